@@ -1,0 +1,190 @@
+// taxopt command line: option parsing and wiring only (CLI.md is the contract).
+#include <tbb/global_control.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "taxopt/core/error.hpp"
+#include "taxopt/core/version.hpp"
+#include "taxopt/io/atomic_file.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/job.hpp"
+
+namespace {
+
+struct Args {
+  std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
+  std::optional<double> feed_mm_per_min, tool_radius;
+  int threads = 0;
+  bool force = false, quiet = false;
+  int verbose = 0;
+  // Options of CLI.md that need the part (later versions); rejected with a clear message.
+  std::string part, plots;
+  std::optional<double> grid, max_deviation, shank_radius, flute_length, holder_radius,
+      holder_length, gauge_length;
+};
+
+int error(const std::string& what, int code) {
+  std::cerr << "taxopt: error: " << what << "\n";
+  return code;
+}
+
+std::optional<taxopt::LengthUnit> parse_unit(const std::string& s, const char* option) {
+  if (s.empty()) return std::nullopt;
+  if (s == "mm") return taxopt::LengthUnit::Millimetre;
+  if (s == "in") return taxopt::LengthUnit::Inch;
+  throw taxopt::InputError(std::string(option) + " expects 'in' or 'mm', got '" + s + "'");
+}
+
+void print_summary(const taxopt::JobResult& result) {
+  std::printf("%-28s %8s %12s %12s %8s %10s\n", "operation", "points", "max w deg/s",
+              "max a deg/s2", "C jumps", "dev deg");
+  for (const auto& r : result.operations) {
+    std::printf("%-28.28s %8zu %12.1f %12.1f %8d %10.3f\n", r.name.c_str(), r.points,
+                r.after.max_omega_deg_s, r.after.max_accel_deg_s2, r.after.c_jumps,
+                r.max_axis_change_deg);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  CLI::App app{
+      "taxopt: tool-axis optimisation for 5-axis ball-end finishing on A/C machines.\n"
+      "Reads a cutter-location file, plans the machine's A/C axes and writes G-code.",
+      "taxopt"};
+  app.set_version_flag("--version", std::string("taxopt ") + taxopt::kVersion);
+  app.add_option("--in", a.in, "cutter-location file (APT / NX CLSF)")->check(CLI::ExistingFile);
+  app.add_option("--gcode", a.gcode, "G-code to write");
+  app.add_option("--machine", a.machine, "machine file (TOML); default: generic A/C table-table")
+      ->check(CLI::ExistingFile);
+  app.add_option("--method", a.method, "none | paper | global (default paper)")
+      ->check(CLI::IsMember({"none", "paper", "global"}));
+  app.add_option("--feed", a.feed_mm_per_min,
+                 "feed for the metrics, mm/min (overrides FEDRAT; the feed written when the "
+                 "file has none; default 1000)");
+  app.add_option("--report", a.report, "JSON report to write");
+  app.add_option("--points-csv", a.points_csv, "per-point CSV to write");
+  app.add_option("--out-cls", a.out_cls, "optimised toolpath as a CL file");
+  app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)");
+  app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)");
+  app.add_option("--tool-radius", a.tool_radius, "ball radius, in the CL file's units");
+  app.add_option("--threads", a.threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)");
+  app.add_flag("-q,--quiet", a.quiet, "only errors on stderr");
+  app.add_flag("-v", a.verbose, "more on stderr");
+  auto* later = app.add_option_group("needs the part (not in this version)");
+  later->add_option("--part", a.part, "part mesh");
+  later->add_option("--grid", a.grid, "C-space cell size, deg");
+  later->add_option("--max-deviation", a.max_deviation, "largest axis change, deg");
+  later->add_option("--plots", a.plots, "SVG plot directory");
+  later->add_option("--shank-radius", a.shank_radius, "shank radius");
+  later->add_option("--flute-length", a.flute_length, "flute length");
+  later->add_option("--holder-radius", a.holder_radius, "holder radius");
+  later->add_option("--holder-length", a.holder_length, "holder length");
+  later->add_option("--gauge-length", a.gauge_length, "gauge length");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "taxopt: error: " << e.what() << "\nRun with --help for the options.\n";
+    return 2;
+  }
+
+  try {
+    for (const char* opt :
+         {"--part", "--grid", "--max-deviation", "--plots", "--shank-radius", "--flute-length",
+          "--holder-radius", "--holder-length", "--gauge-length"}) {
+      if (app.count(opt)) {
+        return error(std::string(opt) + " is not available in taxopt " + taxopt::kVersion +
+                         " (collision checking and plots come with the C-space stage)",
+                     2);
+      }
+    }
+    if (a.in.empty()) return error("--in is required", 2);
+    if (a.gcode.empty() && a.out_cls.empty() && a.report.empty()) {
+      return error("nothing to write: give --gcode, --out-cls or --report", 2);
+    }
+    std::map<std::string, std::string> outputs;
+    for (const auto& [opt, path] :
+         std::map<std::string, std::string>{{"--gcode", a.gcode},
+                                            {"--report", a.report},
+                                            {"--points-csv", a.points_csv},
+                                            {"--out-cls", a.out_cls}}) {
+      if (path.empty()) continue;
+      if (taxopt::same_file(path, a.in)) return error(opt + " " + path + " is the input file", 2);
+      for (const auto& [other_opt, other] : outputs) {
+        if (taxopt::same_file(path, other)) {
+          return error(opt + " and " + other_opt + " name the same file " + path, 2);
+        }
+      }
+      outputs[opt] = path;
+    }
+    const int threads = a.threads > 0
+                            ? a.threads
+                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(threads));
+
+    const taxopt::Machine machine =
+        a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
+    taxopt::ClReadOptions read_options;
+    read_options.units = parse_unit(a.units, "--units");
+    taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
+    if (a.tool_radius) {
+      if (!(*a.tool_radius > 0.0)) return error("--tool-radius must be positive", 2);
+      const double r_mm = *a.tool_radius * taxopt::mm_per_unit(toolpath.units);
+      for (auto& op : toolpath.operations) {
+        op.tool.diameter_mm = 2.0 * r_mm;
+        op.tool.corner_radius_mm = r_mm;
+      }
+    }
+
+    taxopt::JobOptions options;
+    options.method = a.method == "none"    ? taxopt::Method::None
+                     : a.method == "paper" ? taxopt::Method::Paper
+                                           : taxopt::Method::Global;
+    options.feed_mm_per_min = a.feed_mm_per_min;
+    options.units_out = parse_unit(a.units_out, "--units-out");
+    const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);
+
+    if (!a.quiet) {
+      if (a.verbose > 0) {
+        for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
+        for (const auto& [word, count] : toolpath.unknown_records) {
+          std::cerr << "taxopt: note: " << count << " " << word
+                    << " record(s) not interpreted, kept for --out-cls\n";
+        }
+      } else if (!result.warnings.empty()) {
+        std::cerr << "taxopt: " << result.warnings.size() << " warning(s); -v lists them\n";
+      }
+    }
+    for (const auto& p : result.problems) std::cerr << "taxopt: error: " << p << "\n";
+    if (!result.ok() && !a.force) {
+      std::cerr << "taxopt: no output written (--force writes it anyway)\n";
+      return 1;
+    }
+    taxopt::OutputTransaction tx;
+    if (!a.gcode.empty()) tx.stage(a.gcode, result.gcode.text);
+    if (!a.out_cls.empty()) tx.stage(a.out_cls, result.out_cls);
+    if (!a.report.empty())
+      tx.stage(a.report, taxopt::report_json(result, toolpath, machine, options));
+    if (!a.points_csv.empty()) tx.stage(a.points_csv, taxopt::points_csv(result));
+    tx.commit();
+    if (!a.quiet) print_summary(result);
+    return result.ok() ? 0 : 1;
+  } catch (const taxopt::InputError& e) {
+    return error(e.what(), 2);
+  } catch (const std::exception& e) {
+    return error(std::string("internal error: ") + e.what(), 1);
+  }
+}

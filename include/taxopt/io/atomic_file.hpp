@@ -1,0 +1,41 @@
+#pragma once
+/// @file Atomic output: every file of a run is first written to a temporary file beside its
+/// target, and only when all are written are they renamed into place. A failed run leaves no
+/// partial file and never overwrites a good one.
+
+#include <string>
+#include <vector>
+
+namespace taxopt {
+
+/// A set of output files committed together.
+class OutputTransaction {
+ public:
+  OutputTransaction() = default;
+  OutputTransaction(const OutputTransaction&) = delete;
+  OutputTransaction& operator=(const OutputTransaction&) = delete;
+  /// Removes every temporary file not yet committed.
+  ~OutputTransaction();
+
+  /// Writes `content` to a temporary file in the directory of `path` (flushed to disk).
+  /// @throws InputError naming `path` when it cannot be written.
+  void stage(const std::string& path, const std::string& content);
+
+  /// Renames every staged file onto its target. @throws InputError on failure.
+  void commit();
+
+  /// Removes every staged temporary file.
+  void abort() noexcept;
+
+ private:
+  struct Staged {
+    std::string temp;
+    std::string target;
+  };
+  std::vector<Staged> staged_;
+};
+
+/// True when `a` and `b` name the same existing file, or the same path.
+bool same_file(const std::string& a, const std::string& b);
+
+}  // namespace taxopt

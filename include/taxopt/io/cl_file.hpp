@@ -1,0 +1,37 @@
+#pragma once
+/// @file Reading and writing APT / NX CLSF cutter-location files.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "taxopt/core/toolpath.hpp"
+
+namespace taxopt {
+
+/// Options of the CL reader.
+struct ClReadOptions {
+  /// Units of the file; when empty: UNITS/UNIT record, else inch if a feed is IPM/IPR,
+  /// else millimetres.
+  std::optional<LengthUnit> units;
+  /// Largest distance between a CIRCLE arc and the chords taxopt replaces it by, mm.
+  double arc_tolerance_mm = 0.001;
+  /// Largest accepted | |(i,j,k)| - 1 | of a tool axis; the axis is then normalised.
+  double axis_length_tolerance = 1e-3;
+};
+
+/// Parses CL text. `source` names the file in errors and warnings.
+/// @throws InputError with the file and line of the first malformed record.
+Toolpath parse_cl(const std::string& text, const std::string& source,
+                  const ClReadOptions& options = {});
+
+/// Reads a CL file from disk. @throws InputError (unreadable file, malformed record).
+Toolpath read_cl_file(const std::string& path, const ClReadOptions& options = {});
+
+/// Writes a toolpath back as CL text in the file's own units and line ends. Every record of
+/// `original` is written as it was, except the motion records whose points differ in
+/// `operations` (same shape as original.operations): those are written as new GOTOs.
+/// A CIRCLE whose arc points changed is written as the GOTOs of its chords.
+std::string format_cl(const Toolpath& original, const std::vector<Operationd>& operations);
+
+}  // namespace taxopt

@@ -1,0 +1,53 @@
+#pragma once
+/// @file G-code for an A/C machine (LinuxCNC dialect), and a reader of that subset used to
+/// verify every written file by reading it back.
+
+#include <string>
+#include <vector>
+
+#include "taxopt/core/toolpath.hpp"
+#include "taxopt/io/machine_file.hpp"
+
+namespace taxopt {
+
+/// An operation ready to be posted: its points (tips, axes, feeds, motions) and the machine
+/// pose of every point.
+struct PostedOperation {
+  std::string name;
+  Tool tool;
+  double spindle_rpm = 0.0;
+  bool spindle_clockwise = true;
+  std::vector<CLPointd> points;
+  std::vector<Posed> poses;
+};
+
+/// Written G-code and where each point went.
+struct GcodeProgram {
+  std::string text;
+  /// emitted[k][i]: 1-based G-code line of point i of operation k; 0 when the point was not
+  /// written because it repeats the previous block exactly (nothing would move).
+  std::vector<std::vector<int>> emitted;
+};
+
+/// Writes G-code. Feed moves need a positive feed. `comments` go into the header.
+/// @param units units of the output (G20/G21); coordinates inside are mm.
+GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
+                         LengthUnit units, const std::vector<std::string>& comments);
+
+/// One motion block read back from G-code (millimetres and degrees).
+struct GcodeMove {
+  bool rapid = false;
+  Vec3d xyz_mm = Vec3d::Zero();
+  double a_deg = 0.0;
+  double c_deg = 0.0;
+  /// F word in force: units/min (G94) or 1/min (G93), in the file's units.
+  double feed = 0.0;
+  bool inverse_time = false;
+  int line = 0;
+};
+
+/// Reads the motion blocks of G-code in the subset taxopt writes (G0/G1, G20/G21, G90,
+/// G93/G94, X Y Z A C F, comments). @throws InputError on anything outside it.
+std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source);
+
+}  // namespace taxopt

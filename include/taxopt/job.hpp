@@ -1,0 +1,95 @@
+#pragma once
+/// @file One run of taxopt as a library call: a read toolpath and a machine in, G-code,
+/// metrics, verification and report data out. The CLI is a thin layer over run_job.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "taxopt/core/toolpath.hpp"
+#include "taxopt/io/gcode.hpp"
+#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/metrics.hpp"
+#include "taxopt/kinematics/pose_planner.hpp"
+
+namespace taxopt {
+
+/// Tool-axis method. `None` keeps the input axes (post-processing only).
+enum class Method { None, Paper, Global };
+/// "none", "paper", "global".
+const char* to_string(Method method);
+
+/// Options of run_job, with the CLI's defaults.
+struct JobOptions {
+  Method method = Method::Paper;
+  /// Feed for the metrics: overrides the file's feeds when given (--feed). When the file
+  /// has no feed at all, it (or `default_feed_mm_per_min`) is also the feed written.
+  std::optional<double> feed_mm_per_min;
+  double default_feed_mm_per_min = 1000.0;
+  /// Units of the G-code; empty: the CL file's.
+  std::optional<LengthUnit> units_out;
+  PosePlanOptions pose_options;
+  /// Receives progress and informational lines (the library never prints).
+  std::function<void(const std::string&)> log;
+};
+
+/// What run_job proved about its output.
+struct Verification {
+  /// Largest distance between a written XYZ (mapped to the workpiece) and the intended tip.
+  double roundtrip_max_mm = 0.0;
+  /// Largest angle between FK(A, C) of the written values and the intended axis.
+  double roundtrip_max_deg = 0.0;
+  /// Collision-free by the part check; empty when no part was given (nothing checked).
+  std::optional<bool> collision_free;
+  bool within_axis_limits = true;
+};
+
+/// Per-point values for the CSV (after optimisation).
+struct PointRow {
+  std::size_t index = 0;
+  double arc_mm = 0.0;
+  Vec3d tip_mm = Vec3d::Zero();
+  Vec3d axis = Vec3d::UnitZ();
+  double a_deg = 0.0, c_deg = 0.0;
+  double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
+};
+
+/// Result of one operation.
+struct OperationResult {
+  std::string name;
+  std::size_t points = 0;
+  /// Feed used for the metrics (the first feed move's), mm/min.
+  double feed_mm_min = 0.0;
+  RotarySummary before, after;
+  double max_axis_change_deg = 0.0;
+  int segments = 0;
+  Verification verification;
+  double time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0;
+  std::vector<PointRow> rows;
+};
+
+/// Result of run_job. `ok()` is false when the output could not be made safe: `problems`
+/// says why (one line each, with the CL line); the G-code is then not to be used.
+struct JobResult {
+  std::vector<OperationResult> operations;
+  std::vector<std::string> problems;
+  std::vector<std::string> warnings;
+  GcodeProgram gcode;
+  std::string out_cls;
+  LengthUnit gcode_units = LengthUnit::Millimetre;
+  bool ok() const { return problems.empty(); }
+};
+
+/// Runs the job. @throws InputError for options that cannot apply (a method this build
+/// lacks). Outcomes (out of limits, failed verification) are in JobResult::problems.
+JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
+
+/// JSON report (CLI.md): `input`, `machine_name` and the run's options are recorded too.
+std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                        const JobOptions& options);
+
+/// Per-point CSV (CLI.md column names).
+std::string points_csv(const JobResult& result);
+
+}  // namespace taxopt

@@ -1,0 +1,58 @@
+#pragma once
+/// @file Rotary-axis kinematics of a pass (paper eq. 16-18, with the erratum of eq. 18:
+/// the denominator is L_{i+1} + L_i, not T).
+///
+/// For a pass of n points with segment lengths L_i (point i to i+1) and feeds v_i:
+///   t_i       = L_i / v_i                                   (segment time)
+///   omega_i^G = (theta_{i+1}^G - theta_i^G) / t_i            (eq. 16, G = A or C)
+///   a_i^G     = (omega_i^G - omega_{i-1}^G) / ((t_{i-1} + t_i) / 2)   at interior point i
+/// With a constant feed v these are exactly eq. 16: omega = v (dtheta / L) and
+/// a = 2 v (omega_i - omega_{i-1}) / (L_{i-1} + L_i). Synthetic values are
+/// sqrt(x_A^2 + x_C^2) (eq. 17-18). omega is 0 at the last point, a at the first and last.
+/// A segment of zero length that still turns the axes takes the time LinuxCNC gives it under
+/// G94: the rotary distance (deg) divided by the feed read as deg/min.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace taxopt {
+
+/// Per-point rotary kinematics of one pass, degree units as in the paper.
+struct RotaryKinematics {
+  std::vector<double> omega_a_deg_s, omega_c_deg_s, omega_deg_s;
+  std::vector<double> accel_a_deg_s2, accel_c_deg_s2, accel_deg_s2;
+};
+
+/// Summary of the rotary kinematics of one or more passes.
+struct RotarySummary {
+  double max_omega_deg_s = 0.0;
+  double max_accel_deg_s2 = 0.0;
+  double rms_accel_deg_s2 = 0.0;
+  /// Consecutive points whose C differs by more than 90 deg.
+  int c_jumps = 0;
+  /// Number of interior points that entered the RMS.
+  std::size_t accel_samples = 0;
+  double sum_sq_accel = 0.0;
+};
+
+/// Segment times in seconds. @param length_mm n-1 segment lengths
+/// @param feed_mm_per_min n-1 feeds (> 0) @param a_deg,c_deg n axis values
+std::vector<double> segment_times_s(const std::vector<double>& length_mm,
+                                    const std::vector<double>& feed_mm_per_min,
+                                    const std::vector<double>& a_deg,
+                                    const std::vector<double>& c_deg);
+
+/// Rotary kinematics of one pass (eq. 16-18). All vectors of a pass: a_deg and c_deg have
+/// n values, length_mm and feed_mm_per_min n-1.
+RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
+                                   const std::vector<double>& c_deg,
+                                   const std::vector<double>& length_mm,
+                                   const std::vector<double>& feed_mm_per_min);
+
+/// Adds one pass to a summary (maxima, RMS of a over interior points, C jumps).
+void accumulate(RotarySummary& summary, const RotaryKinematics& k,
+                const std::vector<double>& c_deg);
+
+}  // namespace taxopt

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs every Debian package taxopt needs to build, test and verify its G-code.
+# Idempotent: packages already present are left alone; safe to run any number of times.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev          # maths (templated on Scalar)
+  libfcl-dev libccd-dev  # tool-vs-part collision
+  libcgal-dev            # mesh I/O, AABB tree, jet fitting
+  catch2                 # tests (v2)
+  libcli11-dev           # command line
+  libtbb-dev             # parallel over contact points
+  libtomlplusplus-dev    # machine file (TOML, with source positions for errors)
+  nlohmann-json3-dev     # JSON report
+  linuxcnc-uspace        # rs274: the real G-code interpreter used by the integration tests
+  clang clang-format libclang-rt-14-dev  # fuzzing, sanitizers, formatting
+  librsvg2-bin           # render SVG plots to PNG for inspection
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]})); then
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "setup: installing ${missing[*]}" >&2
+  $SUDO apt-get update
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
+else
+  echo "setup: all packages present" >&2
+fi

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The test command of the README (and of CI): installs what is missing, builds with warnings
+# as errors, runs the whole test suite, builds the example consumer against the installed
+# package, then runs the suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+
+jobs=$(nproc)
+echo "== release build and tests"
+cmake --preset release
+cmake --build --preset release -j "$jobs"
+ctest --preset release -j "$jobs"
+
+echo "== install and build the example consumer against it"
+prefix="$PWD/build/install"
+rm -rf "$prefix" build/consumer
+cmake --install build/release --prefix "$prefix"
+cmake -S examples/consumer -B build/consumer -G Ninja -DCMAKE_PREFIX_PATH="$prefix"
+cmake --build build/consumer
+./build/consumer/taxopt_consumer tests/data/real/mech491-variable-axis-ballmill.cls build/consumer/out.ngc
+rs274 -g build/consumer/out.ngc > build/consumer/rs274.log
+
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
+cmake --preset asan
+cmake --build --preset asan -j "$jobs"
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --preset asan -j "$jobs"

@@ -1,0 +1,21 @@
+#include "taxopt/core/error.hpp"
+
+namespace taxopt {
+
+std::string format_location(const std::string& file, int line, const std::string& what) {
+  std::string out;
+  if (!file.empty()) {
+    out += file;
+    if (line > 0) out += ":" + std::to_string(line);
+    out += ": ";
+  }
+  return out + what;
+}
+
+InputError::InputError(std::string file, int line, const std::string& what)
+    : std::runtime_error(format_location(file, line, what)),
+      file_(std::move(file)),
+      line_(line),
+      message_(what) {}
+
+}  // namespace taxopt

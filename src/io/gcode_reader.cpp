@@ -1,0 +1,123 @@
+#include <cctype>
+#include <charconv>
+#include <cmath>
+
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/gcode.hpp"
+
+namespace taxopt {
+
+std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source) {
+  std::vector<GcodeMove> moves;
+  double scale = 1.0;
+  bool inverse_time = false;
+  int motion = -1;
+  double feed = 0.0;
+  Vec3d xyz = Vec3d::Zero();
+  double a = 0.0, c = 0.0;
+  int line_no = 0;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string ln = text.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    // Remove comments.
+    std::string code;
+    int depth = 0;
+    for (char ch : ln) {
+      if (ch == ';' && depth == 0) break;
+      if (ch == '(') {
+        ++depth;
+      } else if (ch == ')') {
+        if (depth == 0) throw InputError(source, line_no, "')' without '('");
+        --depth;
+      } else if (depth == 0 && !std::isspace(static_cast<unsigned char>(ch))) {
+        code += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      }
+    }
+    if (depth != 0) throw InputError(source, line_no, "unclosed comment");
+    if (code.empty() || code == "%") continue;
+    bool has_axis = false;
+    std::size_t i = 0;
+    while (i < code.size()) {
+      const char letter = code[i++];
+      if (!std::isalpha(static_cast<unsigned char>(letter))) {
+        throw InputError(source, line_no,
+                         std::string("expected a word letter, got '") + letter + "'");
+      }
+      std::size_t j = i;
+      while (j < code.size() && (std::isdigit(static_cast<unsigned char>(code[j])) ||
+                                 code[j] == '.' || code[j] == '-' || code[j] == '+')) {
+        ++j;
+      }
+      double v = 0.0;
+      const char* first = code.data() + i + (i < code.size() && code[i] == '+' ? 1 : 0);
+      auto [ptr, ec] = std::from_chars(first, code.data() + j, v);
+      if (j == i || ec != std::errc() || ptr != code.data() + j || !std::isfinite(v)) {
+        throw InputError(source, line_no, std::string("bad number after '") + letter + "'");
+      }
+      i = j;
+      switch (letter) {
+        case 'G': {
+          const int gv = static_cast<int>(std::lround(v * 10));
+          if (gv == 0)
+            motion = 0;
+          else if (gv == 10)
+            motion = 1;
+          else if (gv == 200)
+            scale = kMmPerInch;
+          else if (gv == 210)
+            scale = 1.0;
+          else if (gv == 930)
+            inverse_time = true;
+          else if (gv == 940)
+            inverse_time = false;
+          else if (gv == 900 || gv == 170 || gv == 400 || gv == 490 || gv == 800) {
+          } else {
+            throw InputError(source, line_no,
+                             "G" + std::to_string(v) + " is outside taxopt's subset");
+          }
+          break;
+        }
+        case 'X':
+          xyz.x() = v * scale;
+          has_axis = true;
+          break;
+        case 'Y':
+          xyz.y() = v * scale;
+          has_axis = true;
+          break;
+        case 'Z':
+          xyz.z() = v * scale;
+          has_axis = true;
+          break;
+        case 'A':
+          a = v;
+          has_axis = true;
+          break;
+        case 'C':
+          c = v;
+          has_axis = true;
+          break;
+        case 'F': feed = v; break;
+        case 'M':
+        case 'T':
+        case 'S':
+        case 'N': break;
+        default:
+          throw InputError(source, line_no,
+                           std::string("word '") + letter + "' is outside taxopt's subset");
+      }
+    }
+    if (has_axis) {
+      if (motion < 0) throw InputError(source, line_no, "axis words without G0 or G1");
+      moves.push_back(GcodeMove{motion == 0, xyz, a, c, feed, inverse_time, line_no});
+    }
+    if (end == text.size()) break;
+  }
+  return moves;
+}
+
+}  // namespace taxopt

@@ -1,0 +1,138 @@
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "taxopt/io/gcode.hpp"
+
+namespace taxopt {
+namespace {
+
+std::string fmt(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  std::string s = buf;
+  // No "-0.0000": a negative zero after rounding is written as zero.
+  bool all_zero = true;
+  for (char c : s) {
+    if (c != '-' && c != '0' && c != '.') all_zero = false;
+  }
+  if (all_zero && !s.empty() && s[0] == '-') s.erase(0, 1);
+  return s;
+}
+
+/// A LinuxCNC comment cannot hold parentheses or line breaks.
+std::string comment(const std::string& text) {
+  std::string s;
+  for (char c : text) {
+    if (c == '(') {
+      s += '[';
+    } else if (c == ')') {
+      s += ']';
+    } else if (c == '\n' || c == '\r') {
+      s += ' ';
+    } else {
+      s += c;
+    }
+  }
+  return "(" + s + ")";
+}
+
+}  // namespace
+
+GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
+                         LengthUnit units, const std::vector<std::string>& comments) {
+  const GcodeSettings& g = machine.gcode;
+  const double scale = 1.0 / mm_per_unit(units);
+  const int d = g.decimals;
+  GcodeProgram prog;
+  int line_no = 0;
+  const auto line = [&](const std::string& s) {
+    prog.text += s;
+    prog.text += '\n';
+    return ++line_no;
+  };
+  for (const auto& c : comments) line(comment(c));
+  line(std::string(units == LengthUnit::Inch ? "G20" : "G21") + " G90 G17 G40 G49 G80 " +
+       (g.feed_mode == FeedMode::InverseTime ? "G93" : "G94"));
+  int current_tool = -1;
+  std::string last_words;
+  std::string last_feed;
+  for (const auto& op : operations) {
+    if (op.poses.size() != op.points.size()) {
+      throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
+    }
+    line(comment("operation " + op.name));
+    if (op.tool.number > 0 && op.tool.number != current_tool) {
+      line("T" + std::to_string(op.tool.number) + " M6");
+      current_tool = op.tool.number;
+    }
+    if (op.spindle_rpm > 0.0) {
+      line("S" + fmt(op.spindle_rpm, 0) + (op.spindle_clockwise ? " M3" : " M4"));
+    }
+    std::vector<int> emitted(op.points.size(), 0);
+    last_words.clear();
+    Vec3d prev_xyz = Vec3d::Zero();
+    Posed prev_pose;
+    Vec3d prev_tip = Vec3d::Zero();
+    bool have_prev = false;
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      const CLPointd& p = op.points[i];
+      const Posed& pose = op.poses[i];
+      const Vec3d xyz =
+          g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(p.tip_mm, pose) : p.tip_mm;
+      const std::string words = "X" + fmt(xyz.x() * scale, d) + " Y" + fmt(xyz.y() * scale, d) +
+                                " Z" + fmt(xyz.z() * scale, d) + " A" +
+                                fmt(rad_to_deg(pose.a_rad), d) + " C" +
+                                fmt(rad_to_deg(pose.c_rad), d);
+      if (words == last_words) continue;  // nothing would move
+      std::string block;
+      bool restore_inverse_time = false;
+      if (p.motion == Motion::Rapid) {
+        block = "G0 " + words;
+      } else {
+        if (!(p.feed_mm_per_min > 0.0)) {
+          throw std::invalid_argument("write_gcode: feed move without a feed");
+        }
+        // Time of the block: the tool tip moves at the programmed feed (TCP); a move that
+        // only turns the axes takes rotary degrees / feed, as under G94.
+        const double tip_mm = have_prev ? (p.tip_mm - prev_tip).norm() : 0.0;
+        const double rot_deg = have_prev ? std::hypot(rad_to_deg(pose.a_rad - prev_pose.a_rad),
+                                                      rad_to_deg(pose.c_rad - prev_pose.c_rad))
+                                         : 0.0;
+        const double time_min = (tip_mm > 1e-9 ? tip_mm : rot_deg) / p.feed_mm_per_min;
+        std::string f;
+        if (!have_prev) {
+          // First block of an operation at feed: where the tool comes from is unknown, so
+          // the move is written at the programmed feed in G94 (G93 needs a block time).
+          f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
+          restore_inverse_time = g.feed_mode == FeedMode::InverseTime;
+        } else if (g.feed_mode == FeedMode::InverseTime) {
+          f = fmt(1.0 / time_min, std::max(d, 3));
+        } else if (g.mode == GcodeMode::Machine) {
+          // Joint-space XYZ moves differ from the tip's: scale F so the block takes the
+          // same time as the tip at the programmed feed.
+          const double joint = (xyz - prev_xyz).norm();
+          f = fmt(joint > 1e-9 ? joint * scale / time_min : rot_deg / time_min, std::max(d, 3));
+        } else {
+          f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
+        }
+        block = std::string(restore_inverse_time ? "G94 " : "") + "G1 " + words;
+        if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;
+        last_feed = restore_inverse_time ? std::string() : f;
+      }
+      emitted[i] = line(block);
+      if (restore_inverse_time) line("G93");
+      last_words = words;
+      prev_xyz = xyz;
+      prev_pose = pose;
+      prev_tip = p.tip_mm;
+      have_prev = true;
+    }
+    prog.emitted.push_back(std::move(emitted));
+    if (op.spindle_rpm > 0.0) line("M5");
+  }
+  line("M2");
+  return prog;
+}
+
+}  // namespace taxopt

@@ -1,0 +1,205 @@
+#include "taxopt/io/machine_file.hpp"
+
+#include <toml++/toml.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "taxopt/core/error.hpp"
+
+namespace taxopt {
+namespace {
+
+int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
+
+class MachineParser {
+ public:
+  explicit MachineParser(std::string source) : source_(std::move(source)) {}
+
+  Machine parse(const std::string& text) {
+    toml::table root;
+    try {
+      root = toml::parse(text, source_);
+    } catch (const toml::parse_error& e) {
+      throw InputError(source_, static_cast<int>(e.source().begin.line),
+                       "not valid TOML: " + std::string(e.description()));
+    }
+    Machine m = default_machine();
+    check_keys(root, "", {"name", "kinematics", "axes", "pivot", "gcode"});
+    if (auto* n = root.get("name")) m.name = string_of(*n, "name");
+    const toml::node* kin = root.get("kinematics");
+    if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\")");
+    m.kinematics = string_of(*kin, "kinematics");
+    if (m.kinematics != "ac-table-table") {
+      fail(line_of(*kin), "kinematics '" + m.kinematics + "' is not supported (ac-table-table)");
+    }
+    const toml::table* axes = table_of(root, "axes", true);
+    check_keys(*axes, "axes", {"A", "C"});
+    parse_axis(*table_of(*axes, "A", true, "axes."), "axes.A", m.ac.a, false);
+    parse_axis(*table_of(*axes, "C", true, "axes."), "axes.C", m.ac.c, true);
+    if (const toml::table* pivot = table_of(root, "pivot", false)) {
+      check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
+      m.ac.a_axis_point_mm = Vec3d(0.0, number_or(*pivot, "pivot", "a_axis_y", 0.0),
+                                   number_or(*pivot, "pivot", "a_axis_z", 0.0));
+      m.ac.c_axis_point_mm = Vec3d(number_or(*pivot, "pivot", "c_axis_x", 0.0),
+                                   number_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
+    }
+    if (const toml::table* g = table_of(root, "gcode", false)) {
+      check_keys(*g, "gcode", {"dialect", "mode", "feed_mode", "decimals"});
+      if (auto* n = g->get("dialect")) {
+        const std::string d = string_of(*n, "gcode.dialect");
+        if (d != "linuxcnc") {
+          fail(line_of(*n),
+               "gcode.dialect '" + d + "' is not supported in this version (linuxcnc)");
+        }
+      }
+      if (auto* n = g->get("mode")) {
+        const std::string v = string_of(*n, "gcode.mode");
+        if (v == "tcp") {
+          m.gcode.mode = GcodeMode::Tcp;
+        } else if (v == "machine") {
+          m.gcode.mode = GcodeMode::Machine;
+        } else {
+          fail(line_of(*n), "gcode.mode must be \"tcp\" or \"machine\", got '" + v + "'");
+        }
+      }
+      if (auto* n = g->get("feed_mode")) {
+        const std::string v = string_of(*n, "gcode.feed_mode");
+        if (v == "units-per-minute") {
+          m.gcode.feed_mode = FeedMode::UnitsPerMinute;
+        } else if (v == "inverse-time") {
+          m.gcode.feed_mode = FeedMode::InverseTime;
+        } else {
+          fail(line_of(*n),
+               "gcode.feed_mode must be \"units-per-minute\" or \"inverse-time\", got '" + v + "'");
+        }
+      }
+      if (auto* n = g->get("decimals")) {
+        auto v = n->value<int64_t>();
+        if (!v || !n->is_integer() || *v < 0 || *v > 8) {
+          fail(line_of(*n), "gcode.decimals must be a whole number from 0 to 8");
+        }
+        m.gcode.decimals = static_cast<int>(*v);
+      }
+    }
+    return m;
+  }
+
+ private:
+  [[noreturn]] void fail(int line, const std::string& what) const {
+    throw InputError(source_, line, what);
+  }
+
+  void check_keys(const toml::table& t, const std::string& where,
+                  const std::set<std::string>& allowed) const {
+    for (const auto& [key, node] : t) {
+      if (!allowed.count(std::string(key.str()))) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        const std::string full =
+            where.empty() ? std::string(key.str()) : where + "." + std::string(key.str());
+        fail(line_of(node), "unknown key '" + full + "' (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  const toml::table* table_of(const toml::table& t, const std::string& key, bool required,
+                              const std::string& prefix = "") const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(0, "missing section [" + prefix + key + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) fail(line_of(*n), "'" + prefix + key + "' must be a table");
+    return n->as_table();
+  }
+
+  std::string string_of(const toml::node& n, const std::string& what) const {
+    if (!n.is_string()) fail(line_of(n), what + " must be a string");
+    return n.value<std::string>().value();
+  }
+
+  double number_of(const toml::node& n, const std::string& what) const {
+    if (!n.is_number()) fail(line_of(n), what + " must be a number");
+    const double v = n.value<double>().value();
+    if (!std::isfinite(v)) fail(line_of(n), what + " must be finite");
+    return v;
+  }
+
+  double number_or(const toml::table& t, const std::string& where, const std::string& key,
+                   double fallback) const {
+    const toml::node* n = t.get(key);
+    return n ? number_of(*n, where + "." + key) : fallback;
+  }
+
+  void parse_axis(const toml::table& t, const std::string& where, RotaryAxis<double>& axis,
+                  bool is_c) const {
+    check_keys(
+        t, where,
+        {"min_deg", "max_deg", "continuous", "sense", "max_velocity_deg_s", "max_accel_deg_s2"});
+    const int line = line_of(t);
+    axis = RotaryAxis<double>{};
+    if (const toml::node* n = t.get("continuous")) {
+      if (!n->is_boolean()) fail(line_of(*n), where + ".continuous must be true or false");
+      axis.continuous = n->value<bool>().value();
+      if (axis.continuous && !is_c) fail(line_of(*n), "only the C axis can be continuous");
+    }
+    const toml::node* lo = t.get("min_deg");
+    const toml::node* hi = t.get("max_deg");
+    if (axis.continuous) {
+      if (lo || hi) fail(line, where + ": a continuous axis takes no min_deg/max_deg");
+    } else {
+      if (!lo || !hi) {
+        fail(line, where + " needs min_deg and max_deg" + (is_c ? " (or continuous = true)" : ""));
+      }
+      const double min_deg = number_of(*lo, where + ".min_deg");
+      const double max_deg = number_of(*hi, where + ".max_deg");
+      if (!(min_deg < max_deg)) {
+        fail(line_of(*lo), where + ": min_deg must be less than max_deg");
+      }
+      if (!is_c && (min_deg < -360.0 || max_deg > 360.0)) {
+        fail(line_of(*lo), where + ": range must lie within [-360, 360] deg");
+      }
+      axis.min_rad = deg_to_rad(min_deg);
+      axis.max_rad = deg_to_rad(max_deg);
+    }
+    if (const toml::node* n = t.get("sense")) {
+      const auto v = n->value<int64_t>();
+      if (!n->is_integer() || !v || (*v != 1 && *v != -1)) {
+        fail(line_of(*n), where + ".sense must be 1 or -1");
+      }
+      axis.sense = static_cast<int>(*v);
+    }
+    if (const toml::node* n = t.get("max_velocity_deg_s")) {
+      const double v = number_of(*n, where + ".max_velocity_deg_s");
+      if (!(v > 0.0)) fail(line_of(*n), where + ".max_velocity_deg_s must be positive");
+      axis.max_velocity_rad_s = deg_to_rad(v);
+    }
+    if (const toml::node* n = t.get("max_accel_deg_s2")) {
+      const double v = number_of(*n, where + ".max_accel_deg_s2");
+      if (!(v > 0.0)) fail(line_of(*n), where + ".max_accel_deg_s2 must be positive");
+      axis.max_accel_rad_s2 = deg_to_rad(v);
+    }
+  }
+
+  std::string source_;
+};
+
+}  // namespace
+
+Machine default_machine() { return Machine{}; }
+
+Machine parse_machine_toml(const std::string& text, const std::string& source) {
+  return MachineParser(source).parse(text);
+}
+
+Machine read_machine_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open machine file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parse_machine_toml(ss.str(), path);
+}
+
+}  // namespace taxopt

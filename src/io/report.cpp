@@ -1,0 +1,85 @@
+// JSON report and per-point CSV of a run (CLI.md "JSON report", "Per-point CSV").
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "taxopt/core/version.hpp"
+#include "taxopt/job.hpp"
+
+namespace taxopt {
+namespace {
+
+nlohmann::json summary_json(const RotarySummary& s, const std::optional<bool>& collision_checked) {
+  nlohmann::json j;
+  j["max_omega_deg_s"] = s.max_omega_deg_s;
+  j["max_accel_deg_s2"] = s.max_accel_deg_s2;
+  j["rms_accel_deg_s2"] = s.rms_accel_deg_s2;
+  j["c_jumps"] = s.c_jumps;
+  // Counted only when a part is given; null says "not checked", not "none".
+  j["colliding_points"] = collision_checked ? nlohmann::json(0) : nlohmann::json(nullptr);
+  return j;
+}
+
+}  // namespace
+
+std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                        const JobOptions& options) {
+  nlohmann::json j;
+  j["taxopt_version"] = kVersion;
+  j["method"] = to_string(options.method);
+  j["input"] = toolpath.source;
+  j["machine"] = machine.name;
+  j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
+  j["ok"] = result.ok();
+  j["problems"] = result.problems;
+  j["warnings"] = result.warnings;
+  nlohmann::json ops = nlohmann::json::array();
+  for (const auto& r : result.operations) {
+    nlohmann::json o;
+    o["name"] = r.name;
+    o["points"] = r.points;
+    o["feed_mm_min"] = r.feed_mm_min;
+    o["before"] = summary_json(r.before, r.verification.collision_free);
+    o["after"] = summary_json(r.after, r.verification.collision_free);
+    o["max_axis_change_deg"] = r.max_axis_change_deg;
+    o["segments"] = r.segments;
+    nlohmann::json v;
+    v["roundtrip_max_mm"] = r.verification.roundtrip_max_mm;
+    v["roundtrip_max_deg"] = r.verification.roundtrip_max_deg;
+    v["collision_free"] = r.verification.collision_free
+                              ? nlohmann::json(*r.verification.collision_free)
+                              : nlohmann::json(nullptr);
+    v["within_axis_limits"] = r.verification.within_axis_limits;
+    o["verification"] = v;
+    o["timings_s"] = {
+        {"cspace", r.time_cspace_s}, {"optimise", r.time_optimise_s}, {"post", r.time_post_s}};
+    ops.push_back(o);
+  }
+  j["operations"] = ops;
+  return j.dump(2) + "\n";
+}
+
+std::string points_csv(const JobResult& result) {
+  std::string out =
+      "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
+      "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells\n";
+  char buf[512];
+  for (const auto& r : result.operations) {
+    std::string op = r.name;
+    if (op.find_first_of(",\"\n") != std::string::npos) {
+      std::string q = "\"";
+      for (char c : op) q += (c == '"') ? std::string("\"\"") : std::string(1, c);
+      op = q + "\"";
+    }
+    for (const auto& p : r.rows) {
+      std::snprintf(buf, sizeof buf,
+                    ",%zu,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,,,,,,,,,%.6f,%.6f,%.6f,%.6f,\n",
+                    p.index, p.arc_mm, p.tip_mm.x(), p.tip_mm.y(), p.tip_mm.z(), p.axis.x(),
+                    p.axis.y(), p.axis.z(), p.a_deg, p.c_deg, p.omega_deg_s, p.accel_deg_s2);
+      out += op;
+      out += buf;
+    }
+  }
+  return out;
+}
+
+}  // namespace taxopt

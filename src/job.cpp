@@ -1,0 +1,236 @@
+#include "taxopt/job.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "taxopt/core/error.hpp"
+#include "taxopt/core/version.hpp"
+#include "taxopt/io/cl_file.hpp"
+
+namespace taxopt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double round_to(double v, int decimals) {
+  const double s = std::pow(10.0, decimals);
+  return std::round(v * s) / s;
+}
+
+/// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
+/// not move when the axis turns, so before and after share one arc length), else the tip.
+Vec3d reference_point(const CLPointd& p, const Tool& tool) {
+  return p.tip_mm + tool.ball_radius_mm() * p.axis;
+}
+
+/// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
+RotarySummary summarise(const Operationd& op, const std::vector<double>& a_deg,
+                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
+                        std::vector<PointRow>* rows) {
+  RotarySummary summary;
+  double arc = 0.0;
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::vector<double> a(a_deg.begin() + static_cast<long>(pass.begin),
+                          a_deg.begin() + static_cast<long>(pass.end));
+    std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
+                          c_deg.begin() + static_cast<long>(pass.end));
+    std::vector<double> len, feed;
+    for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
+      len.push_back(
+          (reference_point(op.points[i + 1], op.tool) - reference_point(op.points[i], op.tool))
+              .norm());
+      feed.push_back(metric_feed[i + 1]);
+    }
+    const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
+    accumulate(summary, k, c);
+    if (rows) {
+      for (std::size_t j = 0; j < pass.size(); ++j) {
+        PointRow& r = (*rows)[pass.begin + j];
+        if (j > 0) arc += len[j - 1];
+        r.arc_mm = arc;
+        r.omega_deg_s = k.omega_deg_s[j];
+        r.accel_deg_s2 = k.accel_deg_s2[j];
+      }
+    }
+  }
+  return summary;
+}
+
+}  // namespace
+
+const char* to_string(Method method) {
+  switch (method) {
+    case Method::None: return "none";
+    case Method::Paper: return "paper";
+    case Method::Global: return "global";
+  }
+  return "none";
+}
+
+JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+  if (options.method != Method::None) {
+    throw InputError(std::string("--method ") + to_string(options.method) +
+                     " is not available in taxopt " + kVersion +
+                     " (it needs the C-space optimiser); use --method none");
+  }
+  if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
+    throw InputError("--feed must be positive");
+  }
+  JobResult res;
+  res.warnings = tp.warnings;
+  res.gcode_units = options.units_out.value_or(tp.units);
+  const int decimals = machine.gcode.decimals;
+  const double fallback_feed = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
+
+  std::vector<PostedOperation> posted;
+  std::vector<std::vector<double>> metric_feeds;
+  std::vector<double> post_time;
+  std::optional<Posed> start;
+  for (const Operationd& op : tp.operations) {
+    const auto t0 = Clock::now();
+    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}};
+    std::vector<double> mf(op.points.size(), fallback_feed);
+    bool missing_feed = false;
+    for (std::size_t i = 0; i < po.points.size(); ++i) {
+      CLPointd& p = po.points[i];
+      if (!(p.feed_mm_per_min > 0.0)) {
+        if (p.motion == Motion::Feed) missing_feed = true;
+        p.feed_mm_per_min = fallback_feed;
+      }
+      mf[i] = options.feed_mm_per_min.value_or(p.feed_mm_per_min);
+    }
+    if (missing_feed) {
+      res.warnings.push_back("operation " + op.name + ": feed moves without FEDRAT use " +
+                             std::to_string(fallback_feed) + " mm/min");
+    }
+    std::vector<Vec3d> axes;
+    std::vector<bool> rapid_into;
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      axes.push_back(op.points[i].axis);
+      rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
+    }
+    const PosePlan plan = plan_poses(machine.ac, axes, rapid_into, start, options.pose_options);
+    if (!plan.ok()) {
+      res.problems.push_back(format_location(tp.source, op.points[plan.failed_index].line,
+                                             "operation " + op.name + ": " + plan.message));
+      continue;
+    }
+    po.poses = plan.poses;
+    start = po.poses.back();
+    posted.push_back(std::move(po));
+    metric_feeds.push_back(std::move(mf));
+    post_time.push_back(seconds_since(t0));
+  }
+  if (!res.ok()) return res;
+
+  std::vector<std::string> comments = {
+      std::string("taxopt ") + kVersion + ", method " + to_string(options.method),
+      "source " + tp.source,
+      "machine " + machine.name + ", " +
+          (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
+  auto t_write = Clock::now();
+  res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+  const std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
+  const double write_time = seconds_since(t_write);
+
+  std::size_t next_move = 0;
+  std::vector<Operationd> out_ops = tp.operations;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    const Operationd& op = tp.operations[k];
+    OperationResult r;
+    r.name = op.name;
+    r.points = op.points.size();
+    r.time_post_s = post_time[k] + write_time / static_cast<double>(posted.size());
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      if (op.points[i].motion == Motion::Feed) {
+        r.feed_mm_min = metric_feeds[k][i];
+        break;
+      }
+    }
+    // Read back: the A/C values actually written, and what they mean in the workpiece.
+    std::vector<double> a_w(op.points.size()), c_w(op.points.size());
+    std::vector<double> a_in(op.points.size()), c_in(op.points.size());
+    r.rows.resize(op.points.size());
+    const GcodeMove* last = nullptr;
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      if (res.gcode.emitted[k][i] > 0) {
+        if (next_move >= moves.size() || moves[next_move].line != res.gcode.emitted[k][i]) {
+          throw std::logic_error("run_job: G-code read back does not match what was written");
+        }
+        last = &moves[next_move++];
+      }
+      if (!last) throw std::logic_error("run_job: first point of an operation not written");
+      a_w[i] = last->a_deg;
+      c_w[i] = last->c_deg;
+      a_in[i] = round_to(rad_to_deg(po.poses[i].a_rad), decimals);
+      c_in[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
+      const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
+      const Vec3d axis = machine.ac.forward(written);
+      const Vec3d tip = machine.gcode.mode == GcodeMode::Machine
+                            ? machine.ac.from_machine_mm(last->xyz_mm, written)
+                            : last->xyz_mm;
+      const CLPointd& want = po.points[i];
+      r.verification.roundtrip_max_mm =
+          std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
+      r.verification.roundtrip_max_deg =
+          std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
+      if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
+        if (r.verification.within_axis_limits) {
+          res.problems.push_back(format_location(
+              tp.source, want.line,
+              "operation " + op.name + ": written A " + std::to_string(last->a_deg) + " / C " +
+                  std::to_string(last->c_deg) + " deg is outside the machine's axis ranges"));
+        }
+        r.verification.within_axis_limits = false;
+      }
+      r.max_axis_change_deg =
+          std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
+      PointRow& row = r.rows[i];
+      row.index = i;
+      row.tip_mm = want.tip_mm;
+      row.axis = want.axis;
+      row.a_deg = a_w[i];
+      row.c_deg = c_w[i];
+      out_ops[k].points[i].axis = want.axis;
+      out_ops[k].points[i].tip_mm = want.tip_mm;
+    }
+    // The round trip may differ from the intent only by the rounding of the written
+    // decimals: half a unit of the last decimal per word, mapped to mm and to the axis angle;
+    // in machine mode the angle rounding also moves the mapped point by its lever arm.
+    const double half_unit = 0.5 * std::pow(10.0, -decimals);
+    const double ang_tol = std::sqrt(2.0) * half_unit + 1e-9;
+    double lever_mm = 0.0;
+    if (machine.gcode.mode == GcodeMode::Machine) {
+      for (const auto& p : po.points) {
+        lever_mm = std::max(lever_mm,
+                            (p.tip_mm - machine.ac.c_axis_point_mm).norm() +
+                                (machine.ac.c_axis_point_mm - machine.ac.a_axis_point_mm).norm());
+      }
+    }
+    const double pos_tol = std::sqrt(3.0) * half_unit * mm_per_unit(res.gcode_units) +
+                           2.0 * lever_mm * deg_to_rad(ang_tol) + 1e-9;
+    if (r.verification.roundtrip_max_mm > pos_tol) {
+      res.problems.push_back("operation " + op.name + ": G-code read back is " +
+                             std::to_string(r.verification.roundtrip_max_mm) +
+                             " mm from the intended tips (rounding allows " +
+                             std::to_string(pos_tol) + ")");
+    }
+    if (r.verification.roundtrip_max_deg > ang_tol) {
+      res.problems.push_back("operation " + op.name + ": G-code read back is " +
+                             std::to_string(r.verification.roundtrip_max_deg) +
+                             " deg from the intended axes (rounding allows " +
+                             std::to_string(ang_tol) + ")");
+    }
+    r.before = summarise(op, a_in, c_in, metric_feeds[k], nullptr);
+    r.after = summarise(op, a_w, c_w, metric_feeds[k], &r.rows);
+    res.operations.push_back(std::move(r));
+  }
+  res.out_cls = format_cl(tp, out_ops);
+  return res;
+}
+
+}  // namespace taxopt

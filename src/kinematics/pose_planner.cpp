@@ -1,0 +1,185 @@
+#include "taxopt/kinematics/pose_planner.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace taxopt {
+namespace {
+
+/// Costs closer than this (rad) are equal: rounding must not decide a branch.
+constexpr double kTie = 1e-9;
+
+struct Candidate {
+  Posed pose;
+};
+
+/// Candidate poses of a non-pole axis within the machine's ranges. With a continuous C the
+/// winding is left to the unwrapping after the programme (nearest turn is always optimal);
+/// with a bounded C every turn within the range is a candidate.
+std::vector<Candidate> candidates(const ACMachined& m, const Vec3d& axis) {
+  std::vector<Candidate> out;
+  for (const Posed& p : m.inverse(axis)) {
+    if (!m.a.contains(p.a_rad)) continue;
+    if (m.c.continuous) {
+      out.push_back({p});
+      continue;
+    }
+    const double two_pi = Constants<double>::two_pi();
+    const double k_lo = std::ceil((m.c.min_rad - 1e-9 - p.c_rad) / two_pi);
+    const double k_hi = std::floor((m.c.max_rad + 1e-9 - p.c_rad) / two_pi);
+    for (double k = k_lo; k <= k_hi; k += 1.0) {
+      Posed q = p;
+      q.c_rad = p.c_rad + k * two_pi;
+      out.push_back({q});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
+                    const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
+                    const PosePlanOptions& options) {
+  if (rapid_into.size() != axes.size()) {
+    throw std::invalid_argument("plan_poses: rapid_into and axes differ in size");
+  }
+  const std::size_t n = axes.size();
+  PosePlan plan;
+  plan.poses.assign(n, Posed{});
+  if (n == 0) return plan;
+
+  std::vector<std::size_t> keys;  // points off the pole, in order
+  std::vector<std::vector<Candidate>> cand(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (m.at_pole(axes[i])) {
+      if (!m.a.contains(0.0)) {
+        plan.status = PosePlan::Status::OutOfLimits;
+        plan.failed_index = i;
+        plan.message = "axis on the pole needs A = 0, outside the A range";
+        return plan;
+      }
+      continue;
+    }
+    cand[i] = candidates(m, axes[i]);
+    if (cand[i].empty()) {
+      plan.status = PosePlan::Status::OutOfLimits;
+      plan.failed_index = i;
+      const auto both = m.inverse(axes[i]);
+      std::ostringstream os;
+      os << "no pose within the axis ranges: A would be " << rad_to_deg(both[0].a_rad) << " or "
+         << rad_to_deg(both[1].a_rad) << " deg";
+      if (!m.c.continuous) {
+        os << ", C " << rad_to_deg(both[0].c_rad) << " or " << rad_to_deg(both[1].c_rad)
+           << " deg (plus turns)";
+      }
+      plan.message = os.str();
+      return plan;
+    }
+    keys.push_back(i);
+  }
+
+  const auto dc = [&](double c0, double c1) {
+    return m.c.continuous ? std::abs(wrap_pi(c1 - c0)) : std::abs(c1 - c0);
+  };
+  const auto weight = [&](std::size_t from, std::size_t to) {
+    double w = 0.0;  // the heaviest move between two key points
+    for (std::size_t k = from + 1; k <= to; ++k) {
+      w = std::max(w, rapid_into[k] ? options.rapid_weight : 1.0);
+    }
+    return w;
+  };
+  // Travel between two key points `steps` moves apart (steps > 1: pole points between them,
+  // where A passes through 0 and C is spread evenly over the steps).
+  const auto travel = [&](const Posed& p, const Posed& q, std::size_t steps) {
+    const double da =
+        steps > 1 ? std::abs(p.a_rad) + std::abs(q.a_rad) : std::abs(q.a_rad - p.a_rad);
+    const double c = dc(p.c_rad, q.c_rad);
+    const double jump = c / static_cast<double>(steps) > options.c_jump_threshold_rad
+                            ? options.c_jump_penalty_rad
+                            : 0.0;
+    return da + options.c_weight * c + jump;
+  };
+
+  if (!keys.empty()) {
+    // Forward pass of the dynamic programme over the key points.
+    std::vector<std::vector<double>> cost(keys.size());
+    std::vector<std::vector<int>> from(keys.size());
+    {
+      const auto& c0 = cand[keys[0]];
+      cost[0].assign(c0.size(), 0.0);
+      from[0].assign(c0.size(), -1);
+      if (start) {
+        for (std::size_t s = 0; s < c0.size(); ++s) {
+          cost[0][s] = options.rapid_weight * travel(*start, c0[s].pose, keys[0] + 1);
+        }
+      }
+    }
+    for (std::size_t k = 1; k < keys.size(); ++k) {
+      const auto& prev = cand[keys[k - 1]];
+      const auto& cur = cand[keys[k]];
+      const double w = weight(keys[k - 1], keys[k]);
+      const std::size_t steps = keys[k] - keys[k - 1];
+      cost[k].assign(cur.size(), std::numeric_limits<double>::infinity());
+      from[k].assign(cur.size(), -1);
+      for (std::size_t s = 0; s < cur.size(); ++s) {
+        for (std::size_t r = 0; r < prev.size(); ++r) {
+          const double c = cost[k - 1][r] + w * travel(prev[r].pose, cur[s].pose, steps);
+          // Ties (within rounding) keep the earlier candidate: the a >= 0 branch of the
+          // geometry first, whatever the axes' senses, so mirrored machines mirror.
+          if (c < cost[k][s] - kTie) {
+            cost[k][s] = c;
+            from[k][s] = static_cast<int>(r);
+          }
+        }
+      }
+    }
+    // Backtrack.
+    std::size_t best = 0;
+    for (std::size_t s = 1; s < cost.back().size(); ++s) {
+      if (cost.back()[s] < cost.back()[best] - kTie) best = s;
+    }
+    int s = static_cast<int>(best);
+    for (std::size_t k = keys.size(); k-- > 0;) {
+      plan.poses[keys[k]] = cand[keys[k]][static_cast<std::size_t>(s)].pose;
+      s = from[k][static_cast<std::size_t>(s)];
+    }
+    // Continuous C: take the turn nearest to the previous key point.
+    if (m.c.continuous) {
+      double prev_c = start ? start->c_rad : plan.poses[keys[0]].c_rad;
+      for (std::size_t k : keys) {
+        plan.poses[k].c_rad = prev_c + wrap_pi(plan.poses[k].c_rad - prev_c);
+        prev_c = plan.poses[k].c_rad;
+      }
+    }
+  }
+
+  // Points on the pole: A = 0, C interpolated between the neighbouring key points (held at
+  // the ends of the sequence), so that C never jumps where it does not move the axis.
+  std::size_t i = 0;
+  while (i < n) {
+    if (!m.at_pole(axes[i])) {
+      ++i;
+      continue;
+    }
+    std::size_t e = i;
+    while (e < n && m.at_pole(axes[e])) ++e;
+    const bool has_before = i > 0, has_after = e < n;
+    const double c_before = has_before
+                                ? plan.poses[i - 1].c_rad
+                                : (has_after ? plan.poses[e].c_rad : (start ? start->c_rad : 0.0));
+    const double c_after = has_after ? plan.poses[e].c_rad : c_before;
+    for (std::size_t k = i; k < e; ++k) {
+      const double t = (has_before && has_after)
+                           ? static_cast<double>(k - i + 1) / static_cast<double>(e - i + 1)
+                           : 0.0;
+      plan.poses[k] = Posed{0.0, c_before + t * (c_after - c_before)};
+    }
+    i = e;
+  }
+  return plan;
+}
+
+}  // namespace taxopt

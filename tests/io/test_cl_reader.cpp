@@ -1,0 +1,271 @@
+#include <catch2/catch.hpp>
+#include <set>
+
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+
+using namespace taxopt;
+using taxopt::test::read_file;
+using taxopt::test::real_data;
+
+namespace {
+
+struct Counts {
+  int gotos = 0, with_axis = 0;
+  std::set<std::tuple<long, long, long>> axes;
+};
+
+Counts count_records(const Toolpath& tp) {
+  Counts c;
+  for (const auto& r : tp.records) {
+    if (r.major != "GOTO") continue;
+    ++c.gotos;
+    // Count the numbers of the joined record text, without inline `$$` comments
+    // (NX writes the contact point there: `GOTO/x,y,z $$ cx,cy,cz`).
+    std::string joined;
+    std::size_t start = 0;
+    while (start <= r.text.size()) {
+      std::size_t end = r.text.find('\n', start);
+      if (end == std::string::npos) end = r.text.size();
+      std::string line = r.text.substr(start, end - start);
+      line = line.substr(0, line.find("$$"));
+      while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+      if (!line.empty() && line.back() == '$') line.pop_back();
+      joined += line;
+      start = end + 1;
+    }
+    const int commas = static_cast<int>(std::count(joined.begin(), joined.end(), ','));
+    if (commas == 5) ++c.with_axis;
+  }
+  for (const auto& op : tp.operations) {
+    for (const auto& p : op.points) {
+      if (p.record >= 0 && tp.records[static_cast<std::size_t>(p.record)].major == "GOTO") {
+        c.axes.insert({std::lround(p.axis.x() * 1e4), std::lround(p.axis.y() * 1e4),
+                       std::lround(p.axis.z() * 1e4)});
+      }
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("cl reader: every real file reads with the counts of SOURCES.md", "[io][cl]") {
+  struct Expect {
+    const char* file;
+    int gotos, with_axis;
+    LengthUnit units;
+    std::size_t operations;
+  };
+  const Expect expects[] = {
+      {"mech491-variable-axis-ballmill.cls", 348, 329, LengthUnit::Inch, 1},
+      {"mech491-project2-multiop.cls", 10585, 5514, LengthUnit::Inch, 15},
+      {"peening-catia-multax.aptsource", 31, 31, LengthUnit::Millimetre, 2},
+      {"amorim-tilt-support1.apt", 184, 184, LengthUnit::Millimetre, 3},
+      {"amorim-interface-glue.apt", 6311, 0, LengthUnit::Millimetre, 4},
+      {"amorim-wall-holes.apt", 1864, 692, LengthUnit::Millimetre, 10},
+      {"creopost-profilfraesen.ncl", 52, 0, LengthUnit::Millimetre, 1},
+  };
+  for (const auto& e : expects) {
+    INFO(e.file);
+    const Toolpath tp = read_cl_file(real_data(e.file));
+    const Counts c = count_records(tp);
+    CHECK(c.gotos == e.gotos);
+    CHECK(c.with_axis == e.with_axis);
+    CHECK(tp.units == e.units);
+    CHECK(tp.operations.size() == e.operations);
+    for (const auto& op : tp.operations) {
+      for (const auto& p : op.points) {
+        REQUIRE(p.axis.norm() == Approx(1.0).margin(1e-12));
+        REQUIRE(p.tip_mm.allFinite());
+      }
+    }
+  }
+}
+
+TEST_CASE("cl reader: distinct axes of the 5-axis files match SOURCES.md", "[io][cl]") {
+  CHECK(count_records(read_cl_file(real_data("mech491-variable-axis-ballmill.cls"))).axes.size() ==
+        329);
+  // 23 distinct axes on GOTOs (SOURCES.md counts them after rounding to 1e-4).
+  CHECK(count_records(read_cl_file(real_data("peening-catia-multax.aptsource"))).axes.size() == 23);
+}
+
+TEST_CASE("cl reader: a real file written back unchanged is byte-identical", "[io][cl]") {
+  for (const char* f :
+       {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
+        "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
+        "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
+    INFO(f);
+    const std::string text = read_file(real_data(f));
+    const Toolpath tp = parse_cl(text, f);
+    CHECK(format_cl(tp, tp.operations) == text);
+  }
+}
+
+TEST_CASE("cl reader: NX traps: modal axis, IPM feed, inch ball mill, listing lines", "[io][cl]") {
+  const Toolpath tp = read_cl_file(real_data("mech491-variable-axis-ballmill.cls"));
+  const auto& op = tp.operations.at(0);
+  CHECK(op.name == "NORM_PART");
+  CHECK(op.tool.is_ball());
+  CHECK(op.tool.ball_radius_mm() == Approx(0.5 * 25.4));
+  // Line 16: GOTO/-3.5411,-3.0016,1.2387 keeps the axis of line 13's GOTO.
+  const CLPointd* p = nullptr;
+  for (const auto& q : op.points) {
+    if (q.line == 16) p = &q;
+  }
+  REQUIRE(p);
+  CHECK(p->tip_mm.x() == Approx(-3.5411 * 25.4));
+  CHECK(p->axis.x() == Approx(-0.3778015).margin(1e-6));
+  CHECK(p->feed_mm_per_min == Approx(10.0 * 25.4));
+  CHECK(p->motion == Motion::Feed);
+  // The first two GOTOs follow RAPID.
+  CHECK(op.points[0].motion == Motion::Rapid);
+  CHECK(op.points[1].motion == Motion::Rapid);
+  // The trailer with no final newline is no record: one warning.
+  REQUIRE(tp.warnings.size() == 1);
+  CHECK(tp.warnings[0].find("Tool Path Listing") != std::string::npos);
+  CHECK_FALSE(tp.final_line_end);
+}
+
+TEST_CASE("cl reader: CATIA traps: CRLF, a number split by '$', FROM with an axis", "[io][cl]") {
+  const Toolpath tp = read_cl_file(real_data("peening-catia-multax.aptsource"));
+  CHECK(tp.line_end == "\r\n");
+  // CUTTER/ 1.700000, 0.000000, 0.850000, 0, 0,$ + 0.000000, 1.968504: APT d, r, e, f, a, b,
+  // h -- a 1.7 mm end mill (r = 0) of height 1.968504, the 7th number on the next line.
+  const auto& op = tp.operations.back();
+  CHECK(op.tool.diameter_mm == Approx(1.7));
+  CHECK_FALSE(op.tool.is_ball());
+  CHECK(op.tool.flute_length_mm == Approx(1.968504));
+  const auto& from = tp.operations.front().points.front();
+  CHECK(from.motion == Motion::Rapid);
+  // Line 81 ends '..., 0$' and line 82 is '.752602': the k component is 0.752602.
+  const CLPointd* p81 = nullptr;
+  for (const auto& q : op.points) {
+    if (q.line == 81) p81 = &q;
+  }
+  REQUIRE(p81);
+  CHECK(p81->tip_mm.x() == Approx(-5.673572));
+  const double norm81 = std::sqrt(0.655944 * 0.655944 + 0.057682 * 0.057682 + 0.752602 * 0.752602);
+  CHECK(p81->axis.z() == Approx(0.752602 / norm81).margin(1e-9));
+  CHECK(p81->feed_mm_per_min == Approx(2000.0));
+  for (const auto& o : tp.operations) {
+    for (const auto& q : o.points) CHECK(q.axis.norm() == Approx(1.0));
+  }
+  CHECK(tp.warnings.empty());
+}
+
+TEST_CASE("cl reader: '$' joins without a separator, also inside numbers", "[io][cl]") {
+  const Toolpath tp = parse_cl("GOTO/1.5,2.$\n25,0$\n.5,0,0,1\n", "t.cls");
+  const auto& p = tp.operations.at(0).points.at(0);
+  CHECK(p.tip_mm.y() == Approx(2.25));
+  CHECK(p.tip_mm.z() == Approx(0.5));
+  CHECK(p.line == 1);
+}
+
+TEST_CASE("cl reader: Creo comments continue over '$' and are no records", "[io][cl]") {
+  const Toolpath tp = read_cl_file(real_data("creopost-profilfraesen.ncl"));
+  CHECK(tp.warnings.empty());
+  CHECK(tp.unknown_records.empty());
+  CHECK(tp.units == LengthUnit::Millimetre);
+}
+
+TEST_CASE("cl reader: SOLIDWORKS numbers, units, tools and operations", "[io][cl]") {
+  const Toolpath tp = read_cl_file(real_data("amorim-tilt-support1.apt"));
+  const auto& p = tp.operations.at(0).points.at(0);
+  CHECK(p.axis.x() == Approx(-0.173648).margin(1e-6));
+  CHECK(tp.operations[0].tool.diameter_mm == Approx(16.0));
+  CHECK_FALSE(tp.operations[0].tool.is_ball());
+  CHECK(tp.operations[0].tool.number == 4);
+  const Toolpath glue = read_cl_file(real_data("amorim-interface-glue.apt"));
+  bool ball14 = false;
+  for (const auto& op : glue.operations)
+    ball14 = ball14 || (op.tool.is_ball() && op.tool.diameter_mm == Approx(14.0));
+  CHECK(ball14);
+}
+
+TEST_CASE("cl reader: numbers in every accepted spelling", "[io][cl]") {
+  const Toolpath tp = parse_cl("GOTO/+1.5e2,.5,16.\nGOTO/-0.25E-1 , 2 ,3\n", "t.cls");
+  const auto& pts = tp.operations.at(0).points;
+  CHECK(pts[0].tip_mm == Vec3d(150.0, 0.5, 16.0));
+  CHECK(pts[1].tip_mm.x() == Approx(-0.025));
+}
+
+TEST_CASE("cl reader: units from UNITS, from IPM feeds, and from the option", "[io][cl]") {
+  CHECK(parse_cl("UNITS/INCHES\nGOTO/1,0,0\n", "a").operations[0].points[0].tip_mm.x() ==
+        Approx(25.4));
+  CHECK(parse_cl("FEDRAT/IPM,10\nGOTO/1,0,0\n", "a").units == LengthUnit::Inch);
+  CHECK(parse_cl("FEDRAT/10,MMPM\nGOTO/1,0,0\n", "a").units == LengthUnit::Millimetre);
+  ClReadOptions o;
+  o.units = LengthUnit::Inch;
+  CHECK(parse_cl("GOTO/1,0,0\n", "a", o).operations[0].points[0].tip_mm.x() == Approx(25.4));
+  // An IPM feed in a millimetre file is still inches per minute.
+  CHECK(parse_cl("UNITS/MM\nFEDRAT/IPM,10\nGOTO/1,0,0\n", "a")
+            .operations[0]
+            .points[0]
+            .feed_mm_per_min == Approx(254.0));
+}
+
+TEST_CASE("cl reader: passes are split at rapids", "[io][cl]") {
+  const Toolpath tp = parse_cl(
+      "RAPID\nGOTO/0,0,10\nGOTO/0,0,0\nGOTO/1,0,0\nRAPID\nGOTO/1,0,10\nRAPID\nGOTO/5,0,10\n"
+      "GOTO/5,0,0\nGOTO/6,0,0\nGOTO/7,0,0\n",
+      "t");
+  const auto passes = feed_passes(tp.operations[0]);
+  REQUIRE(passes.size() == 2);
+  CHECK(passes[0].begin == 0);
+  CHECK(passes[0].end == 3);
+  CHECK(passes[1].begin == 4);
+  CHECK(passes[1].end == 8);
+}
+
+TEST_CASE("cl reader: CIRCLE becomes chords within tolerance, counter-clockwise about its axis",
+          "[io][cl]") {
+  // Quarter circle of radius 10 about +Z from (10,0) to (0,10): counter-clockwise.
+  ClReadOptions o;
+  o.arc_tolerance_mm = 0.001;
+  const Toolpath tp = parse_cl("GOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10,0.01\nGOTO/0,10,0\n", "t", o);
+  const auto& pts = tp.operations[0].points;
+  REQUIRE(pts.size() > 10);
+  for (std::size_t i = 1; i + 1 < pts.size(); ++i) {
+    CHECK(pts[i].tip_mm.head<2>().norm() == Approx(10.0).margin(1e-9));
+    CHECK(pts[i].tip_mm.x() > 0.0);
+    CHECK(pts[i].tip_mm.y() > 0.0);
+    // Sagitta of each chord within the tolerance.
+    const double chord = (pts[i].tip_mm - pts[i - 1].tip_mm).norm();
+    CHECK(10.0 - std::sqrt(100.0 - chord * chord / 4) <= 0.001 + 1e-12);
+  }
+  // About -Z the same ends go the long way round (clockwise seen from +Z).
+  const Toolpath cw = parse_cl("GOTO/10,0,0\nCIRCLE/0,0,0,0,0,-1,10\nGOTO/0,10,0\n", "t", o);
+  bool went_negative = false;
+  for (const auto& p : cw.operations[0].points)
+    went_negative = went_negative || p.tip_mm.y() < -9.0;
+  CHECK(went_negative);
+  // The unchanged file still round-trips to the same text.
+  CHECK(format_cl(tp, tp.operations) == "GOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10,0.01\nGOTO/0,10,0\n");
+}
+
+TEST_CASE("cl reader: a CIRCLE with TIMES is a helix of extra full turns", "[io][cl]") {
+  const Toolpath tp =
+      parse_cl("GOTO/10,0,5\nCIRCLE/0,0,0,0,0,1,10,0.01,TIMES,2\nGOTO/0,10,0\n", "t");
+  const auto& pts = tp.operations[0].points;
+  double turned = 0.0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const double a0 = std::atan2(pts[i - 1].tip_mm.y(), pts[i - 1].tip_mm.x());
+    const double a1 = std::atan2(pts[i].tip_mm.y(), pts[i].tip_mm.x());
+    turned += wrap_pi(a1 - a0);
+    CHECK(pts[i].tip_mm.z() <= pts[i - 1].tip_mm.z() + 1e-12);
+  }
+  CHECK(rad_to_deg(turned) == Approx(2 * 360.0 + 90.0).margin(1e-6));
+}
+
+TEST_CASE("cl writer: changed points become GOTOs in the file's units", "[io][cl]") {
+  const Toolpath tp = parse_cl("UNITS/INCHES\nGOTO/1,2,3,0,0,1\nPAINT/COLOR,3\nGOTO/2,2,3\n", "t");
+  auto ops = tp.operations;
+  ops[0].points[1].axis = Vec3d(0, -std::sqrt(0.5), std::sqrt(0.5));
+  const std::string out = format_cl(tp, ops);
+  CHECK(out.find("UNITS/INCHES\nGOTO/1,2,3,0,0,1\nPAINT/COLOR,3\nGOTO/2.000000,2.000000,3.000000,"
+                 "0.000000000,-0.707106781,0.707106781\n") == 0);
+  const Toolpath back = parse_cl(out, "back");
+  CHECK((back.operations[0].points[1].axis - ops[0].points[1].axis).norm() < 1e-9);
+}

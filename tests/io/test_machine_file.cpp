@@ -1,0 +1,100 @@
+#include <catch2/catch.hpp>
+
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/machine_file.hpp"
+
+using namespace taxopt;
+
+namespace {
+
+const char* kFull = R"(name = "generic-ac-trt"
+kinematics = "ac-table-table"
+
+[axes.A]
+min_deg = -120.0
+max_deg = 120.0
+sense = 1
+max_velocity_deg_s = 3600.0
+max_accel_deg_s2 = 36000.0
+
+[axes.C]
+continuous = true
+sense = -1
+max_velocity_deg_s = 7200.0
+max_accel_deg_s2 = 72000.0
+
+[pivot]
+a_axis_y = 1.5
+a_axis_z = -2.0
+c_axis_x = 3.0
+c_axis_y = 4.0
+
+[gcode]
+dialect = "linuxcnc"
+mode = "machine"
+feed_mode = "inverse-time"
+decimals = 5
+)";
+
+void expect_error(const std::string& text, int line, const std::string& says) {
+  try {
+    parse_machine_toml(text, "m.toml");
+    FAIL("accepted: " << says);
+  } catch (const InputError& e) {
+    CHECK(e.file() == "m.toml");
+    CHECK(e.line() == line);
+    CHECK_THAT(e.message(), Catch::Contains(says));
+  }
+}
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  REQUIRE(at != std::string::npos);
+  return s.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]") {
+  const Machine m = parse_machine_toml(kFull, "m.toml");
+  CHECK(m.name == "generic-ac-trt");
+  CHECK(rad_to_deg(m.ac.a.min_rad) == Approx(-120.0));
+  CHECK(rad_to_deg(m.ac.a.max_accel_rad_s2) == Approx(36000.0));
+  CHECK(m.ac.c.continuous);
+  CHECK(m.ac.c.sense == -1);
+  CHECK(m.ac.a_axis_point_mm == Vec3d(0, 1.5, -2.0));
+  CHECK(m.ac.c_axis_point_mm == Vec3d(3.0, 4.0, 0));
+  CHECK(m.gcode.mode == GcodeMode::Machine);
+  CHECK(m.gcode.feed_mode == FeedMode::InverseTime);
+  CHECK(m.gcode.decimals == 5);
+}
+
+TEST_CASE("machine file: every shipped machine file reads", "[io][machine]") {
+  for (const char* f : {"generic-ac-trt.toml", "linuxcnc-xyzac-trt.toml", "paper-ac.toml"}) {
+    INFO(f);
+    CHECK_NOTHROW(read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/" + f));
+  }
+}
+
+TEST_CASE("machine file: errors name the line and what was expected", "[io][machine][bad-input]") {
+  expect_error(replace(kFull, "sense = 1\n", "sense = 1\nspeed = 3\n"), 8,
+               "unknown key 'axes.A.speed'");
+  expect_error(replace(kFull, "max_deg = 120.0", "max_deg = -130.0"), 5,
+               "min_deg must be less than max_deg");
+  expect_error(replace(kFull, "sense = -1", "sense = 2"), 13, "sense must be 1 or -1");
+  expect_error(replace(kFull, "decimals = 5", "decimals = 9"), 27, "decimals");
+  expect_error(replace(kFull, "\"linuxcnc\"", "\"fanuc\""), 24, "not supported");
+  expect_error(replace(kFull, "mode = \"machine\"", "mode = \"head\""), 25, "tcp");
+  expect_error(replace(kFull, "min_deg = -120.0", "min_deg = \"low\""), 5, "must be a number");
+  expect_error(replace(kFull, "[axes.C]\ncontinuous = true\n", "[axes.C]\n"), 11,
+               "needs min_deg and max_deg");
+  expect_error(replace(kFull, "kinematics = \"ac-table-table\"", "kinematics = \"bc-head\""), 2,
+               "not supported");
+  expect_error(replace(kFull, "kinematics = \"ac-table-table\"\n", ""), 0,
+               "missing key 'kinematics'");
+  expect_error("kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -1\nmax_deg = 1\n", 0,
+               "missing section [axes.C]");
+  expect_error("kinematics = = 3\n", 1, "not valid TOML");
+  expect_error(replace(kFull, "max_accel_deg_s2 = 36000.0", "max_accel_deg_s2 = -1.0"), 9,
+               "must be positive");
+}

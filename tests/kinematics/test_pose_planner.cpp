@@ -1,0 +1,177 @@
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "taxopt/kinematics/pose_planner.hpp"
+
+using namespace taxopt;
+
+namespace {
+
+std::vector<bool> feeds(std::size_t n) {
+  std::vector<bool> r(n, false);
+  r[0] = true;
+  return r;
+}
+
+double max_c_step_deg(const std::vector<Posed>& poses) {
+  double m = 0.0;
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    m = std::max(m, std::abs(rad_to_deg(poses[i].c_rad - poses[i - 1].c_rad)));
+  }
+  return m;
+}
+
+void require_axes(const ACMachined& m, const std::vector<Posed>& poses,
+                  const std::vector<Vec3d>& axes) {
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    REQUIRE((m.forward(poses[i]) - axes[i]).norm() < 1e-9);
+    REQUIRE(m.a.contains(poses[i].a_rad));
+    REQUIRE(m.c.contains(poses[i].c_rad));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A in [-110, 30]",
+          "[kinematics][paper]") {
+  ACMachined m = default_ac_machine();
+  m.a.min_rad = deg_to_rad(-110.0);
+  m.a.max_rad = deg_to_rad(30.0);
+  const double ij[8][2] = {{-0.3281, 0.9447}, {-0.6063, 0.7952}, {-0.7259, 0.6878},
+                           {-0.7870, 0.6169}, {-0.8267, 0.5626}, {-0.8500, 0.5268},
+                           {-0.8679, 0.4968}, {-0.8804, 0.4742}};
+  const double a_deg[8] = {-19.1507, -37.3222, -46.5477, -51.9082,
+                           -55.7644, -58.2102, -60.2138, -61.6904};
+  std::vector<Vec3d> axes;
+  for (const auto& v : ij) axes.push_back(Vec3d(0, v[0], v[1]).normalized());
+  const PosePlan plan = plan_poses(m, axes, feeds(8));
+  REQUIRE(plan.ok());
+  for (int i = 0; i < 8; ++i) {
+    CHECK(rad_to_deg(plan.poses[i].a_rad) == Approx(a_deg[i]).margin(0.01));
+    CHECK(std::abs(rad_to_deg(plan.poses[i].c_rad)) == Approx(180.0).margin(0.01));
+  }
+}
+
+TEST_CASE("planner: crossing the pole A = 0 flips A's sign, C does not jump", "[kinematics]") {
+  const ACMachined m = default_ac_machine();
+  std::vector<Vec3d> axes;
+  for (int i = -10; i <= 10; ++i) {
+    axes.push_back(Eigen::AngleAxisd(deg_to_rad(3.0 * i), Vec3d::UnitY()) * Vec3d::UnitZ());
+  }
+  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+  REQUIRE(plan.ok());
+  require_axes(m, plan.poses, axes);
+  CHECK(max_c_step_deg(plan.poses) < 1e-9);
+  CHECK(plan.poses.front().a_rad * plan.poses.back().a_rad < 0.0);
+  CHECK(plan.poses[10].a_rad == 0.0);
+}
+
+TEST_CASE("planner: passing close to the pole does not swing C", "[kinematics]") {
+  const ACMachined m = default_ac_machine();
+  for (double offset_deg : {0.001, 0.05, 0.5}) {
+    std::vector<Vec3d> axes;
+    for (int i = -20; i <= 20; ++i) {
+      const Vec3d v = Eigen::AngleAxisd(deg_to_rad(2.0 * i), Vec3d::UnitY()) *
+                      (Eigen::AngleAxisd(deg_to_rad(offset_deg), Vec3d::UnitX()) * Vec3d::UnitZ());
+      axes.push_back(v);
+    }
+    const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+    REQUIRE(plan.ok());
+    require_axes(m, plan.poses, axes);
+    CHECK(max_c_step_deg(plan.poses) < 90.0);
+  }
+}
+
+TEST_CASE("planner: C unwinds past +-180 deg on a continuous axis", "[kinematics]") {
+  const ACMachined m = default_ac_machine();
+  std::vector<Vec3d> axes;
+  for (int i = 0; i <= 3 * 72; ++i) {  // three full turns of the azimuth, 5 deg a step
+    const double phi = deg_to_rad(5.0 * i);
+    axes.push_back(
+        Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+  }
+  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+  REQUIRE(plan.ok());
+  require_axes(m, plan.poses, axes);
+  CHECK(max_c_step_deg(plan.poses) == Approx(5.0).margin(1e-9));
+  CHECK(std::abs(rad_to_deg(plan.poses.back().c_rad - plan.poses.front().c_rad)) ==
+        Approx(1080.0).margin(1e-6));
+}
+
+TEST_CASE("planner: a bounded C stays in range and turns back where it must", "[kinematics]") {
+  ACMachined m = default_ac_machine();
+  m.c.continuous = false;
+  m.c.min_rad = deg_to_rad(-200.0);
+  m.c.max_rad = deg_to_rad(200.0);
+  std::vector<Vec3d> axes;
+  for (int i = 0; i <= 144; ++i) {  // two turns
+    const double phi = deg_to_rad(5.0 * i);
+    axes.push_back(
+        Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+  }
+  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+  REQUIRE(plan.ok());
+  require_axes(m, plan.poses, axes);
+}
+
+TEST_CASE("planner: an axis out of the A range is reported at its index", "[kinematics]") {
+  ACMachined m = default_ac_machine();
+  m.a.min_rad = deg_to_rad(-30.0);
+  m.a.max_rad = deg_to_rad(30.0);
+  std::vector<Vec3d> axes = {Vec3d::UnitZ(), Vec3d(0, -std::sin(0.3), std::cos(0.3)),
+                             Vec3d(0, -std::sin(0.9), std::cos(0.9))};
+  const PosePlan plan = plan_poses(m, axes, feeds(3));
+  CHECK_FALSE(plan.ok());
+  CHECK(plan.failed_index == 2);
+  CHECK_THAT(plan.message, Catch::Contains("A would be"));
+}
+
+TEST_CASE("planner: a branch change goes where the move is a rapid", "[kinematics]") {
+  // Pass 1 reachable only with A > 0, pass 2 only with A < 0 (A range [-100, 100], tilts of
+  // 60 deg towards opposite sides with C limited to [-10, 10]).
+  ACMachined m = default_ac_machine();
+  m.c.continuous = false;
+  m.c.min_rad = deg_to_rad(-10.0);
+  m.c.max_rad = deg_to_rad(10.0);
+  const Vec3d left(0, -std::sin(1.0), std::cos(1.0)), right(0, std::sin(1.0), std::cos(1.0));
+  std::vector<Vec3d> axes = {left, left, left, right, right, right};
+  std::vector<bool> rapid = {true, false, false, true, false, false};
+  const PosePlan plan = plan_poses(m, axes, rapid);
+  REQUIRE(plan.ok());
+  require_axes(m, plan.poses, axes);
+  CHECK(plan.poses[0].a_rad > 0.0);
+  CHECK(plan.poses[5].a_rad < 0.0);
+}
+
+TEST_CASE("planner: a 3-axis path stays at A = 0 with C held", "[kinematics]") {
+  const std::vector<Vec3d> axes(5, Vec3d::UnitZ());
+  const PosePlan plan = plan_poses(default_ac_machine(), axes, feeds(5), Posed{0.0, 1.25});
+  REQUIRE(plan.ok());
+  for (const auto& p : plan.poses) {
+    CHECK(p.a_rad == 0.0);
+    CHECK(p.c_rad == 1.25);
+  }
+}
+
+TEST_CASE("planner: random smooth paths never jump C by 90 deg on the default machine",
+          "[kinematics]") {
+  std::mt19937 rng(4242);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const ACMachined m = default_ac_machine();
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<Vec3d> axes;
+    Vec3d v = Vec3d(0.3 * n(rng), 0.3 * n(rng), 1.0).normalized();
+    for (int i = 0; i < 100; ++i) {
+      // Steps of at most ~3 deg, staying in the upper hemisphere.
+      Vec3d w = (v + 0.05 * Vec3d(n(rng), n(rng), n(rng))).normalized();
+      if (w.z() < 0.2) w = (w + Vec3d(0, 0, 0.5)).normalized();
+      if (angle_between(v, w) > deg_to_rad(8.0)) w = v;
+      v = w;
+      axes.push_back(v);
+    }
+    const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+    REQUIRE(plan.ok());
+    require_axes(m, plan.poses, axes);
+    REQUIRE(max_c_step_deg(plan.poses) <= 90.0);
+  }
+}

@@ -1,0 +1,175 @@
+#include "support.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace taxopt::test {
+
+TempDir::TempDir() {
+  std::string templ = (std::filesystem::temp_directory_path() / "taxopt-test-XXXXXX").string();
+  std::vector<char> buf(templ.begin(), templ.end());
+  buf.push_back('\0');
+  if (!::mkdtemp(buf.data())) throw std::runtime_error("mkdtemp failed");
+  dir_ = buf.data();
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void write_file(const std::string& path, const std::string& content) {
+  std::ofstream out(path, std::ios::binary);
+  out << content;
+}
+
+bool file_exists(const std::string& path) { return std::filesystem::exists(path); }
+
+std::string real_data(const std::string& name) {
+  return std::string(TAXOPT_TEST_DATA) + "/real/" + name;
+}
+
+RunResult run(const std::string& command) {
+  TempDir tmp;
+  const std::string out = tmp.path("out"), err = tmp.path("err");
+  const std::string full = command + " >" + out + " 2>" + err + " </dev/null";
+  const int status = std::system(full.c_str());
+  RunResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = read_file(out);
+  r.err = read_file(err);
+  return r;
+}
+
+RunResult run_taxopt(const std::string& args) { return run(std::string(TAXOPT_EXE) + " " + args); }
+
+bool have_rs274() { return run("command -v rs274").code == 0; }
+
+RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) {
+  TempDir tmp;
+  std::string table;
+  for (int t = 1; t < 100; ++t) {
+    table += "T" + std::to_string(t) + " P" + std::to_string(t) + " D6 Z0 ;\n";
+  }
+  write_file(tmp.path("tool.tbl"), table);
+  RunResult r = run("rs274 -t " + tmp.path("tool.tbl") + " -g " + ngc_path);
+  moves.clear();
+  std::istringstream in(r.out);
+  std::string line;
+  while (std::getline(in, line)) {
+    const bool feed = line.find("STRAIGHT_FEED(") != std::string::npos;
+    const bool trav = line.find("STRAIGHT_TRAVERSE(") != std::string::npos;
+    if (!feed && !trav) continue;
+    CanonMove m;
+    m.feed = feed;
+    const auto open = line.find('(');
+    if (std::sscanf(line.c_str() + open + 1, "%lf, %lf, %lf, %lf, %lf, %lf", &m.x, &m.y, &m.z, &m.a,
+                    &m.b, &m.c) != 6) {
+      throw std::runtime_error("cannot parse rs274 line: " + line);
+    }
+    moves.push_back(m);
+  }
+  return r;
+}
+
+namespace {
+
+Heightfield make(const std::string& name, std::function<double(double, double)> z) {
+  Heightfield hf;
+  hf.name = name;
+  hf.z = z;
+  hf.normal = [z](double x, double y) {
+    const double h = 1e-5;
+    const double zx = (z(x + h, y) - z(x - h, y)) / (2 * h);
+    const double zy = (z(x, y + h) - z(x, y - h)) / (2 * h);
+    return Vec3d(-zx, -zy, 1.0).normalized();
+  };
+  return hf;
+}
+
+}  // namespace
+
+std::vector<Heightfield> random_heightfields(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Heightfield> out;
+  {
+    const double height = 10 + 15 * u(rng), width = 2 + 4 * u(rng), x0 = 20 + 10 * u(rng);
+    const double skew = 0.3 * (u(rng) - 0.5);
+    out.push_back(make("steep flank", [=](double x, double y) {
+      return height * std::tanh((x - x0 + skew * y) / width);
+    }));
+  }
+  {
+    const double h = 8 + 12 * u(rng), s = 4 + 6 * u(rng), cx = 20 + 10 * u(rng),
+                 cy = 20 + 10 * u(rng);
+    out.push_back(make("bump", [=](double x, double y) {
+      return h * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * s * s));
+    }));
+  }
+  {
+    const double h = 20 + 20 * u(rng), xw = 30 + 10 * u(rng), soft = 0.8 + 0.8 * u(rng);
+    out.push_back(
+        make("wall", [=](double x, double) { return h / (1.0 + std::exp(-(x - xw) / soft)); }));
+  }
+  return out;
+}
+
+GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
+                      double step_mm, double y0, double y1, double x0, double x1) {
+  GeneratedCl g;
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(6);
+  os << "TOOL PATH/GENERATED_" << hf.name.substr(0, hf.name.find(' ')) << ",TOOL,BALL\n";
+  os << "TLDATA/MILL," << 2 * r_mm << "," << r_mm << ",30.0,0.0,0.0\n";
+  os << "MSYS/0,0,0,1,0,0,0,1,0\n";
+  const double tilt = deg_to_rad(tilt_deg);
+  for (int p = 0; p < passes; ++p) {
+    const double y = passes > 1 ? y0 + (y1 - y0) * p / (passes - 1) : y0;
+    const int n = static_cast<int>(std::ceil((x1 - x0) / step_mm));
+    for (int i = 0; i <= n; ++i) {
+      const double x = x0 + (x1 - x0) * i / n;
+      const Vec3d s(x, y, hf.z(x, y));
+      const Vec3d nrm = hf.normal(x, y);
+      // Tilt about the feed direction's side vector K = N x T (eq. 11 with yaw 0).
+      const Vec3d t = (Vec3d::UnitX() - Vec3d::UnitX().dot(nrm) * nrm).normalized();
+      const Vec3d k = nrm.cross(t);
+      const Vec3d v = Eigen::AngleAxisd(tilt, k) * nrm;
+      const Vec3d tip = s + r_mm * nrm - r_mm * v;
+      if (i == 0) {
+        const Vec3d above = tip + 20.0 * Vec3d::UnitZ();
+        os << "RAPID\nGOTO/" << above.x() << "," << above.y() << "," << above.z() << "," << v.x()
+           << "," << v.y() << "," << v.z() << "\n";
+        g.tips_mm.push_back(above);
+        g.axes.push_back(v);
+        g.rapid.push_back(true);
+        os << "FEDRAT/MMPM,250.0\n";
+      }
+      os << "GOTO/" << tip.x() << "," << tip.y() << "," << tip.z() << "," << v.x() << "," << v.y()
+         << "," << v.z() << "\n";
+      g.tips_mm.push_back(tip);
+      g.axes.push_back(v);
+      g.rapid.push_back(false);
+    }
+  }
+  os << "END-OF-PATH\n";
+  g.text = os.str();
+  return g;
+}
+
+}  // namespace taxopt::test

@@ -1,0 +1,74 @@
+#pragma once
+// Helpers shared by the tests: temporary folders, running the CLI and rs274, and CL files of
+// heightfield parts made on the fly (parts no test was tuned on: seeded random shapes).
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "taxopt/core/types.hpp"
+
+namespace taxopt::test {
+
+/// A fresh empty directory under the system temp folder, removed at destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+};
+
+std::string read_file(const std::string& path);
+void write_file(const std::string& path, const std::string& content);
+bool file_exists(const std::string& path);
+std::string real_data(const std::string& name);
+
+/// Result of a command: exit code, stdout and stderr.
+struct RunResult {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+/// Runs a shell command line.
+RunResult run(const std::string& command);
+/// Runs the taxopt CLI with the given arguments (already quoted as needed).
+RunResult run_taxopt(const std::string& args);
+/// True when LinuxCNC's rs274 is installed.
+bool have_rs274();
+
+/// One canonical move printed by rs274 (program units, degrees).
+struct CanonMove {
+  bool feed = false;
+  double x = 0, y = 0, z = 0, a = 0, b = 0, c = 0;
+};
+/// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
+RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves);
+
+/// A heightfield z = f(x, y) with its gradient.
+struct Heightfield {
+  std::string name;
+  std::function<double(double, double)> z;
+  std::function<Vec3d(double, double)> normal;  // unit, upward
+};
+/// Seeded random heightfields of the kinds a CAM user meets: a steep flank, a bump, a wall.
+std::vector<Heightfield> random_heightfields(std::mt19937& rng);
+
+/// Ground truth of a generated CL file: tip and axis of every GOTO in file order.
+struct GeneratedCl {
+  std::string text;
+  std::vector<Vec3d> tips_mm;
+  std::vector<Vec3d> axes;
+  std::vector<bool> rapid;
+};
+/// Raster passes along x over `hf` with a ball-end mill of radius r_mm; the axis is the
+/// surface normal tilted by tilt_deg about the pass direction. NX CLSF in mm.
+GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
+                      double step_mm, double y0, double y1, double x0, double x1);
+
+}  // namespace taxopt::test

@@ -1,0 +1,154 @@
+// The command line as scripts see it: exit codes, the error line, atomic outputs.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "support.hpp"
+
+using namespace taxopt::test;
+
+namespace {
+
+const char* kSmallCl =
+    "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6.0,3.0,20.0,0,0\nRAPID\nGOTO/0,0,10,0,0,1\n"
+    "FEDRAT/MMPM,250\nGOTO/0,0,0,0,-0.3281,0.9447\nGOTO/1,0,0,0,-0.6063,0.7952\n"
+    "GOTO/2,0,0\nEND-OF-PATH\n";
+
+}  // namespace
+
+TEST_CASE("cli: --version and --help exit 0", "[cli]") {
+  const auto v = run_taxopt("--version");
+  CHECK(v.code == 0);
+  CHECK_THAT(v.out, Catch::Contains("taxopt 0."));
+  const auto h = run_taxopt("--help");
+  CHECK(h.code == 0);
+  CHECK_THAT(h.out, Catch::Contains("--gcode"));
+}
+
+TEST_CASE("cli: bad usage exits 2 with one error line", "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  for (const std::string& args :
+       {std::string("--bogus"), std::string("--gcode x.nc"), "--in " + t.path("a.cls"),
+        "--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " --method fast",
+        "--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " --method none --feed -3",
+        "--in " + t.path("missing.cls") + " --gcode " + t.path("o.nc")}) {
+    INFO(args);
+    const auto r = run_taxopt(args);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: "));
+    CHECK_FALSE(file_exists(t.path("o.nc")));
+  }
+}
+
+TEST_CASE("cli: a malformed CL file names file and line, exits 2, writes nothing",
+          "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("bad.cls"), "GOTO/0,0,0\nGOTO/1,2..0,3\n");
+  write_file(t.path("out.nc"), "good old program\n");
+  const auto r = run_taxopt("--in " + t.path("bad.cls") + " --gcode " + t.path("out.nc") +
+                            " --report " + t.path("r.json") + " --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: " + t.path("bad.cls") + ":2: "));
+  CHECK(read_file(t.path("out.nc")) == "good old program\n");
+  CHECK_FALSE(file_exists(t.path("r.json")));
+  // No temporary file is left behind either.
+  CHECK(run("ls -A " + t.dir() + " | grep -c taxopt-").out == "0\n");
+}
+
+TEST_CASE("cli: an output path equal to the input is refused", "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  const auto r =
+      run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.dir() + "/./a.cls --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("is the input file"));
+  CHECK(read_file(t.path("a.cls")) == kSmallCl);
+}
+
+TEST_CASE("cli: an unwritable output exits 2 and leaves the others unwritten", "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") +
+                            " --report /nonexistent-dir/r.json --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("/nonexistent-dir/r.json"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+}
+
+TEST_CASE("cli: axes out of the machine's range exit 1 and write nothing without --force",
+          "[cli]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -10\nmax_deg = 10\n"
+             "[axes.C]\ncontinuous = true\n");
+  const std::string base = "--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                           " --gcode " + t.path("o.nc") + " --method none";
+  const auto r = run_taxopt(base);
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err,
+             Catch::Contains(t.path("a.cls") + ":6: operation T: no pose within the axis ranges"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+}
+
+TEST_CASE("cli: the methods of later versions are refused clearly", "[cli]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--method paper is not available"));
+  const auto p = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") +
+                            " --method none --part x.stl");
+  CHECK(p.code == 2);
+  CHECK_THAT(p.err, Catch::Contains("--part"));
+}
+
+TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") +
+                            " --report " + t.path("r.json") + " --points-csv " + t.path("p.csv") +
+                            " --out-cls " + t.path("o.cls") + " --method none -q");
+  REQUIRE(r.code == 0);
+  CHECK(r.out.empty());
+  const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
+  CHECK(j["method"] == "none");
+  CHECK(j["taxopt_version"].is_string());
+  const auto& op = j["operations"].at(0);
+  CHECK(op["name"] == "T");
+  CHECK(op["points"] == 4);
+  CHECK(op["feed_mm_min"] == 250.0);
+  for (const char* side : {"before", "after"}) {
+    for (const char* key : {"max_omega_deg_s", "max_accel_deg_s2", "rms_accel_deg_s2", "c_jumps",
+                            "colliding_points"}) {
+      CHECK(op[side].contains(key));
+    }
+  }
+  CHECK(op["max_axis_change_deg"] == 0.0);
+  CHECK(op["verification"]["within_axis_limits"] == true);
+  CHECK(op["verification"]["roundtrip_max_mm"].get<double>() < 1e-4);
+  CHECK(op["verification"]["collision_free"].is_null());
+  for (const char* key : {"cspace", "optimise", "post"}) CHECK(op["timings_s"].contains(key));
+  // Before and after agree with --method none; the paper's first axis gives its omega.
+  CHECK(op["before"]["max_omega_deg_s"] == op["after"]["max_omega_deg_s"]);
+  const std::string csv = read_file(t.path("p.csv"));
+  CHECK_THAT(
+      csv, Catch::StartsWith(
+               "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
+               "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells\n"));
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
+  CHECK(read_file(t.path("o.cls")) == kSmallCl);
+}
+
+TEST_CASE("cli: the same input gives the same bytes at 1 and 2 threads", "[cli]") {
+  TempDir t;
+  const std::string in = real_data("mech491-variable-axis-ballmill.cls");
+  const auto a = run_taxopt("--in " + in + " --gcode " + t.path("1.nc") + " --points-csv " +
+                            t.path("1.csv") + " --method none --threads 1 -q");
+  const auto b = run_taxopt("--in " + in + " --gcode " + t.path("2.nc") + " --points-csv " +
+                            t.path("2.csv") + " --method none --threads 2 -q");
+  REQUIRE(a.code == 0);
+  REQUIRE(b.code == 0);
+  CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
+  CHECK(read_file(t.path("1.csv")) == read_file(t.path("2.csv")));
+}

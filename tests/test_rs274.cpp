@@ -1,0 +1,188 @@
+// Integration with LinuxCNC's real interpreter: every file taxopt writes must run through
+// `rs274 -g`, and its canonical moves must put the tool where the CL file says.
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <random>
+
+#include "support.hpp"
+#include "taxopt/io/gcode.hpp"
+#include "taxopt/io/machine_file.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+int trials() {
+  const char* env = std::getenv("TAXOPT_PROPERTY_TRIALS");
+  return env ? std::max(1, std::atoi(env)) : 2;
+}
+
+struct Checked {
+  double max_tip_mm = 0.0;
+  double max_axis_deg = 0.0;
+  double max_c_step_feed_deg = 0.0;
+  std::vector<CanonMove> moves;
+};
+
+/// Runs rs274 on `ngc` and compares its moves one by one with the generated CL points.
+Checked check_against(const std::string& ngc, const GeneratedCl& g, const Machine& m,
+                      double unit_mm) {
+  Checked out;
+  const RunResult r = run_rs274(ngc, out.moves);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(out.moves.size() == g.tips_mm.size());
+  for (std::size_t i = 0; i < out.moves.size(); ++i) {
+    const CanonMove& cm = out.moves[i];
+    REQUIRE(cm.feed == !g.rapid[i]);
+    const Posed pose{deg_to_rad(cm.a), deg_to_rad(cm.c)};
+    const Vec3d xyz = Vec3d(cm.x, cm.y, cm.z) * unit_mm;
+    const Vec3d tip = m.gcode.mode == GcodeMode::Machine ? m.ac.from_machine_mm(xyz, pose) : xyz;
+    if (m.gcode.mode == GcodeMode::Machine) {
+      // Compare in the machine's own coordinates, as the convention defines them.
+      out.max_tip_mm =
+          std::max(out.max_tip_mm, (xyz - m.ac.to_machine_mm(g.tips_mm[i], pose)).norm());
+    } else {
+      out.max_tip_mm = std::max(out.max_tip_mm, (tip - g.tips_mm[i]).norm());
+    }
+    out.max_axis_deg =
+        std::max(out.max_axis_deg, rad_to_deg(angle_between(m.ac.forward(pose), g.axes[i])));
+    if (i > 0 && cm.feed) {
+      out.max_c_step_feed_deg =
+          std::max(out.max_c_step_feed_deg, std::abs(cm.c - out.moves[i - 1].c));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("rs274: --method none on unseen heightfields puts every tip and axis in place",
+          "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> tilt(0.0, 15.0), yoff(-3.0, 3.0);
+  for (int t = 0; t < trials(); ++t) {
+    for (const Heightfield& hf : random_heightfields(rng)) {
+      INFO(hf.name << " trial " << t);
+      TempDir dir;
+      const double y = 25.0 + yoff(rng);
+      const GeneratedCl g = raster_cl(hf, 3.0, tilt(rng), 4, 0.5, y - 4.0, y + 4.0, 0.0, 50.0);
+      write_file(dir.path("in.cls"), g.text);
+      const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --gcode " +
+                                     dir.path("out.ngc") + " --method none -q");
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      const Checked c = check_against(dir.path("out.ngc"), g, default_machine(), 1.0);
+      CHECK(c.max_tip_mm <= 0.002);
+      CHECK(c.max_axis_deg <= 0.01);
+      CHECK(c.max_c_step_feed_deg <= 90.0);
+    }
+  }
+}
+
+TEST_CASE("rs274: machine mode with pivot offsets and inverse time follows the CLI.md convention",
+          "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(77);
+  for (int sense : {1, -1}) {
+    for (const char* feed_mode : {"units-per-minute", "inverse-time"}) {
+      INFO("sense " << sense << " " << feed_mode);
+      TempDir dir;
+      const std::string toml = std::string(
+                                   "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+                                   "max_deg = 120\nsense = ") +
+                               std::to_string(sense) +
+                               "\n[axes.C]\ncontinuous = true\nsense = " + std::to_string(sense) +
+                               "\n[pivot]\na_axis_y = 12.5\na_axis_z = -80.0\nc_axis_x = 7.0\n"
+                               "c_axis_y = -4.0\n[gcode]\nmode = \"machine\"\nfeed_mode = \"" +
+                               feed_mode + "\"\n";
+      write_file(dir.path("m.toml"), toml);
+      const Machine m = read_machine_file(dir.path("m.toml"));
+      const auto hfs = random_heightfields(rng);
+      const GeneratedCl g = raster_cl(hfs[1], 3.0, 10.0, 3, 0.5, 20.0, 30.0, 5.0, 45.0);
+      write_file(dir.path("in.cls"), g.text);
+      const RunResult r =
+          run_taxopt("--in " + dir.path("in.cls") + " --machine " + dir.path("m.toml") +
+                     " --gcode " + dir.path("out.ngc") + " --method none -q");
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      const Checked c = check_against(dir.path("out.ngc"), g, m, 1.0);
+      CHECK(c.max_tip_mm <= 0.002);
+      CHECK(c.max_axis_deg <= 0.01);
+    }
+  }
+}
+
+TEST_CASE("rs274: sense -1 writes mirrored A and C for the same tool axes",
+          "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(5);
+  const auto hfs = random_heightfields(rng);
+  const GeneratedCl g = raster_cl(hfs[0], 3.0, 5.0, 2, 0.5, 10.0, 40.0, 0.0, 50.0);
+  TempDir dir;
+  write_file(dir.path("in.cls"), g.text);
+  std::vector<CanonMove> plus, minus;
+  REQUIRE(run_taxopt("--in " + dir.path("in.cls") + " --gcode " + dir.path("p.ngc") +
+                     " --method none -q")
+              .code == 0);
+  REQUIRE(run_taxopt("--in " + dir.path("in.cls") + " --gcode " + dir.path("m.ngc") +
+                     " --method none -q --machine " + std::string(TAXOPT_SOURCE_DIR) +
+                     "/data/machines/linuxcnc-xyzac-trt.toml")
+              .code == 0);
+  REQUIRE(run_rs274(dir.path("p.ngc"), plus).code == 0);
+  REQUIRE(run_rs274(dir.path("m.ngc"), minus).code == 0);
+  REQUIRE(plus.size() == minus.size());
+  const Machine mm =
+      read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
+  for (std::size_t i = 0; i < plus.size(); ++i) {
+    CHECK(minus[i].a == Approx(-plus[i].a).margin(1e-4));
+    CHECK(minus[i].c == Approx(-plus[i].c).margin(1e-4));
+    const Vec3d v = mm.ac.forward({deg_to_rad(minus[i].a), deg_to_rad(minus[i].c)});
+    CHECK(rad_to_deg(angle_between(v, g.axes[i])) <= 0.01);
+  }
+}
+
+TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for move",
+          "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  for (const char* f :
+       {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
+        "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
+        "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
+    INFO(f);
+    TempDir dir;
+    const RunResult r =
+        run_taxopt("--in " + real_data(f) + " --gcode " + dir.path("o.ngc") + " --method none -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::vector<CanonMove> moves;
+    const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
+    INFO(rs.out.substr(rs.out.size() > 400 ? rs.out.size() - 400 : 0));
+    REQUIRE(rs.code == 0);
+    const auto ours = read_gcode_moves(read_file(dir.path("o.ngc")), "o.ngc");
+    REQUIRE(moves.size() == ours.size());
+    for (std::size_t i = 0; i < ours.size(); ++i) {
+      REQUIRE(moves[i].a == Approx(ours[i].a_deg).margin(1e-4));
+      REQUIRE(moves[i].c == Approx(ours[i].c_deg).margin(1e-4));
+    }
+  }
+}
+
+TEST_CASE("rs274: inch output of a millimetre file", "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(11);
+  const auto hfs = random_heightfields(rng);
+  const GeneratedCl g = raster_cl(hfs[2], 3.0, 0.0, 2, 0.5, 10.0, 20.0, 20.0, 50.0);
+  TempDir dir;
+  write_file(dir.path("in.cls"), g.text);
+  const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --gcode " + dir.path("o.ngc") +
+                                 " --units-out in --method none -q");
+  REQUIRE(r.code == 0);
+  CHECK_THAT(read_file(dir.path("o.ngc")), Catch::Contains("G20"));
+  // 4 decimals of an inch: each coordinate within 0.00005 in.
+  const Checked c = check_against(dir.path("o.ngc"), g, default_machine(), 25.4);
+  CHECK(c.max_tip_mm <= std::sqrt(3.0) * 0.00005 * 25.4 + 1e-9);
+  CHECK(c.max_axis_deg <= 0.01);
+}

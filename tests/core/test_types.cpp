@@ -13,7 +13,7 @@ TEMPLATE_TEST_CASE("types: degree and radian conversions invert each other", "[c
   CHECK(deg_to_rad(TestType(180)) == Approx(Constants<TestType>::pi()));
 }
 
-TEST_CASE("types: wrap_pi maps to (-pi, pi]", "[core]") {
+TEST_CASE("types: wrap_pi maps into -pi < a <= pi", "[core]") {
   const double pi = Constants<double>::pi();
   CHECK(wrap_pi(pi) == Approx(pi));
   CHECK(wrap_pi(-pi) == Approx(pi));

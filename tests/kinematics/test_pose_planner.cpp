@@ -32,7 +32,7 @@ void require_axes(const ACMachined& m, const std::vector<Posed>& poses,
 
 }  // namespace
 
-TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A in [-110, 30]",
+TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A from -110 to 30 deg",
           "[kinematics][paper]") {
   ACMachined m = default_ac_machine();
   m.a.min_rad = deg_to_rad(-110.0);

@@ -152,3 +152,27 @@ TEST_CASE("cli: the same input gives the same bytes at 1 and 2 threads", "[cli]"
   CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
   CHECK(read_file(t.path("1.csv")) == read_file(t.path("2.csv")));
 }
+
+TEST_CASE("cli: generate reproduces the bundled demo files byte for byte", "[cli][generator]") {
+  TempDir t;
+  const auto r =
+      run_taxopt("generate --out-cls " + t.path("s.cls") + " --out-mesh " + t.path("s.stl"));
+  REQUIRE(r.code == 0);
+  CHECK(read_file(t.path("s.cls")) ==
+        read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls"));
+  CHECK(read_file(t.path("s.stl")) ==
+        read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl"));
+}
+
+TEST_CASE("cli: generate refuses impossible settings with exit 2", "[cli][generator][bad-input]") {
+  TempDir t;
+  for (const std::string& bad :
+       {std::string("--scallop 0"), std::string("--tool-radius -1"), std::string("--surface torus"),
+        std::string("--height 1 --wavelength 4")}) {
+    INFO(bad);
+    const auto r = run_taxopt("generate --out-cls " + t.path("s.cls") + " " + bad);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: "));
+    CHECK_FALSE(file_exists(t.path("s.cls")));
+  }
+}

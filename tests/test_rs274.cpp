@@ -186,3 +186,21 @@ TEST_CASE("rs274: inch output of a millimetre file", "[rs274][integration]") {
   CHECK(c.max_tip_mm <= std::sqrt(3.0) * 0.00005 * 25.4 + 1e-9);
   CHECK(c.max_axis_deg <= 0.01);
 }
+
+TEST_CASE("rs274: taxopt demo writes G-code rs274 accepts, with the paper's C flips counted",
+          "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  TempDir dir;
+  const RunResult r = run_taxopt("demo --out " + dir.path("demo"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.out, Catch::Contains("SINE_FINISH"));
+  std::vector<CanonMove> moves;
+  REQUIRE(run_rs274(dir.path("demo/demo.nc"), moves).code == 0);
+  CHECK(moves.size() > 1000);
+  CHECK(file_exists(dir.path("demo/report.json")));
+  CHECK(file_exists(dir.path("demo/points.csv")));
+  // A is limited to [-110, 30] deg: the axis crossing the vertical needs C flips (paper fig. 21).
+  const std::string report = read_file(dir.path("demo/report.json"));
+  CHECK(report.find("\"c_jumps\": 0") == std::string::npos);
+}

@@ -3,6 +3,8 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -11,8 +13,11 @@
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
+#include "taxopt/geometry/raster_generator.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/mesh_file.hpp"
 #include "taxopt/job.hpp"
 
 namespace {
@@ -49,6 +54,103 @@ void print_summary(const taxopt::JobResult& result) {
                 r.after.max_omega_deg_s, r.after.max_accel_deg_s2, r.after.c_jumps,
                 r.max_axis_change_deg);
   }
+}
+
+/// Options of `taxopt generate` (lengths mm, angles deg), defaults = the paper's case.
+struct GenerateArgs {
+  std::string surface = "sine", out_cls, out_mesh;
+  double height_mm = 10.0, wavelength_mm = 40.0, width_mm = 20.0, length_mm = 80.0;
+  double mesh_step_mm = 0.5, feed_mm_per_min = 250.0, spindle_rpm = 3000.0;
+  taxopt::RasterOptions raster;
+};
+
+/// Folder of the bundled data: $TAXOPT_DATA_DIR, else the installed share/taxopt/data beside
+/// the executable, else the source tree this binary was built from.
+std::string data_dir(const char* argv0) {
+  namespace fs = std::filesystem;
+  if (const char* env = std::getenv("TAXOPT_DATA_DIR")) return env;
+  std::error_code ec;
+  const fs::path exe = fs::canonical("/proc/self/exe", ec);
+  const fs::path installed =
+      (ec ? fs::path(argv0) : exe).parent_path() / ".." / "share" / "taxopt" / "data";
+  if (fs::exists(installed / "demo", ec)) return installed.string();
+  return TAXOPT_SOURCE_DATA_DIR;
+}
+
+int run_generate(const GenerateArgs& g) {
+  if (g.out_cls.empty() && g.out_mesh.empty())
+    return error("generate: give --out-cls and/or --out-mesh", 2);
+  if (g.surface != "sine" && g.surface != "plane") {
+    return error("generate: --surface must be sine or plane", 2);
+  }
+  for (double v :
+       {g.height_mm, g.wavelength_mm, g.width_mm, g.length_mm, g.mesh_step_mm, g.feed_mm_per_min}) {
+    if (!(v > 0.0)) return error("generate: lengths, mesh step and feed must be positive", 2);
+  }
+  taxopt::SineSurfaced sine;
+  sine.height_mm = g.height_mm;
+  sine.wavelength_mm = g.wavelength_mm;
+  sine.x1_mm = g.width_mm;
+  sine.y1_mm = g.length_mm;
+  taxopt::Planed plane;
+  plane.u_size_mm = g.width_mm;
+  plane.v_size_mm = g.length_mm;
+  std::vector<taxopt::GeneratedPoint> pts;
+  taxopt::TriangleMesh mesh;
+  // The mesh extends beyond the path by the tool's reach so that a tool at the path's edge
+  // still sees the part around it.
+  const double margin = 4.0 * g.raster.tool_radius_mm;
+  const auto cells = [&](double size) {
+    return std::max(1, static_cast<int>(std::ceil(size / g.mesh_step_mm)));
+  };
+  try {
+    if (g.surface == "sine") {
+      pts = taxopt::generate_raster(sine, g.raster);
+      taxopt::SineSurfaced big = sine;
+      big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
+      mesh = taxopt::tessellate(big, cells(big.x1_mm - big.x0_mm), cells(big.y1_mm - big.y0_mm));
+    } else {
+      pts = taxopt::generate_raster(plane, g.raster);
+      taxopt::Planed big = plane;
+      big.origin = taxopt::Vec3d(-margin, -margin, 0.0);
+      big.u_size_mm += 2 * margin, big.v_size_mm += 2 * margin;
+      mesh = taxopt::tessellate(big, cells(big.u_size_mm), cells(big.v_size_mm));
+    }
+  } catch (const std::invalid_argument& e) {
+    return error(std::string("generate: ") + e.what(), 2);
+  }
+  taxopt::Operationd op;
+  op.name = g.surface == "sine" ? "SINE_FINISH" : "PLANE_FINISH";
+  op.tool.name =
+      "BALL_MILL_D" + std::to_string(static_cast<int>(std::lround(2 * g.raster.tool_radius_mm)));
+  op.tool.number = 1;
+  op.tool.diameter_mm = 2 * g.raster.tool_radius_mm;
+  op.tool.corner_radius_mm = g.raster.tool_radius_mm;
+  op.tool.flute_length_mm = 5 * g.raster.tool_radius_mm;
+  op.spindle_rpm = g.spindle_rpm;
+  std::size_t gouging = 0;
+  for (const auto& p : pts) {
+    taxopt::CLPointd c;
+    c.tip_mm = p.tip_mm;
+    c.axis = p.axis;
+    c.motion = p.rapid ? taxopt::Motion::Rapid : taxopt::Motion::Feed;
+    c.feed_mm_per_min = p.rapid ? 0.0 : g.feed_mm_per_min;
+    op.points.push_back(c);
+    gouging += p.gouges ? 1 : 0;
+  }
+  if (gouging) {
+    return error(
+        "generate: " + std::to_string(gouging) +
+            " contact points have a concave radius below the tool radius: the ball "
+            "would gouge (eq. 19); use a longer wavelength, a lower height or a smaller tool",
+        2);
+  }
+  taxopt::OutputTransaction tx;
+  if (!g.out_cls.empty()) tx.stage(g.out_cls, taxopt::format_new_cl({op}));
+  if (!g.out_mesh.empty())
+    tx.stage(g.out_mesh, taxopt::format_stl_binary(mesh, "taxopt generate " + g.surface));
+  tx.commit();
+  return 0;
 }
 
 }  // namespace
@@ -91,6 +193,28 @@ int main(int argc, char** argv) {
   later->add_option("--holder-length", a.holder_length, "holder length");
   later->add_option("--gauge-length", a.gauge_length, "gauge length");
 
+  GenerateArgs gen;
+  auto* generate =
+      app.add_subcommand("generate", "write a CL file and part mesh of a built-in surface");
+  generate->add_option("--surface", gen.surface, "sine (the paper's case) | plane");
+  generate->add_option("--out-cls", gen.out_cls, "CL file to write (NX CLSF, mm)");
+  generate->add_option("--out-mesh", gen.out_mesh, "part mesh to write (binary STL, mm)");
+  generate->add_option("--height", gen.height_mm, "sine amplitude, mm (10)");
+  generate->add_option("--wavelength", gen.wavelength_mm, "sine wavelength along y, mm (40)");
+  generate->add_option("--width", gen.width_mm, "extent along x (across the passes), mm (20)");
+  generate->add_option("--length", gen.length_mm, "extent along y (the feed direction), mm (80)");
+  generate->add_option("--tool-radius", gen.raster.tool_radius_mm, "ball radius, mm (3)");
+  generate->add_option("--scallop", gen.raster.scallop_mm, "scallop height, mm (0.02)");
+  generate->add_option("--chord-error", gen.raster.chord_error_mm, "chord error, mm (0.05)");
+  generate->add_option("--tilt", gen.raster.tilt_deg, "tilt, deg (5)");
+  generate->add_option("--yaw", gen.raster.yaw_deg, "yaw, deg (0)");
+  generate->add_option("--feed", gen.feed_mm_per_min, "feed, mm/min (250)");
+  generate->add_option("--spindle", gen.spindle_rpm, "spindle speed, rpm (3000)");
+  generate->add_option("--mesh-step", gen.mesh_step_mm, "mesh grid spacing, mm (0.5)");
+  std::string demo_out = "taxopt-demo";
+  auto* demo = app.add_subcommand("demo", "run the bundled sine-surface case from data/");
+  demo->add_option("--out", demo_out, "output folder (taxopt-demo)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -98,6 +222,31 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::cerr << "taxopt: error: " << e.what() << "\nRun with --help for the options.\n";
     return 2;
+  }
+
+  if (*generate) {
+    try {
+      return run_generate(gen);
+    } catch (const taxopt::InputError& e) {
+      return error(e.what(), 2);
+    }
+  }
+  if (*demo) {
+    // The demo is the main job with the bundled files: the sine part's CL file on the
+    // paper's machine (A limited to [-110, 30] deg).
+    const std::string data = data_dir(argv[0]);
+    if (!std::filesystem::exists(data + "/demo/sine.cls")) {
+      return error(data + "/demo/sine.cls: demo data not found (set TAXOPT_DATA_DIR)", 2);
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(demo_out, ec);
+    if (ec) return error(demo_out + ": cannot create folder: " + ec.message(), 2);
+    a.in = data + "/demo/sine.cls";
+    a.machine = data + "/machines/paper-ac.toml";
+    a.method = "none";
+    a.gcode = demo_out + "/demo.nc";
+    a.report = demo_out + "/report.json";
+    a.points_csv = demo_out + "/points.csv";
   }
 
   try {

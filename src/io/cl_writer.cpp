@@ -69,4 +69,35 @@ std::string format_cl(const Toolpath& original, const std::vector<Operationd>& o
   return out;
 }
 
+std::string format_new_cl(const std::vector<Operationd>& operations) {
+  std::string out;
+  char buf[256];
+  for (const auto& op : operations) {
+    out +=
+        "TOOL PATH/" + op.name + ",TOOL," + (op.tool.name.empty() ? "TOOL" : op.tool.name) + "\n";
+    std::snprintf(buf, sizeof buf, "TLDATA/MILL,%.4f,%.4f,%.4f,0.0000,0.0000\n",
+                  op.tool.diameter_mm, op.tool.corner_radius_mm, op.tool.flute_length_mm);
+    out += buf;
+    if (op.tool.number > 0) out += "LOAD/TOOL," + std::to_string(op.tool.number) + "\n";
+    if (op.spindle_rpm > 0.0) {
+      std::snprintf(buf, sizeof buf, "SPINDL/RPM,%.1f,%s\n", op.spindle_rpm,
+                    op.spindle_clockwise ? "CLW" : "CCLW");
+      out += buf;
+    }
+    double feed = -1.0;
+    for (const auto& p : op.points) {
+      if (p.motion == Motion::Rapid) {
+        out += "RAPID\n";
+      } else if (p.feed_mm_per_min != feed && p.feed_mm_per_min > 0.0) {
+        std::snprintf(buf, sizeof buf, "FEDRAT/MMPM,%.4f\n", p.feed_mm_per_min);
+        out += buf;
+        feed = p.feed_mm_per_min;
+      }
+      out += goto_line("GOTO", p, 1.0) + "\n";
+    }
+    out += "END-OF-PATH\n";
+  }
+  return out;
+}
+
 }  // namespace taxopt

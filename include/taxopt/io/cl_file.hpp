@@ -34,4 +34,8 @@ Toolpath read_cl_file(const std::string& path, const ClReadOptions& options = {}
 /// A CIRCLE whose arc points changed is written as the GOTOs of its chords.
 std::string format_cl(const Toolpath& original, const std::vector<Operationd>& operations);
 
+/// Writes operations as a new NX CLSF text in millimetres (TOOL PATH, TLDATA, SPINDL, FEDRAT,
+/// RAPID, GOTO/x,y,z,i,j,k on every point, END-OF-PATH), as `taxopt generate` does.
+std::string format_new_cl(const std::vector<Operationd>& operations);
+
 }  // namespace taxopt

@@ -27,9 +27,11 @@ Vec3d reference_point(const CLPointd& p, const Tool& tool) {
 }
 
 /// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
-RotarySummary summarise(const Operationd& op, const std::vector<double>& a_deg,
-                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
-                        std::vector<PointRow>* rows) {
+/// Segment lengths are the paper's L_i between contact points where both ends touch the
+/// part, else between reference points.
+RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        const std::vector<double>& a_deg, const std::vector<double>& c_deg,
+                        const std::vector<double>& metric_feed, std::vector<PointRow>* rows) {
   RotarySummary summary;
   double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
@@ -39,9 +41,12 @@ RotarySummary summarise(const Operationd& op, const std::vector<double>& a_deg,
                           c_deg.begin() + static_cast<long>(pass.end));
     std::vector<double> len, feed;
     for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
+      const bool cc = !contacts.empty() && contacts[i].state == ContactState::Touching &&
+                      contacts[i + 1].state == ContactState::Touching;
       len.push_back(
-          (reference_point(op.points[i + 1], op.tool) - reference_point(op.points[i], op.tool))
-              .norm());
+          cc ? (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm()
+             : (reference_point(op.points[i + 1], op.tool) - reference_point(op.points[i], op.tool))
+                   .norm());
       feed.push_back(metric_feed[i + 1]);
     }
     const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
@@ -84,6 +89,54 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   res.gcode_units = options.units_out.value_or(tp.units);
   const int decimals = machine.gcode.decimals;
   const double fallback_feed = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
+
+  // Contact recovery for the ball-end operations when the part is known.
+  std::vector<std::vector<ContactPoint>> contacts(tp.operations.size());
+  std::vector<ContactSummary> contact_summaries(tp.operations.size());
+  std::vector<double> cspace_time(tp.operations.size(), 0.0);
+  if (options.part) {
+    for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+      const Operationd& op = tp.operations[k];
+      const auto t0 = Clock::now();
+      if (!op.tool.is_ball()) {
+        res.warnings.push_back("operation " + op.name +
+                               ": not a ball-end mill, no contact recovery");
+        continue;
+      }
+      contacts[k] = recover_contacts(*options.part, op, op.tool.ball_radius_mm(), options.contact);
+      ContactSummary& cs = contact_summaries[k];
+      cs.recovered = true;
+      cs.tolerance_mm = contact_tolerance_mm(*options.part, options.contact);
+      bool any_feed = false;
+      for (std::size_t i = 0; i < op.points.size(); ++i) {
+        const ContactPoint& c = contacts[k][i];
+        any_feed = any_feed || op.points[i].motion == Motion::Feed;
+        if (c.state == ContactState::Gouging) {
+          throw InputError(tp.source, op.points[i].line,
+                           "operation " + op.name + ": the ball cuts " + std::to_string(-c.gap_mm) +
+                               " mm into the part here (wrong part, wrong tool or wrong units?)");
+        }
+        if (c.state == ContactState::Touching) {
+          ++cs.touching;
+          cs.max_abs_gap_mm = std::max(cs.max_abs_gap_mm, std::abs(c.gap_mm));
+          if (c.local_gouge) ++cs.local_gouges;
+        } else {
+          ++cs.in_air;
+        }
+      }
+      if (any_feed && cs.touching == 0) {
+        throw InputError(
+            tp.source, op.points.front().line,
+            "operation " + op.name + ": no CL point touches the part (wrong part or wrong units?)");
+      }
+      if (cs.local_gouges) {
+        res.warnings.push_back("operation " + op.name + ": " + std::to_string(cs.local_gouges) +
+                               " contact points where a concave radius is below the ball radius "
+                               "(local gouge, eq. 19)");
+      }
+      cspace_time[k] = seconds_since(t0);
+    }
+  }
 
   std::vector<PostedOperation> posted;
   std::vector<std::vector<double>> metric_feeds;
@@ -225,8 +278,22 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                              " deg from the intended axes (rounding allows " +
                              std::to_string(ang_tol) + ")");
     }
-    r.before = summarise(op, a_in, c_in, metric_feeds[k], nullptr);
-    r.after = summarise(op, a_w, c_w, metric_feeds[k], &r.rows);
+    r.contact = contact_summaries[k];
+    r.time_cspace_s = cspace_time[k];
+    if (!contacts[k].empty()) {
+      for (std::size_t i = 0; i < op.points.size(); ++i) {
+        const ContactPoint& c = contacts[k][i];
+        if (c.state != ContactState::Touching) continue;
+        PointRow& row = r.rows[i];
+        row.has_contact = true;
+        row.cc_mm = c.cc_mm;
+        row.normal = c.normal;
+        row.tilt_deg = rad_to_deg(c.tilt_rad);
+        row.yaw_deg = rad_to_deg(c.yaw_rad);
+      }
+    }
+    r.before = summarise(op, contacts[k], a_in, c_in, metric_feeds[k], nullptr);
+    r.after = summarise(op, contacts[k], a_w, c_w, metric_feeds[k], &r.rows);
     res.operations.push_back(std::move(r));
   }
   res.out_cls = format_cl(tp, out_ops);

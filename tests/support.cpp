@@ -108,21 +108,21 @@ std::vector<Heightfield> random_heightfields(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Heightfield> out;
   {
-    const double height = 10 + 15 * u(rng), width = 2 + 4 * u(rng), x0 = 20 + 10 * u(rng);
+    const double height = 10 + 15 * u(rng), width = 3 + 3 * u(rng), x0 = 20 + 10 * u(rng);
     const double skew = 0.3 * (u(rng) - 0.5);
     out.push_back(make("steep flank", [=](double x, double y) {
       return height * std::tanh((x - x0 + skew * y) / width);
     }));
   }
   {
-    const double h = 8 + 12 * u(rng), s = 4 + 6 * u(rng), cx = 20 + 10 * u(rng),
+    const double h = 8 + 12 * u(rng), s = 6 + 4 * u(rng), cx = 20 + 10 * u(rng),
                  cy = 20 + 10 * u(rng);
     out.push_back(make("bump", [=](double x, double y) {
       return h * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * s * s));
     }));
   }
   {
-    const double h = 20 + 20 * u(rng), xw = 30 + 10 * u(rng), soft = 0.8 + 0.8 * u(rng);
+    const double h = 20 + 20 * u(rng), xw = 30 + 10 * u(rng), soft = 2.0 + 1.0 * u(rng);
     out.push_back(
         make("wall", [=](double x, double) { return h / (1.0 + std::exp(-(x - xw) / soft)); }));
   }
@@ -146,8 +146,10 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       const double x = x0 + (x1 - x0) * i / n;
       const Vec3d s(x, y, hf.z(x, y));
       const Vec3d nrm = hf.normal(x, y);
-      // Tilt about the feed direction's side vector K = N x T (eq. 11 with yaw 0).
-      const Vec3d t = (Vec3d::UnitX() - Vec3d::UnitX().dot(nrm) * nrm).normalized();
+      // T: the tangent of the contact curve (x, y, z(x, y)) along the pass (eq. 4); the
+      // tilt turns about K = N x T (eq. 11 with yaw 0).
+      const double h = 1e-5;
+      const Vec3d t = Vec3d(2 * h, 0.0, hf.z(x + h, y) - hf.z(x - h, y)).normalized();
       const Vec3d k = nrm.cross(t);
       const Vec3d v = Eigen::AngleAxisd(tilt, k) * nrm;
       const Vec3d tip = s + r_mm * nrm - r_mm * v;

@@ -56,7 +56,8 @@ struct Heightfield {
   std::function<double(double, double)> z;
   std::function<Vec3d(double, double)> normal;  // unit, upward
 };
-/// Seeded random heightfields of the kinds a CAM user meets: a steep flank, a bump, a wall.
+/// Seeded random heightfields of the kinds a CAM user meets: a steep flank, a bump, a wall;
+/// their concave radii stay above 3 mm, so a 3 mm ball can follow them without gouging.
 std::vector<Heightfield> random_heightfields(std::mt19937& rng);
 
 /// Ground truth of a generated CL file: tip and axis of every GOTO in file order.

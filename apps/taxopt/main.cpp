@@ -13,6 +13,7 @@
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
+#include "taxopt/geometry/part.hpp"
 #include "taxopt/geometry/raster_generator.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/io/atomic_file.hpp"
@@ -24,7 +25,7 @@ namespace {
 
 struct Args {
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
-  std::optional<double> feed_mm_per_min, tool_radius;
+  std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   int threads = 0;
   bool force = false, quiet = false;
   int verbose = 0;
@@ -177,13 +178,17 @@ int main(int argc, char** argv) {
   app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)");
   app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)");
   app.add_option("--tool-radius", a.tool_radius, "ball radius, in the CL file's units");
+  app.add_option("--part", a.part, "part mesh (STL, OBJ, OFF, PLY) in the CL file's coordinates")
+      ->check(CLI::ExistingFile);
+  app.add_option(
+      "--contact-tolerance", a.contact_tolerance,
+      "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, 0.1 x mean edge))");
   app.add_option("--threads", a.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
   app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)");
   app.add_flag("-q,--quiet", a.quiet, "only errors on stderr");
   app.add_flag("-v", a.verbose, "more on stderr");
   auto* later = app.add_option_group("needs the part (not in this version)");
-  later->add_option("--part", a.part, "part mesh");
   later->add_option("--grid", a.grid, "C-space cell size, deg");
   later->add_option("--max-deviation", a.max_deviation, "largest axis change, deg");
   later->add_option("--plots", a.plots, "SVG plot directory");
@@ -243,6 +248,7 @@ int main(int argc, char** argv) {
     if (ec) return error(demo_out + ": cannot create folder: " + ec.message(), 2);
     a.in = data + "/demo/sine.cls";
     a.machine = data + "/machines/paper-ac.toml";
+    a.part = data + "/demo/sine.stl";
     a.method = "none";
     a.gcode = demo_out + "/demo.nc";
     a.report = demo_out + "/report.json";
@@ -251,7 +257,7 @@ int main(int argc, char** argv) {
 
   try {
     for (const char* opt :
-         {"--part", "--grid", "--max-deviation", "--plots", "--shank-radius", "--flute-length",
+         {"--grid", "--max-deviation", "--plots", "--shank-radius", "--flute-length",
           "--holder-radius", "--holder-length", "--gauge-length"}) {
       if (app.count(opt)) {
         return error(std::string(opt) + " is not available in taxopt " + taxopt::kVersion +
@@ -298,7 +304,21 @@ int main(int argc, char** argv) {
       }
     }
 
+    std::optional<taxopt::Part> part;
+    if (!a.part.empty()) {
+      taxopt::TriangleMesh mesh = taxopt::read_mesh_file(a.part);
+      if (toolpath.units == taxopt::LengthUnit::Inch) {
+        for (auto& v : mesh.vertices)
+          v *= taxopt::kMmPerInch;  // the part is in the CL file's units
+      }
+      part.emplace(std::move(mesh));
+    }
     taxopt::JobOptions options;
+    if (part) options.part = &*part;
+    if (a.contact_tolerance) {
+      if (!(*a.contact_tolerance > 0.0)) return error("--contact-tolerance must be positive", 2);
+      options.contact.tolerance_mm = *a.contact_tolerance;
+    }
     options.method = a.method == "none"    ? taxopt::Method::None
                      : a.method == "paper" ? taxopt::Method::Paper
                                            : taxopt::Method::Global;

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "taxopt/core/toolpath.hpp"
+#include "taxopt/geometry/contact.hpp"
+#include "taxopt/geometry/part.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/kinematics/metrics.hpp"
@@ -30,6 +32,9 @@ struct JobOptions {
   /// Units of the G-code; empty: the CL file's.
   std::optional<LengthUnit> units_out;
   PosePlanOptions pose_options;
+  /// The part (not owned); without it there is no contact recovery and no collision check.
+  const Part* part = nullptr;
+  ContactOptions contact;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
 };
@@ -53,6 +58,18 @@ struct PointRow {
   Vec3d axis = Vec3d::UnitZ();
   double a_deg = 0.0, c_deg = 0.0;
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
+  /// Contact geometry, when a part was given and the ball touches it here.
+  bool has_contact = false;
+  Vec3d cc_mm = Vec3d::Zero(), normal = Vec3d::UnitZ();
+  double tilt_deg = 0.0, yaw_deg = 0.0;
+};
+
+/// Contact recovery summary of an operation.
+struct ContactSummary {
+  bool recovered = false;
+  std::size_t touching = 0, in_air = 0, local_gouges = 0;
+  double max_abs_gap_mm = 0.0;
+  double tolerance_mm = 0.0;
 };
 
 /// Result of one operation.
@@ -64,6 +81,7 @@ struct OperationResult {
   RotarySummary before, after;
   double max_axis_change_deg = 0.0;
   int segments = 0;
+  ContactSummary contact;
   Verification verification;
   double time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0;
   std::vector<PointRow> rows;
@@ -82,7 +100,9 @@ struct JobResult {
 };
 
 /// Runs the job. @throws InputError for options that cannot apply (a method this build
-/// lacks). Outcomes (out of limits, failed verification) are in JobResult::problems.
+/// lacks) and for a part that does not fit the CL file (no point touches it, or a ball cuts
+/// into it: the CL line is named). Outcomes (out of limits, failed verification) are in
+/// JobResult::problems.
 JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
 
 /// JSON report (CLI.md): `input`, `machine_name` and the run's options are recorded too.

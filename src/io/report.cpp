@@ -42,6 +42,13 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     o["after"] = summary_json(r.after, r.verification.collision_free);
     o["max_axis_change_deg"] = r.max_axis_change_deg;
     o["segments"] = r.segments;
+    if (r.contact.recovered) {
+      o["contact"] = {{"touching_points", r.contact.touching},
+                      {"points_in_air", r.contact.in_air},
+                      {"local_gouge_points", r.contact.local_gouges},
+                      {"max_gap_mm", r.contact.max_abs_gap_mm},
+                      {"tolerance_mm", r.contact.tolerance_mm}};
+    }
     nlohmann::json v;
     v["roundtrip_max_mm"] = r.verification.roundtrip_max_mm;
     v["roundtrip_max_deg"] = r.verification.roundtrip_max_deg;
@@ -71,11 +78,20 @@ std::string points_csv(const JobResult& result) {
       op = q + "\"";
     }
     for (const auto& p : r.rows) {
-      std::snprintf(buf, sizeof buf,
-                    ",%zu,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,,,,,,,,,%.6f,%.6f,%.6f,%.6f,\n",
-                    p.index, p.arc_mm, p.tip_mm.x(), p.tip_mm.y(), p.tip_mm.z(), p.axis.x(),
-                    p.axis.y(), p.axis.z(), p.a_deg, p.c_deg, p.omega_deg_s, p.accel_deg_s2);
+      std::snprintf(buf, sizeof buf, ",%zu,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,", p.index, p.arc_mm,
+                    p.tip_mm.x(), p.tip_mm.y(), p.tip_mm.z(), p.axis.x(), p.axis.y(), p.axis.z());
       out += op;
+      out += buf;
+      if (p.has_contact) {
+        std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,", p.cc_mm.x(),
+                      p.cc_mm.y(), p.cc_mm.z(), p.normal.x(), p.normal.y(), p.normal.z(),
+                      p.tilt_deg, p.yaw_deg);
+        out += buf;
+      } else {
+        out += ",,,,,,,,";
+      }
+      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,\n", p.a_deg, p.c_deg, p.omega_deg_s,
+                    p.accel_deg_s2);
       out += buf;
     }
   }

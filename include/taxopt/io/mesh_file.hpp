@@ -7,6 +7,12 @@
 
 namespace taxopt {
 
+/// Reads a part mesh (STL binary or ASCII, OBJ, OFF, PLY, by the file's extension) with CGAL.
+/// Polygons are split into triangles, duplicated vertices merged (a polygon soup becomes an
+/// indexed mesh). @throws InputError naming the file: unreadable or garbled, empty, non-finite
+/// coordinates, degenerate (zero-area) faces.
+TriangleMesh read_mesh_file(const std::string& path);
+
 /// Binary STL of a mesh (normals from the vertex order), as bytes.
 std::string format_stl_binary(const TriangleMesh& mesh, const std::string& header = "taxopt");
 

@@ -1,0 +1,63 @@
+#pragma once
+/// @file Contact recovery (paper section 2.1): from the CL points of a ball-end operation and
+/// the part, the cutter-contact point Pc, normal N, feed direction T, K = N x T, the tilt and
+/// yaw of the input axis (the inverse of eq. 11) and the principal curvatures at Pc.
+
+#include <string>
+#include <vector>
+
+#include "taxopt/core/toolpath.hpp"
+#include "taxopt/geometry/part.hpp"
+
+namespace taxopt {
+
+/// Where a CL point's ball is relative to the part.
+enum class ContactState {
+  Touching,  ///< | |C - Pc| - R | within the tolerance: a contact point
+  InAir,     ///< farther than R + tolerance: an approach or retract, no contact
+  Gouging,   ///< nearer than R - tolerance: the ball cuts into the part
+};
+
+/// Geometry at one CL point (the vectors are meaningful when Touching).
+struct ContactPoint {
+  ContactState state = ContactState::InAir;
+  Vec3d cc_mm = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitZ();
+  Vec3d feed_dir = Vec3d::UnitX();  ///< T, unit, tangent
+  Vec3d side = Vec3d::UnitY();      ///< K = N x T
+  double tilt_rad = 0.0;            ///< in [0, pi]
+  double yaw_rad = 0.0;             ///< in (-pi, pi]
+  PrincipalCurvatures<double> curvature;
+  /// |C - Pc| - R, mm.
+  double gap_mm = 0.0;
+  /// A concave principal radius at Pc is below R (local gouge, eq. 19).
+  bool local_gouge = false;
+};
+
+/// Options of recover_contacts.
+struct ContactOptions {
+  /// Largest | |C - Pc| - R | of a contact point, mm; 0: max(0.05 mm, 0.1 x mean edge).
+  double tolerance_mm = 0.0;
+  /// Vertices of the local jet fit.
+  int fit_neighbours = 30;
+};
+
+/// Tilt and yaw of axis v in the frame (T, K, N): v = N cos a + sin a (T cos b + K sin b).
+inline void tilt_yaw_of(const Vec3d& v, const Vec3d& n, const Vec3d& t, double& tilt_rad,
+                        double& yaw_rad) {
+  const Vec3d k = n.cross(t);
+  const double vn = v.dot(n), vt = v.dot(t), vk = v.dot(k);
+  tilt_rad = std::atan2(std::hypot(vt, vk), vn);
+  yaw_rad = std::atan2(vk, vt);
+}
+
+/// Recovers the contact geometry of every point of an operation cut by a ball of radius
+/// ball_radius_mm (parallel over points; the result does not depend on the thread count).
+std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
+                                           double ball_radius_mm,
+                                           const ContactOptions& options = {});
+
+/// The tolerance recover_contacts uses for `options` on `part`.
+double contact_tolerance_mm(const Part& part, const ContactOptions& options);
+
+}  // namespace taxopt

@@ -1,0 +1,56 @@
+#pragma once
+/// @file The part: a triangle mesh with its search structures (CGAL AABB tree for closest
+/// points, k-d tree over the vertices for local fitting), built once and then queried from
+/// any number of threads.
+
+#include <memory>
+#include <vector>
+
+#include "taxopt/geometry/surface.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
+
+namespace taxopt {
+
+/// A local fit of the part around a point: a height function over the tangent plane
+/// (jet fitting, degree 2 or 3), evaluated at the fitted surface's point nearest to a query.
+struct LocalFit {
+  /// Point of the fitted surface nearest to the query, and its jet (world coordinates,
+  /// u and v along the fit's tangent axes, normal towards the query's side).
+  SurfaceJet<double> jet;
+  /// Vertices that entered the fit (0 when the fit fell back to the nearest facet).
+  int samples = 0;
+};
+
+class Part {
+ public:
+  /// Builds the search structures. @throws std::invalid_argument for an empty mesh.
+  explicit Part(TriangleMesh mesh);
+  ~Part();
+  Part(Part&&) noexcept;
+  Part& operator=(Part&&) noexcept;
+  Part(const Part&) = delete;
+  Part& operator=(const Part&) = delete;
+
+  const TriangleMesh& mesh() const;
+  /// Mean edge length of the mesh, mm.
+  double mean_edge_mm() const;
+
+  /// Closest point of the mesh to q, and its distance.
+  struct Closest {
+    Vec3d point = Vec3d::Zero();
+    int face = -1;
+    double distance_mm = 0.0;
+  };
+  Closest closest(const Vec3d& q) const;
+
+  /// Fits the part around its point closest to q (jet fitting over the `neighbours` nearest
+  /// vertices, in the frame whose normal points from the mesh to q) and returns the fitted
+  /// surface's point nearest to q, i.e. where a ball centred at q touches it.
+  LocalFit fit_towards(const Vec3d& q, int neighbours = 30) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace taxopt

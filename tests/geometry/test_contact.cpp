@@ -1,0 +1,165 @@
+// Contact recovery on meshes of analytic surfaces: against the analytic contact points,
+// normals and curvatures, and the tilt/yaw the CL file was made with.
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/geometry/contact.hpp"
+#include "taxopt/geometry/part.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
+#include "taxopt/io/cl_file.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+/// A heightfield as a parametric surface (u = x, v = y) for tessellation.
+struct HeightSurface {
+  const Heightfield* hf;
+  double x0, x1, y0, y1;
+  double u_min() const { return x0; }
+  double u_max() const { return x1; }
+  double v_min() const { return y0; }
+  double v_max() const { return y1; }
+  SurfaceJet<double> jet(double u, double v) const {
+    SurfaceJet<double> j;
+    j.p = Vec3d(u, v, hf->z(u, v));
+    return j;
+  }
+};
+
+TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm) {
+  const HeightSurface s{&hf, -10.0, 60.0, -10.0, 60.0};
+  const int n = static_cast<int>(std::lround(70.0 / spacing_mm));
+  return tessellate(s, n, n);
+}
+
+}  // namespace
+
+TEST_CASE("contact: unseen heightfield meshes at 0.5 mm give back the CL file's geometry",
+          "[geometry][contact]") {
+  std::mt19937 rng(31337);
+  std::uniform_real_distribution<double> tilt(5.0, 15.0), yoff(-5.0, 5.0);
+  for (int trial = 0; trial < 2; ++trial) {
+    for (const Heightfield& hf : random_heightfields(rng)) {
+      INFO(hf.name << " trial " << trial);
+      const Part part(heightfield_mesh(hf, 0.5));
+      const double tilt_deg = tilt(rng);
+      const double y = 25.0 + yoff(rng);
+      const GeneratedCl g = raster_cl(hf, 3.0, tilt_deg, 3, 0.5, y - 3.0, y + 3.0, 2.0, 48.0);
+      const Toolpath tp = parse_cl(g.text, "gen.cls");
+      const Operationd& op = tp.operations.at(0);
+      const auto contacts = recover_contacts(part, op, 3.0);
+      REQUIRE(contacts.size() == g.tips_mm.size());
+      double max_cc = 0, max_n = 0, max_tilt = 0, max_yaw = 0;
+      std::size_t touching = 0;
+      for (std::size_t i = 0; i < contacts.size(); ++i) {
+        if (g.rapid[i]) {
+          CHECK(contacts[i].state == ContactState::InAir);
+          continue;
+        }
+        REQUIRE(contacts[i].state == ContactState::Touching);
+        ++touching;
+        // Truth: the generator put the contact at (x, y, z(x, y)) with the analytic normal.
+        const Vec3d centre = g.tips_mm[i] + 3.0 * g.axes[i];
+        // Recover the analytic contact: the point whose normal passes through the centre.
+        Vec3d n_true = Vec3d::UnitZ(), cc_true = Vec3d::Zero();
+        double x = centre.x(), yy = centre.y();
+        for (int it = 0; it < 50; ++it) {
+          n_true = hf.normal(x, yy);
+          const Vec3d p = centre - 3.0 * n_true;
+          x = p.x();
+          yy = p.y();
+        }
+        cc_true = Vec3d(x, yy, hf.z(x, yy));
+        max_cc = std::max(max_cc, (contacts[i].cc_mm - cc_true).norm());
+        max_n = std::max(max_n, rad_to_deg(angle_between(contacts[i].normal, n_true)));
+        max_tilt = std::max(max_tilt, std::abs(rad_to_deg(contacts[i].tilt_rad) - tilt_deg));
+        max_yaw = std::max(max_yaw, std::abs(rad_to_deg(wrap_pi(contacts[i].yaw_rad))));
+      }
+      CHECK(touching > 100);
+      CHECK(max_cc <= 0.05);
+      CHECK(max_n <= 1.5);
+      CHECK(max_tilt <= 1.0);
+      CHECK(max_yaw <= 2.0);
+    }
+  }
+}
+
+TEST_CASE("contact: jet-fitted curvature of sphere and cylinder meshes", "[geometry][contact]") {
+  // Sphere of radius 20 from outside (convex: both curvatures -1/20).
+  TriangleMesh sphere;
+  const int nu = 240, nv = 120;
+  for (int j = 0; j <= nv; ++j) {
+    for (int i = 0; i < nu; ++i) {
+      const double th = Constants<double>::pi() * j / nv, ph = Constants<double>::two_pi() * i / nu;
+      sphere.vertices.emplace_back(20.0 * std::sin(th) * std::cos(ph),
+                                   20.0 * std::sin(th) * std::sin(ph), 20.0 * std::cos(th));
+    }
+  }
+  for (int j = 0; j < nv; ++j) {
+    for (int i = 0; i < nu; ++i) {
+      const int a = j * nu + i, b = j * nu + (i + 1) % nu, c = (j + 1) * nu + i,
+                d = (j + 1) * nu + (i + 1) % nu;
+      sphere.faces.push_back({a, c, d});
+      sphere.faces.push_back({a, d, b});
+    }
+  }
+  const Part sp(std::move(sphere));
+  for (const Vec3d& dir : {Vec3d(1, 0.2, 0.3), Vec3d(-0.3, 1, -0.5), Vec3d(0.1, -0.4, 0.6)}) {
+    const Vec3d q = 25.0 * dir.normalized();
+    const LocalFit fit = sp.fit_towards(q);
+    const auto pc = principal_curvatures(fit.jet);
+    CHECK(pc.k1 == Approx(-0.05).epsilon(0.03));
+    CHECK(pc.k2 == Approx(-0.05).epsilon(0.03));
+    CHECK(fit.jet.p.norm() == Approx(20.0).margin(0.01));
+    CHECK(rad_to_deg(angle_between(unit_normal(fit.jet), dir.normalized())) < 0.2);
+  }
+  // Inside of a cylinder of radius 10 about z (concave: +1/10 around, 0 along).
+  TriangleMesh cyl;
+  const int na = 360, nz = 40;
+  for (int j = 0; j <= nz; ++j) {
+    for (int i = 0; i < na; ++i) {
+      const double ph = Constants<double>::two_pi() * i / na;
+      cyl.vertices.emplace_back(10.0 * std::cos(ph), 10.0 * std::sin(ph), 0.5 * j);
+    }
+  }
+  for (int j = 0; j < nz; ++j) {
+    for (int i = 0; i < na; ++i) {
+      const int a = j * na + i, b = j * na + (i + 1) % na, c = (j + 1) * na + i,
+                d = (j + 1) * na + (i + 1) % na;
+      cyl.faces.push_back({a, b, d});
+      cyl.faces.push_back({a, d, c});
+    }
+  }
+  const Part cp(std::move(cyl));
+  const LocalFit fit = cp.fit_towards(Vec3d(6.0, 1.0, 10.0));
+  const auto pc = principal_curvatures(fit.jet);
+  CHECK(pc.k1 == Approx(0.1).epsilon(0.03));
+  CHECK(pc.k2 == Approx(0.0).margin(0.003));
+  CHECK(std::abs(pc.d2.z()) == Approx(1.0).margin(0.01));
+}
+
+TEST_CASE("contact: a CL file in the wrong units touches nothing; a ball cutting in is named",
+          "[geometry][contact][bad-input]") {
+  std::mt19937 rng(8);
+  const auto hfs = random_heightfields(rng);
+  const Part part(heightfield_mesh(hfs[1], 0.5));
+  const GeneratedCl g = raster_cl(hfs[1], 3.0, 5.0, 2, 0.5, 20.0, 24.0, 5.0, 40.0);
+  ClReadOptions inch;
+  inch.units = LengthUnit::Inch;
+  const Toolpath wrong = parse_cl(g.text, "gen.cls", inch);
+  std::size_t touching = 0;
+  for (const auto& c : recover_contacts(part, wrong.operations[0], 3.0 * 25.4)) {
+    touching += c.state == ContactState::Touching ? 1 : 0;
+  }
+  CHECK(touching == 0);
+  Toolpath deep = parse_cl(g.text, "gen.cls");
+  deep.operations[0].points[10].tip_mm -= 0.5 * deep.operations[0].points[10].axis;
+  const auto c = recover_contacts(part, deep.operations[0], 3.0);
+  CHECK(c[10].state == ContactState::Gouging);
+  CHECK(c[10].gap_mm == Approx(-0.5).margin(0.02));
+  CHECK(c[11].state == ContactState::Touching);
+}

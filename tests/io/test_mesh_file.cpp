@@ -1,0 +1,138 @@
+#include <catch2/catch.hpp>
+#include <sstream>
+
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/geometry/surface.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
+#include "taxopt/io/mesh_file.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+void expect_mesh_error(const std::string& path, const std::string& says) {
+  try {
+    read_mesh_file(path);
+    FAIL("accepted " << path);
+  } catch (const InputError& e) {
+    CHECK(e.file() == path);
+    CHECK_THAT(e.message(), Catch::Contains(says));
+  }
+}
+
+const char* kTetraOff =
+    "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+
+}  // namespace
+
+TEST_CASE("mesh: every format reads to the same indexed mesh", "[io][mesh]") {
+  TempDir t;
+  write_file(t.path("a.off"), kTetraOff);
+  write_file(t.path("a.obj"),
+             "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  write_file(t.path("a.ply"),
+             "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float "
+             "y\nproperty float z\n"
+             "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 "
+             "1 0\n0 0 1\n"
+             "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  std::string ascii = "solid t\n";
+  const double tri[4][3][3] = {{{0, 0, 0}, {0, 1, 0}, {1, 0, 0}},
+                               {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}},
+                               {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}},
+                               {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  for (const auto& f : tri) {
+    ascii += " facet normal 0 0 0\n  outer loop\n";
+    for (const auto& v : f)
+      ascii += "   vertex " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " " +
+               std::to_string(v[2]) + "\n";
+    ascii += "  endloop\n endfacet\n";
+  }
+  ascii += "endsolid t\n";
+  write_file(t.path("a.stl"), ascii);
+  TriangleMesh m;
+  for (const auto& v : {Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, 0, 1)})
+    m.vertices.push_back(v);
+  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  write_file(t.path("b.stl"), format_stl_binary(m));
+  for (const char* f : {"a.off", "a.obj", "a.ply", "a.stl", "b.stl"}) {
+    INFO(f);
+    const TriangleMesh r = read_mesh_file(t.path(f));
+    CHECK(r.faces.size() == 4);
+    CHECK(r.vertices.size() == 4);  // STL's 12 corner copies merged into 4 vertices
+  }
+}
+
+TEST_CASE("mesh: the demo part reads with shared vertices", "[io][mesh]") {
+  const TriangleMesh m = read_mesh_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl");
+  CHECK(m.faces.size() > 10000);
+  CHECK(m.vertices.size() < m.faces.size());
+}
+
+TEST_CASE("mesh: every bad mesh kind is an error naming the file", "[io][mesh][bad-input]") {
+  TempDir t;
+  write_file(t.path("empty.stl"), "");
+  expect_mesh_error(t.path("empty.stl"), "empty");
+  write_file(t.path("garbled.stl"), "this is not a mesh at all, just some words\n");
+  expect_mesh_error(t.path("garbled.stl"), "part mesh");
+  write_file(t.path("garbled.off"), "OFF\n4 4 0\n0 0 0\n1 zero 0\n");
+  expect_mesh_error(t.path("garbled.off"), "part mesh");
+  write_file(t.path("nan.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\nnan 1 0\n3 0 1 2\n");
+  expect_mesh_error(t.path("nan.off"), "");
+  write_file(t.path("flat.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n");
+  expect_mesh_error(t.path("flat.off"), "degenerate");
+  write_file(t.path("nofaces.off"), "OFF\n3 0 0\n0 0 0\n1 0 0\n2 0 0\n");
+  expect_mesh_error(t.path("nofaces.off"), "");
+  write_file(t.path("a.3ds"), "x");
+  expect_mesh_error(t.path("a.3ds"), "must be .stl");
+  expect_mesh_error(t.path("missing.stl"), "cannot open");
+}
+
+TEST_CASE("cli: a bad part exits 2 naming the part file; a wrong part names the CL line",
+          "[cli][mesh][bad-input]") {
+  TempDir t;
+  write_file(t.path("flat.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n");
+  const std::string cls = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls";
+  auto r = run_taxopt("--in " + cls + " --part " + t.path("flat.off") + " --gcode " +
+                      t.path("o.nc") + " --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: " + t.path("flat.off") + ": "));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  // The demo part, 50 mm away: no contact.
+  write_file(t.path("far.off"), "OFF\n3 1 0\n0 0 -50\n100 0 -50\n0 100 -50\n3 0 1 2\n");
+  r = run_taxopt("--in " + cls + " --part " + t.path("far.off") + " --gcode " + t.path("o.nc") +
+                 " --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("no CL point touches the part"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+}
+
+TEST_CASE("cli: with the part, the CSV has contact point, normal, tilt and yaw", "[cli][mesh]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  const auto r =
+      run_taxopt("--in " + d + "sine.cls --part " + d + "sine.stl --points-csv " + t.path("p.csv") +
+                 " --report " + t.path("r.json") + " --method none -q");
+  REQUIRE(r.code == 0);
+  const std::string csv = read_file(t.path("p.csv"));
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  int with_contact = 0, rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    std::vector<std::string> cols;
+    std::string cell;
+    std::istringstream ls(line);
+    while (std::getline(ls, cell, ',')) cols.push_back(cell);
+    if (cols.size() > 16 && !cols[9].empty()) {
+      ++with_contact;
+      CHECK(std::stod(cols[15]) == Approx(5.0).margin(0.2));  // tilt_deg: the demo's 5 deg
+      CHECK(std::abs(std::stod(cols[16])) < 0.5);             // yaw_deg: 0
+    }
+  }
+  CHECK(with_contact > 1900);
+  CHECK(rows - with_contact < 200);  // approach and retract points only
+}

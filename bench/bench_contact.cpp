@@ -24,7 +24,8 @@ struct Bumps {
   double v_max() const { return 100.0; }
   SurfaceJet<double> jet(double u, double v) const {
     const double a = 6.0, p = 1.0 / 9.0, q = 1.0 / 11.0;
-    const double su = std::sin(u * p), cu = std::cos(u * p), sv = std::sin(v * q), cv = std::cos(v * q);
+    const double su = std::sin(u * p), cu = std::cos(u * p), sv = std::sin(v * q),
+                 cv = std::cos(v * q);
     SurfaceJet<double> j;
     j.p = Vec3d(u, v, a * su * cv);
     j.su = Vec3d(1, 0, a * p * cu * cv);
@@ -78,7 +79,8 @@ int main(int argc, char** argv) {
               faces, t_mesh, t_build);
   std::printf("| threads | CL points | touching | time s | points/s |\n|---|---|---|---|---|\n");
   for (int threads : {1, 2}) {
-    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism,
+                           static_cast<std::size_t>(threads));
     t0 = std::chrono::steady_clock::now();
     const auto contacts = recover_contacts(part, op, 3.0);
     const double t = seconds(t0);

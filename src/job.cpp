@@ -1,10 +1,14 @@
 #include "taxopt/job.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <chrono>
 #include <cmath>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
+#include "taxopt/cspace/collision.hpp"
 #include "taxopt/io/cl_file.hpp"
 
 namespace taxopt {
@@ -64,6 +68,31 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
   return summary;
 }
 
+/// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
+/// ball centres). In parallel; the result is sorted, whatever the thread count.
+std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
+                                          const Operationd& op, const std::vector<Vec3d>& axes,
+                                          const std::vector<ContactPoint>& contacts) {
+  const double R = tool.ball_radius_mm;
+  using List = std::vector<std::size_t>;
+  List hits = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, op.points.size()), List{},
+      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
+          const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
+          if (model.collides(tool, centre, axes[i], in_air)) acc.push_back(i);
+        }
+        return acc;
+      },
+      [](List a, const List& b) {
+        a.insert(a.end(), b.begin(), b.end());
+        return a;
+      });
+  std::sort(hits.begin(), hits.end());
+  return hits;
+}
+
 }  // namespace
 
 const char* to_string(Method method) {
@@ -98,12 +127,13 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
       const Operationd& op = tp.operations[k];
       const auto t0 = Clock::now();
-      if (!op.tool.is_ball()) {
+      const double ball_r = options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
+      if (!(ball_r > 0.0)) {
         res.warnings.push_back("operation " + op.name +
-                               ": not a ball-end mill, no contact recovery");
+                               ": not a ball-end mill, no contact recovery and no collision check");
         continue;
       }
-      contacts[k] = recover_contacts(*options.part, op, op.tool.ball_radius_mm(), options.contact);
+      contacts[k] = recover_contacts(*options.part, op, ball_r, options.contact);
       ContactSummary& cs = contact_summaries[k];
       cs.recovered = true;
       cs.tolerance_mm = contact_tolerance_mm(*options.part, options.contact);
@@ -189,6 +219,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   const std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
   const double write_time = seconds_since(t_write);
 
+  std::optional<CollisionModel> collision;
+  if (options.part) collision.emplace(options.part->mesh());
   std::size_t next_move = 0;
   std::vector<Operationd> out_ops = tp.operations;
   for (std::size_t k = 0; k < posted.size(); ++k) {
@@ -280,6 +312,36 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     r.contact = contact_summaries[k];
     r.time_cspace_s = cspace_time[k];
+    if (collision && r.contact.recovered) {
+      const auto t0 = Clock::now();
+      const ToolModel tool = ToolModel::ball_end(op.tool, options.tool);
+      std::vector<Vec3d> in_axes, out_axes;
+      for (std::size_t i = 0; i < op.points.size(); ++i) {
+        in_axes.push_back(op.points[i].axis);
+        out_axes.push_back(po.points[i].axis);
+      }
+      const auto before = colliding_points(*collision, tool, op, in_axes, contacts[k]);
+      const auto after = in_axes == out_axes
+                             ? before
+                             : colliding_points(*collision, tool, op, out_axes, contacts[k]);
+      r.colliding_before = static_cast<long>(before.size());
+      r.colliding_after = static_cast<long>(after.size());
+      r.verification.collision_free = after.empty();
+      if (!after.empty()) {
+        std::string lines;
+        for (std::size_t j = 0; j < after.size() && j < 10; ++j) {
+          lines += (j ? ", " : "") + std::to_string(op.points[after[j]].line);
+        }
+        if (after.size() > 10) lines += ", ...";
+        res.problems.push_back(format_location(
+            tp.source, op.points[after.front()].line,
+            "operation " + op.name + ": " + std::to_string(after.size()) +
+                " CL points where the tool (shank, holder, or a ball in the air) hits the part, "
+                "at lines " +
+                lines));
+      }
+      r.time_cspace_s += seconds_since(t0);
+    }
     if (!contacts[k].empty()) {
       for (std::size_t i = 0; i < op.points.size(); ++i) {
         const ContactPoint& c = contacts[k][i];

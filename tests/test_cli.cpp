@@ -176,3 +176,49 @@ TEST_CASE("cli: generate refuses impossible settings with exit 2", "[cli][genera
     CHECK_FALSE(file_exists(t.path("s.cls")));
   }
 }
+
+TEST_CASE("cli: an input path whose shank hits the part exits 1, names the lines, writes nothing",
+          "[cli][collision]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  const std::string base = "--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " +
+                           d + "machines/paper-ac.toml --method none --gauge-length 18 --gcode " +
+                           t.path("o.nc") + " --report " + t.path("r.json");
+  write_file(t.path("o.nc"), "previous good program\n");
+  const auto r = run_taxopt(base);
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err,
+             Catch::Contains("sine.cls:23: operation SINE_FINISH: 60 CL points where the tool"));
+  CHECK(read_file(t.path("o.nc")) == "previous good program\n");
+  CHECK_FALSE(file_exists(t.path("r.json")));
+  // --force writes it anyway, still exits 1, and the report says what was wrong.
+  const auto f = run_taxopt(base + " --force");
+  CHECK(f.code == 1);
+  const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
+  CHECK(j["ok"] == false);
+  CHECK(j["operations"][0]["after"]["colliding_points"] == 60);
+  CHECK(j["operations"][0]["verification"]["collision_free"] == false);
+  // With the demo's 15 mm stub tool the path is clear.
+  const auto ok =
+      run_taxopt("--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " + d +
+                 "machines/paper-ac.toml --method none --gauge-length 15 --report " +
+                 t.path("r2.json") + " -q");
+  CHECK(ok.code == 0);
+  const auto j2 = nlohmann::json::parse(read_file(t.path("r2.json")));
+  CHECK(j2["operations"][0]["after"]["colliding_points"] == 0);
+  CHECK(j2["operations"][0]["verification"]["collision_free"] == true);
+}
+
+TEST_CASE("cli: with a part, 1 and 2 threads give the same bytes", "[cli][collision]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  for (int n : {1, 2}) {
+    const auto r = run_taxopt("--in " + d + "sine.cls --part " + d +
+                              "sine.stl --method none --gauge-length 15 --threads " +
+                              std::to_string(n) + " --gcode " + t.path(std::to_string(n) + ".nc") +
+                              " --points-csv " + t.path(std::to_string(n) + ".csv") + " -q");
+    REQUIRE(r.code == 0);
+  }
+  CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
+  CHECK(read_file(t.path("1.csv")) == read_file(t.path("2.csv")));
+}

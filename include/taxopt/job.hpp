@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "taxopt/core/toolpath.hpp"
+#include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/contact.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/gcode.hpp"
@@ -35,6 +36,8 @@ struct JobOptions {
   /// The part (not owned); without it there is no contact recovery and no collision check.
   const Part* part = nullptr;
   ContactOptions contact;
+  /// Tool dimensions overriding the CL file's (mm), for contact recovery and collision checks.
+  ToolOverrides tool;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
 };
@@ -79,6 +82,9 @@ struct OperationResult {
   /// Feed used for the metrics (the first feed move's), mm/min.
   double feed_mm_min = 0.0;
   RotarySummary before, after;
+  /// CL points whose tool intersects the part (shank and holder above the ball; the ball too
+  /// where it is in the air), with the input and with the output axes; -1: not checked.
+  long colliding_before = -1, colliding_after = -1;
   double max_axis_change_deg = 0.0;
   int segments = 0;
   ContactSummary contact;

@@ -8,14 +8,14 @@
 namespace taxopt {
 namespace {
 
-nlohmann::json summary_json(const RotarySummary& s, const std::optional<bool>& collision_checked) {
+nlohmann::json summary_json(const RotarySummary& s, long colliding) {
   nlohmann::json j;
   j["max_omega_deg_s"] = s.max_omega_deg_s;
   j["max_accel_deg_s2"] = s.max_accel_deg_s2;
   j["rms_accel_deg_s2"] = s.rms_accel_deg_s2;
   j["c_jumps"] = s.c_jumps;
   // Counted only when a part is given; null says "not checked", not "none".
-  j["colliding_points"] = collision_checked ? nlohmann::json(0) : nlohmann::json(nullptr);
+  j["colliding_points"] = colliding >= 0 ? nlohmann::json(colliding) : nlohmann::json(nullptr);
   return j;
 }
 
@@ -38,8 +38,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     o["name"] = r.name;
     o["points"] = r.points;
     o["feed_mm_min"] = r.feed_mm_min;
-    o["before"] = summary_json(r.before, r.verification.collision_free);
-    o["after"] = summary_json(r.after, r.verification.collision_free);
+    o["before"] = summary_json(r.before, r.colliding_before);
+    o["after"] = summary_json(r.after, r.colliding_after);
     o["max_axis_change_deg"] = r.max_axis_change_deg;
     o["segments"] = r.segments;
     if (r.contact.recovered) {

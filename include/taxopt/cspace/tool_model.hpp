@@ -1,0 +1,51 @@
+#pragma once
+/// @file The cutter as collision checks see it.
+///
+/// A ball-end mill of radius R with its tip at P and axis V has its ball centre at C = P + R V.
+/// The ball touches the part at the contact point by construction (checked by contact recovery
+/// and, for concave regions, by the local gouge check of eq. 19), so the checked body is what
+/// lies above the ball centre: coaxial cylinders, each from `start_mm` to `end_mm` along V
+/// measured from C:
+///   flutes  radius R                    from 0            to flute_length - R
+///   shank   radius shank_radius         from flute_length - R to gauge_length - R
+///   holder  radius holder_radius        from gauge_length - R to gauge_length - R + holder_length
+/// (lengths from the tip, as on a tool sheet). For a CL point where the ball is in the air
+/// (approach, retract) the ball itself is checked too.
+
+#include <optional>
+#include <vector>
+
+#include "taxopt/core/toolpath.hpp"
+
+namespace taxopt {
+
+/// A coaxial cylinder of the tool, lengths along the axis from the ball centre.
+struct ToolBody {
+  double radius_mm = 0.0;
+  double start_mm = 0.0;
+  double end_mm = 0.0;
+};
+
+/// Tool dimensions given on the command line (mm), overriding the CL file's.
+struct ToolOverrides {
+  std::optional<double> ball_radius_mm, shank_radius_mm, flute_length_mm, holder_radius_mm,
+      holder_length_mm, gauge_length_mm;
+};
+
+/// The bodies of a ball-end mill.
+struct ToolModel {
+  double ball_radius_mm = 0.0;
+  std::vector<ToolBody> bodies;
+
+  /// Farthest distance from the ball centre that any body reaches, mm.
+  double reach_mm() const;
+
+  /// Builds the model of a ball-end `tool` with `overrides`. Defaults: flute length from the
+  /// file (else 4 diameters), shank radius = R, gauge length = max(flute length, 10 diameters),
+  /// no holder unless its radius is given (holder length then defaults to 40 mm).
+  /// @throws InputError when the dimensions contradict each other (shank thinner than zero,
+  /// gauge length shorter than the flutes, a holder thinner than the shank).
+  static ToolModel ball_end(const Tool& tool, const ToolOverrides& overrides = {});
+};
+
+}  // namespace taxopt

@@ -26,3 +26,6 @@ cmake --preset asan
 cmake --build --preset asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --preset asan -j "$jobs"
+
+echo "== fuzzing (libFuzzer, bounded)"
+bash scripts/fuzz.sh 30

@@ -33,9 +33,16 @@ Vec3d reference_point(const CLPointd& p, const Tool& tool) {
 /// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
 /// Segment lengths are the paper's L_i between contact points where both ends touch the
 /// part, else between reference points.
+/// Largest |omega| and |a| per rotary axis (0 = A, 1 = C) and the points where they occur.
+struct AxisPeaks {
+  double omega[2] = {0, 0}, accel[2] = {0, 0};
+  std::size_t omega_at[2] = {0, 0}, accel_at[2] = {0, 0};
+};
+
 RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
                         const std::vector<double>& a_deg, const std::vector<double>& c_deg,
-                        const std::vector<double>& metric_feed, std::vector<PointRow>* rows) {
+                        const std::vector<double>& metric_feed, std::vector<PointRow>* rows,
+                        AxisPeaks* peaks = nullptr) {
   RotarySummary summary;
   double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
@@ -55,6 +62,18 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
     }
     const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
     accumulate(summary, k, c);
+    if (peaks) {
+      for (std::size_t j = 0; j < pass.size(); ++j) {
+        const double w[2] = {std::abs(k.omega_a_deg_s[j]), std::abs(k.omega_c_deg_s[j])};
+        const double acc[2] = {std::abs(k.accel_a_deg_s2[j]), std::abs(k.accel_c_deg_s2[j])};
+        for (int ax = 0; ax < 2; ++ax) {
+          if (w[ax] > peaks->omega[ax])
+            peaks->omega[ax] = w[ax], peaks->omega_at[ax] = pass.begin + j;
+          if (acc[ax] > peaks->accel[ax])
+            peaks->accel[ax] = acc[ax], peaks->accel_at[ax] = pass.begin + j;
+        }
+      }
+    }
     if (rows) {
       for (std::size_t j = 0; j < pass.size(); ++j) {
         PointRow& r = (*rows)[pass.begin + j];
@@ -82,6 +101,53 @@ std::vector<std::size_t> colliding_points(const CollisionModel& model, const Too
           const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
           const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
           if (model.collides(tool, centre, axes[i], in_air)) acc.push_back(i);
+        }
+        return acc;
+      },
+      [](List a, const List& b) {
+        a.insert(a.end(), b.begin(), b.end());
+        return a;
+      });
+  std::sort(hits.begin(), hits.end());
+  return hits;
+}
+
+/// Index i of every move from point i-1 to point i during which the tool hits the part, with
+/// the machine moving linearly in its joints between the values written (`xyz_w` as written,
+/// `a_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
+/// only the bodies above the ball are checked (the ball's path between contacts is the CAM
+/// system's chord tolerance); where either end is in the air, the ball too.
+std::vector<std::size_t> colliding_moves(const CollisionModel& model, const ToolModel& tool,
+                                         const Machine& machine, const std::vector<Vec3d>& xyz_w,
+                                         const std::vector<double>& a_deg,
+                                         const std::vector<double>& c_deg,
+                                         const std::vector<ContactPoint>& contacts) {
+  const double R = tool.ball_radius_mm;
+  const std::size_t n = xyz_w.size();
+  using List = std::vector<std::size_t>;
+  List hits = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(1, std::max<std::size_t>(n, 1)), List{},
+      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
+          const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
+          const int steps = static_cast<int>(
+              std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
+          const bool in_air = contacts[i - 1].state != ContactState::Touching ||
+                              contacts[i].state != ContactState::Touching;
+          for (int s = 1; s < steps; ++s) {
+            const double t = static_cast<double>(s) / steps;
+            const Posed pose{deg_to_rad(a_deg[i - 1] + t * da), deg_to_rad(c_deg[i - 1] + t * dc)};
+            const Vec3d xyz = xyz_w[i - 1] + t * (xyz_w[i] - xyz_w[i - 1]);
+            const Vec3d tip = machine.gcode.mode == GcodeMode::Machine
+                                  ? machine.ac.from_machine_mm(xyz, pose)
+                                  : xyz;
+            const Vec3d axis = machine.ac.forward(pose);
+            if (model.collides(tool, tip + R * axis, axis, in_air)) {
+              acc.push_back(i);
+              break;
+            }
+          }
         }
         return acc;
       },
@@ -238,6 +304,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     // Read back: the A/C values actually written, and what they mean in the workpiece.
     std::vector<double> a_w(op.points.size()), c_w(op.points.size());
+    std::vector<Vec3d> xyz_w(op.points.size());
     std::vector<double> a_in(op.points.size()), c_in(op.points.size());
     r.rows.resize(op.points.size());
     const GcodeMove* last = nullptr;
@@ -250,6 +317,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
       if (!last) throw std::logic_error("run_job: first point of an operation not written");
       a_w[i] = last->a_deg;
+      xyz_w[i] = last->xyz_mm;
       c_w[i] = last->c_deg;
       a_in[i] = round_to(rad_to_deg(po.poses[i].a_rad), decimals);
       c_in[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
@@ -340,6 +408,20 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                 "at lines " +
                 lines));
       }
+      const auto moves_hit =
+          colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k]);
+      r.verification.colliding_moves = static_cast<long>(moves_hit.size());
+      if (!moves_hit.empty()) {
+        r.verification.collision_free = false;
+        const std::size_t i = moves_hit.front();
+        res.problems.push_back(format_location(
+            tp.source, op.points[i].line,
+            "operation " + op.name + ": " + std::to_string(moves_hit.size()) +
+                " moves where the tool hits the part between CL points as the machine moves it, "
+                "first from line " +
+                std::to_string(op.points[i - 1].line) + " to line " +
+                std::to_string(op.points[i].line)));
+      }
       r.time_cspace_s += seconds_since(t0);
     }
     if (!contacts[k].empty()) {
@@ -355,7 +437,30 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
     }
     r.before = summarise(op, contacts[k], a_in, c_in, metric_feeds[k], nullptr);
-    r.after = summarise(op, contacts[k], a_w, c_w, metric_feeds[k], &r.rows);
+    AxisPeaks peaks;
+    r.after = summarise(op, contacts[k], a_w, c_w, metric_feeds[k], &r.rows, &peaks);
+    // The machine's velocity and acceleration limits at the programmed feed.
+    const RotaryAxis<double>* axes[2] = {&machine.ac.a, &machine.ac.c};
+    const char* names[2] = {"A", "C"};
+    for (int ax = 0; ax < 2; ++ax) {
+      const double vmax = rad_to_deg(axes[ax]->max_velocity_rad_s);
+      const double amax = rad_to_deg(axes[ax]->max_accel_rad_s2);
+      const auto report_limit = [&](double value, double limit, std::size_t at, const char* what,
+                                    const char* unit) {
+        r.verification.within_dynamic_limits = false;
+        res.problems.push_back(format_location(
+            tp.source, op.points[at].line,
+            "operation " + op.name + ": axis " + names[ax] + " " + what + " " +
+                std::to_string(value) + " " + unit +
+                " at the programmed feed, the machine allows " + std::to_string(limit)));
+      };
+      if (vmax > 0.0 && peaks.omega[ax] > vmax * (1.0 + 1e-9)) {
+        report_limit(peaks.omega[ax], vmax, peaks.omega_at[ax], "velocity", "deg/s");
+      }
+      if (amax > 0.0 && peaks.accel[ax] > amax * (1.0 + 1e-9)) {
+        report_limit(peaks.accel[ax], amax, peaks.accel_at[ax], "acceleration", "deg/s^2");
+      }
+    }
     res.operations.push_back(std::move(r));
   }
   res.out_cls = format_cl(tp, out_ops);

@@ -1,10 +1,13 @@
 // The command line as scripts see it: exit codes, the error line, atomic outputs.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "support.hpp"
+#include "taxopt/core/types.hpp"
 
 using namespace taxopt::test;
+using taxopt::Vec3d;
 
 namespace {
 
@@ -221,4 +224,128 @@ TEST_CASE("cli: with a part, 1 and 2 threads give the same bytes", "[cli][collis
   }
   CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
   CHECK(read_file(t.path("1.csv")) == read_file(t.path("2.csv")));
+}
+
+namespace {
+
+/// OFF text of an axis-aligned box.
+std::string box_off(const Vec3d& lo, const Vec3d& hi) {
+  std::string s = "OFF\n8 12 0\n";
+  for (int k = 0; k < 8; ++k) {
+    s += std::to_string((k & 1) ? hi.x() : lo.x()) + " " +
+         std::to_string((k & 2) ? hi.y() : lo.y()) + " " +
+         std::to_string((k & 4) ? hi.z() : lo.z()) + "\n";
+  }
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f)
+    s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) +
+         "\n";
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("cli: a move that sweeps the shank through the part between two free poses exits 1",
+          "[cli][collision]") {
+  TempDir t;
+  // A floor (z = 0, finely split) and a thin pin standing at x = 0 from z = 8 up: the tool
+  // touches the floor at x = -10 and x = +10, both poses free; the move between them sweeps
+  // the shank through the pin.
+  std::string floor_off = "OFF\n";
+  const int n = 40;
+  floor_off += std::to_string((n + 1) * (n + 1)) + " " + std::to_string(2 * n * n) + " 0\n";
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; j <= n; ++j)
+      floor_off += std::to_string(-40.0 + 2.0 * i) + " " + std::to_string(-40.0 + 2.0 * j) + " 0\n";
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const int a = i * (n + 1) + j;
+      floor_off += "3 " + std::to_string(a) + " " + std::to_string(a + n + 1) + " " +
+                   std::to_string(a + n + 2) + "\n";
+      floor_off += "3 " + std::to_string(a) + " " + std::to_string(a + n + 2) + " " +
+                   std::to_string(a + 1) + "\n";
+    }
+  }
+  write_file(t.path("floor.off"), floor_off);
+  // Two OFF files cannot be merged by the CLI: write one mesh with both (pin vertices after
+  // the floor's).
+  std::string pin = box_off(Vec3d(-0.5, -0.5, 8.0), Vec3d(0.5, 0.5, 50.0));
+  std::istringstream pin_in(pin);
+  std::string line;
+  std::getline(pin_in, line);  // OFF
+  std::getline(pin_in, line);  // counts
+  std::vector<std::string> pin_v, pin_f;
+  for (int k = 0; k < 8; ++k) {
+    std::getline(pin_in, line);
+    pin_v.push_back(line);
+  }
+  const int base = (n + 1) * (n + 1);
+  for (int k = 0; k < 12; ++k) {
+    int c, a, b, d;
+    pin_in >> c >> a >> b >> d;
+    pin_f.push_back("3 " + std::to_string(a + base) + " " + std::to_string(b + base) + " " +
+                    std::to_string(d + base));
+  }
+  std::string both =
+      "OFF\n" + std::to_string(base + 8) + " " + std::to_string(2 * n * n + 12) + " 0\n";
+  std::istringstream fl(floor_off);
+  std::getline(fl, line);
+  std::getline(fl, line);
+  std::string rest((std::istreambuf_iterator<char>(fl)), std::istreambuf_iterator<char>());
+  const std::size_t split = [&] {
+    std::size_t at = 0;
+    for (int k = 0; k < base; ++k) at = rest.find('\n', at) + 1;
+    return at;
+  }();
+  both += rest.substr(0, split);
+  for (const auto& v : pin_v) both += v + "\n";
+  both += rest.substr(split);
+  for (const auto& f : pin_f) both += f + "\n";
+  write_file(t.path("part.off"), both);
+  write_file(
+      t.path("a.cls"),
+      "TLDATA/MILL,6,3,20,0,0\nFEDRAT/MMPM,500\nGOTO/-10,0,0,0,0,1\nGOTO/10,0,0\nGOTO/10,10,0\n");
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --part " + t.path("part.off") +
+                            " --method none --gauge-length 30 --gcode " + t.path("o.nc"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains(
+                        "a.cls:4: operation 1: 1 moves where the tool hits the part "
+                        "between CL points as the machine moves it, first from line 3 to line 4"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  // A short tool stays below the pin: clear.
+  CHECK(run_taxopt("--in " + t.path("a.cls") + " --part " + t.path("part.off") +
+                   " --method none --flute-length 6 --gauge-length 7 --gcode " + t.path("o.nc") +
+                   " -q")
+            .code == 0);
+}
+
+TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits exit 1",
+          "[cli][verification]") {
+  TempDir t;
+  write_file(t.path("a.cls"),
+             "FEDRAT/MMPM,600\nGOTO/0,0,0,0,0,1\nGOTO/1,0,0,0,-0.1736482,0.9848078\n"
+             "GOTO/2,0,0,0,-0.3420201,0.9396926\nGOTO/3,0,0,0,-0.3420201,0.9396926\n");
+  const std::string m =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n";
+  // 10 deg per mm at 10 mm/s: A turns at 100 deg/s.
+  write_file(t.path("slow.toml"), m + "max_velocity_deg_s = 50.0\n[axes.C]\ncontinuous = true\n");
+  auto r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("slow.toml") +
+                      " --method none --gcode " + t.path("o.nc"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("axis A velocity 100.0"));
+  CHECK_THAT(r.err, Catch::Contains("the machine allows 50.0"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  write_file(t.path("stiff.toml"), m + "max_accel_deg_s2 = 500.0\n[axes.C]\ncontinuous = true\n");
+  r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("stiff.toml") +
+                 " --method none --gcode " + t.path("o.nc"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("axis A acceleration 1000.0"));
+  write_file(
+      t.path("fast.toml"),
+      m + "max_velocity_deg_s = 150.0\nmax_accel_deg_s2 = 1500.0\n[axes.C]\ncontinuous = true\n");
+  CHECK(run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("fast.toml") +
+                   " --method none --gcode " + t.path("o.nc") + " -q")
+            .code == 0);
 }

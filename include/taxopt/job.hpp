@@ -50,7 +50,13 @@ struct Verification {
   double roundtrip_max_deg = 0.0;
   /// Collision-free by the part check; empty when no part was given (nothing checked).
   std::optional<bool> collision_free;
+  /// Moves between consecutive CL points (sampled as the machine moves them, linear in its
+  /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; -1: not checked.
+  long colliding_moves = -1;
   bool within_axis_limits = true;
+  /// Axis velocity and acceleration within the machine file's limits at the programmed feed
+  /// (true when the machine gives none).
+  bool within_dynamic_limits = true;
 };
 
 /// Per-point values for the CSV (after optimisation).

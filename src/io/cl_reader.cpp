@@ -533,6 +533,9 @@ class Reader {
       const std::size_t at = major == "LOADTL" ? 0 : 1;
       if (args.size() <= at) fail(line, major + " expects a tool number");
       const auto v = numbers(args, at, at + 1, major, line);
+      if (!(v[0] >= 0.0 && v[0] <= 1e6 && v[0] == std::floor(v[0]))) {
+        fail(line, major + ": tool number must be a whole number from 0 to 1000000");
+      }
       tool_.number = static_cast<int>(v[0]);
       tool_changed();
     } else if (major == "SPINDL" || major == "SPINDLE") {

@@ -56,6 +56,10 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                               ? nlohmann::json(*r.verification.collision_free)
                               : nlohmann::json(nullptr);
     v["within_axis_limits"] = r.verification.within_axis_limits;
+    v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
+    v["colliding_moves"] = r.verification.colliding_moves >= 0
+                               ? nlohmann::json(r.verification.colliding_moves)
+                               : nlohmann::json(nullptr);
     o["verification"] = v;
     o["timings_s"] = {
         {"cspace", r.time_cspace_s}, {"optimise", r.time_optimise_s}, {"post", r.time_post_s}};

@@ -55,6 +55,9 @@ TEST_CASE("cl reader: every malformed kind is an error with file, line and expec
       {"corner over radius", "CUTTER/6,4\nGOTO/1,2,3\n", 1, "corner radius"},
       {"cutter text", "CUTTER/abc\nGOTO/1,2,3\n", 1, "expected a number, got 'abc'"},
       {"loadtl text", "LOADTL/x\nGOTO/1,2,3\n", 1, "expected a number"},
+      // Found by fuzz_cl_reader: a huge tool number overflowed the int it is stored in.
+      {"loadtl huge", "LOADTL / 4444444444444444444444444444444\nGOTO/1,2,3\n", 1, "tool number"},
+      {"load tool fraction", "LOAD/TOOL,2.5\nGOTO/1,2,3\n", 1, "tool number"},
   };
   for (const auto& c : cases) {
     INFO(c.name);

@@ -44,8 +44,8 @@ int main(int argc, char** argv) {
     const Vec3d v = Eigen::AngleAxisd(deg_to_rad(5.0), nrm.cross(t)) * nrm;
     const Vec3d tip = Vec3d(x, y, 10.0 * std::cos(w * y)) + 3.0 * nrm - 3.0 * v;
     if (k == 0) text += "RAPID\n";
-    std::snprintf(buf, sizeof buf, "GOTO/%.4f,%.4f,%.4f,%.7f,%.7f,%.7f\n", tip.x(), tip.y(), tip.z(),
-                  v.x(), v.y(), v.z());
+    std::snprintf(buf, sizeof buf, "GOTO/%.4f,%.4f,%.4f,%.7f,%.7f,%.7f\n", tip.x(), tip.y(),
+                  tip.z(), v.x(), v.y(), v.z());
     text += buf;
   }
   text += "END-OF-PATH\n";
@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
 
   std::printf("# taxopt scale benchmark\n# command: bench_scale %ld\n", n);
   std::printf("# CL text %.1f MB, G-code %.1f MB, CSV %.1f MB; result ok: %s\n",
-              static_cast<double>(text.size()) / 1e6, static_cast<double>(result.gcode.text.size()) / 1e6,
+              static_cast<double>(text.size()) / 1e6,
+              static_cast<double>(result.gcode.text.size()) / 1e6,
               static_cast<double>(csv.size()) / 1e6, result.ok() ? "yes" : "no");
   std::printf("| stage | time s | peak RSS MB after |\n|---|---|---|\n");
   std::printf("| make CL text | %.2f | %.0f |\n", t_make, rss_text);

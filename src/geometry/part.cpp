@@ -9,6 +9,8 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <Eigen/QR>
+#include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
 namespace taxopt {
@@ -73,6 +75,23 @@ Part::Closest Part::closest(const Vec3d& q) const {
   c.face = static_cast<int>(hit.second - impl_->triangles.cbegin());
   c.distance_mm = (c.point - q).norm();
   return c;
+}
+
+std::vector<int> Part::faces_within(const Vec3d& q, double radius_mm) const {
+  const CGAL::Bbox_3 box(q.x() - radius_mm, q.y() - radius_mm, q.z() - radius_mm, q.x() + radius_mm,
+                         q.y() + radius_mm, q.z() + radius_mm);
+  std::vector<Tree::Primitive_id> hits;
+  impl_->tree.all_intersected_primitives(box, std::back_inserter(hits));
+  std::vector<int> out;
+  out.reserve(hits.size());
+  const K::Point_3 p = to_cgal(q);
+  const double r2 = radius_mm * radius_mm;
+  for (const auto& h : hits) {
+    if (CGAL::squared_distance(p, *h) <= r2)
+      out.push_back(static_cast<int>(h - impl_->triangles.cbegin()));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 LocalFit Part::fit_towards(const Vec3d& q, int neighbours) const {

@@ -48,6 +48,9 @@ class Part {
   /// surface's point nearest to q, i.e. where a ball centred at q touches it.
   LocalFit fit_towards(const Vec3d& q, int neighbours = 30) const;
 
+  /// Indices of the faces within `radius_mm` of q (exact triangle distance), ascending.
+  std::vector<int> faces_within(const Vec3d& q, double radius_mm) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

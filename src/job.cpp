@@ -87,20 +87,16 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
   return summary;
 }
 
-/// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
-/// ball centres). In parallel; the result is sorted, whatever the thread count.
-std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
-                                          const Operationd& op, const std::vector<Vec3d>& axes,
-                                          const std::vector<ContactPoint>& contacts) {
-  const double R = tool.ball_radius_mm;
+/// The indices in [begin, end) for which `pred` holds, ascending, evaluated in parallel:
+/// the result does not depend on the thread count.
+template <class Pred>
+std::vector<std::size_t> parallel_select(std::size_t begin, std::size_t end, const Pred& pred) {
   using List = std::vector<std::size_t>;
   List hits = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, op.points.size()), List{},
+      tbb::blocked_range<std::size_t>(begin, std::max(begin, end)), List{},
       [&](const tbb::blocked_range<std::size_t>& range, List acc) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
-          const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
-          if (model.collides(tool, centre, axes[i], in_air)) acc.push_back(i);
+          if (pred(i)) acc.push_back(i);
         }
         return acc;
       },
@@ -110,6 +106,19 @@ std::vector<std::size_t> colliding_points(const CollisionModel& model, const Too
       });
   std::sort(hits.begin(), hits.end());
   return hits;
+}
+
+/// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
+/// ball centres). In parallel; the result is sorted, whatever the thread count.
+std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
+                                          const Operationd& op, const std::vector<Vec3d>& axes,
+                                          const std::vector<ContactPoint>& contacts) {
+  const double R = tool.ball_radius_mm;
+  return parallel_select(0, op.points.size(), [&](std::size_t i) {
+    const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
+    const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
+    return model.collides(tool, centre, axes[i], in_air);
+  });
 }
 
 /// Index i of every move from point i-1 to point i during which the tool hits the part, with
@@ -123,40 +132,26 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
                                          const std::vector<double>& c_deg,
                                          const std::vector<ContactPoint>& contacts) {
   const double R = tool.ball_radius_mm;
-  const std::size_t n = xyz_w.size();
-  using List = std::vector<std::size_t>;
-  List hits = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(1, std::max<std::size_t>(n, 1)), List{},
-      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
-          const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
-          const int steps = static_cast<int>(
-              std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
-          const bool in_air = contacts[i - 1].state != ContactState::Touching ||
-                              contacts[i].state != ContactState::Touching;
-          for (int s = 1; s < steps; ++s) {
-            const double t = static_cast<double>(s) / steps;
-            const Posed pose{deg_to_rad(a_deg[i - 1] + t * da), deg_to_rad(c_deg[i - 1] + t * dc)};
-            const Vec3d xyz = xyz_w[i - 1] + t * (xyz_w[i] - xyz_w[i - 1]);
-            const Vec3d tip = machine.gcode.mode == GcodeMode::Machine
-                                  ? machine.ac.from_machine_mm(xyz, pose)
-                                  : xyz;
-            const Vec3d axis = machine.ac.forward(pose);
-            if (model.collides(tool, tip + R * axis, axis, in_air)) {
-              acc.push_back(i);
-              break;
-            }
-          }
-        }
-        return acc;
-      },
-      [](List a, const List& b) {
-        a.insert(a.end(), b.begin(), b.end());
-        return a;
-      });
-  std::sort(hits.begin(), hits.end());
-  return hits;
+  return parallel_select(1, xyz_w.size(), [&](std::size_t i) {
+    const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
+    const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
+    const int steps = static_cast<int>(
+        std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
+    const bool in_air = contacts[i - 1].state != ContactState::Touching ||
+                        contacts[i].state != ContactState::Touching;
+    for (int s = 1; s < steps; ++s) {
+      const double t = static_cast<double>(s) / steps;
+      const Posed pose{deg_to_rad(a_deg[i - 1] + t * da), deg_to_rad(c_deg[i - 1] + t * dc)};
+      const Vec3d xyz = xyz_w[i - 1] + t * (xyz_w[i] - xyz_w[i - 1]);
+      const Vec3d tip =
+          machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz, pose) : xyz;
+      const Vec3d axis = machine.ac.forward(pose);
+      if (model.collides(tool, tip + R * axis, axis, in_air)) {
+        return true;
+      }
+    }
+    return false;
+  });
 }
 
 }  // namespace

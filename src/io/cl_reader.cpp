@@ -32,7 +32,6 @@ bool parse_number(const std::string& token, double& out) {
   std::size_t i = 0;
   const std::size_t n = t.size();
   if (i < n && (t[i] == '+' || t[i] == '-')) ++i;
-  const std::size_t mantissa_begin = i;
   std::size_t digits = 0;
   while (i < n && std::isdigit(static_cast<unsigned char>(t[i]))) ++i, ++digits;
   if (i < n && t[i] == '.') {
@@ -48,11 +47,10 @@ bool parse_number(const std::string& token, double& out) {
     if (exp_digits == 0) return false;
   }
   if (i != n) return false;
-  // from_chars takes neither a leading '+' nor a bare trailing '.' issue: it accepts "16."
+  // The grammar is checked above; from_chars does not take a leading '+' (it does take "16.").
   const char* first = t.data() + (t[0] == '+' ? 1 : 0);
   double value = 0.0;
   auto [ptr, ec] = std::from_chars(first, t.data() + n, value);
-  (void)mantissa_begin;
   if (ec != std::errc() || ptr != t.data() + n || !std::isfinite(value)) return false;
   out = value;
   return true;

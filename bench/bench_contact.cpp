@@ -63,8 +63,7 @@ int main(int argc, char** argv) {
   ro.max_step_mm = 0.3;
   const auto gen = generate_raster(bumps, ro);
   Operationd op;
-  op.tool.diameter_mm = 6.0;
-  op.tool.corner_radius_mm = 3.0;
+  op.tool = Tool::ball_end_mill(6.0, 15.0);
   for (const auto& g : gen) {
     if (static_cast<long>(op.points.size()) >= points) break;
     CLPointd p;

@@ -33,8 +33,7 @@ void run(const Case& c, const ToolModel& tool, double cell_deg, long points, lon
   RasterOptions ro;
   const auto gen = generate_raster(c.surface, ro);
   Operationd op;
-  op.tool.diameter_mm = 6.0;
-  op.tool.corner_radius_mm = 3.0;
+  op.tool = Tool::ball_end_mill(6.0, 15.0);
   for (const auto& g : gen) {
     if (g.rapid) continue;
     CLPointd p;
@@ -105,10 +104,7 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const long points = argc > 1 ? std::atol(argv[1]) : 200;
   const long brute = argc > 2 ? std::atol(argv[2]) : 5;
-  Tool t;
-  t.diameter_mm = 6.0;
-  t.corner_radius_mm = 3.0;
-  t.flute_length_mm = 15.0;
+  const Tool t = Tool::ball_end_mill(6.0, 15.0);
   ToolOverrides o;
   o.gauge_length_mm = 60.0;
   o.holder_radius_mm = 16.0;

@@ -122,12 +122,10 @@ int run_generate(const GenerateArgs& g) {
   }
   taxopt::Operationd op;
   op.name = g.surface == "sine" ? "SINE_FINISH" : "PLANE_FINISH";
+  op.tool = taxopt::Tool::ball_end_mill(2 * g.raster.tool_radius_mm, 5 * g.raster.tool_radius_mm);
   op.tool.name =
       "BALL_MILL_D" + std::to_string(static_cast<int>(std::lround(2 * g.raster.tool_radius_mm)));
   op.tool.number = 1;
-  op.tool.diameter_mm = 2 * g.raster.tool_radius_mm;
-  op.tool.corner_radius_mm = g.raster.tool_radius_mm;
-  op.tool.flute_length_mm = 5 * g.raster.tool_radius_mm;
   op.spindle_rpm = g.spindle_rpm;
   std::size_t gouging = 0;
   for (const auto& p : pts) {

@@ -41,10 +41,7 @@ TEST_CASE("collision: on a flat part everything is free until the holder reaches
           "[cspace][collision]") {
   const CollisionModel part(
       rectangle(Vec3d(-150, -150, 0), Vec3d(300, 0, 0), Vec3d(0, 300, 0), 30));
-  Tool t;
-  t.diameter_mm = 6.0;
-  t.corner_radius_mm = 3.0;
-  t.flute_length_mm = 15.0;
+  const Tool t = Tool::ball_end_mill(6.0, 15.0);
   ToolOverrides o;
   o.gauge_length_mm = 40.0;
   o.holder_radius_mm = 20.0;
@@ -76,10 +73,7 @@ TEST_CASE("collision: a vertical wall blocks the tilt band of the closed form",
   // farthest point is its top rim: x = L sin a + r cos a.
   const double D = 25.0;
   const CollisionModel wall(rectangle(Vec3d(D, -60, -20), Vec3d(0, 120, 0), Vec3d(0, 0, 140), 30));
-  Tool t;
-  t.diameter_mm = 6.0;
-  t.corner_radius_mm = 3.0;
-  t.flute_length_mm = 20.0;
+  const Tool t = Tool::ball_end_mill(6.0, 20.0);
   ToolOverrides o;
   o.gauge_length_mm = 53.0;  // the body ends L = 50 mm above the centre
   o.shank_radius_mm = 4.0;
@@ -99,10 +93,7 @@ TEST_CASE("collision: a vertical wall blocks the tilt band of the closed form",
 
 TEST_CASE("collision: the tool model follows the tool sheet and refuses contradictions",
           "[cspace][collision][bad-input]") {
-  Tool t;
-  t.diameter_mm = 10.0;
-  t.corner_radius_mm = 5.0;
-  t.flute_length_mm = 25.0;
+  const Tool t = Tool::ball_end_mill(10.0, 25.0);
   const ToolModel m = ToolModel::ball_end(t);
   REQUIRE(m.bodies.size() == 2);
   CHECK(m.bodies[0].radius_mm == 5.0);

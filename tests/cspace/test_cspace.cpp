@@ -91,10 +91,7 @@ TEST_CASE("cspace: on a flat part the free cells are the tilts below the holder'
     }
   }
   const Part part(plane);
-  Tool t;
-  t.diameter_mm = 6.0;
-  t.corner_radius_mm = 3.0;
-  t.flute_length_mm = 15.0;
+  const Tool t = Tool::ball_end_mill(6.0, 15.0);
   ToolOverrides o;
   o.gauge_length_mm = 40.0;
   o.holder_radius_mm = 20.0;
@@ -148,10 +145,7 @@ TEST_CASE("cspace: the fast rasteriser matches one FCL query per cell on unseen 
     const Toolpath tp = parse_cl(g.text, "gen.cls");
     const Operationd& op = tp.operations[0];
     const auto contacts = recover_contacts(part, op, 3.0);
-    Tool t;
-    t.diameter_mm = 6.0;
-    t.corner_radius_mm = 3.0;
-    t.flute_length_mm = 15.0;
+    const Tool t = Tool::ball_end_mill(6.0, 15.0);
     ToolOverrides o;
     o.gauge_length_mm = 35.0;
     o.shank_radius_mm = 4.0;

@@ -51,6 +51,9 @@ struct Tool {
   /// True when the file described this tool (TLDATA or CUTTER); false for the default.
   bool from_file = false;
 
+  /// A ball-end mill of the given diameter and flute length (mm): corner radius d / 2.
+  static Tool ball_end_mill(double diameter_mm, double flute_length_mm);
+
   /// A ball-end mill: corner radius equal to half the diameter (within 1e-6 relative).
   bool is_ball() const;
   /// Ball radius R for a ball-end mill, 0 otherwise.

@@ -122,7 +122,10 @@ class MachineParser {
 
   double number_of(const toml::node& n, const std::string& what) const {
     if (!n.is_number()) fail(line_of(n), what + " must be a number");
-    const double v = n.value<double>().value();
+    // Read integers and floats explicitly: toml++'s value<double>() is empty for an integer
+    // that a double cannot hold exactly (found by fuzz_machine_file).
+    const double v =
+        n.is_integer() ? static_cast<double>(n.as_integer()->get()) : n.as_floating_point()->get();
     if (!std::isfinite(v)) fail(line_of(n), what + " must be finite");
     return v;
   }

@@ -97,4 +97,10 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   expect_error("kinematics = = 3\n", 1, "not valid TOML");
   expect_error(replace(kFull, "max_accel_deg_s2 = 36000.0", "max_accel_deg_s2 = -1.0"), 9,
                "must be positive");
+  // Found by fuzz_machine_file: an integer no double holds exactly threw bad_optional_access.
+  expect_error(replace(kFull, "min_deg = -120.0", "min_deg = -9007199254740995"), 5,
+               "within [-360, 360]");
+  expect_error(
+      replace(kFull, "max_velocity_deg_s = 3600.0", "max_velocity_deg_s = -9007199254740993"), 8,
+      "must be positive");
 }

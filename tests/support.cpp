@@ -67,10 +67,13 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
     table += "T" + std::to_string(t) + " P" + std::to_string(t) + " D6 Z0 ;\n";
   }
   write_file(tmp.path("tool.tbl"), table);
-  // rs274 keeps its parameter file (rs274ngc.var) in the working directory: two runs in one
-  // folder race on it (seen as SIGBUS under ctest -j), so each run gets its own folder.
+  // rs274 keeps its parameter file (rs274ngc.var) in the working directory, and it opens
+  // $HOME/.tool.mmap with O_TRUNC and maps it MAP_SHARED: two concurrent runs (ctest -j)
+  // truncate each other's mapping and one dies of SIGBUS (exit 135). Each run gets its own
+  // folder and its own HOME.
   const std::string abs = std::filesystem::absolute(ngc_path).string();
-  RunResult r = run("cd " + tmp.dir() + " && rs274 -t tool.tbl -v rs274ngc.var -g " + abs);
+  RunResult r = run("cd " + tmp.dir() + " && HOME=" + tmp.dir() +
+                    " rs274 -t tool.tbl -v rs274ngc.var -g " + abs);
   moves.clear();
   std::istringstream in(r.out);
   std::string line;

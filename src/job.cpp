@@ -1,7 +1,6 @@
 #include "taxopt/job.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
 
 #include <chrono>
 #include <cmath>
@@ -10,6 +9,8 @@
 #include "taxopt/core/version.hpp"
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/plan/paper_optimiser.hpp"
+#include "util/parallel_select.hpp"
 
 namespace taxopt {
 namespace {
@@ -24,10 +25,32 @@ double round_to(double v, int decimals) {
   return std::round(v * s) / s;
 }
 
+/// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
+double ball_radius_mm(const Operationd& op, const JobOptions& options) {
+  return options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
+}
+
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
 /// not move when the axis turns, so before and after share one arc length), else the tip.
-Vec3d reference_point(const CLPointd& p, const Tool& tool) {
-  return p.tip_mm + tool.ball_radius_mm() * p.axis;
+Vec3d reference_point(const CLPointd& p, double ball_radius_mm) {
+  return p.tip_mm + ball_radius_mm * p.axis;
+}
+
+/// The paper's L_i of a pass, from point i to i + 1: between contact points where both ends
+/// touch the part, else between reference points. The metrics and the optimiser share them.
+std::vector<double> segment_lengths_mm(const Operationd& op,
+                                       const std::vector<ContactPoint>& contacts,
+                                       double ball_radius_mm, const IndexRange& pass) {
+  std::vector<double> len;
+  for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
+    const bool cc = !contacts.empty() && contacts[i].state == ContactState::Touching &&
+                    contacts[i + 1].state == ContactState::Touching;
+    len.push_back(cc ? (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm()
+                     : (reference_point(op.points[i + 1], ball_radius_mm) -
+                        reference_point(op.points[i], ball_radius_mm))
+                           .norm());
+  }
+  return len;
 }
 
 /// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
@@ -40,9 +63,9 @@ struct AxisPeaks {
 };
 
 RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                        const std::vector<double>& a_deg, const std::vector<double>& c_deg,
-                        const std::vector<double>& metric_feed, std::vector<PointRow>* rows,
-                        AxisPeaks* peaks = nullptr) {
+                        double ball_radius_mm, const std::vector<double>& a_deg,
+                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
+                        std::vector<PointRow>* rows, AxisPeaks* peaks = nullptr) {
   RotarySummary summary;
   double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
@@ -50,16 +73,9 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
                           a_deg.begin() + static_cast<long>(pass.end));
     std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
                           c_deg.begin() + static_cast<long>(pass.end));
-    std::vector<double> len, feed;
-    for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
-      const bool cc = !contacts.empty() && contacts[i].state == ContactState::Touching &&
-                      contacts[i + 1].state == ContactState::Touching;
-      len.push_back(
-          cc ? (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm()
-             : (reference_point(op.points[i + 1], op.tool) - reference_point(op.points[i], op.tool))
-                   .norm());
-      feed.push_back(metric_feed[i + 1]);
-    }
+    const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
+    std::vector<double> feed;
+    for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) feed.push_back(metric_feed[i + 1]);
     const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
     accumulate(summary, k, c);
     if (peaks) {
@@ -87,34 +103,13 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
   return summary;
 }
 
-/// The indices in [begin, end) for which `pred` holds, ascending, evaluated in parallel:
-/// the result does not depend on the thread count.
-template <class Pred>
-std::vector<std::size_t> parallel_select(std::size_t begin, std::size_t end, const Pred& pred) {
-  using List = std::vector<std::size_t>;
-  List hits = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(begin, std::max(begin, end)), List{},
-      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          if (pred(i)) acc.push_back(i);
-        }
-        return acc;
-      },
-      [](List a, const List& b) {
-        a.insert(a.end(), b.begin(), b.end());
-        return a;
-      });
-  std::sort(hits.begin(), hits.end());
-  return hits;
-}
-
 /// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
 /// ball centres). In parallel; the result is sorted, whatever the thread count.
 std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
                                           const Operationd& op, const std::vector<Vec3d>& axes,
                                           const std::vector<ContactPoint>& contacts) {
   const double R = tool.ball_radius_mm;
-  return parallel_select(0, op.points.size(), [&](std::size_t i) {
+  return detail::parallel_select(0, op.points.size(), [&](std::size_t i) {
     const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
     const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
     return model.collides(tool, centre, axes[i], in_air);
@@ -132,7 +127,7 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
                                          const std::vector<double>& c_deg,
                                          const std::vector<ContactPoint>& contacts) {
   const double R = tool.ball_radius_mm;
-  return parallel_select(1, xyz_w.size(), [&](std::size_t i) {
+  return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
     const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
     const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
     const int steps = static_cast<int>(
@@ -154,6 +149,167 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
   });
 }
 
+/// The axes of one operation after the paper's optimiser, and what it did.
+struct OptimisedOperation {
+  std::vector<Vec3d> axes;
+  std::size_t intervals = 0, repairs = 0, smoothed_joints = 0, sharp_joints = 0;
+  /// Passes the guard gave back their input axes.
+  std::size_t reverted_passes = 0;
+  /// Points with no acceptable axis within the cone (they keep their input axis).
+  std::vector<std::size_t> no_free_axis;
+};
+
+/// Runs plan_pass_paper on every feed pass of `op` (in parallel over passes; each pass is
+/// planned alone, so the result does not depend on the thread count). An axis is acceptable
+/// when the machine reaches it and, with a part, the tool above the ball (and the ball, where
+/// it is in the air) misses the part. Points outside the feed passes keep their axes.
+OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                                  double ball_radius_mm, const CollisionModel* model,
+                                  const ToolModel* tool, const Machine& machine,
+                                  const PaperOptions& options) {
+  OptimisedOperation out;
+  for (const CLPointd& p : op.points) out.axes.push_back(p.axis);
+  const std::vector<IndexRange> passes = feed_passes(op);
+  std::vector<PassPlan> plans(passes.size());
+  const double R = ball_radius_mm;
+  const auto touching = [&](std::size_t i) {
+    return !contacts.empty() && contacts[i].state == ContactState::Touching;
+  };
+  tbb::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
+    const IndexRange pass = passes[q];
+    PassProblem problem;
+    problem.segment_mm = segment_lengths_mm(op, contacts, R, pass);
+    Vec3d mean = Vec3d::Zero();
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      problem.input_axes.push_back(op.points[i].axis);
+      mean += op.points[i].axis;
+    }
+    problem.up = mean.norm() > 1e-9 ? Vec3d(mean.normalized()) : Vec3d::UnitZ();
+    // The curve of the segmenter: the contact points; where the ball is in the air, the ball
+    // centre offset by the normal of the nearest contact point (no jump of R at an approach);
+    // without any contact, the ball centres (an offset of the contact curve).
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      const Vec3d centre = reference_point(op.points[i], R);
+      if (touching(i)) {
+        problem.curve_mm.push_back(contacts[i].cc_mm);
+        continue;
+      }
+      std::optional<Vec3d> normal;
+      for (std::size_t d = 1; !normal && d < pass.size(); ++d) {
+        if (i >= pass.begin + d && touching(i - d)) normal = contacts[i - d].normal;
+        if (i + d < pass.end && touching(i + d)) normal = contacts[i + d].normal;
+      }
+      problem.curve_mm.push_back(normal ? Vec3d(centre - R * *normal) : centre);
+    }
+    const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
+      const std::size_t i = pass.begin + j;
+      if (!machine.ac.reachable(axis)) return false;
+      if (!model) return true;
+      return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
+    };
+    plans[q] = plan_pass_paper(problem, acceptable, options);
+  });
+  for (std::size_t q = 0; q < passes.size(); ++q) {
+    const PassPlan& plan = plans[q];
+    std::copy(plan.axes.begin(), plan.axes.end(),
+              out.axes.begin() + static_cast<long>(passes[q].begin));
+    out.intervals += plan.intervals();
+    out.repairs += plan.repairs;
+    out.smoothed_joints += plan.smoothed_joints;
+    out.sharp_joints += plan.sharp_joints;
+    for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(passes[q].begin + j);
+  }
+  return out;
+}
+
+/// Peak synthetic omega (deg/s) and a (deg/s^2) of one pass for poses of the whole operation.
+std::pair<double, double> pass_peaks(const Operationd& op,
+                                     const std::vector<ContactPoint>& contacts,
+                                     double ball_radius_mm, const IndexRange& pass,
+                                     const std::vector<Posed>& poses,
+                                     const std::vector<double>& metric_feed) {
+  std::vector<double> a, c, feed;
+  for (std::size_t i = pass.begin; i < pass.end; ++i) {
+    a.push_back(rad_to_deg(poses[i].a_rad));
+    c.push_back(rad_to_deg(poses[i].c_rad));
+    if (i > pass.begin) feed.push_back(metric_feed[i]);
+  }
+  const RotaryKinematics k =
+      rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass), feed);
+  double w = 0.0, acc = 0.0;
+  for (double x : k.omega_deg_s) w = std::max(w, x);
+  for (double x : k.accel_deg_s2) acc = std::max(acc, x);
+  return {w, acc};
+}
+
+/// The guard after the optimiser: a pass keeps its input axes when its optimised axes would
+/// raise its peak omega or a, or sweep the tool through the part between two CL points as the
+/// machine moves it (the optimiser checks the points, not the moves: near the pole A = 0 a
+/// small turn of the axis is a large turn of C), provided the input pass is itself safe.
+/// Returns the number of passes reverted.
+std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const CollisionModel* model, const ToolModel* tool,
+                         const Machine& machine, const std::vector<double>& metric_feed,
+                         const PosePlanOptions& pose_options, OptimisedOperation& out) {
+  const std::size_t n = op.points.size();
+  std::vector<Vec3d> in_axes;
+  std::vector<bool> rapid_into;
+  for (std::size_t i = 0; i < n; ++i) {
+    in_axes.push_back(op.points[i].axis);
+    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
+  }
+  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options);
+  if (!in_plan.ok()) return 0;
+  const PosePlan out_plan = plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options);
+  const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses) {
+    std::vector<char> hit(n, 0);
+    if (!model) return hit;
+    std::vector<Vec3d> xyz;
+    std::vector<double> a, c;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3d tip = reference_point(op.points[i], ball_radius_mm) - ball_radius_mm * axes[i];
+      xyz.push_back(
+          machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, poses[i]) : tip);
+      a.push_back(rad_to_deg(poses[i].a_rad));
+      c.push_back(rad_to_deg(poses[i].c_rad));
+    }
+    std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
+    for (std::size_t i :
+         colliding_moves(*model, *tool, machine, xyz, a, c, contacts.empty() ? air : contacts)) {
+      hit[i] = 1;
+    }
+    for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts)) hit[i] = 1;
+    return hit;
+  };
+  const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses);
+  const std::vector<char> out_hit =
+      out_plan.ok() ? moves_hit(out.axes, out_plan.poses) : std::vector<char>(n, 1);
+  std::size_t reverted = 0;
+  for (const IndexRange& pass : feed_passes(op)) {
+    bool input_safe = true, output_safe = true;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      input_safe = input_safe && !in_hit[i];
+      output_safe = output_safe && !out_hit[i];
+    }
+    if (!input_safe) continue;
+    bool worse = !output_safe;
+    if (!worse) {
+      const auto before =
+          pass_peaks(op, contacts, ball_radius_mm, pass, in_plan.poses, metric_feed);
+      const auto after =
+          pass_peaks(op, contacts, ball_radius_mm, pass, out_plan.poses, metric_feed);
+      worse =
+          after.first > before.first * (1.0 + 1e-9) || after.second > before.second * (1.0 + 1e-9);
+    }
+    if (!worse) continue;
+    std::copy(in_axes.begin() + static_cast<long>(pass.begin),
+              in_axes.begin() + static_cast<long>(pass.end),
+              out.axes.begin() + static_cast<long>(pass.begin));
+    ++reverted;
+  }
+  return reverted;
+}
+
 }  // namespace
 
 const char* to_string(Method method) {
@@ -166,10 +322,15 @@ const char* to_string(Method method) {
 }
 
 JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
-  if (options.method != Method::None) {
-    throw InputError(std::string("--method ") + to_string(options.method) +
-                     " is not available in taxopt " + kVersion +
-                     " (it needs the C-space optimiser); use --method none");
+  if (options.method == Method::Global) {
+    throw InputError(std::string("--method global is not available in taxopt ") + kVersion +
+                     "; use --method paper or --method none");
+  }
+  if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
+    throw InputError("--max-deviation must be within [0, 90] deg");
+  }
+  if (!(options.paper.grid_deg > 0.0 && options.paper.grid_deg <= 10.0)) {
+    throw InputError("--grid must be within (0, 10] deg");
   }
   if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
     throw InputError("--feed must be positive");
@@ -229,13 +390,84 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
   }
 
+  std::optional<CollisionModel> collision;
+  if (options.part) collision.emplace(options.part->mesh());
+
+  // The paper's optimiser: new axes about the fixed ball centres.
+  std::vector<std::optional<OptimisedOperation>> optimised(tp.operations.size());
+  std::vector<double> optimise_time(tp.operations.size(), 0.0);
+  if (options.method == Method::Paper) {
+    if (!options.part) {
+      res.warnings.push_back(
+          "no part given: no collision constraint; the tool axes may move up "
+          "to --max-deviation (" +
+          std::to_string(options.paper.max_deviation_deg) + " deg) from the input axes");
+    }
+    for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+      const Operationd& op = tp.operations[k];
+      const double R = ball_radius_mm(op, options);
+      if (!(R > 0.0)) {
+        res.warnings.push_back("operation " + op.name +
+                               ": not a ball-end mill, the input tool axes are kept");
+        continue;
+      }
+      if (options.part && !contact_summaries[k].recovered) continue;
+      const auto t0 = Clock::now();
+      std::optional<ToolModel> tool;
+      if (collision) tool = ToolModel::ball_end(op.tool, options.tool);
+      optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
+                                    tool ? &*tool : nullptr, machine, options.paper);
+      std::vector<double> metric_feed;
+      for (const CLPointd& p : op.points) {
+        metric_feed.push_back(options.feed_mm_per_min.value_or(
+            p.feed_mm_per_min > 0.0 ? p.feed_mm_per_min : fallback_feed));
+      }
+      const std::size_t reverted = guard_passes(
+          op, contacts[k], R, collision ? &*collision : nullptr, tool ? &*tool : nullptr, machine,
+          metric_feed, options.pose_options, *optimised[k]);
+      optimised[k]->reverted_passes = reverted;
+      if (reverted) {
+        res.warnings.push_back("operation " + op.name + ": " + std::to_string(reverted) +
+                               " passes keep their input axes (the optimised axes raised their "
+                               "peak omega or a, or swept the tool through the part between "
+                               "points near the pole A = 0)");
+      }
+      for (std::size_t i : optimised[k]->no_free_axis) {
+        res.problems.push_back(
+            format_location(tp.source, op.points[i].line,
+                            "operation " + op.name + ": no tool axis within " +
+                                std::to_string(options.paper.max_deviation_deg) +
+                                " deg of the input axis is reachable and collision-free here"));
+      }
+      optimise_time[k] = seconds_since(t0);
+      if (options.log) {
+        const OptimisedOperation& o = *optimised[k];
+        options.log("operation " + op.name + ": " + std::to_string(o.intervals) + " intervals, " +
+                    std::to_string(o.repairs) + " repair keys, " +
+                    std::to_string(o.smoothed_joints) + " joints smoothed, " +
+                    std::to_string(o.sharp_joints) + " left sharp");
+      }
+    }
+  }
+
   std::vector<PostedOperation> posted;
   std::vector<std::vector<double>> metric_feeds;
+  std::vector<std::vector<Posed>> input_poses;
   std::vector<double> post_time;
-  std::optional<Posed> start;
-  for (const Operationd& op : tp.operations) {
+  std::optional<Posed> start, input_start;
+  bool posting_failed = false;
+  for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+    const Operationd& op = tp.operations[k];
     const auto t0 = Clock::now();
     PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}};
+    if (optimised[k]) {
+      const double R = ball_radius_mm(op, options);
+      for (std::size_t i = 0; i < po.points.size(); ++i) {
+        const Vec3d centre = reference_point(op.points[i], R);
+        po.points[i].axis = optimised[k]->axes[i];
+        po.points[i].tip_mm = centre - R * po.points[i].axis;
+      }
+    }
     std::vector<double> mf(op.points.size(), fallback_feed);
     bool missing_feed = false;
     for (std::size_t i = 0; i < po.points.size(); ++i) {
@@ -250,14 +482,26 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       res.warnings.push_back("operation " + op.name + ": feed moves without FEDRAT use " +
                              std::to_string(fallback_feed) + " mm/min");
     }
-    std::vector<Vec3d> axes;
+    std::vector<Vec3d> axes, in_axes;
     std::vector<bool> rapid_into;
     for (std::size_t i = 0; i < op.points.size(); ++i) {
-      axes.push_back(op.points[i].axis);
+      axes.push_back(po.points[i].axis);
+      in_axes.push_back(op.points[i].axis);
       rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
     }
     const PosePlan plan = plan_poses(machine.ac, axes, rapid_into, start, options.pose_options);
+    // The input axes as the machine would have run them, for the "before" metrics.
+    if (optimised[k]) {
+      const PosePlan before =
+          plan_poses(machine.ac, in_axes, rapid_into, input_start, options.pose_options);
+      if (before.ok()) input_start = before.poses.back();
+      input_poses.push_back(before.ok() ? before.poses : std::vector<Posed>{});
+    } else {
+      input_poses.push_back(plan.ok() ? plan.poses : std::vector<Posed>{});
+      if (plan.ok()) input_start = plan.poses.back();
+    }
     if (!plan.ok()) {
+      posting_failed = true;
       res.problems.push_back(format_location(tp.source, op.points[plan.failed_index].line,
                                              "operation " + op.name + ": " + plan.message));
       continue;
@@ -268,7 +512,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     metric_feeds.push_back(std::move(mf));
     post_time.push_back(seconds_since(t0));
   }
-  if (!res.ok()) return res;
+  if (posting_failed) return res;
 
   std::vector<std::string> comments = {
       std::string("taxopt ") + kVersion + ", method " + to_string(options.method),
@@ -280,8 +524,6 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   const std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
   const double write_time = seconds_since(t_write);
 
-  std::optional<CollisionModel> collision;
-  if (options.part) collision.emplace(options.part->mesh());
   std::size_t next_move = 0;
   std::vector<Operationd> out_ops = tp.operations;
   for (std::size_t k = 0; k < posted.size(); ++k) {
@@ -314,8 +556,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       a_w[i] = last->a_deg;
       xyz_w[i] = last->xyz_mm;
       c_w[i] = last->c_deg;
-      a_in[i] = round_to(rad_to_deg(po.poses[i].a_rad), decimals);
-      c_in[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
+      if (!input_poses[k].empty()) {
+        a_in[i] = round_to(rad_to_deg(input_poses[k][i].a_rad), decimals);
+        c_in[i] = round_to(rad_to_deg(input_poses[k][i].c_rad), decimals);
+      }
       const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
       const Vec3d axis = machine.ac.forward(written);
       const Vec3d tip = machine.gcode.mode == GcodeMode::Machine
@@ -375,6 +619,17 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     r.contact = contact_summaries[k];
     r.time_cspace_s = cspace_time[k];
+    r.time_optimise_s = optimise_time[k];
+    if (optimised[k]) {
+      r.segments = static_cast<int>(optimised[k]->intervals);
+      // The optimiser keeps every axis within the cone; this proves it on what is written.
+      const double allowed = options.paper.max_deviation_deg + 1e-6;
+      if (r.max_axis_change_deg > allowed) {
+        res.problems.push_back("operation " + op.name + ": an output axis is " +
+                               std::to_string(r.max_axis_change_deg) +
+                               " deg from its input axis, more than --max-deviation");
+      }
+    }
     if (collision && r.contact.recovered) {
       const auto t0 = Clock::now();
       const ToolModel tool = ToolModel::ball_end(op.tool, options.tool);
@@ -431,9 +686,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         row.yaw_deg = rad_to_deg(c.yaw_rad);
       }
     }
-    r.before = summarise(op, contacts[k], a_in, c_in, metric_feeds[k], nullptr);
+    r.before = summarise(op, contacts[k], ball_radius_mm(op, options), a_in, c_in, metric_feeds[k],
+                         nullptr);
     AxisPeaks peaks;
-    r.after = summarise(op, contacts[k], a_w, c_w, metric_feeds[k], &r.rows, &peaks);
+    r.after = summarise(op, contacts[k], ball_radius_mm(op, options), a_w, c_w, metric_feeds[k],
+                        &r.rows, &peaks);
     // The machine's velocity and acceleration limits at the programmed feed.
     const RotaryAxis<double>* axes[2] = {&machine.ac.a, &machine.ac.c};
     const char* names[2] = {"A", "C"};

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "taxopt/geometry/surface.hpp"
+
 namespace taxopt::test {
 
 TempDir::TempDir() {
@@ -110,6 +112,32 @@ Heightfield make(const std::string& name, std::function<double(double, double)> 
 
 }  // namespace
 
+namespace {
+
+/// A heightfield as a parametric surface (u = x, v = y) for tessellation.
+struct HeightSurface {
+  const Heightfield* hf;
+  double x0, x1, y0, y1;
+  double u_min() const { return x0; }
+  double u_max() const { return x1; }
+  double v_min() const { return y0; }
+  double v_max() const { return y1; }
+  SurfaceJet<double> jet(double u, double v) const {
+    SurfaceJet<double> j;
+    j.p = Vec3d(u, v, hf->z(u, v));
+    return j;
+  }
+};
+
+}  // namespace
+
+TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x0, double x1,
+                              double y0, double y1) {
+  const HeightSurface s{&hf, x0, x1, y0, y1};
+  return tessellate(s, static_cast<int>(std::lround((x1 - x0) / spacing_mm)),
+                    static_cast<int>(std::lround((y1 - y0) / spacing_mm)));
+}
+
 std::vector<Heightfield> random_heightfields(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Heightfield> out;
@@ -160,12 +188,14 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       const Vec3d v = Eigen::AngleAxisd(tilt, k) * nrm;
       const Vec3d tip = s + r_mm * nrm - r_mm * v;
       if (i == 0) {
-        const Vec3d above = tip + 20.0 * Vec3d::UnitZ();
+        const Vec3d above = tip + 20.0 * v;  // approach along the axis, as CAM systems do
         os << "RAPID\nGOTO/" << above.x() << "," << above.y() << "," << above.z() << "," << v.x()
            << "," << v.y() << "," << v.z() << "\n";
         g.tips_mm.push_back(above);
         g.axes.push_back(v);
         g.rapid.push_back(true);
+        g.cc_mm.push_back(above);
+        g.centres_mm.push_back(above + r_mm * v);
         os << "FEDRAT/MMPM,250.0\n";
       }
       os << "GOTO/" << tip.x() << "," << tip.y() << "," << tip.z() << "," << v.x() << "," << v.y()
@@ -173,6 +203,8 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       g.tips_mm.push_back(tip);
       g.axes.push_back(v);
       g.rapid.push_back(false);
+      g.cc_mm.push_back(s);
+      g.centres_mm.push_back(s + r_mm * nrm);
     }
   }
   os << "END-OF-PATH\n";

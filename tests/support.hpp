@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "taxopt/core/types.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
 
 namespace taxopt::test {
 
@@ -66,7 +67,15 @@ struct GeneratedCl {
   std::vector<Vec3d> tips_mm;
   std::vector<Vec3d> axes;
   std::vector<bool> rapid;
+  /// True contact point of each feed GOTO (the heightfield point), and the ball centre of
+  /// every GOTO, mm.
+  std::vector<Vec3d> cc_mm;
+  std::vector<Vec3d> centres_mm;
 };
+/// The heightfield over [x0, x1] x [y0, y1] as a triangle mesh with the given spacing.
+TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x0 = -10.0,
+                              double x1 = 60.0, double y0 = -10.0, double y1 = 60.0);
+
 /// Raster passes along x over `hf` with a ball-end mill of radius r_mm; the axis is the
 /// surface normal tilted by tilt_deg about the pass direction. NX CLSF in mm.
 GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,

@@ -94,12 +94,19 @@ TEST_CASE("cli: axes out of the machine's range exit 1 and write nothing without
   CHECK_FALSE(file_exists(t.path("o.nc")));
 }
 
-TEST_CASE("cli: the methods of later versions are refused clearly", "[cli]") {
+TEST_CASE("cli: the method of a later version is refused clearly", "[cli]") {
   TempDir t;
   write_file(t.path("a.cls"), kSmallCl);
-  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc"));
+  const auto r =
+      run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " --method global");
   CHECK(r.code == 2);
-  CHECK_THAT(r.err, Catch::Contains("--method paper is not available"));
+  CHECK_THAT(r.err, Catch::Contains("--method global is not available"));
+  CHECK(!file_exists(t.path("o.nc")));
+  for (const char* bad : {"--grid 0", "--grid 20", "--max-deviation -1", "--max-deviation 95"}) {
+    const auto b = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " " + bad);
+    CHECK(b.code == 2);
+    CHECK_THAT(b.err, Catch::Contains(std::string(bad).substr(0, std::string(bad).find(' '))));
+  }
   const auto p = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") +
                             " --method none --part x.stl");
   CHECK(p.code == 2);

@@ -193,9 +193,11 @@ int main(int argc, char** argv) {
   app.add_option("--holder-length", a.holder_length, "holder length (default 40 mm)");
   app.add_option("--gauge-length", a.gauge_length,
                  "tip to holder face (default: max(flute length, 10 diameters))");
-  auto* later = app.add_option_group("needs the C-space stage (not in this version)");
-  later->add_option("--grid", a.grid, "C-space cell size, deg");
-  later->add_option("--max-deviation", a.max_deviation, "largest axis change, deg");
+  app.add_option("--grid", a.grid,
+                 "C-space cell size, deg: spacing of the key-axis candidates (2)");
+  app.add_option("--max-deviation", a.max_deviation,
+                 "largest angle between an output axis and its input axis, deg (30)");
+  auto* later = app.add_option_group("not in this version");
   later->add_option("--plots", a.plots, "SVG plot directory");
 
   GenerateArgs gen;
@@ -253,17 +255,16 @@ int main(int argc, char** argv) {
     // the shank into the opposite flank of the sine (data/README.md); moving them clear is
     // the optimiser's work, not --method none's.
     if (!a.gauge_length) a.gauge_length = 15.0;
-    a.method = "none";
     a.gcode = demo_out + "/demo.nc";
     a.report = demo_out + "/report.json";
     a.points_csv = demo_out + "/points.csv";
   }
 
   try {
-    for (const char* opt : {"--grid", "--max-deviation", "--plots"}) {
+    for (const char* opt : {"--plots"}) {
       if (app.count(opt)) {
         return error(std::string(opt) + " is not available in taxopt " + taxopt::kVersion +
-                         " (it comes with the C-space stage)",
+                         " (plots come with a later version)",
                      2);
       }
     }
@@ -338,6 +339,8 @@ int main(int argc, char** argv) {
     options.method = a.method == "none"    ? taxopt::Method::None
                      : a.method == "paper" ? taxopt::Method::Paper
                                            : taxopt::Method::Global;
+    if (a.grid) options.paper.grid_deg = *a.grid;
+    if (a.max_deviation) options.paper.max_deviation_deg = *a.max_deviation;
     options.feed_mm_per_min = a.feed_mm_per_min;
     options.units_out = parse_unit(a.units_out, "--units-out");
     const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);

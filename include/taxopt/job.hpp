@@ -15,6 +15,7 @@
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/kinematics/metrics.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
+#include "taxopt/plan/paper_optimiser.hpp"
 
 namespace taxopt {
 
@@ -33,6 +34,9 @@ struct JobOptions {
   /// Units of the G-code; empty: the CL file's.
   std::optional<LengthUnit> units_out;
   PosePlanOptions pose_options;
+  /// The paper's optimiser (--method paper): deviation cone (--max-deviation), candidate
+  /// grid (--grid), segmenter and joint smoothing.
+  PaperOptions paper;
   /// The part (not owned); without it there is no contact recovery and no collision check.
   const Part* part = nullptr;
   ContactOptions contact;

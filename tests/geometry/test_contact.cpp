@@ -13,31 +13,6 @@
 using namespace taxopt;
 using namespace taxopt::test;
 
-namespace {
-
-/// A heightfield as a parametric surface (u = x, v = y) for tessellation.
-struct HeightSurface {
-  const Heightfield* hf;
-  double x0, x1, y0, y1;
-  double u_min() const { return x0; }
-  double u_max() const { return x1; }
-  double v_min() const { return y0; }
-  double v_max() const { return y1; }
-  SurfaceJet<double> jet(double u, double v) const {
-    SurfaceJet<double> j;
-    j.p = Vec3d(u, v, hf->z(u, v));
-    return j;
-  }
-};
-
-TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm) {
-  const HeightSurface s{&hf, -10.0, 60.0, -10.0, 60.0};
-  const int n = static_cast<int>(std::lround(70.0 / spacing_mm));
-  return tessellate(s, n, n);
-}
-
-}  // namespace
-
 TEST_CASE("contact: unseen heightfield meshes at 0.5 mm give back the CL file's geometry",
           "[geometry][contact]") {
   std::mt19937 rng(31337);

@@ -79,6 +79,19 @@ struct ACMachine {
     return {Pose<S>{sa * ag, wrap_pi(sc * c_pos)}, Pose<S>{-sa * ag, wrap_pi(sc * c_neg)}};
   }
 
+  /// True when some pose of unit `axis` has A within its range and a turn of C within its
+  /// range (on the pole any C will do).
+  bool reachable(const Vec3<S>& axis) const {
+    for (const Pose<S>& p : inverse(axis)) {
+      if (!a.contains(p.a_rad)) continue;
+      if (c.continuous || (at_pole(axis) && c.min_rad <= c.max_rad)) return true;
+      for (int turn = -2; turn <= 2; ++turn) {
+        if (c.contains(p.c_rad + S(turn) * Constants<S>::two_pi())) return true;
+      }
+    }
+    return false;
+  }
+
   /// Machine-mode joint position of a workpiece point for a pose (CLI.md):
   /// p_m = Rot(X, -a) (Rot(Z, -c) (p_w - c0) + c0 - a0) + a0.
   Vec3<S> to_machine_mm(const Vec3<S>& p_w_mm, const Pose<S>& pose) const {

@@ -1,0 +1,288 @@
+#include "taxopt/plan/paper_optimiser.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <optional>
+
+#include "taxopt/plan/slerp.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt {
+
+std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad) {
+  // A fixed orthonormal pair perpendicular to the centre (deterministic for a given centre).
+  const Vec3d seed = std::abs(centre.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY();
+  const Vec3d e1 = centre.cross(seed).normalized();
+  const Vec3d e2 = centre.cross(e1);
+  std::vector<Vec3d> out = {centre};
+  const int rings = static_cast<int>(std::floor(radius_rad / step_rad + 1e-9));
+  for (int r = 1; r <= rings; ++r) {
+    const double rho = r * step_rad;
+    const int m = std::max(
+        1, static_cast<int>(std::ceil(Constants<double>::two_pi() * std::sin(rho) / step_rad)));
+    for (int t = 0; t < m; ++t) {
+      const double phi = Constants<double>::two_pi() * t / m;
+      out.push_back(std::cos(rho) * centre +
+                    std::sin(rho) * (std::cos(phi) * e1 + std::sin(phi) * e2));
+    }
+  }
+  return out;
+}
+
+namespace {
+
+/// The state of one pass while it is being planned.
+class PassPlanner {
+ public:
+  PassPlanner(const PassProblem& problem, const AxisTest& is_free, const PaperOptions& options)
+      : p_(problem), is_free_(is_free), opt_(options), n_(problem.input_axes.size()) {
+    arc_.assign(n_, 0.0);
+    for (std::size_t i = 1; i < n_; ++i) arc_[i] = arc_[i - 1] + p_.segment_mm[i - 1];
+    const double length = n_ ? arc_.back() : 0.0;
+    pull_ = opt_.pull_weight / std::max(length, 1e-6);
+    max_dev_rad_ = deg_to_rad(opt_.max_deviation_deg);
+    step_rad_ = deg_to_rad(opt_.grid_deg);
+  }
+
+  PassPlan run() {
+    PassPlan plan;
+    if (n_ == 0) return plan;
+    const CurveShape<double> shape = segment_curve(p_.curve_mm, p_.up, opt_.segmenter);
+    plan.segmenter_keys = shape.keys;
+    keys_ = shape.keys;
+    key_axes_.clear();
+    for (std::size_t k : keys_) {
+      const std::optional<Vec3d> v = nearest_free(k);
+      if (!v) no_free_.push_back(k);
+      key_axes_.push_back(v.value_or(p_.input_axes[k]));
+    }
+    optimise_keys();
+    axes_.assign(p_.input_axes.begin(), p_.input_axes.end());
+    for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
+    plan.repairs = repair();
+    if (opt_.joint_smoothing) smooth_joints(plan);
+    plan.axes = axes_;
+    plan.keys = keys_;
+    std::sort(no_free_.begin(), no_free_.end());
+    no_free_.erase(std::unique(no_free_.begin(), no_free_.end()), no_free_.end());
+    plan.no_free_axis = no_free_;
+    return plan;
+  }
+
+ private:
+  bool acceptable(std::size_t i, const Vec3d& v) const {
+    return angle_between(v, p_.input_axes[i]) <= max_dev_rad_ + 1e-12 && is_free_(i, v);
+  }
+
+  /// The input axis if free, else the free candidate nearest to it.
+  std::optional<Vec3d> nearest_free(std::size_t i) const {
+    for (const Vec3d& v : cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_)) {
+      if (acceptable(i, v)) return v;
+    }
+    return std::nullopt;
+  }
+
+  /// Bending energy terms of the key polygon that involve key j, plus j's pull.
+  double local_cost(std::size_t j, const Vec3d& v) const {
+    const std::size_t m = keys_.size();
+    const auto axis = [&](std::size_t t) { return t == j ? v : key_axes_[t]; };
+    const auto rate = [&](std::size_t t) {  // from key t to key t + 1
+      const double len = std::max(arc_[keys_[t + 1]] - arc_[keys_[t]], 1e-9);
+      return Vec3d((axis(t + 1) - axis(t)) / len);
+    };
+    double e = 0.0;
+    for (std::size_t t = (j > 0 ? j - 1 : 0); t <= j + 1 && t + 1 < m; ++t) {
+      if (t == 0) continue;
+      const double span = std::max(0.5 * (arc_[keys_[t + 1]] - arc_[keys_[t - 1]]), 1e-9);
+      e += (rate(t) - rate(t - 1)).squaredNorm() / span;
+    }
+    const double dev = angle_between(v, p_.input_axes[keys_[j]]);
+    return e + pull_ * dev * dev;
+  }
+
+  /// The best acceptable axis for key j with the others fixed: the cap grid by cost, then a
+  /// pattern search down to grid / 8. Empty when no candidate is acceptable.
+  std::optional<Vec3d> best_key_axis(std::size_t j) const {
+    const std::size_t i = keys_[j];
+    const std::vector<Vec3d> cands = cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_);
+    std::vector<std::pair<double, std::size_t>> order;
+    order.reserve(cands.size() + 1);
+    for (std::size_t c = 0; c < cands.size(); ++c) order.emplace_back(local_cost(j, cands[c]), c);
+    std::sort(order.begin(), order.end());
+    std::optional<Vec3d> best;
+    double best_cost = 0.0;
+    // The current axis competes too: a sweep never makes a key worse.
+    const double current_cost = local_cost(j, key_axes_[j]);
+    const bool current_ok = acceptable(i, key_axes_[j]);
+    for (const auto& [cost, c] : order) {
+      if (current_ok && cost >= current_cost) break;
+      if (acceptable(i, cands[c])) {
+        best = cands[c];
+        best_cost = cost;
+        break;
+      }
+    }
+    if (!best && current_ok) best = key_axes_[j], best_cost = current_cost;
+    if (!best) return best;
+    // Pattern search in the tangent plane of the best axis.
+    for (double step = 0.5 * step_rad_; step > step_rad_ / 8.5; step *= 0.5) {
+      for (int round = 0; round < 8; ++round) {
+        const Vec3d b = *best;
+        const Vec3d seed = std::abs(b.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY();
+        const Vec3d e1 = b.cross(seed).normalized(), e2 = b.cross(e1);
+        bool improved = false;
+        for (int d = 0; d < 8; ++d) {
+          const double phi = Constants<double>::two_pi() * d / 8;
+          const Vec3d v = sphere_exp(b, Vec3d(step * (std::cos(phi) * e1 + std::sin(phi) * e2)));
+          const double cost = local_cost(j, v);
+          if (cost < best_cost - 1e-15 && acceptable(i, v)) {
+            best = v;
+            best_cost = cost;
+            improved = true;
+          }
+        }
+        if (!improved) break;
+      }
+    }
+    return best;
+  }
+
+  /// Sweeps over the keys until none moves.
+  void optimise_keys() {
+    for (int sweep = 0; sweep < opt_.max_sweeps; ++sweep) {
+      bool moved = false;
+      for (std::size_t j = 0; j < keys_.size(); ++j) {
+        const std::optional<Vec3d> v = best_key_axis(j);
+        if (!v) continue;
+        if (angle_between(*v, key_axes_[j]) > 1e-9) moved = true;
+        key_axes_[j] = *v;
+      }
+      if (!moved) break;
+    }
+  }
+
+  /// Arc-length slerp over the interval from key k to key k + 1.
+  void fill(std::size_t k) {
+    const std::size_t e = keys_[k], f = keys_[k + 1];
+    const std::vector<double> len(p_.segment_mm.begin() + static_cast<long>(e),
+                                  p_.segment_mm.begin() + static_cast<long>(f));
+    const std::vector<Vec3d> v = arc_length_slerp(key_axes_[k], key_axes_[k + 1], len);
+    std::copy(v.begin(), v.end(), axes_.begin() + static_cast<long>(e));
+  }
+
+  /// Points strictly inside the interval from key k to key k + 1 whose axis is not acceptable.
+  std::vector<std::size_t> bad_points(std::size_t k) const {
+    return detail::parallel_select(keys_[k] + 1, keys_[k + 1],
+                                   [&](std::size_t i) { return !acceptable(i, axes_[i]); });
+  }
+
+  /// Splits intervals at unacceptable interpolated axes until every axis is acceptable or a
+  /// key. Returns the number of keys added.
+  std::size_t repair() {
+    std::size_t added = 0;
+    std::vector<std::size_t> todo(keys_.size() > 1 ? keys_.size() - 1 : 0);
+    std::iota(todo.begin(), todo.end(), std::size_t(0));
+    // Work from the last interval back so that inserting keys does not shift pending ones.
+    std::sort(todo.rbegin(), todo.rend());
+    while (!todo.empty()) {
+      const std::size_t k = todo.back();
+      todo.pop_back();
+      const std::vector<std::size_t> bad = bad_points(k);
+      if (bad.empty()) continue;
+      std::size_t worst = bad.front();
+      double worst_dev = -1.0;
+      for (std::size_t i : bad) {
+        const double dev = angle_between(axes_[i], p_.input_axes[i]);
+        if (dev > worst_dev) worst = i, worst_dev = dev;
+      }
+      keys_.insert(keys_.begin() + static_cast<long>(k + 1), worst);
+      key_axes_.insert(key_axes_.begin() + static_cast<long>(k + 1), axes_[worst]);
+      const std::optional<Vec3d> v = best_key_axis(k + 1);
+      if (!v) {
+        no_free_.push_back(worst);
+        key_axes_[k + 1] = p_.input_axes[worst];
+      } else {
+        key_axes_[k + 1] = *v;
+      }
+      ++added;
+      fill(k);
+      fill(k + 1);
+      // Pending intervals after k moved one place up; k and k + 1 are checked again.
+      for (std::size_t& t : todo) {
+        if (t > k) ++t;
+      }
+      todo.push_back(k + 1);
+      todo.push_back(k);
+    }
+    return added;
+  }
+
+  /// Parabolic blends at the interior keys (see the header).
+  void smooth_joints(PassPlan& plan) {
+    if (keys_.size() < 3) return;
+    const std::size_t joints = keys_.size() - 2;
+    std::vector<char> smoothed(joints, 0);
+    tbb::parallel_for(std::size_t(0), joints, [&](std::size_t q) {
+      const std::size_t j = q + 1;
+      const std::size_t ia = keys_[j - 1], ik = keys_[j], ib = keys_[j + 1];
+      const Vec3d vk = key_axes_[j];
+      const double left = arc_[ik] - arc_[ia], right = arc_[ib] - arc_[ik];
+      if (!(left > 0.0) || !(right > 0.0)) return;
+      const Vec3d w_left = -sphere_log(vk, key_axes_[j - 1]) / left;
+      const Vec3d w_right = sphere_log(vk, key_axes_[j + 1]) / right;
+      const Vec3d dw = w_right - w_left;
+      if (dw.norm() * std::min(left, right) < 1e-12) {
+        smoothed[q] = 1;
+        return;
+      }
+      double d = 0.5 * std::min(left, right);
+      for (int attempt = 0; attempt < 5; ++attempt, d *= 0.5) {
+        std::vector<std::pair<std::size_t, Vec3d>> blend;
+        bool ok = true;
+        for (std::size_t i = ia + 1; i < ib && ok; ++i) {
+          const double s = arc_[i] - arc_[ik];
+          if (std::abs(s) >= d) continue;
+          const Vec3d u = w_left * s + dw * ((s + d) * (s + d) / (4.0 * d));
+          const Vec3d v = sphere_exp<double>(vk, u);
+          ok = acceptable(i, v);
+          blend.emplace_back(i, v);
+        }
+        if (!ok) continue;
+        for (const auto& [i, v] : blend) axes_[i] = v;
+        smoothed[q] = 1;
+        return;
+      }
+    });
+    for (char s : smoothed) (s ? plan.smoothed_joints : plan.sharp_joints) += 1;
+  }
+
+  const PassProblem& p_;
+  const AxisTest& is_free_;
+  const PaperOptions& opt_;
+  std::size_t n_;
+  std::vector<double> arc_;
+  double pull_ = 0.0, max_dev_rad_ = 0.0, step_rad_ = 0.0;
+  std::vector<std::size_t> keys_;
+  std::vector<Vec3d> key_axes_;
+  std::vector<Vec3d> axes_;
+  std::vector<std::size_t> no_free_;
+};
+
+}  // namespace
+
+PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
+                         const PaperOptions& options) {
+  const std::size_t n = problem.input_axes.size();
+  if (problem.curve_mm.size() != n || (n > 0 && problem.segment_mm.size() != n - 1)) {
+    throw std::invalid_argument("plan_pass_paper: curve, axes and segments do not match");
+  }
+  if (!(options.grid_deg > 0.0) || !(options.max_deviation_deg >= 0.0)) {
+    throw std::invalid_argument("plan_pass_paper: grid must be positive, deviation not negative");
+  }
+  return PassPlanner(problem, is_free, options).run();
+}
+
+}  // namespace taxopt

@@ -1,0 +1,35 @@
+#pragma once
+/// @file Private helper of the compiled library (not installed): a deterministic parallel
+/// filter over an index range.
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace taxopt::detail {
+
+/// The indices in [begin, end) for which `pred` holds, ascending, evaluated in parallel:
+/// the result does not depend on the thread count.
+template <class Pred>
+std::vector<std::size_t> parallel_select(std::size_t begin, std::size_t end, const Pred& pred) {
+  using List = std::vector<std::size_t>;
+  List hits = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(begin, std::max(begin, end)), List{},
+      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          if (pred(i)) acc.push_back(i);
+        }
+        return acc;
+      },
+      [](List a, const List& b) {
+        a.insert(a.end(), b.begin(), b.end());
+        return a;
+      });
+  std::sort(hits.begin(), hits.end());
+  return hits;
+}
+
+}  // namespace taxopt::detail

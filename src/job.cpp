@@ -10,6 +10,7 @@
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
+#include "taxopt/plan/pole_passage.hpp"
 #include "util/parallel_select.hpp"
 
 namespace taxopt {
@@ -153,6 +154,8 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
 struct OptimisedOperation {
   std::vector<Vec3d> axes;
   std::size_t intervals = 0, repairs = 0, smoothed_joints = 0, sharp_joints = 0;
+  /// Stretches near the pole A = 0 whose C was re-planned (pole_passage.hpp).
+  std::size_t pole_stretches = 0;
   /// Passes the guard gave back their input axes.
   std::size_t reverted_passes = 0;
   /// Points with no acceptable axis within the cone (they keep their input axis).
@@ -162,16 +165,21 @@ struct OptimisedOperation {
 /// Runs plan_pass_paper on every feed pass of `op` (in parallel over passes; each pass is
 /// planned alone, so the result does not depend on the thread count). An axis is acceptable
 /// when the machine reaches it and, with a part, the tool above the ball (and the ball, where
-/// it is in the air) misses the part. Points outside the feed passes keep their axes.
+/// it is in the air) misses the part. Points outside the feed passes keep their axes. Then
+/// each pass's stretches near the pole get C re-planned in machine space (pole_passage.hpp).
 OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
                                   double ball_radius_mm, const CollisionModel* model,
                                   const ToolModel* tool, const Machine& machine,
+                                  const std::vector<double>& metric_feed,
+                                  const PosePlanOptions& pose_options,
                                   const PaperOptions& options) {
   OptimisedOperation out;
   for (const CLPointd& p : op.points) out.axes.push_back(p.axis);
   const std::vector<IndexRange> passes = feed_passes(op);
   std::vector<PassPlan> plans(passes.size());
+  std::vector<std::size_t> pole_stretches(passes.size(), 0);
   const double R = ball_radius_mm;
+  const double max_dev_rad = deg_to_rad(options.max_deviation_deg);
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
@@ -207,7 +215,23 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       if (!model) return true;
       return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
     };
-    plans[q] = plan_pass_paper(problem, acceptable, options);
+    PassPlan plan = plan_pass_paper(problem, acceptable, options);
+    std::vector<bool> rapid_into(pass.size(), false);
+    rapid_into[0] = true;
+    const PosePlan poses = plan_poses(machine.ac, plan.axes, rapid_into, {}, pose_options);
+    if (poses.ok()) {
+      std::vector<double> feed;
+      for (std::size_t i = pass.begin + 1; i < pass.end; ++i) feed.push_back(metric_feed[i]);
+      const AxisTest in_cone = [&](std::size_t j, const Vec3d& axis) {
+        return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
+               acceptable(j, axis);
+      };
+      PolePassage pole = smooth_pole_passages(machine.ac, plan.axes, poses.poses,
+                                              problem.segment_mm, feed, in_cone);
+      plan.axes = std::move(pole.axes);
+      pole_stretches[q] = pole.stretches;
+    }
+    plans[q] = std::move(plan);
   });
   for (std::size_t q = 0; q < passes.size(); ++q) {
     const PassPlan& plan = plans[q];
@@ -217,6 +241,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     out.repairs += plan.repairs;
     out.smoothed_joints += plan.smoothed_joints;
     out.sharp_joints += plan.sharp_joints;
+    out.pole_stretches += pole_stretches[q];
     for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(passes[q].begin + j);
   }
   return out;
@@ -415,13 +440,14 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const auto t0 = Clock::now();
       std::optional<ToolModel> tool;
       if (collision) tool = ToolModel::ball_end(op.tool, options.tool);
-      optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
-                                    tool ? &*tool : nullptr, machine, options.paper);
       std::vector<double> metric_feed;
       for (const CLPointd& p : op.points) {
         metric_feed.push_back(options.feed_mm_per_min.value_or(
             p.feed_mm_per_min > 0.0 ? p.feed_mm_per_min : fallback_feed));
       }
+      optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
+                                    tool ? &*tool : nullptr, machine, metric_feed,
+                                    options.pose_options, options.paper);
       const std::size_t reverted = guard_passes(
           op, contacts[k], R, collision ? &*collision : nullptr, tool ? &*tool : nullptr, machine,
           metric_feed, options.pose_options, *optimised[k]);

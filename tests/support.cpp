@@ -205,6 +205,16 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       g.rapid.push_back(false);
       g.cc_mm.push_back(s);
       g.centres_mm.push_back(s + r_mm * nrm);
+      if (i == n) {
+        const Vec3d above = tip + 20.0 * v;  // retract along the axis before the next pass
+        os << "RAPID\nGOTO/" << above.x() << "," << above.y() << "," << above.z() << "," << v.x()
+           << "," << v.y() << "," << v.z() << "\n";
+        g.tips_mm.push_back(above);
+        g.axes.push_back(v);
+        g.rapid.push_back(true);
+        g.cc_mm.push_back(above);
+        g.centres_mm.push_back(above + r_mm * v);
+      }
     }
   }
   os << "END-OF-PATH\n";

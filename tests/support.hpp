@@ -77,7 +77,9 @@ TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x
                               double x1 = 60.0, double y0 = -10.0, double y1 = 60.0);
 
 /// Raster passes along x over `hf` with a ball-end mill of radius r_mm; the axis is the
-/// surface normal tilted by tilt_deg about the pass direction. NX CLSF in mm.
+/// surface normal tilted by tilt_deg in the plane of motion (a lead angle, about N x T). Each
+/// pass starts with a rapid to 20 mm above its first tip and ends with a rapid to 20 mm above
+/// its last one, along the axis. NX CLSF in mm.
 GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
                       double step_mm, double y0, double y1, double x0, double x1);
 

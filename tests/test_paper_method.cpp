@@ -4,6 +4,7 @@
 // rs274 reads them from the G-code, the path lengths between the true contact points of the
 // heightfield, the tool tested against every nearby mesh face with the exact
 // triangle-versus-cylinder test (not FCL, which the optimiser uses).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <random>
 
@@ -54,18 +55,43 @@ Peaks peaks(const std::vector<CanonMove>& moves, const GeneratedCl& g, double fe
   return p;
 }
 
-/// True when some body of the tool at ball centre `c` and axis `v` meets a face of the mesh.
-bool tool_hits(const TriangleMesh& mesh, const ToolModel& tool, const Vec3d& c, const Vec3d& v) {
-  const double reach = tool.reach_mm();
+/// A mesh face's bounding sphere, in plain doubles: the prefilter below runs for every face
+/// and point, and Eigen's expression templates are slow in a Debug build.
+struct FaceSphere {
+  double x, y, z, r;
+};
+
+std::vector<FaceSphere> face_spheres(const TriangleMesh& mesh) {
+  std::vector<FaceSphere> out;
   for (const auto& f : mesh.faces) {
     const Vec3d& a = mesh.vertices[f[0]];
     const Vec3d& b = mesh.vertices[f[1]];
     const Vec3d& d = mesh.vertices[f[2]];
     const Vec3d mid = (a + b + d) / 3.0;
     const double r = std::max({(a - mid).norm(), (b - mid).norm(), (d - mid).norm()});
-    if ((mid - c).norm() > reach + r) continue;
+    out.push_back({mid.x(), mid.y(), mid.z(), r});
+  }
+  return out;
+}
+
+/// True when some body of the tool at ball centre `c` and axis `v` meets a face of the mesh.
+/// Exact test (triangle_meets_cylinder) on the faces whose bounding sphere reaches the
+/// body's segment; the others cannot meet it.
+bool tool_hits(const TriangleMesh& mesh, const std::vector<FaceSphere>& spheres,
+               const ToolModel& tool, const Vec3d& c, const Vec3d& v) {
+  for (std::size_t k = 0; k < spheres.size(); ++k) {
+    const FaceSphere& f = spheres[k];
+    const double px = f.x - c.x(), py = f.y - c.y(), pz = f.z - c.z();
+    const double along = px * v.x() + py * v.y() + pz * v.z();
     for (const ToolBody& body : tool.bodies) {
-      if (triangle_meets_cylinder(a, b, d, c, v, body.radius_mm, body.start_mm, body.end_mm)) {
+      const double t = std::clamp(along, body.start_mm, body.end_mm);
+      const double qx = px - t * v.x(), qy = py - t * v.y(), qz = pz - t * v.z();
+      const double reach = body.radius_mm + f.r;
+      if (qx * qx + qy * qy + qz * qz > reach * reach) continue;
+      const auto& face = mesh.faces[k];
+      if (triangle_meets_cylinder(mesh.vertices[face[0]], mesh.vertices[face[1]],
+                                  mesh.vertices[face[2]], c, v, body.radius_mm, body.start_mm,
+                                  body.end_mm)) {
         return true;
       }
     }
@@ -114,13 +140,14 @@ void check_case(const Case& k) {
   const ToolModel tool = ToolModel::ball_end(Tool::ball_end_mill(6.0, 30.0));
   double worst_centre = 0.0, worst_dev = 0.0;
   std::size_t hits = 0;
+  const std::vector<FaceSphere> spheres = face_spheres(mesh);
   for (std::size_t i = 0; i < after.size(); ++i) {
     const CanonMove& m = after[i];
     const Vec3d axis = machine.forward(Posed{deg_to_rad(m.a), deg_to_rad(m.c)});
     const Vec3d centre = Vec3d(m.x, m.y, m.z) + 3.0 * axis;
     worst_centre = std::max(worst_centre, (centre - k.cl.centres_mm[i]).norm());
     worst_dev = std::max(worst_dev, rad_to_deg(angle_between(axis, k.cl.axes[i])));
-    if (!k.cl.rapid[i] && tool_hits(mesh, tool, centre, axis)) ++hits;
+    if (!k.cl.rapid[i] && tool_hits(mesh, spheres, tool, centre, axis)) ++hits;
   }
   INFO("ball centres moved up to " << worst_centre << " mm, axes up to " << worst_dev << " deg");
   CHECK(worst_centre <= 0.005);
@@ -130,16 +157,13 @@ void check_case(const Case& k) {
 
 }  // namespace
 
-// Hidden ([.]): this is issue 5's acceptance target and it is NOT met yet. Measured with
-// `build/dev/tests/taxopt_tests "[paper-done-when]"`: on the sine-like part the passes graze
-// the pole A = 0, where the tool-axis slerp of the paper turns C fast (728 -> 683 deg/s, -6 %,
-// the target is -10.9 %); without the wobble the guard of run_job gives every pass back its
-// input axes; the bump's generated input collides on its approach. Run it by its tag; it
-// becomes a regular test when it passes.
+// Issue 5's acceptance target. Near the pole A = 0 the paper's slerp alone is not enough (on
+// the sine-like part the passes graze the pole and C turns fast: 728 -> 683 deg/s, -6 %);
+// the pole passages re-planned in machine space (plan/pole_passage.hpp) are what meets it.
 TEST_CASE(
     "paper method: on unseen sine-like and bump parts the peaks fall by the paper's "
     "margins, safely",
-    "[.][paper-done-when][integration]") {
+    "[paper-done-when][integration]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(9001);
   std::uniform_real_distribution<double> u(0.0, 1.0);

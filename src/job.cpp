@@ -37,6 +37,24 @@ Vec3d reference_point(const CLPointd& p, double ball_radius_mm) {
   return p.tip_mm + ball_radius_mm * p.axis;
 }
 
+/// The tip that keeps the ball centre of `p` where it is with the tool along `axis`:
+/// P' = C - R V' (the contact point does not move when the axis turns).
+Vec3d tip_for_axis(const CLPointd& p, double ball_radius_mm, const Vec3d& axis) {
+  return reference_point(p, ball_radius_mm) - ball_radius_mm * axis;
+}
+
+/// The feed of each point that the kinematic metrics use: --feed, else the file's, else
+/// `fallback_mm_min`.
+std::vector<double> metric_feeds_of(const Operationd& op, const JobOptions& options,
+                                    double fallback_mm_min) {
+  std::vector<double> feed;
+  for (const CLPointd& p : op.points) {
+    feed.push_back(options.feed_mm_per_min.value_or(p.feed_mm_per_min > 0.0 ? p.feed_mm_per_min
+                                                                            : fallback_mm_min));
+  }
+  return feed;
+}
+
 /// The paper's L_i of a pass, from point i to i + 1: between contact points where both ends
 /// touch the part, else between reference points. The metrics and the optimiser share them.
 std::vector<double> segment_lengths_mm(const Operationd& op,
@@ -292,7 +310,7 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
     std::vector<Vec3d> xyz;
     std::vector<double> a, c;
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec3d tip = reference_point(op.points[i], ball_radius_mm) - ball_radius_mm * axes[i];
+      const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
       xyz.push_back(
           machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, poses[i]) : tip);
       a.push_back(rad_to_deg(poses[i].a_rad));
@@ -440,11 +458,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const auto t0 = Clock::now();
       std::optional<ToolModel> tool;
       if (collision) tool = ToolModel::ball_end(op.tool, options.tool);
-      std::vector<double> metric_feed;
-      for (const CLPointd& p : op.points) {
-        metric_feed.push_back(options.feed_mm_per_min.value_or(
-            p.feed_mm_per_min > 0.0 ? p.feed_mm_per_min : fallback_feed));
-      }
+      const std::vector<double> metric_feed = metric_feeds_of(op, options, fallback_feed);
       optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
                                     tool ? &*tool : nullptr, machine, metric_feed,
                                     options.pose_options, options.paper);
@@ -471,7 +485,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         options.log("operation " + op.name + ": " + std::to_string(o.intervals) + " intervals, " +
                     std::to_string(o.repairs) + " repair keys, " +
                     std::to_string(o.smoothed_joints) + " joints smoothed, " +
-                    std::to_string(o.sharp_joints) + " left sharp");
+                    std::to_string(o.sharp_joints) + " left sharp, " +
+                    std::to_string(o.pole_stretches) + " pole passages re-planned");
       }
     }
   }
@@ -489,20 +504,17 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     if (optimised[k]) {
       const double R = ball_radius_mm(op, options);
       for (std::size_t i = 0; i < po.points.size(); ++i) {
-        const Vec3d centre = reference_point(op.points[i], R);
         po.points[i].axis = optimised[k]->axes[i];
-        po.points[i].tip_mm = centre - R * po.points[i].axis;
+        po.points[i].tip_mm = tip_for_axis(op.points[i], R, po.points[i].axis);
       }
     }
-    std::vector<double> mf(op.points.size(), fallback_feed);
+    std::vector<double> mf = metric_feeds_of(op, options, fallback_feed);
     bool missing_feed = false;
-    for (std::size_t i = 0; i < po.points.size(); ++i) {
-      CLPointd& p = po.points[i];
+    for (CLPointd& p : po.points) {
       if (!(p.feed_mm_per_min > 0.0)) {
         if (p.motion == Motion::Feed) missing_feed = true;
         p.feed_mm_per_min = fallback_feed;
       }
-      mf[i] = options.feed_mm_per_min.value_or(p.feed_mm_per_min);
     }
     if (missing_feed) {
       res.warnings.push_back("operation " + op.name + ": feed moves without FEDRAT use " +

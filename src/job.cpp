@@ -201,6 +201,12 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
+  // Reachable by the machine and, with a part, the tool misses it (the ball too, in the air).
+  const auto acceptable_at = [&](std::size_t i, const Vec3d& axis) {
+    if (!machine.ac.reachable(axis)) return false;
+    if (!model) return true;
+    return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
+  };
   tbb::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
     const IndexRange pass = passes[q];
     PassProblem problem;
@@ -228,10 +234,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       problem.curve_mm.push_back(normal ? Vec3d(centre - R * *normal) : centre);
     }
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
-      const std::size_t i = pass.begin + j;
-      if (!machine.ac.reachable(axis)) return false;
-      if (!model) return true;
-      return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
+      return acceptable_at(pass.begin + j, axis);
     };
     PassPlan plan = plan_pass_paper(problem, acceptable, options);
     std::vector<bool> rapid_into(pass.size(), false);
@@ -261,6 +264,40 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     out.sharp_joints += plan.sharp_joints;
     out.pole_stretches += pole_stretches[q];
     for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(passes[q].begin + j);
+  }
+  const auto carry = [&](std::size_t to, std::size_t from) {
+    const Vec3d& axis = out.axes[from];
+    if (angle_between(axis, op.points[to].axis) <= max_dev_rad + 1e-12 &&
+        acceptable_at(to, axis)) {
+      out.axes[to] = axis;
+    }
+  };
+  // The points of a pass where the ball is in the air before its first contact (an approach)
+  // and after its last (a retract) take the axis of that contact, where acceptable and within
+  // their cone: the tool comes down and leaves along the orientation it cuts with, as CAM
+  // systems do, and does not turn on the way (which the points alone would not check).
+  if (!contacts.empty()) {
+    for (const IndexRange& pass : passes) {
+      std::size_t first = pass.end, last = pass.end;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) {
+        if (!touching(i)) continue;
+        if (first == pass.end) first = i;
+        last = i;
+      }
+      if (first == pass.end) continue;
+      for (std::size_t i = first; i-- > pass.begin;) carry(i, i + 1);
+      for (std::size_t i = last + 1; i < pass.end; ++i) carry(i, i - 1);
+    }
+  }
+  // A point outside every pass (a retract, a rapid between passes) keeps the axis of the
+  // point before it, where acceptable and within its cone: the tool leaves without turning.
+  std::vector<char> in_pass(op.points.size(), 0);
+  for (const IndexRange& pass : passes) {
+    std::fill(in_pass.begin() + static_cast<long>(pass.begin),
+              in_pass.begin() + static_cast<long>(pass.end), 1);
+  }
+  for (std::size_t i = 1; i < op.points.size(); ++i) {
+    if (!in_pass[i]) carry(i, i - 1);
   }
   return out;
 }

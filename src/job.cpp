@@ -8,6 +8,7 @@
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/cspace/collision.hpp"
+#include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
@@ -267,8 +268,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   }
   const auto carry = [&](std::size_t to, std::size_t from) {
     const Vec3d& axis = out.axes[from];
-    if (angle_between(axis, op.points[to].axis) <= max_dev_rad + 1e-12 &&
-        acceptable_at(to, axis)) {
+    if (angle_between(axis, op.points[to].axis) <= max_dev_rad + 1e-12 && acceptable_at(to, axis)) {
       out.axes[to] = axis;
     }
   };
@@ -601,6 +601,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
 
   std::size_t next_move = 0;
   std::vector<Operationd> out_ops = tp.operations;
+  std::optional<CSpaceRasteriser> rasteriser;
+  if (options.count_free_cells && options.part) rasteriser.emplace(options.part->mesh());
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     const Operationd& op = tp.operations[k];
@@ -759,6 +761,23 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         row.normal = c.normal;
         row.tilt_deg = rad_to_deg(c.tilt_rad);
         row.yaw_deg = rad_to_deg(c.yaw_rad);
+      }
+      if (rasteriser && ball_radius_mm(op, options) > 0.0) {
+        const auto t0 = Clock::now();
+        const double R = ball_radius_mm(op, options);
+        const ToolModel tool = ToolModel::ball_end(op.tool, options.tool);
+        CSpaceOptions cs;
+        // The grid's cell must divide 180 deg: the nearest such to --grid.
+        cs.cell_deg = 180.0 / std::max(1.0, std::round(180.0 / options.paper.grid_deg));
+        cs.max_deviation_deg = options.paper.max_deviation_deg;
+        tbb::parallel_for(std::size_t(0), op.points.size(), [&](std::size_t i) {
+          const ContactPoint& c = contacts[k][i];
+          if (c.state != ContactState::Touching) return;
+          const CSpaceGrid g = rasteriser->free_axes(tool, c, reference_point(op.points[i], R),
+                                                     op.points[i].axis, cs);
+          r.rows[i].free_cells = g.free_count() / 2;  // the grid holds every axis twice
+        });
+        r.time_cspace_s += seconds_since(t0);
       }
     }
     r.before = summarise(op, contacts[k], ball_radius_mm(op, options), a_in, c_in, metric_feeds[k],

@@ -5,6 +5,7 @@
 
 #include "support.hpp"
 #include "taxopt/core/types.hpp"
+#include "taxopt/io/mesh_file.hpp"
 
 using namespace taxopt::test;
 using taxopt::Vec3d;
@@ -355,4 +356,55 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   CHECK(run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("fast.toml") +
                    " --method none --gcode " + t.path("o.nc") + " -q")
             .code == 0);
+}
+
+TEST_CASE("cli: --points-csv counts the free C-space cells of each contact (closed form, plane)",
+          "[cli][cspace]") {
+  // A plane z = 0 far wider than the tool, vertical input axes. At --grid 3 the window of 30
+  // deg holds the cells of tilt 1.5, 4.5, ..., 28.5 deg (10 rows of 120 yaw cells): all free
+  // without a holder; with a holder of radius 40 from 17 mm above the ball centre (gauge 20)
+  // the rim reaches the plane where 17 cos a - 40 sin a = -3, so only rows below that tilt.
+  Heightfield hf;
+  hf.name = "plane";
+  hf.z = [](double, double) { return 0.0; };
+  hf.normal = [](double, double) { return taxopt::Vec3d::UnitZ(); };
+  TempDir t;
+  write_file(t.path("in.cls"), raster_cl(hf, 3.0, 0.0, 1, 2.0, 0.0, 0.0, 0.0, 20.0).text);
+  write_file(t.path("plane.stl"),
+             taxopt::format_stl_binary(heightfield_mesh(hf, 20.0, -150.0, 170.0, -150.0, 150.0)));
+  double lo = 0.0, hi = 1.5;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (17.0 * std::cos(mid) - 40.0 * std::sin(mid) + 3.0 > 0 ? lo : hi) = mid;
+  }
+  int rows_free = 0;
+  for (double a = 1.5; a < 30.0; a += 3.0) rows_free += taxopt::deg_to_rad(a) < lo ? 1 : 0;
+  REQUIRE(rows_free > 0);
+  REQUIRE(rows_free < 10);
+  for (const auto& [args, expected] :
+       {std::pair<std::string, int>{"", 1200},
+        {"--holder-radius 40 --holder-length 20 --flute-length 15 --gauge-length 20",
+         120 * rows_free}}) {
+    INFO(args);
+    const RunResult r = run_taxopt("--in " + t.path("in.cls") + " --part " + t.path("plane.stl") +
+                                   " --method none --grid 3 -q --report " + t.path("r.json") +
+                                   " --points-csv " + t.path("p.csv") + " " + args);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::istringstream csv(read_file(t.path("p.csv")));
+    std::string line;
+    std::getline(csv, line);
+    int touching = 0;
+    while (std::getline(csv, line)) {
+      const std::string last = line.substr(line.rfind(',') + 1);
+      const bool has_contact = line.find(",,,,,,,,") == std::string::npos;
+      if (!has_contact) {
+        CHECK(last.empty());
+        continue;
+      }
+      ++touching;
+      CHECK(std::stoi(last) == expected);
+    }
+    CHECK(touching == 11);
+  }
 }

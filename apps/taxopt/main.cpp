@@ -318,6 +318,7 @@ int main(int argc, char** argv) {
     }
     taxopt::JobOptions options;
     if (part) options.part = &*part;
+    options.count_free_cells = !a.points_csv.empty();
     {
       // Tool dimensions are in the CL file's units.
       const double u = taxopt::mm_per_unit(toolpath.units);

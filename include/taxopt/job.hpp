@@ -42,6 +42,9 @@ struct JobOptions {
   ContactOptions contact;
   /// Tool dimensions overriding the CL file's (mm), for contact recovery and collision checks.
   ToolOverrides tool;
+  /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
+  /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
+  bool count_free_cells = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
 };
@@ -75,6 +78,9 @@ struct PointRow {
   bool has_contact = false;
   Vec3d cc_mm = Vec3d::Zero(), normal = Vec3d::UnitZ();
   double tilt_deg = 0.0, yaw_deg = 0.0;
+  /// Free cells of the C-space grid at this contact (cell size --grid, within --max-deviation
+  /// of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
+  std::optional<std::size_t> free_cells;
 };
 
 /// Contact recovery summary of an operation.

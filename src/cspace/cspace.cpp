@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "taxopt/core/error.hpp"
 
@@ -53,14 +54,20 @@ std::vector<WindowCell> window(const CSpaceGrid& g, const ContactPoint& cp, cons
                                double max_dev_rad) {
   std::vector<WindowCell> out;
   const double cos_dev = std::cos(max_dev_rad);
+  std::vector<Vec3d> dir(static_cast<std::size_t>(g.yaw_cells()));
+  for (int j = 0; j < g.yaw_cells(); ++j) {
+    const double b = g.yaw_rad(j);
+    dir[static_cast<std::size_t>(j)] = std::cos(b) * cp.feed_dir + std::sin(b) * cp.side;
+  }
   for (int i = g.tilt_cells() / 2; i < g.tilt_cells(); ++i) {
     const double a = g.tilt_rad(i);
     if (a < -1e-12) continue;
     const double ca = std::cos(a), sa = std::sin(a);
+    // Every axis of this row makes the angle a with N: skip rows the cone cannot reach.
+    if (std::abs(a - angle_between(cp.normal, input)) > max_dev_rad + 1e-9) continue;
     for (int j = 0; j < g.yaw_cells(); ++j) {
-      const double b = g.yaw_rad(j);
       // eq. 11 written out: V = N cos a + sin a (T cos b + K sin b).
-      const Vec3d v = ca * cp.normal + sa * (std::cos(b) * cp.feed_dir + std::sin(b) * cp.side);
+      const Vec3d v = ca * cp.normal + sa * dir[static_cast<std::size_t>(j)];
       if (v.dot(input) >= cos_dev) out.push_back({i, j, v});
     }
   }
@@ -128,58 +135,205 @@ bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c, con
   return origin_inside;
 }
 
-CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& cp,
-                               const Vec3d& centre, const Vec3d& input_axis,
-                               const CSpaceOptions& options) {
+CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh) {
+  std::vector<Vec3d> centroids;
+  for (const auto& f : mesh.faces) {
+    const std::array<Vec3d, 3> t = {mesh.vertices[static_cast<std::size_t>(f[0])],
+                                    mesh.vertices[static_cast<std::size_t>(f[1])],
+                                    mesh.vertices[static_cast<std::size_t>(f[2])]};
+    const Vec3d m = (t[0] + t[1] + t[2]) / 3.0;
+    tri_.push_back(t);
+    face_sphere_.push_back(
+        {m, std::max({(t[0] - m).norm(), (t[1] - m).norm(), (t[2] - m).norm()})});
+    centroids.push_back(m);
+  }
+  if (!tri_.empty()) build(0, static_cast<int>(tri_.size()), centroids);
+}
+
+/// Top-down: split the faces at the median centroid along the longest extent, four faces or
+/// fewer to a leaf. Faces are reordered so that a leaf's are contiguous.
+int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids) {
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.push_back({});
+  Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int k = first; k < first + count; ++k) {
+    for (const Vec3d& p : tri_[static_cast<std::size_t>(k)]) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  }
+  Sphere s{0.5 * (lo + hi), 0.0};
+  for (int k = first; k < first + count; ++k) {
+    for (const Vec3d& p : tri_[static_cast<std::size_t>(k)]) {
+      s.radius = std::max(s.radius, (p - s.centre).norm());
+    }
+  }
+  nodes_[static_cast<std::size_t>(id)].sphere = s;
+  if (count <= 4) {
+    nodes_[static_cast<std::size_t>(id)].first = first;
+    nodes_[static_cast<std::size_t>(id)].count = count;
+    return id;
+  }
+  Vec3d cl = Vec3d::Constant(std::numeric_limits<double>::infinity()), ch = -cl;
+  for (int k = first; k < first + count; ++k) {
+    cl = cl.cwiseMin(centroids[static_cast<std::size_t>(k)]);
+    ch = ch.cwiseMax(centroids[static_cast<std::size_t>(k)]);
+  }
+  int axis = 0;
+  (ch - cl).maxCoeff(&axis);
+  std::vector<int> order(static_cast<std::size_t>(count));
+  for (int k = 0; k < count; ++k) order[static_cast<std::size_t>(k)] = first + k;
+  const auto mid = order.begin() + count / 2;
+  std::nth_element(order.begin(), mid, order.end(), [&](int a, int b) {
+    const double ka = centroids[static_cast<std::size_t>(a)][axis];
+    const double kb = centroids[static_cast<std::size_t>(b)][axis];
+    return ka < kb || (ka == kb && a < b);
+  });
+  std::vector<std::array<Vec3d, 3>> t;
+  std::vector<Sphere> fs;
+  std::vector<Vec3d> c;
+  for (int k : order) {
+    t.push_back(tri_[static_cast<std::size_t>(k)]);
+    fs.push_back(face_sphere_[static_cast<std::size_t>(k)]);
+    c.push_back(centroids[static_cast<std::size_t>(k)]);
+  }
+  std::copy(t.begin(), t.end(), tri_.begin() + first);
+  std::copy(fs.begin(), fs.end(), face_sphere_.begin() + first);
+  std::copy(c.begin(), c.end(), centroids.begin() + first);
+  const int left = build(first, count / 2, centroids);
+  const int right = build(first + count / 2, count - count / 2, centroids);
+  nodes_[static_cast<std::size_t>(id)].left = left;
+  nodes_[static_cast<std::size_t>(id)].right = right;
+  return id;
+}
+
+CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint& cp,
+                                       const Vec3d& centre, const Vec3d& input_axis,
+                                       const CSpaceOptions& options) const {
   CSpaceGrid grid(options.cell_deg);
   if (cp.local_gouge) return grid;
-  const std::vector<WindowCell> cells =
-      window(grid, cp, input_axis, deg_to_rad(options.max_deviation_deg));
-  if (cells.empty()) return grid;
-  std::vector<char> blocked(cells.size(), 0);
-  const TriangleMesh& mesh = part.mesh();
   const double max_dev = deg_to_rad(options.max_deviation_deg);
+  const std::vector<WindowCell> cells = window(grid, cp, input_axis, max_dev);
+  if (cells.empty() || nodes_.empty()) return grid;
+  std::vector<char> blocked(cells.size(), 0);
+  const double cos_dev = std::cos(max_dev), sin_dev = std::sin(max_dev);
+  // Window index of the half-grid cell (i, j), i >= tilt_cells / 2, or -1.
+  const int n_yaw = grid.yaw_cells(), row0 = grid.tilt_cells() / 2;
+  std::vector<int> cell_at(static_cast<std::size_t>((grid.tilt_cells() - row0) * n_yaw), -1);
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    cell_at[static_cast<std::size_t>((cells[k].i - row0) * n_yaw + cells[k].j)] =
+        static_cast<int>(k);
+  }
+  const double cell_rad = deg_to_rad(grid.cell_deg());
+
   struct Active {
     const ToolBody* body;
-    double cos_cone;  // cells whose axis is farther from the face than this cannot meet it
+    double cos_lo;  // cells with axis . u below this cannot meet the body
   };
-  std::vector<Active> active;
-  for (int f : part.faces_within(centre, tool.reach_mm())) {
-    const auto& face = mesh.faces[static_cast<std::size_t>(f)];
-    const Vec3d& a = mesh.vertices[static_cast<std::size_t>(face[0])];
-    const Vec3d& b = mesh.vertices[static_cast<std::size_t>(face[1])];
-    const Vec3d& c = mesh.vertices[static_cast<std::size_t>(face[2])];
-    // Bounding sphere (m, rho) of the face, seen from the ball centre at distance d along u.
-    const Vec3d m = (a + b + c) / 3.0;
-    const double rho = std::max({(a - m).norm(), (b - m).norm(), (c - m).norm()});
-    const double d = (m - centre).norm();
-    const Vec3d u = d > 1e-12 ? Vec3d((m - centre) / d) : Vec3d::UnitZ();
-    // Per body: a face can meet a body at axis v only if its sphere reaches the body's slab
-    // (d (u.v) + rho >= start, d (u.v) - rho <= end) and comes within r of the axis line,
-    // i.e. v lies within asin((r + rho) / d) of u.
-    active.clear();
+  std::vector<Active> active(tool.bodies.size());
+  // The bodies a sphere (m, rho) can meet at some axis of the window, and their number. A
+  // body (radius r, from `start` to `end`) needs axis . u >= cos_lo, the larger of cos phi,
+  // phi = asin((r + rho) / d) (within r + rho of the axis line; where d > r + rho), and
+  // (start - rho) / d (reaching the body's slab); the window needs angle(u, input) <= max_dev
+  // + acos(cos_lo).
+  const auto reach = [&](const Sphere& sp, Vec3d& u, double& d) {
+    const Vec3d w = sp.centre - centre;
+    d = w.norm();
+    u = d > 1e-12 ? Vec3d(w / d) : Vec3d::UnitZ();
+    const double cu_in = u.dot(input_axis);
+    std::size_t n = 0;
     for (const ToolBody& body : tool.bodies) {
-      if (d + rho < body.start_mm || d - rho > std::hypot(body.radius_mm, body.end_mm)) continue;
-      double cos_cone = -2.0;
-      if (d > body.radius_mm + rho) {
-        const double phi = std::asin((body.radius_mm + rho) / d);
-        if (angle_between(u, input_axis) > max_dev + phi) continue;
-        cos_cone = std::cos(phi);
+      if (d + sp.radius < body.start_mm ||
+          d - sp.radius > std::hypot(body.radius_mm, body.end_mm)) {
+        continue;
       }
-      active.push_back({&body, cos_cone});
+      double lo = -1.0;
+      if (d > body.radius_mm + sp.radius) {
+        const double s = (body.radius_mm + sp.radius) / d;
+        lo = std::sqrt(std::max(0.0, 1.0 - s * s));
+      }
+      if (d > 1e-12) lo = std::max(lo, (body.start_mm - sp.radius) / d);
+      if (lo > 1.0) continue;
+      // cos(max_dev + psi) with cos psi = lo, when max_dev + psi < pi.
+      const double sin_lo = std::sqrt(std::max(0.0, 1.0 - lo * lo));
+      if (max_dev + std::acos(std::max(-1.0, lo)) < Constants<double>::pi() &&
+          cu_in < cos_dev * lo - sin_dev * sin_lo) {
+        continue;
+      }
+      active[n++] = {&body, lo};
     }
-    if (active.empty()) continue;
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      if (blocked[k]) continue;
-      const double cu = cells[k].axis.dot(u);
-      for (const Active& act : active) {
-        const ToolBody& body = *act.body;
-        if (cu < act.cos_cone || d * cu + rho < body.start_mm || d * cu - rho > body.end_mm)
+    return n;
+  };
+
+  std::vector<int> stack = {0};
+  std::vector<int> candidates;
+  while (!stack.empty()) {
+    const Node& node = nodes_[static_cast<std::size_t>(stack.back())];
+    stack.pop_back();
+    Vec3d u;
+    double d = 0.0;
+    if (reach(node.sphere, u, d) == 0) continue;
+    if (node.left >= 0) {
+      stack.push_back(node.right);
+      stack.push_back(node.left);
+      continue;
+    }
+    for (int f = node.first; f < node.first + node.count; ++f) {
+      const Sphere& fs = face_sphere_[static_cast<std::size_t>(f)];
+      const std::size_t n_active = reach(fs, u, d);
+      if (n_active == 0) continue;
+      // The window cells within psi of u (cos psi = the smallest cos_lo), row by row: on the
+      // row of tilt a, cos(angle) = cos a cos th + sin a sin th cos(b - beta) >= cos psi.
+      double cos_psi = 1.0;
+      for (std::size_t b = 0; b < n_active; ++b) cos_psi = std::min(cos_psi, active[b].cos_lo);
+      const double psi = std::acos(std::max(-1.0, cos_psi));
+      const double th = std::acos(std::clamp(u.dot(cp.normal), -1.0, 1.0));
+      const double beta = std::atan2(u.dot(cp.side), u.dot(cp.feed_dir));
+      candidates.clear();
+      for (int i = row0; i < grid.tilt_cells(); ++i) {
+        const double a = grid.tilt_rad(i);
+        if (std::abs(a - th) > psi + 1e-9) continue;
+        const double sn = std::sin(a) * std::sin(th);
+        double half = Constants<double>::pi();  // half-width of the yaw range
+        if (sn > 1e-12) {
+          const double c = (cos_psi - std::cos(a) * std::cos(th)) / sn;
+          if (c > 1.0 + 1e-9) continue;
+          half = std::acos(std::clamp(c, -1.0, 1.0)) + 1e-9;
+        }
+        if (half >= Constants<double>::pi()) {
+          for (int j = 0; j < n_yaw; ++j) {
+            const int k = cell_at[static_cast<std::size_t>((i - row0) * n_yaw + j)];
+            if (k >= 0) candidates.push_back(k);
+          }
           continue;
-        if (triangle_meets_cylinder(a, b, c, centre, cells[k].axis, body.radius_mm, body.start_mm,
-                                    body.end_mm)) {
-          blocked[k] = 1;
-          break;
+        }
+        // Yaw of cell j: -pi + (j + 0.5) cell; cells with |b - beta| <= half, wrapped.
+        const int j0 =
+            static_cast<int>(std::floor((beta - half + Constants<double>::pi()) / cell_rad - 0.5));
+        const int j1 =
+            static_cast<int>(std::ceil((beta + half + Constants<double>::pi()) / cell_rad - 0.5));
+        for (int j = j0; j <= j1 && j < j0 + n_yaw; ++j) {
+          const int jw = ((j % n_yaw) + n_yaw) % n_yaw;
+          const int k = cell_at[static_cast<std::size_t>((i - row0) * n_yaw + jw)];
+          if (k >= 0) candidates.push_back(k);
+        }
+      }
+      const auto& t = tri_[static_cast<std::size_t>(f)];
+      for (int kk : candidates) {
+        const std::size_t k = static_cast<std::size_t>(kk);
+        if (blocked[k]) continue;
+        const double cu = cells[k].axis.dot(u);
+        for (std::size_t b = 0; b < n_active; ++b) {
+          const ToolBody& body = *active[b].body;
+          if (cu < active[b].cos_lo || d * cu + fs.radius < body.start_mm ||
+              d * cu - fs.radius > body.end_mm) {
+            continue;
+          }
+          if (triangle_meets_cylinder(t[0], t[1], t[2], centre, cells[k].axis, body.radius_mm,
+                                      body.start_mm, body.end_mm)) {
+            blocked[k] = 1;
+            break;
+          }
         }
       }
     }
@@ -188,6 +342,12 @@ CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const Co
     if (!blocked[k]) store(grid, cells[k]);
   }
   return grid;
+}
+
+CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& cp,
+                               const Vec3d& centre, const Vec3d& input_axis,
+                               const CSpaceOptions& options) {
+  return CSpaceRasteriser(part.mesh()).free_axes(tool, cp, centre, input_axis, options);
 }
 
 CSpaceGrid brute_force_free_axes(const CollisionModel& model, const ToolModel& tool,

@@ -94,9 +94,11 @@ std::string points_csv(const JobResult& result) {
       } else {
         out += ",,,,,,,,";
       }
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,\n", p.a_deg, p.c_deg, p.omega_deg_s,
+      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,", p.a_deg, p.c_deg, p.omega_deg_s,
                     p.accel_deg_s2);
       out += buf;
+      if (p.free_cells) out += std::to_string(*p.free_cells);
+      out += "\n";
     }
   }
   return out;

@@ -8,6 +8,7 @@
 /// (a, b) and (-a, b + 180) are the same axis: the grid covers the hemisphere twice, as in
 /// the paper; it is computed once for a >= 0 and mirrored.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -51,12 +52,46 @@ class CSpaceGrid {
   std::vector<std::uint64_t> bits_;
 };
 
-/// Free tool axes at a contact point, exact at every cell centre, without FCL: the faces
-/// within the tool's reach of the ball centre, each tested per body only against the cells
-/// whose axis its bounding sphere can reach (radial cone and axial slab); the test itself is
-/// exact (the face clipped to the body's slab, then its distance to the body's axis).
-/// An independent second implementation of brute_force_free_axes (docs/benchmarks.md has
-/// both timed: within a 30 deg window FCL's BVH is faster than this face-by-face culling).
+/// Free tool axes at a contact point, exact at every cell centre, without FCL: an independent
+/// second implementation of brute_force_free_axes, and the fast one.
+///
+/// Built once per part: a tree of bounding spheres over the faces. Per contact point the tree
+/// is walked with the test that also culls single faces: a sphere (centre m at distance d
+/// from the ball centre, direction u, radius rho) can meet a body (radius r, from `start` to
+/// `end` along the axis) only if d + rho >= start, d - rho <= hypot(r, end), and, where
+/// d > r + rho, the angle between u and some axis of the deviation window is at most
+/// asin((r + rho) / d). Faces that survive are tested per window cell with the same cone and
+/// slab bounds, and the exact triangle-versus-cylinder test decides. Cost: the faces near the
+/// swept tool, not all faces in its reach (docs/benchmarks.md).
+/// free_axes may be called from several threads at once.
+class CSpaceRasteriser {
+ public:
+  explicit CSpaceRasteriser(const TriangleMesh& mesh);
+
+  CSpaceGrid free_axes(const ToolModel& tool, const ContactPoint& contact, const Vec3d& ball_centre,
+                       const Vec3d& input_axis, const CSpaceOptions& options = {}) const;
+
+  /// Number of faces of the part.
+  std::size_t faces() const { return tri_.size(); }
+
+ private:
+  struct Sphere {
+    Vec3d centre = Vec3d::Zero();
+    double radius = 0.0;
+  };
+  struct Node {
+    Sphere sphere;
+    /// Children (inner node) or the range [first, first + count) of faces (leaf).
+    int left = -1, right = -1, first = 0, count = 0;
+  };
+  int build(int first, int count, std::vector<Vec3d>& centroids);
+  std::vector<std::array<Vec3d, 3>> tri_;
+  std::vector<Sphere> face_sphere_;
+  std::vector<Node> nodes_;
+};
+
+/// One-off convenience: builds a CSpaceRasteriser for `part` and asks it once. Build the
+/// rasteriser yourself to ask for many points.
 CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& contact,
                                const Vec3d& ball_centre, const Vec3d& input_axis,
                                const CSpaceOptions& options = {});

@@ -163,6 +163,18 @@ std::vector<Heightfield> random_heightfields(std::mt19937& rng) {
   return out;
 }
 
+void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Vec3d& axis,
+                 bool rapid, const Vec3d& cc_mm, const Vec3d& centre_mm) {
+  if (rapid) os << "RAPID\n";
+  os << "GOTO/" << tip_mm.x() << "," << tip_mm.y() << "," << tip_mm.z() << "," << axis.x() << ","
+     << axis.y() << "," << axis.z() << "\n";
+  g.tips_mm.push_back(tip_mm);
+  g.axes.push_back(axis);
+  g.rapid.push_back(rapid);
+  g.cc_mm.push_back(cc_mm);
+  g.centres_mm.push_back(centre_mm);
+}
+
 GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
                       double step_mm, double y0, double y1, double x0, double x1) {
   GeneratedCl g;
@@ -187,34 +199,13 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       const Vec3d k = nrm.cross(t);
       const Vec3d v = Eigen::AngleAxisd(tilt, k) * nrm;
       const Vec3d tip = s + r_mm * nrm - r_mm * v;
+      const Vec3d above = tip + 20.0 * v;  // approach and retract along the axis
       if (i == 0) {
-        const Vec3d above = tip + 20.0 * v;  // approach along the axis, as CAM systems do
-        os << "RAPID\nGOTO/" << above.x() << "," << above.y() << "," << above.z() << "," << v.x()
-           << "," << v.y() << "," << v.z() << "\n";
-        g.tips_mm.push_back(above);
-        g.axes.push_back(v);
-        g.rapid.push_back(true);
-        g.cc_mm.push_back(above);
-        g.centres_mm.push_back(above + r_mm * v);
+        append_goto(g, os, above, v, true, above, above + r_mm * v);
         os << "FEDRAT/MMPM,250.0\n";
       }
-      os << "GOTO/" << tip.x() << "," << tip.y() << "," << tip.z() << "," << v.x() << "," << v.y()
-         << "," << v.z() << "\n";
-      g.tips_mm.push_back(tip);
-      g.axes.push_back(v);
-      g.rapid.push_back(false);
-      g.cc_mm.push_back(s);
-      g.centres_mm.push_back(s + r_mm * nrm);
-      if (i == n) {
-        const Vec3d above = tip + 20.0 * v;  // retract along the axis before the next pass
-        os << "RAPID\nGOTO/" << above.x() << "," << above.y() << "," << above.z() << "," << v.x()
-           << "," << v.y() << "," << v.z() << "\n";
-        g.tips_mm.push_back(above);
-        g.axes.push_back(v);
-        g.rapid.push_back(true);
-        g.cc_mm.push_back(above);
-        g.centres_mm.push_back(above + r_mm * v);
-      }
+      append_goto(g, os, tip, v, false, s, s + r_mm * nrm);
+      if (i == n) append_goto(g, os, above, v, true, above, above + r_mm * v);
     }
   }
   os << "END-OF-PATH\n";

@@ -2,6 +2,7 @@
 // Helpers shared by the tests: temporary folders, running the CLI and rs274, and CL files of
 // heightfield parts made on the fly (parts no test was tuned on: seeded random shapes).
 #include <functional>
+#include <ostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -72,6 +73,11 @@ struct GeneratedCl {
   std::vector<Vec3d> cc_mm;
   std::vector<Vec3d> centres_mm;
 };
+/// Writes one GOTO (after RAPID when `rapid`) of a generated NX CLSF to `os` and records its
+/// ground truth in `g`: tip, axis, contact point `cc_mm` and ball centre `centre_mm`.
+void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Vec3d& axis,
+                 bool rapid, const Vec3d& cc_mm, const Vec3d& centre_mm);
+
 /// The heightfield over [x0, x1] x [y0, y1] as a triangle mesh with the given spacing.
 TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x0 = -10.0,
                               double x1 = 60.0, double y0 = -10.0, double y1 = 60.0);

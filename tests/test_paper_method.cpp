@@ -194,14 +194,7 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
   os << "TOOL PATH/GENERATED_" << hf.name << ",TOOL,BALL\n";
   os << "TLDATA/MILL," << 2 * r_mm << "," << r_mm << ",30.0,0.0,0.0\n";
   const auto put = [&](const Vec3d& tip, const Vec3d& v, bool rapid, const Vec3d& cc) {
-    if (rapid) os << "RAPID\n";
-    os << "GOTO/" << tip.x() << "," << tip.y() << "," << tip.z() << "," << v.x() << "," << v.y()
-       << "," << v.z() << "\n";
-    g.tips_mm.push_back(tip);
-    g.axes.push_back(v);
-    g.rapid.push_back(rapid);
-    g.cc_mm.push_back(cc);
-    g.centres_mm.push_back(tip + r_mm * v);
+    append_goto(g, os, tip, v, rapid, cc, tip + r_mm * v);
   };
   const Eigen::AngleAxisd lean(-deg_to_rad(lean_deg), Vec3d::UnitX());
   for (double y : ys) {

@@ -85,7 +85,8 @@ struct AxisPeaks {
 RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
                         double ball_radius_mm, const std::vector<double>& a_deg,
                         const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
-                        std::vector<PointRow>* rows, AxisPeaks* peaks = nullptr) {
+                        std::vector<PointRow>* rows, AxisPeaks* peaks = nullptr,
+                        bool rows_before = false) {
   RotarySummary summary;
   double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
@@ -115,8 +116,8 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
         PointRow& r = (*rows)[pass.begin + j];
         if (j > 0) arc += len[j - 1];
         r.arc_mm = arc;
-        r.omega_deg_s = k.omega_deg_s[j];
-        r.accel_deg_s2 = k.accel_deg_s2[j];
+        (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
+        (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
       }
     }
   }
@@ -175,6 +176,8 @@ struct OptimisedOperation {
   std::size_t intervals = 0, repairs = 0, smoothed_joints = 0, sharp_joints = 0;
   /// Stretches near the pole A = 0 whose C was re-planned (pole_passage.hpp).
   std::size_t pole_stretches = 0;
+  /// Key points (ends of the optimiser's intervals), indices into the operation, ascending.
+  std::vector<std::size_t> keys;
   /// Passes the guard gave back their input axes.
   std::size_t reverted_passes = 0;
   /// Points with no acceptable axis within the cone (they keep their input axis).
@@ -264,6 +267,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     out.smoothed_joints += plan.smoothed_joints;
     out.sharp_joints += plan.sharp_joints;
     out.pole_stretches += pole_stretches[q];
+    for (std::size_t j : plan.keys) out.keys.push_back(passes[q].begin + j);
     for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(passes[q].begin + j);
   }
   const auto carry = [&](std::size_t to, std::size_t from) {
@@ -602,7 +606,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   std::size_t next_move = 0;
   std::vector<Operationd> out_ops = tp.operations;
   std::optional<CSpaceRasteriser> rasteriser;
-  if (options.count_free_cells && options.part) rasteriser.emplace(options.part->mesh());
+  if ((options.count_free_cells || options.cspace_maps) && options.part) {
+    rasteriser.emplace(options.part->mesh());
+  }
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     const Operationd& op = tp.operations[k];
@@ -777,11 +783,50 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                                                      op.points[i].axis, cs);
           r.rows[i].free_cells = g.free_count() / 2;  // the grid holds every axis twice
         });
+        if (options.cspace_maps) {
+          // The most constrained contact, and the one whose axis the optimiser turned most.
+          std::optional<std::size_t> fewest, turned;
+          double most_deg = -1.0;
+          for (std::size_t i = 0; i < op.points.size(); ++i) {
+            if (!r.rows[i].free_cells) continue;
+            if (!fewest || *r.rows[i].free_cells < *r.rows[*fewest].free_cells) fewest = i;
+            const double dev = rad_to_deg(angle_between(op.points[i].axis, r.rows[i].axis));
+            if (dev > most_deg) most_deg = dev, turned = i;
+          }
+          const auto tilt_yaw = [](const ContactPoint& c, const Vec3d& v) {
+            return std::pair<double, double>(
+                rad_to_deg(angle_between(c.normal, v)),
+                rad_to_deg(std::atan2(v.dot(c.side), v.dot(c.feed_dir))));
+          };
+          for (const auto& [at, why] :
+               {std::pair<std::optional<std::size_t>, const char*>{fewest, "fewest free cells"},
+                {turned, "largest axis change"}}) {
+            if (!at) continue;
+            if (!r.cspace_maps.empty() && r.cspace_maps.back().index == *at) continue;
+            const ContactPoint& c = contacts[k][*at];
+            CSpaceMap map;
+            map.index = *at;
+            map.why = why;
+            map.max_deviation_deg = cs.max_deviation_deg;
+            map.grid = rasteriser->free_axes(tool, c, reference_point(op.points[*at], R),
+                                             op.points[*at].axis, cs);
+            std::tie(map.input_tilt_deg, map.input_yaw_deg) = tilt_yaw(c, op.points[*at].axis);
+            std::tie(map.output_tilt_deg, map.output_yaw_deg) = tilt_yaw(c, r.rows[*at].axis);
+            r.cspace_maps.push_back(std::move(map));
+          }
+        }
         r.time_cspace_s += seconds_since(t0);
       }
     }
     r.before = summarise(op, contacts[k], ball_radius_mm(op, options), a_in, c_in, metric_feeds[k],
-                         nullptr);
+                         &r.rows, nullptr, true);
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      r.rows[i].a_before_deg = a_in[i];
+      r.rows[i].c_before_deg = c_in[i];
+    }
+    if (optimised[k]) {
+      for (std::size_t i : optimised[k]->keys) r.rows[i].key = true;
+    }
     AxisPeaks peaks;
     r.after = summarise(op, contacts[k], ball_radius_mm(op, options), a_w, c_w, metric_feeds[k],
                         &r.rows, &peaks);

@@ -196,6 +196,10 @@ TEST_CASE("rs274: taxopt demo writes G-code rs274 accepts, with the paper's C fl
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK_THAT(r.out, Catch::Contains("SINE_FINISH"));
+  for (const char* plot : {"op1-angles-a.svg", "op1-angles-c.svg", "op1-omega.svg",
+                           "op1-accel.svg"}) {
+    CHECK(file_exists(dir.path("demo/plots/") + plot));
+  }
   std::vector<CanonMove> moves;
   REQUIRE(run_rs274(dir.path("demo/demo.nc"), moves).code == 0);
   CHECK(moves.size() > 1000);

@@ -19,6 +19,7 @@
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
+#include "taxopt/io/plots.hpp"
 #include "taxopt/job.hpp"
 
 namespace {
@@ -29,7 +30,6 @@ struct Args {
   int threads = 0;
   bool force = false, quiet = false;
   int verbose = 0;
-  // Options of CLI.md that need the part (later versions); rejected with a clear message.
   std::string part, plots;
   std::optional<double> grid, max_deviation, shank_radius, flute_length, holder_radius,
       holder_length, gauge_length;
@@ -197,8 +197,9 @@ int main(int argc, char** argv) {
                  "C-space cell size, deg: spacing of the key-axis candidates (2)");
   app.add_option("--max-deviation", a.max_deviation,
                  "largest angle between an output axis and its input axis, deg (30)");
-  auto* later = app.add_option_group("not in this version");
-  later->add_option("--plots", a.plots, "SVG plot directory");
+  app.add_option("--plots", a.plots,
+                 "folder for SVG plots: A, C, omega and a against arc length, before and after; "
+                 "C-space maps (with --part)");
 
   GenerateArgs gen;
   auto* generate =
@@ -258,16 +259,10 @@ int main(int argc, char** argv) {
     a.gcode = demo_out + "/demo.nc";
     a.report = demo_out + "/report.json";
     a.points_csv = demo_out + "/points.csv";
+    a.plots = demo_out + "/plots";
   }
 
   try {
-    for (const char* opt : {"--plots"}) {
-      if (app.count(opt)) {
-        return error(std::string(opt) + " is not available in taxopt " + taxopt::kVersion +
-                         " (plots come with a later version)",
-                     2);
-      }
-    }
     if (a.in.empty()) return error("--in is required", 2);
     if (a.gcode.empty() && a.out_cls.empty() && a.report.empty()) {
       return error("nothing to write: give --gcode, --out-cls or --report", 2);
@@ -319,6 +314,7 @@ int main(int argc, char** argv) {
     taxopt::JobOptions options;
     if (part) options.part = &*part;
     options.count_free_cells = !a.points_csv.empty();
+    options.cspace_maps = !a.plots.empty();
     {
       // Tool dimensions are in the CL file's units.
       const double u = taxopt::mm_per_unit(toolpath.units);
@@ -368,6 +364,12 @@ int main(int argc, char** argv) {
     if (!a.report.empty())
       tx.stage(a.report, taxopt::report_json(result, toolpath, machine, options));
     if (!a.points_csv.empty()) tx.stage(a.points_csv, taxopt::points_csv(result));
+    if (!a.plots.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(a.plots, ec);
+      if (ec) return error(a.plots + ": cannot create folder: " + ec.message(), 2);
+      for (const auto& [name, svg] : taxopt::job_plots(result)) tx.stage(a.plots + "/" + name, svg);
+    }
     tx.commit();
     if (!a.quiet) print_summary(result);
     return result.ok() ? 0 : 1;

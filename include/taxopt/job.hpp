@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "taxopt/core/toolpath.hpp"
+#include "taxopt/cspace/cspace.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/contact.hpp"
 #include "taxopt/geometry/part.hpp"
@@ -45,6 +46,9 @@ struct JobOptions {
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
   bool count_free_cells = false;
+  /// C-space maps per operation (with a part): the contact with the fewest free cells and
+  /// the one whose axis changed most (0: none). Implies count_free_cells.
+  bool cspace_maps = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
 };
@@ -78,6 +82,11 @@ struct PointRow {
   bool has_contact = false;
   Vec3d cc_mm = Vec3d::Zero(), normal = Vec3d::UnitZ();
   double tilt_deg = 0.0, yaw_deg = 0.0;
+  /// The same with the input axes as the machine would have run them (the "before").
+  double a_before_deg = 0.0, c_before_deg = 0.0;
+  double omega_before_deg_s = 0.0, accel_before_deg_s2 = 0.0;
+  /// A key point of the optimiser: an end of one of its intervals (segment boundary).
+  bool key = false;
   /// Free cells of the C-space grid at this contact (cell size --grid, within --max-deviation
   /// of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
   std::optional<std::size_t> free_cells;
@@ -89,6 +98,19 @@ struct ContactSummary {
   std::size_t touching = 0, in_air = 0, local_gouges = 0;
   double max_abs_gap_mm = 0.0;
   double tolerance_mm = 0.0;
+};
+
+/// The C-space grid of one contact point (the paper's fig. 10), with the input and output
+/// axes as (tilt, yaw) in the contact's frame (T, K, N), tilt >= 0.
+struct CSpaceMap {
+  std::size_t index = 0;
+  CSpaceGrid grid;
+  double input_tilt_deg = 0.0, input_yaw_deg = 0.0;
+  double output_tilt_deg = 0.0, output_yaw_deg = 0.0;
+  /// The deviation cone the grid was computed in, deg.
+  double max_deviation_deg = 30.0;
+  /// Why this point was chosen ("fewest free cells", "largest axis change").
+  std::string why;
 };
 
 /// Result of one operation.
@@ -107,6 +129,8 @@ struct OperationResult {
   Verification verification;
   double time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0;
   std::vector<PointRow> rows;
+  /// With JobOptions::cspace_maps: the maps of the chosen points.
+  std::vector<CSpaceMap> cspace_maps;
 };
 
 /// Result of run_job. `ok()` is false when the output could not be made safe: `problems`

@@ -350,6 +350,36 @@ CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const Co
   return CSpaceRasteriser(part.mesh()).free_axes(tool, cp, centre, input_axis, options);
 }
 
+Vec3d cell_axis(const CSpaceGrid& grid, int i, int j, const ContactPoint& cp) {
+  const double a = grid.tilt_rad(i), b = grid.yaw_rad(j);
+  return std::cos(a) * cp.normal +
+         std::sin(a) * (std::cos(b) * cp.feed_dir + std::sin(b) * cp.side);
+}
+
+std::vector<Vec3d> free_axes_of(const CSpaceGrid& grid, const ContactPoint& cp) {
+  std::vector<Vec3d> out;
+  for (int i = grid.tilt_cells() / 2; i < grid.tilt_cells(); ++i) {
+    for (int j = 0; j < grid.yaw_cells(); ++j) {
+      if (grid.free(i, j)) out.push_back(cell_axis(grid, i, j, cp));
+    }
+  }
+  return out;
+}
+
+std::vector<Posed> free_poses_of(const CSpaceGrid& grid, const ContactPoint& cp,
+                                 const ACMachined& machine) {
+  std::vector<Posed> out;
+  for (const Vec3d& v : free_axes_of(grid, cp)) {
+    for (const Posed& p : machine.inverse(v)) {
+      if (machine.a.contains(p.a_rad)) {
+        out.push_back(p);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
 CSpaceGrid brute_force_free_axes(const CollisionModel& model, const ToolModel& tool,
                                  const ContactPoint& cp, const Vec3d& centre,
                                  const Vec3d& input_axis, const CSpaceOptions& options) {

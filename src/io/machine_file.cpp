@@ -76,11 +76,11 @@ class MachineParser {
         }
       }
       if (auto* n = g->get("decimals")) {
-        auto v = n->value<int64_t>();
-        if (!v || !n->is_integer() || *v < 0 || *v > 8) {
-          fail(line_of(*n), "gcode.decimals must be a whole number from 0 to 8");
-        }
-        m.gcode.decimals = static_cast<int>(*v);
+        // Test the type first: toml++'s value<int64_t>() converts a float, with undefined
+        // behaviour when it does not fit (fuzz_machine_file found sense = 6e58).
+        const int64_t v = n->is_integer() ? n->as_integer()->get() : -1;
+        if (v < 0 || v > 8) fail(line_of(*n), "gcode.decimals must be a whole number from 0 to 8");
+        m.gcode.decimals = static_cast<int>(v);
       }
     }
     return m;
@@ -168,11 +168,9 @@ class MachineParser {
       axis.max_rad = deg_to_rad(max_deg);
     }
     if (const toml::node* n = t.get("sense")) {
-      const auto v = n->value<int64_t>();
-      if (!n->is_integer() || !v || (*v != 1 && *v != -1)) {
-        fail(line_of(*n), where + ".sense must be 1 or -1");
-      }
-      axis.sense = static_cast<int>(*v);
+      const int64_t v = n->is_integer() ? n->as_integer()->get() : 0;  // type first, as above
+      if (v != 1 && v != -1) fail(line_of(*n), where + ".sense must be 1 or -1");
+      axis.sense = static_cast<int>(v);
     }
     if (const toml::node* n = t.get("max_velocity_deg_s")) {
       const double v = number_of(*n, where + ".max_velocity_deg_s");

@@ -120,6 +120,21 @@ TEST_CASE("cspace: on a flat part the free cells are the tilts below the holder'
       REQUIRE(g.free(i, j) == (tilt < a_star_deg));
     }
   }
+  // The free axes in workpiece and machine coordinates: each once, below a*, and the poses
+  // give the same axes back (A within the default machine's range).
+  const std::vector<Vec3d> axes = free_axes_of(g, cp);
+  CHECK(axes.size() == g.free_count() / 2);
+  for (const Vec3d& v : axes) {
+    CHECK(v.norm() == Approx(1.0));
+    CHECK(rad_to_deg(angle_between(v, cp.normal)) < a_star_deg);
+  }
+  const ACMachined m = default_ac_machine();
+  const std::vector<Posed> poses = free_poses_of(g, cp, m);
+  REQUIRE(poses.size() == axes.size());
+  for (std::size_t k = 0; k < axes.size(); ++k) {
+    CHECK(angle_between(m.forward(poses[k]), axes[k]) < 1e-9);
+    CHECK(m.a.contains(poses[k].a_rad));
+  }
   // The deviation cone bounds the free set too.
   opt.max_deviation_deg = 20.0;
   const CSpaceGrid w = rasterise_free_axes(part, tool, cp, centre, Vec3d::UnitZ(), opt);

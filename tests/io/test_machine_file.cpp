@@ -103,4 +103,9 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   expect_error(
       replace(kFull, "max_velocity_deg_s = 3600.0", "max_velocity_deg_s = -9007199254740993"), 8,
       "must be positive");
+  // Found by fuzz_machine_file: a float where an integer belongs, too large for one
+  // (toml++ converted it with undefined behaviour before the type was tested).
+  expect_error(replace(kFull, "sense = -1", "sense = 6.0e58"), 13, "sense must be 1 or -1");
+  expect_error(replace(kFull, "sense = -1", "sense = 1.0"), 13, "sense must be 1 or -1");
+  expect_error(replace(kFull, "decimals = 5", "decimals = 1e300"), 27, "decimals");
 }

@@ -16,6 +16,7 @@
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/contact.hpp"
 #include "taxopt/geometry/part.hpp"
+#include "taxopt/kinematics/ac_machine.hpp"
 
 namespace taxopt {
 
@@ -95,6 +96,19 @@ class CSpaceRasteriser {
 CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& contact,
                                const Vec3d& ball_centre, const Vec3d& input_axis,
                                const CSpaceOptions& options = {});
+
+/// The unit tool axis, workpiece coordinates, at the centre of cell (i, j) of a contact's
+/// grid: V = N cos a + sin a (T cos b + K sin b) (eq. 11).
+Vec3d cell_axis(const CSpaceGrid& grid, int i, int j, const ContactPoint& contact);
+
+/// The free axes of a contact's grid, each once (the cells of tilt >= 0), workpiece
+/// coordinates, tilt-major.
+std::vector<Vec3d> free_axes_of(const CSpaceGrid& grid, const ContactPoint& contact);
+
+/// The same as machine poses (A, C): for each free axis the inverse solution with A within
+/// the machine's range (branch A >= 0 first); axes the machine cannot reach are left out.
+std::vector<Posed> free_poses_of(const CSpaceGrid& grid, const ContactPoint& contact,
+                                 const ACMachined& machine);
 
 /// The same grid by brute force: one FCL collision query per cell (the reference).
 CSpaceGrid brute_force_free_axes(const CollisionModel& model, const ToolModel& tool,

@@ -56,6 +56,12 @@ std::vector<double> metric_feeds_of(const Operationd& op, const JobOptions& opti
   return feed;
 }
 
+/// The metric feeds of a pass's moves: the move from point i to i + 1 runs at point i + 1's.
+std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const IndexRange& pass) {
+  return std::vector<double>(metric_feed.begin() + static_cast<long>(pass.begin) + 1,
+                             metric_feed.begin() + static_cast<long>(pass.end));
+}
+
 /// The paper's L_i of a pass, from point i to i + 1: between contact points where both ends
 /// touch the part, else between reference points. The metrics and the optimiser share them.
 std::vector<double> segment_lengths_mm(const Operationd& op,
@@ -95,9 +101,7 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
     std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
                           c_deg.begin() + static_cast<long>(pass.end));
     const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
-    std::vector<double> feed;
-    for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) feed.push_back(metric_feed[i + 1]);
-    const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
+    const RotaryKinematics k = rotary_kinematics(a, c, len, pass_feeds(metric_feed, pass));
     accumulate(summary, k, c);
     if (peaks) {
       for (std::size_t j = 0; j < pass.size(); ++j) {
@@ -245,14 +249,13 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     rapid_into[0] = true;
     const PosePlan poses = plan_poses(machine.ac, plan.axes, rapid_into, {}, pose_options);
     if (poses.ok()) {
-      std::vector<double> feed;
-      for (std::size_t i = pass.begin + 1; i < pass.end; ++i) feed.push_back(metric_feed[i]);
       const AxisTest in_cone = [&](std::size_t j, const Vec3d& axis) {
         return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
                acceptable(j, axis);
       };
-      PolePassage pole = smooth_pole_passages(machine.ac, plan.axes, poses.poses,
-                                              problem.segment_mm, feed, in_cone);
+      PolePassage pole =
+          smooth_pole_passages(machine.ac, plan.axes, poses.poses, problem.segment_mm,
+                               pass_feeds(metric_feed, pass), in_cone);
       plan.axes = std::move(pole.axes);
       pole_stretches[q] = pole.stretches;
     }
@@ -306,24 +309,14 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   return out;
 }
 
-/// Peak synthetic omega (deg/s) and a (deg/s^2) of one pass for poses of the whole operation.
-std::pair<double, double> pass_peaks(const Operationd& op,
-                                     const std::vector<ContactPoint>& contacts,
-                                     double ball_radius_mm, const IndexRange& pass,
-                                     const std::vector<Posed>& poses,
-                                     const std::vector<double>& metric_feed) {
-  std::vector<double> a, c, feed;
-  for (std::size_t i = pass.begin; i < pass.end; ++i) {
-    a.push_back(rad_to_deg(poses[i].a_rad));
-    c.push_back(rad_to_deg(poses[i].c_rad));
-    if (i > pass.begin) feed.push_back(metric_feed[i]);
-  }
-  const RotaryKinematics k =
-      rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass), feed);
-  double w = 0.0, acc = 0.0;
-  for (double x : k.omega_deg_s) w = std::max(w, x);
-  for (double x : k.accel_deg_s2) acc = std::max(acc, x);
-  return {w, acc};
+/// Peak synthetic omega and a of one pass for poses of the whole operation.
+PeakRates pass_peaks(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                     double ball_radius_mm, const IndexRange& pass, const std::vector<Posed>& poses,
+                     const std::vector<double>& metric_feed) {
+  return peak_rates(std::vector<Posed>(poses.begin() + static_cast<long>(pass.begin),
+                                       poses.begin() + static_cast<long>(pass.end)),
+                    segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                    pass_feeds(metric_feed, pass));
 }
 
 /// The guard after the optimiser: a pass keeps its input axes when its optimised axes would
@@ -382,8 +375,8 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
           pass_peaks(op, contacts, ball_radius_mm, pass, in_plan.poses, metric_feed);
       const auto after =
           pass_peaks(op, contacts, ball_radius_mm, pass, out_plan.poses, metric_feed);
-      worse =
-          after.first > before.first * (1.0 + 1e-9) || after.second > before.second * (1.0 + 1e-9);
+      worse = after.omega_deg_s > before.omega_deg_s * (1.0 + 1e-9) ||
+              after.accel_deg_s2 > before.accel_deg_s2 * (1.0 + 1e-9);
     }
     if (!worse) continue;
     std::copy(in_axes.begin() + static_cast<long>(pass.begin),

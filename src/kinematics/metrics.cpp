@@ -1,5 +1,6 @@
 #include "taxopt/kinematics/metrics.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace taxopt {
@@ -54,6 +55,20 @@ RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
     k.accel_deg_s2[i] = std::hypot(k.accel_a_deg_s2[i], k.accel_c_deg_s2[i]);
   }
   return k;
+}
+
+PeakRates peak_rates(const std::vector<Posed>& poses, const std::vector<double>& length_mm,
+                     const std::vector<double>& feed_mm_per_min) {
+  std::vector<double> a, c;
+  for (const Posed& p : poses) {
+    a.push_back(rad_to_deg(p.a_rad));
+    c.push_back(rad_to_deg(p.c_rad));
+  }
+  const RotaryKinematics k = rotary_kinematics(a, c, length_mm, feed_mm_per_min);
+  PeakRates out;
+  for (double w : k.omega_deg_s) out.omega_deg_s = std::max(out.omega_deg_s, w);
+  for (double x : k.accel_deg_s2) out.accel_deg_s2 = std::max(out.accel_deg_s2, x);
+  return out;
 }
 
 void accumulate(RotarySummary& s, const RotaryKinematics& k, const std::vector<double>& c_deg) {

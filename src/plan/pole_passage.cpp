@@ -9,24 +9,6 @@
 namespace taxopt {
 namespace {
 
-struct Peaks {
-  double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
-};
-
-Peaks peaks_of(const std::vector<Posed>& poses, const std::vector<double>& segment_mm,
-               const std::vector<double>& feed_mm_min) {
-  std::vector<double> a, c;
-  for (const Posed& p : poses) {
-    a.push_back(rad_to_deg(p.a_rad));
-    c.push_back(rad_to_deg(p.c_rad));
-  }
-  const RotaryKinematics k = rotary_kinematics(a, c, segment_mm, feed_mm_min);
-  Peaks out;
-  for (double w : k.omega_deg_s) out.omega_deg_s = std::max(out.omega_deg_s, w);
-  for (double x : k.accel_deg_s2) out.accel_deg_s2 = std::max(out.accel_deg_s2, x);
-  return out;
-}
-
 enum class Shape { Linear, Hermite };
 
 /// Poses with C re-planned in every stretch of |A| < rho whose new axes are all acceptable;
@@ -102,7 +84,7 @@ PolePassage smooth_pole_passages(const ACMachined& machine, const std::vector<Ve
   std::vector<double> arc(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) arc[i] = arc[i - 1] + segment_mm[i - 1];
 
-  const Peaks p0 = peaks_of(poses, segment_mm, feed_mm_min);
+  const PeakRates p0 = peak_rates(poses, segment_mm, feed_mm_min);
   best.omega_before_deg_s = best.omega_after_deg_s = p0.omega_deg_s;
   best.accel_before_deg_s2 = best.accel_after_deg_s2 = p0.accel_deg_s2;
   if (!(p0.omega_deg_s > 0.0) || !(p0.accel_deg_s2 > 0.0)) return best;
@@ -113,7 +95,7 @@ PolePassage smooth_pole_passages(const ACMachined& machine, const std::vector<Ve
       std::vector<Posed> trial =
           replan(machine, poses, arc, acceptable, deg_to_rad(rho_deg), shape, stretches);
       if (stretches == 0) continue;
-      const Peaks p = peaks_of(trial, segment_mm, feed_mm_min);
+      const PeakRates p = peak_rates(trial, segment_mm, feed_mm_min);
       if (p.omega_deg_s > p0.omega_deg_s || p.accel_deg_s2 > p0.accel_deg_s2) continue;
       const double score = p.omega_deg_s / p0.omega_deg_s + p.accel_deg_s2 / p0.accel_deg_s2;
       if (!(score < best_score - 1e-12)) continue;

@@ -17,6 +17,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "taxopt/kinematics/ac_machine.hpp"
+
 namespace taxopt {
 
 /// Per-point rotary kinematics of one pass, degree units as in the paper.
@@ -50,6 +52,16 @@ RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
                                    const std::vector<double>& c_deg,
                                    const std::vector<double>& length_mm,
                                    const std::vector<double>& feed_mm_per_min);
+
+/// Peak synthetic omega (deg/s) and a (deg/s^2) of one pass.
+struct PeakRates {
+  double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
+};
+
+/// Peaks of one pass given by its machine poses (radians, C unwound), n of them;
+/// length_mm and feed_mm_per_min n-1 as for rotary_kinematics.
+PeakRates peak_rates(const std::vector<Posed>& poses, const std::vector<double>& length_mm,
+                     const std::vector<double>& feed_mm_per_min);
 
 /// Adds one pass to a summary (maxima, RMS of a over interior points, C jumps).
 void accumulate(RotarySummary& summary, const RotaryKinematics& k,

@@ -10,6 +10,7 @@
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
 #include "util/parallel_select.hpp"
@@ -82,17 +83,10 @@ std::vector<double> segment_lengths_mm(const Operationd& op,
 /// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
 /// Segment lengths are the paper's L_i between contact points where both ends touch the
 /// part, else between reference points.
-/// Largest |omega| and |a| per rotary axis (0 = A, 1 = C) and the points where they occur.
-struct AxisPeaks {
-  double omega[2] = {0, 0}, accel[2] = {0, 0};
-  std::size_t omega_at[2] = {0, 0}, accel_at[2] = {0, 0};
-};
-
 RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
                         double ball_radius_mm, const std::vector<double>& a_deg,
                         const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
-                        std::vector<PointRow>* rows, AxisPeaks* peaks = nullptr,
-                        bool rows_before = false) {
+                        std::vector<PointRow>* rows, bool rows_before = false) {
   RotarySummary summary;
   double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
@@ -103,18 +97,6 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
     const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
     const RotaryKinematics k = rotary_kinematics(a, c, len, pass_feeds(metric_feed, pass));
     accumulate(summary, k, c);
-    if (peaks) {
-      for (std::size_t j = 0; j < pass.size(); ++j) {
-        const double w[2] = {std::abs(k.omega_a_deg_s[j]), std::abs(k.omega_c_deg_s[j])};
-        const double acc[2] = {std::abs(k.accel_a_deg_s2[j]), std::abs(k.accel_c_deg_s2[j])};
-        for (int ax = 0; ax < 2; ++ax) {
-          if (w[ax] > peaks->omega[ax])
-            peaks->omega[ax] = w[ax], peaks->omega_at[ax] = pass.begin + j;
-          if (acc[ax] > peaks->accel[ax])
-            peaks->accel[ax] = acc[ax], peaks->accel_at[ax] = pass.begin + j;
-        }
-      }
-    }
     if (rows) {
       for (std::size_t j = 0; j < pass.size(); ++j) {
         PointRow& r = (*rows)[pass.begin + j];
@@ -126,6 +108,118 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
     }
   }
   return summary;
+}
+
+/// Joint positions (X Y Z mm, A C deg) of tips and poses: the machine-mode convention of
+/// CLI.md, which is where the joints are whatever the G-code mode.
+std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
+                                     const std::vector<Posed>& poses) {
+  std::vector<JointPosition> q(tips_mm.size());
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const Vec3d m = ac.to_machine_mm(tips_mm[i], poses[i]);
+    q[i] = {m.x(), m.y(), m.z(), rad_to_deg(poses[i].a_rad), rad_to_deg(poses[i].c_rad)};
+  }
+  return q;
+}
+
+/// Time of the feed move into each point at its programmed feed, s, as write_gcode times it
+/// (tip distance over the feed, or rotary degrees over it when only A and C turn); 0 for the
+/// first point and rapids.
+std::vector<double> programmed_times_s(const std::vector<CLPointd>& points,
+                                       const std::vector<Posed>& poses) {
+  std::vector<double> t(points.size(), 0.0);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].motion != Motion::Feed || !(points[i].feed_mm_per_min > 0.0)) continue;
+    const double tip_mm = (points[i].tip_mm - points[i - 1].tip_mm).norm();
+    const double rot_deg = std::hypot(rad_to_deg(poses[i].a_rad - poses[i - 1].a_rad),
+                                      rad_to_deg(poses[i].c_rad - poses[i - 1].c_rad));
+    // A move too small to time (below 1e-9 either way) still gets a positive time: its words
+    // may differ after rounding, and the schedule needs a bound for every move.
+    t[i] = 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / points[i].feed_mm_per_min;
+  }
+  return t;
+}
+
+/// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
+/// feed move; a chain's joints are those of points begin - 1 .. end - 1.
+std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
+  std::vector<IndexRange> chains;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].motion != Motion::Feed) continue;
+    if (chains.empty() || chains.back().end != i) chains.push_back(IndexRange{i, i});
+    chains.back().end = i + 1;
+  }
+  return chains;
+}
+
+/// An operation's feed schedule: per point the scheduled time of the move into it (0 for
+/// rapids and the first point), the feed it reaches, and the summary.
+struct OperationSchedule {
+  std::vector<double> time_s;
+  std::vector<std::optional<double>> feed_mm_min;
+  FeedSummary summary;
+};
+
+OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
+                                     const std::vector<JointPosition>& joints,
+                                     const std::vector<double>& programmed_s,
+                                     const JointLimits& limits) {
+  OperationSchedule out;
+  const std::size_t n = points.size();
+  out.time_s.assign(n, 0.0);
+  out.feed_mm_min.assign(n, std::nullopt);
+  std::vector<FeedBound> bound(n, FeedBound::Programmed);
+  std::vector<Joint> bound_joint(n, Joint::X);
+  for (const IndexRange& c : feed_chains(points)) {
+    FeedChain chain;
+    chain.joints.assign(joints.begin() + static_cast<long>(c.begin) - 1,
+                        joints.begin() + static_cast<long>(c.end));
+    chain.min_time_s.assign(programmed_s.begin() + static_cast<long>(c.begin),
+                            programmed_s.begin() + static_cast<long>(c.end));
+    const FeedSchedule s = schedule_feed(chain, limits);
+    out.summary.sweeps = std::max(out.summary.sweeps, s.sweeps);
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      out.time_s[i] = s.time_s[i - c.begin];
+      bound[i] = s.bound[i - c.begin];
+      bound_joint[i] = s.bound_joint[i - c.begin];
+    }
+  }
+  FeedSummary& sum = out.summary;
+  double path_mm = 0.0, limited_mm = 0.0;
+  std::array<double, kJointCount> by_velocity{}, by_accel{};
+  bool any_feed = false;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (points[i].motion == Motion::Rapid) {
+      sum.cycle_time_s += rapid_time_s(joints[i - 1], joints[i], limits);
+      continue;
+    }
+    if (!(out.time_s[i] > 0.0)) continue;
+    sum.cycle_time_s += out.time_s[i];
+    const double feed = points[i].feed_mm_per_min * programmed_s[i] / out.time_s[i];
+    out.feed_mm_min[i] = feed;
+    sum.min_feed_mm_min = any_feed ? std::min(sum.min_feed_mm_min, feed) : feed;
+    any_feed = true;
+    const double len = (points[i].tip_mm - points[i - 1].tip_mm).norm();
+    path_mm += len;
+    if (out.time_s[i] > programmed_s[i] * (1.0 + 1e-9)) {
+      limited_mm += len;
+      const std::size_t j = static_cast<std::size_t>(bound_joint[i]);
+      (bound[i] == FeedBound::Velocity ? by_velocity : by_accel)[j] += len;
+    }
+  }
+  sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
+  double most = 0.0;
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    for (const auto& [share, kind] : {std::pair<double, const char*>{by_velocity[j], "velocity"},
+                                      {by_accel[j], "acceleration"}}) {
+      if (share > most) {
+        most = share;
+        sum.limiting_axis = to_string(static_cast<Joint>(j));
+        sum.limiting_kind = kind;
+      }
+    }
+  }
+  return out;
 }
 
 /// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
@@ -389,6 +483,77 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
 
 }  // namespace
 
+namespace {
+
+/// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
+/// (0: no limit), as the controller moves: block times from the F words read back, each
+/// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
+/// problems, jerk a warning (the schedule does not bound it).
+void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
+                          const std::vector<JointPosition>& joints,
+                          const std::vector<const GcodeMove*>& at, JobResult& res,
+                          const std::string& source, const JointLimits& check, bool scheduled) {
+  const std::size_t n = po.points.size();
+  std::vector<double> written_s(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (po.points[i].motion == Motion::Feed && at[i] != at[i - 1]) {
+      written_s[i] = block_time_s(*at[i - 1], *at[i], res.gcode_units);
+    }
+  }
+  struct Worst {
+    double value = 0.0;
+    std::size_t point = 0;
+  };
+  std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
+  for (const IndexRange& c : feed_chains(po.points)) {
+    const std::vector<JointPosition> q(joints.begin() + static_cast<long>(c.begin) - 1,
+                                       joints.begin() + static_cast<long>(c.end));
+    const std::vector<double> t(written_s.begin() + static_cast<long>(c.begin),
+                                written_s.begin() + static_cast<long>(c.end));
+    const JointRates jr = joint_rates(q, t);
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      const auto keep = [](Worst& w, double v, std::size_t point) {
+        if (v > w.value) w = Worst{v, point};
+      };
+      keep(velocity[j], jr.max_velocity_per_s[j], c.begin + jr.velocity_at[j]);
+      keep(accel[j], jr.max_accel_per_s2[j], std::min(n - 1, c.begin - 1 + jr.accel_at[j]));
+      keep(jerk[j], jr.max_jerk_per_s3[j], std::min(n - 1, c.begin - 1 + jr.jerk_at[j]));
+    }
+  }
+  const char* at_feed = scheduled ? " at the scheduled feed" : " at the programmed feed";
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    const std::string unit = j < 3 ? "mm" : "deg";
+    const std::string axis = std::string("axis ") + to_string(static_cast<Joint>(j));
+    const auto describe = [&](const Worst& w, double limit, const char* what,
+                              const std::string& per) {
+      return format_location(source, po.points[w.point].line,
+                             "operation " + po.name + ": " + axis + " " + what + " " +
+                                 std::to_string(w.value) + " " + unit + per + at_feed +
+                                 ", the machine allows " + std::to_string(limit));
+    };
+    if (check[j].max_velocity_per_s > 0.0 &&
+        velocity[j].value > check[j].max_velocity_per_s * (1.0 + 1e-9)) {
+      r.verification.within_dynamic_limits = false;
+      res.problems.push_back(describe(velocity[j], check[j].max_velocity_per_s, "velocity", "/s"));
+    }
+    if (check[j].max_accel_per_s2 > 0.0 &&
+        accel[j].value > check[j].max_accel_per_s2 * (1.0 + 1e-9)) {
+      r.verification.within_dynamic_limits = false;
+      res.problems.push_back(describe(accel[j], check[j].max_accel_per_s2, "acceleration", "/s^2"));
+    }
+    if (check[j].max_jerk_per_s3 > 0.0 && jerk[j].value > check[j].max_jerk_per_s3 * (1.0 + 1e-9)) {
+      res.warnings.push_back(describe(jerk[j], check[j].max_jerk_per_s3, "jerk", "/s^3") +
+                             " (feed schedules bound velocity and acceleration, not jerk)");
+    }
+  }
+  if (!r.verification.within_dynamic_limits && !scheduled) {
+    res.problems.push_back("operation " + po.name +
+                           ": --feed-schedule writes feeds within the machine's limits");
+  }
+}
+
+}  // namespace
+
 const char* to_string(Method method) {
   switch (method) {
     case Method::None: return "none";
@@ -534,7 +699,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < tp.operations.size(); ++k) {
     const Operationd& op = tp.operations[k];
     const auto t0 = Clock::now();
-    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}};
+    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}, {}};
     if (optimised[k]) {
       const double R = ball_radius_mm(op, options);
       for (std::size_t i = 0; i < po.points.size(); ++i) {
@@ -593,10 +758,70 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
   auto t_write = Clock::now();
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-  const std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
+  std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
+  // Per operation and point, the move read back that put the machine there.
+  const auto moves_of_points = [&] {
+    std::vector<std::vector<const GcodeMove*>> out(posted.size());
+    std::size_t next = 0;
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      const GcodeMove* last = nullptr;
+      for (std::size_t i = 0; i < posted[k].points.size(); ++i) {
+        if (res.gcode.emitted[k][i] > 0) {
+          if (next >= moves.size() || moves[next].line != res.gcode.emitted[k][i]) {
+            throw std::logic_error("run_job: G-code read back does not match what was written");
+          }
+          last = &moves[next++];
+        }
+        if (!last) throw std::logic_error("run_job: first point of an operation not written");
+        out[k].push_back(last);
+      }
+    }
+    return out;
+  };
+  // Joint positions as written: the words read back (in tcp mode mapped to the joints).
+  const auto written_joints = [&](const std::vector<const GcodeMove*>& at) {
+    std::vector<JointPosition> q;
+    for (const GcodeMove* m : at) {
+      const Posed pose{deg_to_rad(m->a_deg), deg_to_rad(m->c_deg)};
+      const Vec3d xyz = machine.gcode.mode == GcodeMode::Machine
+                            ? m->xyz_mm
+                            : machine.ac.to_machine_mm(m->xyz_mm, pose);
+      q.push_back({xyz.x(), xyz.y(), xyz.z(), m->a_deg, m->c_deg});
+    }
+    return q;
+  };
+  std::vector<std::vector<const GcodeMove*>> point_moves = moves_of_points();
+
+  // Feed schedules at the machine's limits: the written path (from the words read back) and
+  // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
+  const JointLimits limits = effective_limits(machine);
+  std::vector<OperationSchedule> schedule_after, schedule_before;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    schedule_after.push_back(schedule_operation(po.points, written_joints(point_moves[k]),
+                                                programmed_times_s(po.points, po.poses), limits));
+    std::vector<CLPointd> in_points = po.points;
+    std::vector<Vec3d> in_tips;
+    for (std::size_t i = 0; i < in_points.size(); ++i) {
+      in_points[i].tip_mm = tp.operations[k].points[i].tip_mm;
+      in_points[i].axis = tp.operations[k].points[i].axis;
+      in_tips.push_back(in_points[i].tip_mm);
+    }
+    schedule_before.push_back(
+        input_poses[k].empty()
+            ? schedule_after.back()
+            : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses[k]),
+                                 programmed_times_s(in_points, input_poses[k]), limits));
+  }
+  if (options.feed_schedule) {
+    for (std::size_t k = 0; k < posted.size(); ++k)
+      posted[k].block_time_s = schedule_after[k].time_s;
+    res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+    moves = read_gcode_moves(res.gcode.text, "written G-code");
+    point_moves = moves_of_points();
+  }
   const double write_time = seconds_since(t_write);
 
-  std::size_t next_move = 0;
   std::vector<Operationd> out_ops = tp.operations;
   std::optional<CSpaceRasteriser> rasteriser;
   if ((options.count_free_cells || options.cspace_maps) && options.part) {
@@ -620,15 +845,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     std::vector<Vec3d> xyz_w(op.points.size());
     std::vector<double> a_in(op.points.size()), c_in(op.points.size());
     r.rows.resize(op.points.size());
-    const GcodeMove* last = nullptr;
     for (std::size_t i = 0; i < op.points.size(); ++i) {
-      if (res.gcode.emitted[k][i] > 0) {
-        if (next_move >= moves.size() || moves[next_move].line != res.gcode.emitted[k][i]) {
-          throw std::logic_error("run_job: G-code read back does not match what was written");
-        }
-        last = &moves[next_move++];
-      }
-      if (!last) throw std::logic_error("run_job: first point of an operation not written");
+      const GcodeMove* last = point_moves[k][i];
       a_w[i] = last->a_deg;
       xyz_w[i] = last->xyz_mm;
       c_w[i] = last->c_deg;
@@ -812,7 +1030,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
     }
     r.before = summarise(op, contacts[k], ball_radius_mm(op, options), a_in, c_in, metric_feeds[k],
-                         &r.rows, nullptr, true);
+                         &r.rows, true);
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       r.rows[i].a_before_deg = a_in[i];
       r.rows[i].c_before_deg = c_in[i];
@@ -820,31 +1038,22 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     if (optimised[k]) {
       for (std::size_t i : optimised[k]->keys) r.rows[i].key = true;
     }
-    AxisPeaks peaks;
-    r.after = summarise(op, contacts[k], ball_radius_mm(op, options), a_w, c_w, metric_feeds[k],
-                        &r.rows, &peaks);
-    // The machine's velocity and acceleration limits at the programmed feed.
-    const RotaryAxis<double>* axes[2] = {&machine.ac.a, &machine.ac.c};
-    const char* names[2] = {"A", "C"};
-    for (int ax = 0; ax < 2; ++ax) {
-      const double vmax = rad_to_deg(axes[ax]->max_velocity_rad_s);
-      const double amax = rad_to_deg(axes[ax]->max_accel_rad_s2);
-      const auto report_limit = [&](double value, double limit, std::size_t at, const char* what,
-                                    const char* unit) {
-        r.verification.within_dynamic_limits = false;
-        res.problems.push_back(format_location(
-            tp.source, op.points[at].line,
-            "operation " + op.name + ": axis " + names[ax] + " " + what + " " +
-                std::to_string(value) + " " + unit +
-                " at the programmed feed, the machine allows " + std::to_string(limit)));
-      };
-      if (vmax > 0.0 && peaks.omega[ax] > vmax * (1.0 + 1e-9)) {
-        report_limit(peaks.omega[ax], vmax, peaks.omega_at[ax], "velocity", "deg/s");
-      }
-      if (amax > 0.0 && peaks.accel[ax] > amax * (1.0 + 1e-9)) {
-        report_limit(peaks.accel[ax], amax, peaks.accel_at[ax], "acceleration", "deg/s^2");
-      }
+    r.after =
+        summarise(op, contacts[k], ball_radius_mm(op, options), a_w, c_w, metric_feeds[k], &r.rows);
+    r.feed_after = schedule_after[k].summary;
+    r.feed_before = schedule_before[k].summary;
+    if (optimised[k] && r.feed_after.cycle_time_s > r.feed_before.cycle_time_s * (1.0 + 1e-9)) {
+      res.warnings.push_back("operation " + op.name +
+                             ": at the machine's limits the new axes take " +
+                             std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
+                             std::to_string(r.feed_before.cycle_time_s) + " s");
     }
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      r.rows[i].feed_mm_min = schedule_after[k].feed_mm_min[i];
+      r.rows[i].feed_before_mm_min = schedule_before[k].feed_mm_min[i];
+    }
+    check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], res, tp.source,
+                         options.feed_schedule ? limits : machine.limits, options.feed_schedule);
     res.operations.push_back(std::move(r));
   }
   res.out_cls = format_cl(tp, out_ops);

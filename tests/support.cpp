@@ -79,12 +79,21 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
   moves.clear();
   std::istringstream in(r.out);
   std::string line;
+  double feed_rate = 0.0;
+  bool inverse_time = false;
   while (std::getline(in, line)) {
+    if (line.find("feed mode set to inverse time") != std::string::npos) inverse_time = true;
+    if (line.find("feed mode set to units per minute") != std::string::npos) inverse_time = false;
+    if (const auto at = line.find("SET_FEED_RATE("); at != std::string::npos) {
+      feed_rate = std::strtod(line.c_str() + at + 14, nullptr);
+    }
     const bool feed = line.find("STRAIGHT_FEED(") != std::string::npos;
     const bool trav = line.find("STRAIGHT_TRAVERSE(") != std::string::npos;
     if (!feed && !trav) continue;
     CanonMove m;
     m.feed = feed;
+    m.feed_rate = feed_rate;
+    m.inverse_time = inverse_time;
     const auto open = line.find('(');
     if (std::sscanf(line.c_str() + open + 1, "%lf, %lf, %lf, %lf, %lf, %lf", &m.x, &m.y, &m.z, &m.a,
                     &m.b, &m.c) != 6) {
@@ -176,7 +185,8 @@ void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Ve
 }
 
 GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
-                      double step_mm, double y0, double y1, double x0, double x1) {
+                      double step_mm, double y0, double y1, double x0, double x1,
+                      std::optional<double> clearance_z_mm) {
   GeneratedCl g;
   std::ostringstream os;
   os.setf(std::ios::fixed);
@@ -201,11 +211,21 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
       const Vec3d tip = s + r_mm * nrm - r_mm * v;
       const Vec3d above = tip + 20.0 * v;  // approach and retract along the axis
       if (i == 0) {
+        if (clearance_z_mm && p > 0) {
+          const Vec3d up(above.x(), above.y(), *clearance_z_mm);
+          append_goto(g, os, up, g.axes.back(), true, up, up + r_mm * g.axes.back());
+        }
         append_goto(g, os, above, v, true, above, above + r_mm * v);
         os << "FEDRAT/MMPM,250.0\n";
       }
       append_goto(g, os, tip, v, false, s, s + r_mm * nrm);
-      if (i == n) append_goto(g, os, above, v, true, above, above + r_mm * v);
+      if (i == n) {
+        append_goto(g, os, above, v, true, above, above + r_mm * v);
+        if (clearance_z_mm) {
+          const Vec3d up(above.x(), above.y(), *clearance_z_mm);
+          append_goto(g, os, up, v, true, up, up + r_mm * v);
+        }
+      }
     }
   }
   os << "END-OF-PATH\n";

@@ -2,6 +2,7 @@
 // Helpers shared by the tests: temporary folders, running the CLI and rs274, and CL files of
 // heightfield parts made on the fly (parts no test was tuned on: seeded random shapes).
 #include <functional>
+#include <optional>
 #include <ostream>
 #include <random>
 #include <string>
@@ -48,6 +49,10 @@ bool have_rs274();
 struct CanonMove {
   bool feed = false;
   double x = 0, y = 0, z = 0, a = 0, b = 0, c = 0;
+  /// Feed rate in force (SET_FEED_RATE: rs274 turns a G93 word into units or degrees per
+  /// minute of the move) and whether the program is in inverse time (G93).
+  double feed_rate = 0;
+  bool inverse_time = false;
 };
 /// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
 RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves);
@@ -85,8 +90,10 @@ TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x
 /// Raster passes along x over `hf` with a ball-end mill of radius r_mm; the axis is the
 /// surface normal tilted by tilt_deg in the plane of motion (a lead angle, about N x T). Each
 /// pass starts with a rapid to 20 mm above its first tip and ends with a rapid to 20 mm above
-/// its last one, along the axis. NX CLSF in mm.
+/// its last one, along the axis; with `clearance_z_mm` given, the rapids between passes go up
+/// to that height first, as a CAM system's clearance plane. NX CLSF in mm.
 GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int passes,
-                      double step_mm, double y0, double y1, double x0, double x1);
+                      double step_mm, double y0, double y1, double x0, double x1,
+                      std::optional<double> clearance_z_mm = std::nullopt);
 
 }  // namespace taxopt::test

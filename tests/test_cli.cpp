@@ -146,7 +146,7 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   CHECK_THAT(
       csv, Catch::StartsWith(
                "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
-               "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells\n"));
+               "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min\n"));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
   CHECK(read_file(t.path("o.cls")) == kSmallCl);
 }
@@ -350,10 +350,50 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("stiff.toml") +
                  " --method none --gcode " + t.path("o.nc"));
   CHECK(r.code == 1);
-  CHECK_THAT(r.err, Catch::Contains("axis A acceleration 1000.0"));
+  // From rest to 100 deg/s within half the first move (0.1 s): 2000 deg/s^2.
+  CHECK_THAT(r.err, Catch::Contains("axis A acceleration 2000.0"));
+  CHECK_THAT(r.err, Catch::Contains("--feed-schedule writes feeds within the machine's limits"));
+  // With --feed-schedule the same machine gets feeds it can hold: A within 50 deg/s.
+  r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("slow.toml") +
+                 " --method none --feed-schedule --gcode " + t.path("o.nc") + " --report " +
+                 t.path("r.json"));
+  INFO(r.err);
+  CHECK(r.code == 0);
+  const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
+  const auto& after = j["operations"][0]["after"];
+  CHECK(after["limiting_axis"] == "A");
+  CHECK(after["feed_limited_fraction"].get<double>() > 0.5);
+  CHECK(after["min_feed_mm_min"].get<double>() <= 300.0 + 1e-6);  // 50 of 100 deg/s: half of 600
+  // 10 deg at 50 deg/s twice, then 1 mm at the programmed 10 mm/s.
+  CHECK(after["cycle_time_s"].get<double>() == Approx(0.2 + 0.2 + 0.1).epsilon(1e-3));
+  CHECK(j["operations"][0]["feed_schedule_written"] == true);
+  // The G-code's F words say the same: 300 mm/min on the two turning moves, 600 after.
+  const std::string nc = read_file(t.path("o.nc"));
+  CHECK_THAT(nc, Catch::Contains("F299.99"));
+  CHECK_THAT(nc, Catch::Contains("F600.000"));
+  // A jerk limit is checked and reported, not scheduled: a warning, still exit 0.
+  write_file(t.path("jerky.toml"), m + "max_velocity_deg_s = 50.0\nmax_jerk_deg_s3 = 1.0\n"
+                                       "[axes.C]\ncontinuous = true\n");
+  r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("jerky.toml") +
+                 " --method none --feed-schedule --gcode " + t.path("o.nc") + " -v --points-csv " +
+                 t.path("p.csv"));
+  CHECK(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("axis A jerk"));
+  CHECK_THAT(r.err, Catch::Contains("not jerk"));
+  // The CSV's feed_mm_min: empty for the first point, then the scheduled feeds.
+  std::istringstream csv(read_file(t.path("p.csv")));
+  std::string line;
+  std::vector<std::string> feeds;
+  std::getline(csv, line);
+  while (std::getline(csv, line)) feeds.push_back(line.substr(line.rfind(',') + 1));
+  REQUIRE(feeds.size() == 4);
+  CHECK(feeds[0].empty());
+  CHECK(std::stod(feeds[1]) == Approx(300.0).epsilon(1e-4));
+  CHECK(std::stod(feeds[2]) == Approx(300.0).epsilon(1e-4));
+  CHECK(std::stod(feeds[3]) == Approx(600.0).epsilon(1e-4));
   write_file(
       t.path("fast.toml"),
-      m + "max_velocity_deg_s = 150.0\nmax_accel_deg_s2 = 1500.0\n[axes.C]\ncontinuous = true\n");
+      m + "max_velocity_deg_s = 150.0\nmax_accel_deg_s2 = 2500.0\n[axes.C]\ncontinuous = true\n");
   CHECK(run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("fast.toml") +
                    " --method none --gcode " + t.path("o.nc") + " -q")
             .code == 0);
@@ -397,7 +437,12 @@ TEST_CASE("cli: --points-csv counts the free C-space cells of each contact (clos
     std::getline(csv, line);
     int touching = 0;
     while (std::getline(csv, line)) {
-      const std::string last = line.substr(line.rfind(',') + 1);
+      // free_cells is the 22nd column (feed_mm_min follows it).
+      std::vector<std::string> fields;
+      std::istringstream row(line);
+      for (std::string f; std::getline(row, f, ',');) fields.push_back(f);
+      fields.resize(23);
+      const std::string last = fields[21];
       const bool has_contact = line.find(",,,,,,,,") == std::string::npos;
       if (!has_contact) {
         CHECK(last.empty());

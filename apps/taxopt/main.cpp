@@ -28,7 +28,7 @@ struct Args {
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   int threads = 0;
-  bool force = false, quiet = false;
+  bool force = false, quiet = false, feed_schedule = false;
   int verbose = 0;
   std::string part, plots;
   std::optional<double> grid, max_deviation, shank_radius, flute_length, holder_radius,
@@ -47,13 +47,31 @@ std::optional<taxopt::LengthUnit> parse_unit(const std::string& s, const char* o
   throw taxopt::InputError(std::string(option) + " expects 'in' or 'mm', got '" + s + "'");
 }
 
+/// "before -> after (-x %)".
+std::string before_after(double before, double after, const char* format) {
+  char b[32], a[32], pct[32] = "";
+  std::snprintf(b, sizeof b, format, before);
+  std::snprintf(a, sizeof a, format, after);
+  if (before > 0.0) std::snprintf(pct, sizeof pct, " (%+.0f %%)", 100.0 * (after / before - 1.0));
+  return std::string(b) + " -> " + a + pct;
+}
+
+/// The table printed at the end of a run: per operation, before -> after.
 void print_summary(const taxopt::JobResult& result) {
-  std::printf("%-28s %8s %12s %12s %8s %10s\n", "operation", "points", "max w deg/s",
-              "max a deg/s2", "C jumps", "dev deg");
+  std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %7s\n", "operation", "points",
+              "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "cycle time s",
+              "time s");
   for (const auto& r : result.operations) {
-    std::printf("%-28.28s %8zu %12.1f %12.1f %8d %10.3f\n", r.name.c_str(), r.points,
-                r.after.max_omega_deg_s, r.after.max_accel_deg_s2, r.after.c_jumps,
-                r.max_axis_change_deg);
+    const auto count = [](long before, long after) {
+      return before < 0 ? std::string("-") : std::to_string(before) + "->" + std::to_string(after);
+    };
+    std::printf("%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %7.2f\n", r.name.c_str(), r.points,
+                before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
+                before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
+                count(r.before.c_jumps, r.after.c_jumps).c_str(),
+                count(r.colliding_before, r.colliding_after).c_str(), r.max_axis_change_deg,
+                before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
+                r.time_cspace_s + r.time_optimise_s + r.time_post_s);
   }
 }
 
@@ -183,6 +201,9 @@ int main(int argc, char** argv) {
       "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, 0.1 x mean edge))");
   app.add_option("--threads", a.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
+  app.add_flag("--feed-schedule", a.feed_schedule,
+               "write per block the fastest feed the machine's limits allow (never above the "
+               "programmed feed)");
   app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)");
   app.add_flag("-q,--quiet", a.quiet, "only errors on stderr");
   app.add_flag("-v", a.verbose, "more on stderr");
@@ -315,6 +336,7 @@ int main(int argc, char** argv) {
     if (part) options.part = &*part;
     options.count_free_cells = !a.points_csv.empty();
     options.cspace_maps = !a.plots.empty();
+    options.feed_schedule = a.feed_schedule;
     {
       // Tool dimensions are in the CL file's units.
       const double u = taxopt::mm_per_unit(toolpath.units);

@@ -49,6 +49,11 @@ struct JobOptions {
   /// C-space maps per operation (with a part): the contact with the fewest free cells and
   /// the one whose axis changed most (0: none). Implies count_free_cells.
   bool cspace_maps = false;
+  /// Write the scheduled feed of every feed move (--feed-schedule): the fastest the machine's
+  /// limits allow, never above the programmed feed (feed_schedule.hpp). The dynamic limits
+  /// are then checked at those feeds with the machine's effective limits (its file's, else
+  /// the defaults); otherwise at the programmed feeds, with the limits its file gives.
+  bool feed_schedule = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
 };
@@ -65,8 +70,9 @@ struct Verification {
   /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; -1: not checked.
   long colliding_moves = -1;
   bool within_axis_limits = true;
-  /// Axis velocity and acceleration within the machine file's limits at the programmed feed
-  /// (true when the machine gives none).
+  /// Joint velocities and accelerations within the limits at the written feeds, as the
+  /// controller moves (linear in the joints, from rest at each chain of feed moves): the
+  /// machine file's limits, or with --feed-schedule the effective ones (true when none).
   bool within_dynamic_limits = true;
 };
 
@@ -87,6 +93,10 @@ struct PointRow {
   double omega_before_deg_s = 0.0, accel_before_deg_s2 = 0.0;
   /// A key point of the optimiser: an end of one of its intervals (segment boundary).
   bool key = false;
+  /// Scheduled feed of the move into this point (the feed the machine can hold there, mm/min:
+  /// programmed feed x programmed time / scheduled time), after and before; empty for rapids
+  /// and the first point.
+  std::optional<double> feed_mm_min, feed_before_mm_min;
   /// Free cells of the C-space grid at this contact (cell size --grid, within --max-deviation
   /// of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
   std::optional<std::size_t> free_cells;
@@ -113,6 +123,22 @@ struct CSpaceMap {
   std::string why;
 };
 
+/// The feed schedule of an operation at the machine's effective limits (feed_schedule.hpp).
+struct FeedSummary {
+  /// Feed moves at their scheduled feeds plus rapids on their joints' trapezoids, s. The move
+  /// into an operation's first point (from the previous one) is not counted.
+  double cycle_time_s = 0.0;
+  /// Share of the feed moves' tip path length where the schedule is below the programmed feed.
+  double feed_limited_fraction = 0.0;
+  /// Lowest scheduled feed, mm/min (0 when there is no feed move).
+  double min_feed_mm_min = 0.0;
+  /// The joint ("X" ... "C") whose limits hold the feed down over the longest path, and
+  /// whether its velocity or acceleration does; empty when the programmed feed holds.
+  std::string limiting_axis, limiting_kind;
+  /// Largest number of sweeps the scheduler needed on a chain of feed moves.
+  int sweeps = 0;
+};
+
 /// Result of one operation.
 struct OperationResult {
   std::string name;
@@ -120,6 +146,8 @@ struct OperationResult {
   /// Feed used for the metrics (the first feed move's), mm/min.
   double feed_mm_min = 0.0;
   RotarySummary before, after;
+  /// Feed schedules of the input axes and of the written G-code.
+  FeedSummary feed_before, feed_after;
   /// CL points whose tool intersects the part (shank and holder above the ball; the ball too
   /// where it is in the air), with the input and with the output axes; -1: not checked.
   long colliding_before = -1, colliding_after = -1;

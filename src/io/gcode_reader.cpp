@@ -120,4 +120,13 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
   return moves;
 }
 
+double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units) {
+  if (!(to.feed > 0.0)) return 0.0;
+  if (to.inverse_time) return 60.0 / to.feed;
+  const double xyz_mm = (to.xyz_mm - from.xyz_mm).norm();
+  // A move whose XYZ words repeat has a rounded distance of exactly zero.
+  if (xyz_mm > 0.0) return 60.0 * xyz_mm / (to.feed * mm_per_unit(units));
+  return 60.0 * std::hypot(to.a_deg - from.a_deg, to.c_deg - from.c_deg) / to.feed;
+}
+
 }  // namespace taxopt

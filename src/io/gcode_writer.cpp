@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "taxopt/io/gcode.hpp"
@@ -19,6 +21,9 @@ std::string fmt(double v, int decimals) {
   if (all_zero && !s.empty() && s[0] == '-') s.erase(0, 1);
   return s;
 }
+
+/// The value a reader gets back from fmt(v, decimals).
+double round_to(double v, int decimals) { return std::strtod(fmt(v, decimals).c_str(), nullptr); }
 
 /// A LinuxCNC comment cannot hold parentheses or line breaks.
 std::string comment(const std::string& text) {
@@ -44,6 +49,9 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   const GcodeSettings& g = machine.gcode;
   const double scale = 1.0 / mm_per_unit(units);
   const int d = g.decimals;
+  const auto rounded = [d](const Vec3d& v) {
+    return Vec3d(round_to(v.x(), d), round_to(v.y(), d), round_to(v.z(), d));
+  };
   GcodeProgram prog;
   int line_no = 0;
   const auto line = [&](const std::string& s) {
@@ -99,7 +107,17 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         const double rot_deg = have_prev ? std::hypot(rad_to_deg(pose.a_rad - prev_pose.a_rad),
                                                       rad_to_deg(pose.c_rad - prev_pose.c_rad))
                                          : 0.0;
-        const double time_min = (tip_mm > 1e-9 ? tip_mm : rot_deg) / p.feed_mm_per_min;
+        const double programmed_min = (tip_mm > 1e-9 ? tip_mm : rot_deg) / p.feed_mm_per_min;
+        // A scheduled block (never faster than programmed) writes its F with 8 significant
+        // digits, so that rounding cannot carry it over the limits it was scheduled for.
+        const bool scheduled = i < op.block_time_s.size() && op.block_time_s[i] > 0.0 && have_prev;
+        const double time_min =
+            scheduled ? std::max(programmed_min, op.block_time_s[i] / 60.0) : programmed_min;
+        const auto fmt_feed = [&](double f) {
+          if (!scheduled) return fmt(f, std::max(d, 3));
+          const int digits = 7 - static_cast<int>(std::floor(std::log10(std::max(f, 1e-300))));
+          return fmt(f, std::clamp(digits, std::max(d, 3), 15));
+        };
         std::string f;
         if (!have_prev) {
           // First block of an operation at feed: where the tool comes from is unknown, so
@@ -107,7 +125,15 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
           f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
           restore_inverse_time = g.feed_mode == FeedMode::InverseTime;
         } else if (g.feed_mode == FeedMode::InverseTime) {
-          f = fmt(1.0 / time_min, std::max(d, 3));
+          f = fmt_feed(1.0 / time_min);
+        } else if (scheduled) {
+          // The controller times the block from the written (rounded) words: so does F.
+          const Vec3d written = rounded(xyz * scale), before = rounded(prev_xyz * scale);
+          const double len = (written - before).norm();
+          const double rot = std::hypot(
+              round_to(rad_to_deg(pose.a_rad), d) - round_to(rad_to_deg(prev_pose.a_rad), d),
+              round_to(rad_to_deg(pose.c_rad), d) - round_to(rad_to_deg(prev_pose.c_rad), d));
+          f = fmt_feed((len > 0.0 ? len : rot) / time_min);
         } else if (g.mode == GcodeMode::Machine) {
           // Joint-space XYZ moves differ from the tip's: scale F so the block takes the
           // same time as the tip at the programmed feed.

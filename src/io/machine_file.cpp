@@ -35,9 +35,20 @@ class MachineParser {
       fail(line_of(*kin), "kinematics '" + m.kinematics + "' is not supported (ac-table-table)");
     }
     const toml::table* axes = table_of(root, "axes", true);
-    check_keys(*axes, "axes", {"A", "C"});
-    parse_axis(*table_of(*axes, "A", true, "axes."), "axes.A", m.ac.a, false);
-    parse_axis(*table_of(*axes, "C", true, "axes."), "axes.C", m.ac.c, true);
+    check_keys(*axes, "axes", {"X", "Y", "Z", "A", "C"});
+    const toml::table* a_table = table_of(*axes, "A", true, "axes.");
+    const toml::table* c_table = table_of(*axes, "C", true, "axes.");
+    parse_axis(*a_table, "axes.A", m.ac.a, false);
+    parse_axis(*c_table, "axes.C", m.ac.c, true);
+    parse_limits(*a_table, "axes.A", "deg", m.limits[static_cast<std::size_t>(Joint::A)]);
+    parse_limits(*c_table, "axes.C", "deg", m.limits[static_cast<std::size_t>(Joint::C)]);
+    for (Joint j : {Joint::X, Joint::Y, Joint::Z}) {
+      const std::string name = to_string(j);
+      if (const toml::table* t = table_of(*axes, name, false, "axes.")) {
+        check_keys(*t, "axes." + name, {"max_velocity_mm_s", "max_accel_mm_s2", "max_jerk_mm_s3"});
+        parse_limits(*t, "axes." + name, "mm", m.limits[static_cast<std::size_t>(j)]);
+      }
+    }
     if (const toml::table* pivot = table_of(root, "pivot", false)) {
       check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
       m.ac.a_axis_point_mm = Vec3d(0.0, number_or(*pivot, "pivot", "a_axis_y", 0.0),
@@ -138,9 +149,9 @@ class MachineParser {
 
   void parse_axis(const toml::table& t, const std::string& where, RotaryAxis<double>& axis,
                   bool is_c) const {
-    check_keys(
-        t, where,
-        {"min_deg", "max_deg", "continuous", "sense", "max_velocity_deg_s", "max_accel_deg_s2"});
+    check_keys(t, where,
+               {"min_deg", "max_deg", "continuous", "sense", "max_velocity_deg_s",
+                "max_accel_deg_s2", "max_jerk_deg_s3"});
     const int line = line_of(t);
     axis = RotaryAxis<double>{};
     if (const toml::node* n = t.get("continuous")) {
@@ -172,15 +183,21 @@ class MachineParser {
       if (v != 1 && v != -1) fail(line_of(*n), where + ".sense must be 1 or -1");
       axis.sense = static_cast<int>(v);
     }
-    if (const toml::node* n = t.get("max_velocity_deg_s")) {
-      const double v = number_of(*n, where + ".max_velocity_deg_s");
-      if (!(v > 0.0)) fail(line_of(*n), where + ".max_velocity_deg_s must be positive");
-      axis.max_velocity_rad_s = deg_to_rad(v);
-    }
-    if (const toml::node* n = t.get("max_accel_deg_s2")) {
-      const double v = number_of(*n, where + ".max_accel_deg_s2");
-      if (!(v > 0.0)) fail(line_of(*n), where + ".max_accel_deg_s2 must be positive");
-      axis.max_accel_rad_s2 = deg_to_rad(v);
+  }
+
+  /// The optional max_velocity_<unit>_s, max_accel_<unit>_s2 and max_jerk_<unit>_s3 of an axis.
+  void parse_limits(const toml::table& t, const std::string& where, const std::string& unit,
+                    JointLimit& limit) const {
+    const std::pair<std::string, double*> keys[] = {
+        {"max_velocity_" + unit + "_s", &limit.max_velocity_per_s},
+        {"max_accel_" + unit + "_s2", &limit.max_accel_per_s2},
+        {"max_jerk_" + unit + "_s3", &limit.max_jerk_per_s3}};
+    for (const auto& [key, value] : keys) {
+      if (const toml::node* n = t.get(key)) {
+        const double v = number_of(*n, where + "." + key);
+        if (!(v > 0.0)) fail(line_of(*n), where + "." + key + " must be positive");
+        *value = v;
+      }
     }
   }
 
@@ -190,6 +207,26 @@ class MachineParser {
 }  // namespace
 
 Machine default_machine() { return Machine{}; }
+
+JointLimits default_joint_limits() {
+  JointLimits l;
+  for (Joint j : {Joint::X, Joint::Y, Joint::Z})
+    l[static_cast<std::size_t>(j)] = {500.0, 3000.0, 0.0};
+  l[static_cast<std::size_t>(Joint::A)] = {150.0, 1000.0, 0.0};
+  l[static_cast<std::size_t>(Joint::C)] = {240.0, 1500.0, 0.0};
+  return l;
+}
+
+JointLimits effective_limits(const Machine& machine) {
+  JointLimits l = default_joint_limits();
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    const JointLimit& given = machine.limits[j];
+    if (given.max_velocity_per_s > 0.0) l[j].max_velocity_per_s = given.max_velocity_per_s;
+    if (given.max_accel_per_s2 > 0.0) l[j].max_accel_per_s2 = given.max_accel_per_s2;
+    if (given.max_jerk_per_s3 > 0.0) l[j].max_jerk_per_s3 = given.max_jerk_per_s3;
+  }
+  return l;
+}
 
 Machine parse_machine_toml(const std::string& text, const std::string& source) {
   return MachineParser(source).parse(text);

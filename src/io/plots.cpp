@@ -323,6 +323,27 @@ std::vector<std::pair<std::string, std::string>> job_plots(const JobResult& resu
     out.emplace_back(stem + "accel.svg",
                      make("synthetic angular acceleration", "deg/s\u00b2",
                           &PointRow::accel_before_deg_s2, &PointRow::accel_deg_s2, true));
+    {
+      // The feed the machine can hold at its limits (feed_schedule.hpp), on the feed moves.
+      std::vector<double> feed_arc, before, after;
+      for (const PointRow* r : rows) {
+        if (!r->feed_mm_min || !r->feed_before_mm_min) continue;
+        feed_arc.push_back(r->arc_mm);
+        before.push_back(*r->feed_before_mm_min);
+        after.push_back(*r->feed_mm_min);
+      }
+      if (!feed_arc.empty()) {
+        LinePlot p;
+        p.title = op.name + ": scheduled feed at the machine's limits (mm/min)";
+        p.x_label = "arc length along the path (mm)";
+        p.y_label = "feed (mm/min)";
+        p.series.push_back({"before (input axes)", feed_arc, before, "#8c8c8c", true});
+        p.series.push_back({"after", feed_arc, after, "#1f5fbf", false});
+        p.markers_x = keys;
+        p.markers_label = "segment boundaries";
+        out.emplace_back(stem + "feed.svg", svg_line_plot(p));
+      }
+    }
     for (const CSpaceMap& m : op.cspace_maps) {
       out.emplace_back(stem + "cspace-" + std::to_string(m.index) + ".svg",
                        svg_cspace_map(m, op.name + ": C-space at point " + std::to_string(m.index) +

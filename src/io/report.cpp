@@ -8,7 +8,7 @@
 namespace taxopt {
 namespace {
 
-nlohmann::json summary_json(const RotarySummary& s, long colliding) {
+nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSummary& f) {
   nlohmann::json j;
   j["max_omega_deg_s"] = s.max_omega_deg_s;
   j["max_accel_deg_s2"] = s.max_accel_deg_s2;
@@ -16,6 +16,14 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding) {
   j["c_jumps"] = s.c_jumps;
   // Counted only when a part is given; null says "not checked", not "none".
   j["colliding_points"] = colliding >= 0 ? nlohmann::json(colliding) : nlohmann::json(nullptr);
+  // The feed schedule at the machine's limits (feed_schedule.hpp).
+  j["cycle_time_s"] = f.cycle_time_s;
+  j["feed_limited_fraction"] = f.feed_limited_fraction;
+  j["min_feed_mm_min"] = f.min_feed_mm_min;
+  j["limiting_axis"] =
+      f.limiting_axis.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.limiting_axis);
+  j["limiting_kind"] =
+      f.limiting_kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.limiting_kind);
   return j;
 }
 
@@ -38,8 +46,9 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     o["name"] = r.name;
     o["points"] = r.points;
     o["feed_mm_min"] = r.feed_mm_min;
-    o["before"] = summary_json(r.before, r.colliding_before);
-    o["after"] = summary_json(r.after, r.colliding_after);
+    o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
+    o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
+    o["feed_schedule_written"] = options.feed_schedule;
     o["max_axis_change_deg"] = r.max_axis_change_deg;
     o["segments"] = r.segments;
     if (r.contact.recovered) {
@@ -66,13 +75,24 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     ops.push_back(o);
   }
   j["operations"] = ops;
+  nlohmann::json limits = nlohmann::json::object();
+  const JointLimits effective = effective_limits(machine);
+  for (std::size_t q = 0; q < kJointCount; ++q) {
+    const std::string unit = q < 3 ? "mm" : "deg";
+    nlohmann::json l = {{"max_velocity_" + unit + "_s", effective[q].max_velocity_per_s},
+                        {"max_accel_" + unit + "_s2", effective[q].max_accel_per_s2}};
+    if (effective[q].max_jerk_per_s3 > 0.0)
+      l["max_jerk_" + unit + "_s3"] = effective[q].max_jerk_per_s3;
+    limits[to_string(static_cast<Joint>(q))] = l;
+  }
+  j["axis_limits"] = limits;
   return j.dump(2) + "\n";
 }
 
 std::string points_csv(const JobResult& result) {
   std::string out =
       "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
-      "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells\n";
+      "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min\n";
   char buf[512];
   for (const auto& r : result.operations) {
     std::string op = r.name;
@@ -98,6 +118,11 @@ std::string points_csv(const JobResult& result) {
                     p.accel_deg_s2);
       out += buf;
       if (p.free_cells) out += std::to_string(*p.free_cells);
+      out += ",";
+      if (p.feed_mm_min) {
+        std::snprintf(buf, sizeof buf, "%.3f", *p.feed_mm_min);
+        out += buf;
+      }
       out += "\n";
     }
   }

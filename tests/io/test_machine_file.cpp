@@ -59,7 +59,9 @@ TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]
   const Machine m = parse_machine_toml(kFull, "m.toml");
   CHECK(m.name == "generic-ac-trt");
   CHECK(rad_to_deg(m.ac.a.min_rad) == Approx(-120.0));
-  CHECK(rad_to_deg(m.ac.a.max_accel_rad_s2) == Approx(36000.0));
+  CHECK(m.limits[3].max_accel_per_s2 == 36000.0);
+  CHECK(m.limits[4].max_velocity_per_s == 7200.0);
+  CHECK(m.limits[0].max_velocity_per_s == 0.0);  // not given
   CHECK(m.ac.c.continuous);
   CHECK(m.ac.c.sense == -1);
   CHECK(m.ac.a_axis_point_mm == Vec3d(0, 1.5, -2.0));
@@ -67,6 +69,31 @@ TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]
   CHECK(m.gcode.mode == GcodeMode::Machine);
   CHECK(m.gcode.feed_mode == FeedMode::InverseTime);
   CHECK(m.gcode.decimals == 5);
+}
+
+TEST_CASE("machine file: X Y Z limits and jerk, and the defaults where none is given",
+          "[io][machine][feed]") {
+  const Machine m =
+      parse_machine_toml(replace(kFull, "[pivot]",
+                                 "[axes.X]\nmax_velocity_mm_s = 400.0\nmax_accel_mm_s2 = 2500\n"
+                                 "[axes.Z]\nmax_jerk_mm_s3 = 50000.0\n\n[pivot]"),
+                         "m.toml");
+  CHECK(m.limits[0].max_velocity_per_s == 400.0);
+  CHECK(m.limits[0].max_accel_per_s2 == 2500.0);
+  CHECK(m.limits[2].max_jerk_per_s3 == 50000.0);
+  const JointLimits e = effective_limits(m);
+  CHECK(e[0].max_velocity_per_s == 400.0);                                         // given
+  CHECK(e[1].max_velocity_per_s == default_joint_limits()[1].max_velocity_per_s);  // default
+  CHECK(e[3].max_accel_per_s2 == 36000.0);
+  for (const JointLimit& l : default_joint_limits()) {
+    CHECK(l.max_velocity_per_s > 0.0);
+    CHECK(l.max_accel_per_s2 > 0.0);
+  }
+  expect_error(replace(kFull, "[pivot]", "[axes.X]\nmax_velocity_deg_s = 4.0\n[pivot]"), 18,
+               "unknown key 'axes.X.max_velocity_deg_s'");
+  expect_error(replace(kFull, "[pivot]", "[axes.Y]\nmax_accel_mm_s2 = 0\n[pivot]"), 18,
+               "axes.Y.max_accel_mm_s2 must be positive");
+  expect_error(replace(kFull, "[pivot]", "[axes.Q]\n[pivot]"), 17, "unknown key 'axes.Q'");
 }
 
 TEST_CASE("machine file: every shipped machine file reads", "[io][machine]") {

@@ -19,6 +19,9 @@ struct PostedOperation {
   bool spindle_clockwise = true;
   std::vector<CLPointd> points;
   std::vector<Posed> poses;
+  /// Optional, per point: the time of the feed move into it, s, from a feed schedule
+  /// (feed_schedule.hpp); 0 or absent: the programmed feed's. Never shorter than that.
+  std::vector<double> block_time_s;
 };
 
 /// Written G-code and where each point went.
@@ -45,6 +48,11 @@ struct GcodeMove {
   bool inverse_time = false;
   int line = 0;
 };
+
+/// Time the controller takes for the feed move `to` from `from` (both read back, `units` the
+/// program's): under G94 the XYZ distance over F, or the rotary distance (deg) over F when
+/// only A and C move; under G93 one over F minutes.
+double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units);
 
 /// Reads the motion blocks of G-code in the subset taxopt writes (G0/G1, G20/G21, G90,
 /// G93/G94, X Y Z A C F, comments). @throws InputError on anything outside it.

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
 
 namespace taxopt {
 
@@ -30,8 +31,19 @@ struct Machine {
   std::string name = "generic-ac-trt";
   std::string kinematics = "ac-table-table";
   ACMachined ac = default_ac_machine();
+  /// Velocity, acceleration and jerk limits of X Y Z (mm) and A C (deg) as the machine file
+  /// gives them; 0: not given (effective_limits fills in the defaults).
+  JointLimits limits{};
   GcodeSettings gcode;
 };
+
+/// Limits of a typical mid-size A/C trunnion machine, used where the machine file gives
+/// none: X Y Z 500 mm/s (30 m/min) and 3000 mm/s^2; A 150 deg/s (25 rpm) and 1000 deg/s^2;
+/// C 240 deg/s (40 rpm) and 1500 deg/s^2; no jerk limit.
+JointLimits default_joint_limits();
+
+/// The machine's limits where its file gives them, else default_joint_limits().
+JointLimits effective_limits(const Machine& machine);
 
 /// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
 Machine default_machine();

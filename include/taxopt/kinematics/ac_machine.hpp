@@ -29,9 +29,6 @@ struct RotaryAxis {
   bool continuous = false;
   /// +1: right-hand rotation as in eq. 12; -1: the machine turns the other way.
   int sense = 1;
-  /// Optional limits for checks; 0 means not given.
-  S max_velocity_rad_s = S(0);
-  S max_accel_rad_s2 = S(0);
 
   /// True when `value_rad` is within the range (with a tolerance of 1e-9 rad).
   bool contains(S value_rad) const {

@@ -1,0 +1,159 @@
+// Feed scheduling end to end: on parts no test was tuned on, --feed-schedule writes G-code that
+// LinuxCNC's rs274 reads in both feed modes, every joint stays within its limits by an
+// independent check of what rs274 read, and the optimised path is no slower than the input.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+
+#include "support.hpp"
+#include "taxopt/io/mesh_file.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+struct Limits {
+  double v[5], a[5];
+};
+
+/// Joint positions of one rs274 move, by the machine-mode convention of CLI.md written out
+/// here with sines and cosines (not the library's kinematics): tcp words are the tip in
+/// workpiece coordinates, p_m = Rx(-A) (Rz(-C) (p - c0) + c0 - a0) + a0.
+std::array<double, 5> joints(const CanonMove& m, bool machine_mode, const double c0[2],
+                             const double a0[2]) {
+  if (machine_mode) return {m.x, m.y, m.z, m.a, m.c};
+  const double pi = std::acos(-1.0);
+  const double a = m.a * pi / 180.0, c = m.c * pi / 180.0;
+  // Rz(-c) (p - c0) + c0
+  const double px = m.x - c0[0], py = m.y - c0[1];
+  const double x1 = std::cos(c) * px + std::sin(c) * py + c0[0];
+  const double y1 = -std::sin(c) * px + std::cos(c) * py + c0[1];
+  const double z1 = m.z;
+  // Rx(-a) (q - a0) + a0, a0 = (0, a_y, a_z)
+  const double qy = y1 - a0[0], qz = z1 - a0[1];
+  const double y2 = std::cos(a) * qy + std::sin(a) * qz + a0[0];
+  const double z2 = -std::sin(a) * qy + std::cos(a) * qz + a0[1];
+  return {x1, y2, z2, m.a, m.c};
+}
+
+struct Measured {
+  double worst_ratio = 0.0;            // largest velocity or acceleration over its limit
+  double fastest_vs_programmed = 0.0;  // largest programmed time / written time of a feed move
+  int feed_moves = 0;
+};
+
+/// Velocity and acceleration of every joint from rs274's moves: block times from the feed
+/// rates rs274 sets (XYZ distance / rate, or rotary distance / rate), each chain of
+/// feed moves from rest to rest, velocity per move and acceleration between moves over their
+/// mean time (eq. 16-18).
+Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const double c0[2],
+                 const double a0[2], const Limits& lim, double programmed_mm_min) {
+  Measured out;
+  std::vector<double> prev_w(5, 0.0);
+  double prev_t = 0.0;
+  const auto accel_check = [&](const std::vector<double>& w, double t) {
+    for (int j = 0; j < 5; ++j) {
+      const double acc = std::abs(w[j] - prev_w[j]) / ((t + prev_t) / 2.0);
+      out.worst_ratio = std::max(out.worst_ratio, acc / lim.a[j]);
+    }
+  };
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    const CanonMove &p = moves[i - 1], &m = moves[i];
+    if (!m.feed) {
+      if (prev_t > 0.0) accel_check(std::vector<double>(5, 0.0), 0.0);  // stop before a rapid
+      prev_w.assign(5, 0.0), prev_t = 0.0;
+      continue;
+    }
+    const double len = std::sqrt((m.x - p.x) * (m.x - p.x) + (m.y - p.y) * (m.y - p.y) +
+                                 (m.z - p.z) * (m.z - p.z));
+    const double rot = std::hypot(m.a - p.a, m.c - p.c);
+    if (len == 0.0 && rot == 0.0) continue;
+    // rs274 turns a G93 word into the rate of the move in units (or degrees) per minute.
+    const double t = 60.0 * (len > 0 ? len : rot) / m.feed_rate;
+    if (!machine_mode && len > 0.0) {
+      out.fastest_vs_programmed =
+          std::max(out.fastest_vs_programmed, (60.0 * len / programmed_mm_min) / t);
+    }
+    ++out.feed_moves;
+    const auto qa = joints(p, machine_mode, c0, a0), qb = joints(m, machine_mode, c0, a0);
+    std::vector<double> w(5);
+    for (int j = 0; j < 5; ++j) {
+      w[j] = (qb[j] - qa[j]) / t;
+      out.worst_ratio = std::max(out.worst_ratio, std::abs(w[j]) / lim.v[j]);
+    }
+    accel_check(w, t);
+    prev_w = w, prev_t = t;
+  }
+  if (prev_t > 0.0) accel_check(std::vector<double>(5, 0.0), 0.0);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "feed schedule: on unseen parts rs274 reads the scheduled G-code in both feed modes, "
+    "within every limit, and the optimised path is no slower",
+    "[feed][rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(4242);
+  const Limits lim{{40, 40, 40, 20, 30}, {400, 400, 400, 100, 150}};
+  int checked = 0;
+  for (const Heightfield& hf : random_heightfields(rng)) {
+    for (const char* mode : {"tcp", "machine"}) {
+      for (const char* feed_mode : {"units-per-minute", "inverse-time"}) {
+        INFO(hf.name << ", " << mode << ", " << feed_mode);
+        TempDir dir;
+        const bool machine_mode = std::string(mode) == "machine";
+        const double c0[2] = {machine_mode ? 7.0 : 0.0, machine_mode ? -4.0 : 0.0};
+        const double a0[2] = {machine_mode ? 12.5 : 0.0, machine_mode ? -80.0 : 0.0};
+        std::ostringstream toml;
+        toml << "kinematics = \"ac-table-table\"\n";
+        for (int j = 0; j < 3; ++j) {
+          toml << "[axes."
+               << "XYZ"[j] << "]\nmax_velocity_mm_s = " << lim.v[j]
+               << "\nmax_accel_mm_s2 = " << lim.a[j] << "\n";
+        }
+        toml << "[axes.A]\nmin_deg = -120\nmax_deg = 120\nmax_velocity_deg_s = " << lim.v[3]
+             << "\nmax_accel_deg_s2 = " << lim.a[3] << "\n[axes.C]\ncontinuous = true\n"
+             << "max_velocity_deg_s = " << lim.v[4] << "\nmax_accel_deg_s2 = " << lim.a[4]
+             << "\n[pivot]\nc_axis_x = " << c0[0] << "\nc_axis_y = " << c0[1]
+             << "\na_axis_y = " << a0[0] << "\na_axis_z = " << a0[1] << "\n[gcode]\nmode = \""
+             << mode << "\"\nfeed_mode = \"" << feed_mode << "\"\n";
+        write_file(dir.path("m.toml"), toml.str());
+        const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 3, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+        write_file(dir.path("in.cls"), g.text);
+        write_file(dir.path("part.stl"),
+                   format_stl_binary(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0)));
+        const RunResult r =
+            run_taxopt("--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") +
+                       " --machine " + dir.path("m.toml") + " --feed-schedule --gcode " +
+                       dir.path("o.ngc") + " --report " + dir.path("r.json") + " -q --grid 4");
+        INFO(r.err);
+        REQUIRE(r.code == 0);
+        const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
+        for (const auto& op : rep["operations"]) {
+          const double before = op["before"]["cycle_time_s"], after = op["after"]["cycle_time_s"];
+          INFO("cycle time " << before << " s -> " << after << " s");
+          CHECK(after <= before * (1.0 + 1e-9));
+          CHECK(op["verification"]["within_dynamic_limits"] == true);
+        }
+        std::vector<CanonMove> moves;
+        const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
+        INFO(rs.err);
+        REQUIRE(rs.code == 0);
+        REQUIRE(moves.size() == g.tips_mm.size());
+        const Measured m = measure(moves, machine_mode, c0, a0, lim, 250.0);
+        CHECK(m.feed_moves > 100);
+        // rs274 prints 4 decimals: the check allows their rounding.
+        CHECK(m.worst_ratio <= 1.0 + 1e-3);
+        CHECK(m.worst_ratio > 0.5);  // the limits do bind somewhere on these parts
+        if (!machine_mode) CHECK(m.fastest_vs_programmed <= 1.0 + 1e-3);
+        ++checked;
+      }
+    }
+  }
+  CHECK(checked == 12);
+}

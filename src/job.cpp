@@ -758,7 +758,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
   auto t_write = Clock::now();
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-  std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code");
+  std::vector<GcodeMove> moves =
+      read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect);
   // Per operation and point, the move read back that put the machine there.
   const auto moves_of_points = [&] {
     std::vector<std::vector<const GcodeMove*>> out(posted.size());
@@ -817,7 +818,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     for (std::size_t k = 0; k < posted.size(); ++k)
       posted[k].block_time_s = schedule_after[k].time_s;
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-    moves = read_gcode_moves(res.gcode.text, "written G-code");
+    moves = read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect);
     point_moves = moves_of_points();
   }
   const double write_time = seconds_since(t_write);

@@ -454,3 +454,22 @@ TEST_CASE("cli: --points-csv counts the free C-space cells of each contact (clos
     CHECK(touching == 11);
   }
 }
+
+TEST_CASE("cli: the machine file's dialect picks the controller's program format", "[cli][gcode]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kSmallCl);
+  const std::pair<const char*, const char*> dialects[] = {
+      {"fanuc", "G43.4 H"}, {"siemens", "TRAORI"}, {"heidenhain", "M128 *"}};
+  for (const auto& [dialect, tcp_word] : dialects) {
+    INFO(dialect);
+    write_file(t.path("m.toml"), std::string("kinematics = \"ac-table-table\"\n[axes.A]\n"
+                                             "min_deg = -120\nmax_deg = 120\n[axes.C]\n"
+                                             "continuous = true\n[gcode]\ndialect = \"") +
+                                     dialect + "\"\n");
+    const auto r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                              " --method none --feed-schedule --gcode " + t.path("o.nc") + " -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK_THAT(read_file(t.path("o.nc")), Catch::Contains(tcp_word));
+  }
+}

@@ -1,13 +1,39 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <initializer_list>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 
 namespace taxopt {
 
-std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source) {
+namespace {
+
+/// Removes the whole words `keywords` (Sinumerik's TRAORI ...) from a line, outside comments.
+std::string without_keywords(const std::string& line, std::initializer_list<const char*> keywords) {
+  std::string out = line;
+  for (const char* k : keywords) {
+    const std::string key = k;
+    for (std::size_t at = out.find(key); at != std::string::npos; at = out.find(key, at)) {
+      const bool starts = at == 0 || std::isspace(static_cast<unsigned char>(out[at - 1]));
+      const std::size_t end = at + key.size();
+      const bool ends = end == out.size() || std::isspace(static_cast<unsigned char>(out[end])) ||
+                        out[end] == ';';
+      if (starts && ends) {
+        out.replace(at, key.size(), " ");
+      } else {
+        at = end;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
+                                        GcodeDialect dialect) {
   std::vector<GcodeMove> moves;
   double scale = 1.0;
   bool inverse_time = false;
@@ -23,6 +49,24 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     std::string ln = text.substr(pos, end - pos);
     pos = end + 1;
     ++line_no;
+    if (dialect == GcodeDialect::Siemens) {
+      ln = without_keywords(ln, {"TRAORI", "ORIAXES", "TRAFOOF"});
+    } else if (dialect == GcodeDialect::Heidenhain) {
+      // Program begin and end blocks (%NAME G71 *), and the block end "*".
+      if (ln.find('%') != std::string::npos) {
+        const std::size_t unit = ln.find("G7");
+        if (unit != std::string::npos && unit + 2 < ln.size()) {
+          scale = ln[unit + 2] == '0' ? kMmPerInch : 1.0;
+        }
+        if (end == text.size()) break;
+        continue;
+      }
+      const std::size_t star = ln.rfind('*');
+      const std::size_t semi = ln.find(';');
+      if (star != std::string::npos && (semi == std::string::npos || star < semi)) {
+        ln.erase(star, 1);
+      }
+    }
     // Remove comments.
     std::string code;
     int depth = 0;
@@ -62,19 +106,22 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       switch (letter) {
         case 'G': {
           const int gv = static_cast<int>(std::lround(v * 10));
+          const bool iso_units =
+              dialect == GcodeDialect::LinuxCNC || dialect == GcodeDialect::Fanuc;
           if (gv == 0)
             motion = 0;
           else if (gv == 10)
             motion = 1;
-          else if (gv == 200)
-            scale = kMmPerInch;
-          else if (gv == 210)
-            scale = 1.0;
+          else if (iso_units && (gv == 200 || gv == 210))
+            scale = gv == 200 ? kMmPerInch : 1.0;
+          else if (dialect == GcodeDialect::Siemens && (gv == 7000 || gv == 7100))
+            scale = gv == 7000 ? kMmPerInch : 1.0;
           else if (gv == 930)
             inverse_time = true;
           else if (gv == 940)
             inverse_time = false;
           else if (gv == 900 || gv == 170 || gv == 400 || gv == 490 || gv == 800) {
+          } else if (dialect == GcodeDialect::Fanuc && (gv == 434 || gv == 430)) {
           } else {
             throw InputError(source, line_no,
                              "G" + std::to_string(v) + " is outside taxopt's subset");
@@ -106,6 +153,18 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
         case 'T':
         case 'S':
         case 'N': break;
+        case 'H':
+        case 'O':
+          if (dialect != GcodeDialect::Fanuc) {
+            throw InputError(source, line_no,
+                             std::string("word '") + letter + "' is outside taxopt's subset");
+          }
+          break;
+        case 'D':
+          if (dialect != GcodeDialect::Siemens) {
+            throw InputError(source, line_no, "word 'D' is outside taxopt's subset");
+          }
+          break;
         default:
           throw InputError(source, line_no,
                            std::string("word '") + letter + "' is outside taxopt's subset");

@@ -25,8 +25,9 @@ std::string fmt(double v, int decimals) {
 /// The value a reader gets back from fmt(v, decimals).
 double round_to(double v, int decimals) { return std::strtod(fmt(v, decimals).c_str(), nullptr); }
 
-/// A LinuxCNC comment cannot hold parentheses or line breaks.
-std::string comment(const std::string& text) {
+/// Comment text for a controller: no parentheses (they close a LinuxCNC or Fanuc comment),
+/// no line breaks.
+std::string comment_text(const std::string& text) {
   std::string s;
   for (char c : text) {
     if (c == '(') {
@@ -39,8 +40,108 @@ std::string comment(const std::string& text) {
       s += c;
     }
   }
-  return "(" + s + ")";
+  return s;
 }
+
+/// How one controller dialect writes a program (docs/gcode-dialects.md).
+class Dialect {
+ public:
+  Dialect(GcodeDialect d, LengthUnit units) : d_(d), inch_(units == LengthUnit::Inch) {}
+
+  /// A block as written: Heidenhain ISO numbers blocks and ends them with " *".
+  std::string block(const std::string& words) {
+    if (d_ != GcodeDialect::Heidenhain) return words;
+    block_no_ += 10;
+    return "N" + std::to_string(block_no_) + " " + words + " *";
+  }
+  std::string comment(const std::string& text) {
+    switch (d_) {
+      case GcodeDialect::LinuxCNC:
+      case GcodeDialect::Fanuc: return "(" + comment_text(text) + ")";
+      case GcodeDialect::Siemens: return "; " + comment_text(text);
+      case GcodeDialect::Heidenhain: return block("; " + comment_text(text));
+    }
+    return {};
+  }
+  /// Lines before the comments: the program start.
+  std::vector<std::string> start() const {
+    switch (d_) {
+      case GcodeDialect::Fanuc: return {"%", "O1000 (TAXOPT)"};
+      case GcodeDialect::Heidenhain:
+        return {std::string("%TAXOPT ") + (inch_ ? "G70" : "G71") + " *"};
+      default: return {};
+    }
+  }
+  /// The modal set-up block (units, absolute, plane, feed mode).
+  std::string setup(bool inverse_time) const {
+    const std::string feed = inverse_time ? "G93" : "G94";
+    switch (d_) {
+      case GcodeDialect::LinuxCNC:
+      case GcodeDialect::Fanuc:
+        return std::string(inch_ ? "G20" : "G21") + " G90 G17 G40 G49 G80 " + feed;
+      case GcodeDialect::Siemens:  // G700/G710: feeds in the program's units too
+        return std::string(inch_ ? "G700" : "G710") + " G90 G17 G40 " + feed;
+      case GcodeDialect::Heidenhain: return "G17 G90 G40";  // units in the first block
+    }
+    return {};
+  }
+  std::vector<std::string> tool_change(int tool) const {
+    const std::string t = "T" + std::to_string(tool);
+    switch (d_) {
+      case GcodeDialect::Siemens: return {t + " D1 M6"};
+      case GcodeDialect::Heidenhain: return {t + " G17"};
+      default: return {t + " M6"};
+    }
+  }
+  /// Tool centre point control on (tcp mode): blocks before an operation's first move.
+  std::vector<std::string> tcp_on(bool tcp) const {
+    if (!tcp) return {};
+    switch (d_) {
+      case GcodeDialect::Siemens: return {"TRAORI", "ORIAXES"};  // rotary axes linear
+      case GcodeDialect::Heidenhain: return {"M128"};
+      default: return {};
+    }
+  }
+  /// Fanuc starts tool centre point control (G43.4, or plain tool length compensation G43 in
+  /// machine mode) on the operation's first motion block, with the tool's offset number.
+  std::string first_move_prefix(bool tcp, int tool) const {
+    if (d_ != GcodeDialect::Fanuc) return {};
+    return std::string(tcp ? "G43.4" : "G43") + " H" + std::to_string(std::max(tool, 1)) + " ";
+  }
+  std::vector<std::string> tcp_off(bool tcp) const {
+    switch (d_) {
+      case GcodeDialect::Fanuc: return {"G49"};
+      case GcodeDialect::Siemens:
+        return tcp ? std::vector<std::string>{"TRAFOOF"} : std::vector<std::string>{};
+      case GcodeDialect::Heidenhain:
+        return tcp ? std::vector<std::string>{"M129"} : std::vector<std::string>{};
+      default: return {};
+    }
+  }
+  std::string rapid() const { return d_ == GcodeDialect::Heidenhain ? "G00" : "G0"; }
+  std::string linear() const { return d_ == GcodeDialect::Heidenhain ? "G01" : "G1"; }
+  std::string end() const { return d_ == GcodeDialect::LinuxCNC ? "M2" : "M30"; }
+  std::vector<std::string> finish() const {
+    switch (d_) {
+      case GcodeDialect::Fanuc: return {"%"};
+      case GcodeDialect::Heidenhain:
+        return {std::string("N99999999 %TAXOPT ") + (inch_ ? "G70" : "G71") + " *"};
+      default: return {};
+    }
+  }
+  /// Fanuc reads a number without a decimal point in least input increments: "10" is
+  /// 0.010 mm. Every coordinate gets its point.
+  std::string number(double v, int decimals) const {
+    std::string s = fmt(v, decimals);
+    if (d_ == GcodeDialect::Fanuc && s.find('.') == std::string::npos) s += '.';
+    return s;
+  }
+
+ private:
+  GcodeDialect d_;
+  bool inch_;
+  int block_no_ = 0;
+};
 
 }  // namespace
 
@@ -52,16 +153,25 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   const auto rounded = [d](const Vec3d& v) {
     return Vec3d(round_to(v.x(), d), round_to(v.y(), d), round_to(v.z(), d));
   };
+  if (g.dialect == GcodeDialect::Heidenhain && g.feed_mode == FeedMode::InverseTime) {
+    throw std::invalid_argument("write_gcode: the heidenhain dialect has no inverse time (G93)");
+  }
+  Dialect dialect(g.dialect, units);
   GcodeProgram prog;
   int line_no = 0;
-  const auto line = [&](const std::string& s) {
+  const auto raw = [&](const std::string& s) {
     prog.text += s;
     prog.text += '\n';
     return ++line_no;
   };
-  for (const auto& c : comments) line(comment(c));
-  line(std::string(units == LengthUnit::Inch ? "G20" : "G21") + " G90 G17 G40 G49 G80 " +
-       (g.feed_mode == FeedMode::InverseTime ? "G93" : "G94"));
+  const auto line = [&](const std::string& s) { return raw(dialect.block(s)); };
+  const auto lines = [&](const std::vector<std::string>& v) {
+    for (const auto& s : v) line(s);
+  };
+  const bool tcp = g.mode == GcodeMode::Tcp;
+  for (const auto& s : dialect.start()) raw(s);
+  for (const auto& c : comments) raw(dialect.comment(c));
+  line(dialect.setup(g.feed_mode == FeedMode::InverseTime));
   int current_tool = -1;
   std::string last_words;
   std::string last_feed;
@@ -69,14 +179,16 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     if (op.poses.size() != op.points.size()) {
       throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
     }
-    line(comment("operation " + op.name));
+    raw(dialect.comment("operation " + op.name));
     if (op.tool.number > 0 && op.tool.number != current_tool) {
-      line("T" + std::to_string(op.tool.number) + " M6");
+      lines(dialect.tool_change(op.tool.number));
       current_tool = op.tool.number;
     }
     if (op.spindle_rpm > 0.0) {
       line("S" + fmt(op.spindle_rpm, 0) + (op.spindle_clockwise ? " M3" : " M4"));
     }
+    lines(dialect.tcp_on(tcp));
+    std::string prefix = dialect.first_move_prefix(tcp, current_tool);
     std::vector<int> emitted(op.points.size(), 0);
     last_words.clear();
     Vec3d prev_xyz = Vec3d::Zero();
@@ -88,15 +200,16 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       const Posed& pose = op.poses[i];
       const Vec3d xyz =
           g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(p.tip_mm, pose) : p.tip_mm;
-      const std::string words = "X" + fmt(xyz.x() * scale, d) + " Y" + fmt(xyz.y() * scale, d) +
-                                " Z" + fmt(xyz.z() * scale, d) + " A" +
-                                fmt(rad_to_deg(pose.a_rad), d) + " C" +
-                                fmt(rad_to_deg(pose.c_rad), d);
+      const std::string words = "X" + dialect.number(xyz.x() * scale, d) + " Y" +
+                                dialect.number(xyz.y() * scale, d) + " Z" +
+                                dialect.number(xyz.z() * scale, d) + " A" +
+                                dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
+                                dialect.number(rad_to_deg(pose.c_rad), d);
       if (words == last_words) continue;  // nothing would move
       std::string block;
       bool restore_inverse_time = false;
       if (p.motion == Motion::Rapid) {
-        block = "G0 " + words;
+        block = dialect.rapid() + " " + words;
       } else {
         if (!(p.feed_mm_per_min > 0.0)) {
           throw std::invalid_argument("write_gcode: feed move without a feed");
@@ -142,11 +255,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         } else {
           f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
         }
-        block = std::string(restore_inverse_time ? "G94 " : "") + "G1 " + words;
+        block = std::string(restore_inverse_time ? "G94 " : "") + dialect.linear() + " " + words;
         if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;
         last_feed = restore_inverse_time ? std::string() : f;
       }
-      emitted[i] = line(block);
+      emitted[i] = line(prefix + block);
+      prefix.clear();
       if (restore_inverse_time) line("G93");
       last_words = words;
       prev_xyz = xyz;
@@ -155,9 +269,11 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       have_prev = true;
     }
     prog.emitted.push_back(std::move(emitted));
+    lines(dialect.tcp_off(tcp));
     if (op.spindle_rpm > 0.0) line("M5");
   }
-  line("M2");
+  line(dialect.end());
+  for (const auto& s : dialect.finish()) raw(s);
   return prog;
 }
 

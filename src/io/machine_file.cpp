@@ -60,9 +60,16 @@ class MachineParser {
       check_keys(*g, "gcode", {"dialect", "mode", "feed_mode", "decimals"});
       if (auto* n = g->get("dialect")) {
         const std::string d = string_of(*n, "gcode.dialect");
-        if (d != "linuxcnc") {
+        bool known = false;
+        for (GcodeDialect v : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
+                               GcodeDialect::Heidenhain}) {
+          if (d == to_string(v)) m.gcode.dialect = v, known = true;
+        }
+        if (!known) {
           fail(line_of(*n),
-               "gcode.dialect '" + d + "' is not supported in this version (linuxcnc)");
+               "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\" or \"heidenhain\", got "
+               "'" +
+                   d + "'");
         }
       }
       if (auto* n = g->get("mode")) {
@@ -85,6 +92,12 @@ class MachineParser {
           fail(line_of(*n),
                "gcode.feed_mode must be \"units-per-minute\" or \"inverse-time\", got '" + v + "'");
         }
+      }
+      if (m.gcode.dialect == GcodeDialect::Heidenhain &&
+          m.gcode.feed_mode == FeedMode::InverseTime) {
+        fail(line_of(*g->get("feed_mode")),
+             "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
+             "mode has no G93); use \"units-per-minute\"");
       }
       if (auto* n = g->get("decimals")) {
         // Test the type first: toml++'s value<int64_t>() converts a float, with undefined
@@ -205,6 +218,16 @@ class MachineParser {
 };
 
 }  // namespace
+
+const char* to_string(GcodeDialect dialect) {
+  switch (dialect) {
+    case GcodeDialect::LinuxCNC: return "linuxcnc";
+    case GcodeDialect::Fanuc: return "fanuc";
+    case GcodeDialect::Siemens: return "siemens";
+    case GcodeDialect::Heidenhain: return "heidenhain";
+  }
+  return "?";
+}
 
 Machine default_machine() { return Machine{}; }
 

@@ -1,4 +1,7 @@
 #include <catch2/catch.hpp>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
@@ -35,53 +38,89 @@ PostedOperation simple_op() {
 
 }  // namespace
 
-TEST_CASE("gcode: what is written reads back as the same tips and axes", "[io][gcode]") {
-  for (GcodeMode mode : {GcodeMode::Tcp, GcodeMode::Machine}) {
-    for (FeedMode fm : {FeedMode::UnitsPerMinute, FeedMode::InverseTime}) {
-      for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
-        Machine m = default_machine();
-        m.gcode.mode = mode;
-        m.gcode.feed_mode = fm;
-        m.gcode.decimals = 5;
-        m.ac.c_axis_point_mm = Vec3d(20, 5, 0);
-        m.ac.a_axis_point_mm = Vec3d(0, -3, 40);
-        const PostedOperation op = simple_op();
-        const GcodeProgram prog = write_gcode({op}, m, u, {"test"});
-        const auto moves = read_gcode_moves(prog.text, "t.ngc");
-        REQUIRE(moves.size() == op.points.size());
-        for (std::size_t i = 0; i < moves.size(); ++i) {
-          const Posed pose{deg_to_rad(moves[i].a_deg), deg_to_rad(moves[i].c_deg)};
-          const Vec3d tip = mode == GcodeMode::Machine ? m.ac.from_machine_mm(moves[i].xyz_mm, pose)
-                                                       : moves[i].xyz_mm;
-          CHECK((tip - op.points[i].tip_mm).norm() < 2e-4);
-          CHECK(rad_to_deg(angle_between(m.ac.forward(pose), op.points[i].axis)) < 1e-4);
-          CHECK(moves[i].rapid == (i == 0));
-          CHECK(moves[i].line == prog.emitted[0][i]);
-          if (i > 0) {
-            // The block takes the time of the tip at the programmed feed.
-            const double tip_mm = (op.points[i].tip_mm - op.points[i - 1].tip_mm).norm();
-            const double want_min = tip_mm / 600.0;
-            const double f = moves[i].feed;
-            double got_min;
-            if (fm == FeedMode::InverseTime) {
-              got_min = 1.0 / f;
-            } else if (mode == GcodeMode::Machine) {
-              const Posed prev{deg_to_rad(moves[i - 1].a_deg), deg_to_rad(moves[i - 1].c_deg)};
-              (void)prev;
-              got_min = (moves[i].xyz_mm - moves[i - 1].xyz_mm).norm() / mm_per_unit(u) / f;
-            } else {
-              got_min = tip_mm / mm_per_unit(u) / f;
+TEST_CASE("gcode: what is written reads back as the same tips and axes, in every dialect",
+          "[io][gcode]") {
+  for (GcodeDialect dialect : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
+                               GcodeDialect::Heidenhain}) {
+    for (GcodeMode mode : {GcodeMode::Tcp, GcodeMode::Machine}) {
+      for (FeedMode fm : {FeedMode::UnitsPerMinute, FeedMode::InverseTime}) {
+        if (dialect == GcodeDialect::Heidenhain && fm == FeedMode::InverseTime) continue;
+        for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
+          INFO(to_string(dialect));
+          Machine m = default_machine();
+          m.gcode.dialect = dialect;
+          m.gcode.mode = mode;
+          m.gcode.feed_mode = fm;
+          m.gcode.decimals = 5;
+          m.ac.c_axis_point_mm = Vec3d(20, 5, 0);
+          m.ac.a_axis_point_mm = Vec3d(0, -3, 40);
+          const PostedOperation op = simple_op();
+          const GcodeProgram prog = write_gcode({op}, m, u, {"test"});
+          const auto moves = read_gcode_moves(prog.text, "t.ngc", dialect);
+          REQUIRE(moves.size() == op.points.size());
+          for (std::size_t i = 0; i < moves.size(); ++i) {
+            const Posed pose{deg_to_rad(moves[i].a_deg), deg_to_rad(moves[i].c_deg)};
+            const Vec3d tip = mode == GcodeMode::Machine
+                                  ? m.ac.from_machine_mm(moves[i].xyz_mm, pose)
+                                  : moves[i].xyz_mm;
+            CHECK((tip - op.points[i].tip_mm).norm() < 2e-4);
+            CHECK(rad_to_deg(angle_between(m.ac.forward(pose), op.points[i].axis)) < 1e-4);
+            CHECK(moves[i].rapid == (i == 0));
+            CHECK(moves[i].line == prog.emitted[0][i]);
+            if (i > 0) {
+              // The block takes the time of the tip at the programmed feed.
+              const double tip_mm = (op.points[i].tip_mm - op.points[i - 1].tip_mm).norm();
+              const double want_min = tip_mm / 600.0;
+              const double f = moves[i].feed;
+              double got_min;
+              if (fm == FeedMode::InverseTime) {
+                got_min = 1.0 / f;
+              } else if (mode == GcodeMode::Machine) {
+                const Posed prev{deg_to_rad(moves[i - 1].a_deg), deg_to_rad(moves[i - 1].c_deg)};
+                (void)prev;
+                got_min = (moves[i].xyz_mm - moves[i - 1].xyz_mm).norm() / mm_per_unit(u) / f;
+              } else {
+                got_min = tip_mm / mm_per_unit(u) / f;
+              }
+              CHECK(got_min == Approx(want_min).epsilon(1e-3));
             }
-            CHECK(got_min == Approx(want_min).epsilon(1e-3));
           }
+          const bool iso = dialect == GcodeDialect::LinuxCNC || dialect == GcodeDialect::Fanuc;
+          const char* unit_word = iso ? (u == LengthUnit::Inch ? "G20" : "G21")
+                                  : dialect == GcodeDialect::Siemens
+                                      ? (u == LengthUnit::Inch ? "G700" : "G710")
+                                      : (u == LengthUnit::Inch ? "G70 *" : "G71 *");
+          CHECK(prog.text.find(unit_word) != std::string::npos);
+          CHECK(prog.text.find("-0.00000") == std::string::npos);
+          CHECK(prog.text.find("operation op [1]") != std::string::npos);
+          CHECK(prog.text.find("T3") != std::string::npos);
         }
-        CHECK(prog.text.find(u == LengthUnit::Inch ? "G20" : "G21") != std::string::npos);
-        CHECK(prog.text.find("-0.00000") == std::string::npos);
-        CHECK(prog.text.find("(operation op [1])") != std::string::npos);
-        CHECK(prog.text.find("T3 M6") != std::string::npos);
       }
     }
   }
+}
+
+TEST_CASE("gcode: each dialect reads only its own program", "[io][gcode][bad-input]") {
+  PostedOperation op = simple_op();
+  for (GcodeDialect writer :
+       {GcodeDialect::Fanuc, GcodeDialect::Siemens, GcodeDialect::Heidenhain}) {
+    Machine m = default_machine();
+    m.gcode.dialect = writer;
+    const std::string text = write_gcode({op}, m, LengthUnit::Millimetre, {}).text;
+    // LinuxCNC's subset has no G43.4, TRAORI, N..* blocks: its reader refuses them.
+    CHECK_THROWS_AS(read_gcode_moves(text, "t"), InputError);
+  }
+  // Fanuc reads a coordinate without a decimal point in least increments: always a point.
+  Machine fanuc = default_machine();
+  fanuc.gcode.dialect = GcodeDialect::Fanuc;
+  fanuc.gcode.decimals = 0;
+  const std::string text = write_gcode({op}, fanuc, LengthUnit::Millimetre, {}).text;
+  CHECK(text.find("X10. ") != std::string::npos);
+  // Heidenhain without G93.
+  Machine heidenhain = default_machine();
+  heidenhain.gcode.dialect = GcodeDialect::Heidenhain;
+  heidenhain.gcode.feed_mode = FeedMode::InverseTime;
+  CHECK_THROWS_AS(write_gcode({op}, heidenhain, LengthUnit::Millimetre, {}), std::invalid_argument);
 }
 
 TEST_CASE("gcode: a block that moves nothing is not written", "[io][gcode]") {
@@ -99,4 +138,66 @@ TEST_CASE("gcode: the reader rejects what taxopt never writes", "[io][gcode][bad
   CHECK_THROWS_AS(read_gcode_moves("G1 X1..2\n", "t"), InputError);
   CHECK_THROWS_AS(read_gcode_moves("(open\nG1 X1\n", "t"), InputError);
   CHECK_THROWS_AS(read_gcode_moves("X1 Y2\n", "t"), InputError);
+}
+
+namespace {
+
+/// Compares `text` with the golden file tests/data/golden/`name`; TAXOPT_UPDATE_GOLDEN=1
+/// writes it instead (then review the diff before committing).
+void check_golden(const std::string& name, const std::string& text) {
+  const std::string path = std::string(TAXOPT_TEST_DATA) + "/golden/" + name;
+  if (std::getenv("TAXOPT_UPDATE_GOLDEN")) {
+    std::ofstream(path, std::ios::binary) << text;
+  }
+  std::ifstream in(path, std::ios::binary);
+  REQUIRE(in);
+  const std::string want((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK(text == want);
+}
+
+}  // namespace
+
+TEST_CASE("gcode: golden programs of each dialect, mode and feed mode", "[io][gcode][golden]") {
+  struct Case {
+    const char* file;
+    GcodeDialect dialect;
+    GcodeMode mode;
+    FeedMode feed;
+    LengthUnit units;
+    bool scheduled;
+  };
+  const Case cases[] = {
+      {"linuxcnc-tcp-g94.ngc", GcodeDialect::LinuxCNC, GcodeMode::Tcp, FeedMode::UnitsPerMinute,
+       LengthUnit::Millimetre, false},
+      {"linuxcnc-machine-g93-scheduled.ngc", GcodeDialect::LinuxCNC, GcodeMode::Machine,
+       FeedMode::InverseTime, LengthUnit::Millimetre, true},
+      {"fanuc-tcp-g94.nc", GcodeDialect::Fanuc, GcodeMode::Tcp, FeedMode::UnitsPerMinute,
+       LengthUnit::Millimetre, false},
+      {"fanuc-machine-g93-inch.nc", GcodeDialect::Fanuc, GcodeMode::Machine, FeedMode::InverseTime,
+       LengthUnit::Inch, false},
+      {"siemens-tcp-g94-scheduled.mpf", GcodeDialect::Siemens, GcodeMode::Tcp,
+       FeedMode::UnitsPerMinute, LengthUnit::Millimetre, true},
+      {"siemens-machine-g93.mpf", GcodeDialect::Siemens, GcodeMode::Machine, FeedMode::InverseTime,
+       LengthUnit::Millimetre, false},
+      {"heidenhain-tcp-g94.i", GcodeDialect::Heidenhain, GcodeMode::Tcp, FeedMode::UnitsPerMinute,
+       LengthUnit::Millimetre, false},
+      {"heidenhain-machine-g94-inch.i", GcodeDialect::Heidenhain, GcodeMode::Machine,
+       FeedMode::UnitsPerMinute, LengthUnit::Inch, false},
+  };
+  for (const Case& c : cases) {
+    INFO(c.file);
+    Machine m = default_machine();
+    m.name = "golden";
+    m.gcode.dialect = c.dialect;
+    m.gcode.mode = c.mode;
+    m.gcode.feed_mode = c.feed;
+    m.ac.c_axis_point_mm = Vec3d(20, 5, 0);
+    m.ac.a_axis_point_mm = Vec3d(0, -3, 40);
+    PostedOperation op = simple_op();
+    if (c.scheduled) op.block_time_s = {0.0, 1.5, 2.25, 3.0, 4.0};  // slower than programmed
+    const GcodeProgram prog = write_gcode({op}, m, c.units, {"golden " + std::string(c.file)});
+    check_golden(c.file, prog.text);
+    // And it reads back with the dialect's reader, point for point.
+    CHECK(read_gcode_moves(prog.text, c.file, c.dialect).size() == op.points.size());
+  }
 }

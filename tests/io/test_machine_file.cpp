@@ -110,7 +110,14 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
                "min_deg must be less than max_deg");
   expect_error(replace(kFull, "sense = -1", "sense = 2"), 13, "sense must be 1 or -1");
   expect_error(replace(kFull, "decimals = 5", "decimals = 9"), 27, "decimals");
-  expect_error(replace(kFull, "\"linuxcnc\"", "\"fanuc\""), 24, "not supported");
+  expect_error(replace(kFull, "\"linuxcnc\"", "\"mazatrol\""), 24,
+               "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\" or \"heidenhain\"");
+  // Heidenhain's ISO mode has no G93: refused where the file asks for both.
+  expect_error(replace(kFull, "\"linuxcnc\"", "\"heidenhain\""), 26, "no G93");
+  for (const char* d : {"linuxcnc", "fanuc", "siemens"}) {
+    const Machine m = parse_machine_toml(replace(kFull, "linuxcnc", d), "m.toml");
+    CHECK(std::string(to_string(m.gcode.dialect)) == d);
+  }
   expect_error(replace(kFull, "mode = \"machine\"", "mode = \"head\""), 25, "tcp");
   expect_error(replace(kFull, "min_deg = -120.0", "min_deg = \"low\""), 5, "must be a number");
   expect_error(replace(kFull, "[axes.C]\ncontinuous = true\n", "[axes.C]\n"), 11,

@@ -54,8 +54,11 @@ struct GcodeMove {
 /// only A and C move; under G93 one over F minutes.
 double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units);
 
-/// Reads the motion blocks of G-code in the subset taxopt writes (G0/G1, G20/G21, G90,
-/// G93/G94, X Y Z A C F, comments). @throws InputError on anything outside it.
-std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source);
+/// Reads the motion blocks of G-code in the subset taxopt writes for `dialect` (G0/G1,
+/// G90, G93/G94, X Y Z A C F, comments; units G20/G21, Sinumerik G700/G710, Heidenhain
+/// G70/G71; Fanuc's %, O, G43.4/G43 H, G49; Sinumerik's TRAORI, ORIAXES, TRAFOOF, D; the
+/// Heidenhain ISO program blocks, N numbers and "*"). @throws InputError on anything outside.
+std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
+                                        GcodeDialect dialect = GcodeDialect::LinuxCNC);
 
 }  // namespace taxopt

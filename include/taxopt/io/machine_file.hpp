@@ -9,8 +9,12 @@
 
 namespace taxopt {
 
-/// Controller dialect of the G-code. Only LinuxCNC is written in this version.
-enum class GcodeDialect { LinuxCNC };
+/// Controller dialect of the G-code (docs/gcode-dialects.md): LinuxCNC (rs274-checked),
+/// Fanuc 30i/31i-B5 (G43.4), Siemens Sinumerik 840D (TRAORI), Heidenhain TNC in ISO mode
+/// (M128).
+enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain };
+/// "linuxcnc", "fanuc", "siemens", "heidenhain".
+const char* to_string(GcodeDialect dialect);
 /// tcp: X Y Z are the tool tip in workpiece coordinates (the controller does TCP);
 /// machine: X Y Z are the joint positions after the table rotation (CLI.md convention).
 enum class GcodeMode { Tcp, Machine };

@@ -20,6 +20,8 @@ cmake -S examples/consumer -B build/consumer -G Ninja -DCMAKE_PREFIX_PATH="$pref
 cmake --build build/consumer
 ./build/consumer/taxopt_consumer tests/data/real/mech491-variable-axis-ballmill.cls build/consumer/out.ngc
 rs274 -g build/consumer/out.ngc > build/consumer/rs274.log
+./build/consumer/taxopt_consumer data/demo/sine.cls data/demo/sine.stl build/consumer/demo.ngc
+rs274 -g build/consumer/demo.ngc > build/consumer/rs274-demo.log
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
 cmake --preset asan

@@ -14,6 +14,7 @@
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
 #include "util/parallel_select.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt {
 namespace {
@@ -208,6 +209,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
     }
   }
   sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
+  sum.feed_path_mm = path_mm;
   double most = 0.0;
   for (std::size_t j = 0; j < kJointCount; ++j) {
     for (const auto& [share, kind] : {std::pair<double, const char*>{by_velocity[j], "velocity"},
@@ -226,12 +228,15 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
 /// ball centres). In parallel; the result is sorted, whatever the thread count.
 std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
                                           const Operationd& op, const std::vector<Vec3d>& axes,
-                                          const std::vector<ContactPoint>& contacts) {
+                                          const std::vector<ContactPoint>& contacts,
+                                          detail::StageProgress* progress = nullptr) {
   const double R = tool.ball_radius_mm;
   return detail::parallel_select(0, op.points.size(), [&](std::size_t i) {
     const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
     const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
-    return model.collides(tool, centre, axes[i], in_air);
+    const bool hit = model.collides(tool, centre, axes[i], in_air);
+    if (progress) progress->advance();
+    return hit;
   });
 }
 
@@ -244,9 +249,16 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
                                          const Machine& machine, const std::vector<Vec3d>& xyz_w,
                                          const std::vector<double>& a_deg,
                                          const std::vector<double>& c_deg,
-                                         const std::vector<ContactPoint>& contacts) {
+                                         const std::vector<ContactPoint>& contacts,
+                                         detail::StageProgress* progress = nullptr) {
   const double R = tool.ball_radius_mm;
   return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
+    struct Advance {  // on every return of this move's check
+      detail::StageProgress* p;
+      ~Advance() {
+        if (p) p->advance();
+      }
+    } advance{progress};
     const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
     const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
     const int steps = static_cast<int>(
@@ -291,8 +303,8 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
                                   double ball_radius_mm, const CollisionModel* model,
                                   const ToolModel* tool, const Machine& machine,
                                   const std::vector<double>& metric_feed,
-                                  const PosePlanOptions& pose_options,
-                                  const PaperOptions& options) {
+                                  const PosePlanOptions& pose_options, const PaperOptions& options,
+                                  detail::StageProgress& progress) {
   OptimisedOperation out;
   for (const CLPointd& p : op.points) out.axes.push_back(p.axis);
   const std::vector<IndexRange> passes = feed_passes(op);
@@ -354,6 +366,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       pole_stretches[q] = pole.stretches;
     }
     plans[q] = std::move(plan);
+    progress.advance();
   });
   for (std::size_t q = 0; q < passes.size(); ++q) {
     const PassPlan& plan = plans[q];
@@ -588,9 +601,14 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   std::vector<ContactSummary> contact_summaries(tp.operations.size());
   std::vector<double> cspace_time(tp.operations.size(), 0.0);
   if (options.part) {
+    detail::StageProgress progress(options.progress, "contact recovery", tp.operations.size());
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
       const Operationd& op = tp.operations[k];
       const auto t0 = Clock::now();
+      struct Advance {  // on every way out of this operation
+        detail::StageProgress& p;
+        ~Advance() { p.advance(); }
+      } advance{progress};
       const double ball_r = options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
       if (!(ball_r > 0.0)) {
         res.warnings.push_back("operation " + op.name +
@@ -645,6 +663,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           "to --max-deviation (" +
           std::to_string(options.paper.max_deviation_deg) + " deg) from the input axes");
     }
+    std::size_t all_passes = 0;
+    for (const Operationd& op : tp.operations) all_passes += feed_passes(op).size();
+    detail::StageProgress progress(options.progress, "optimisation", all_passes);
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
       const Operationd& op = tp.operations[k];
       const double R = ball_radius_mm(op, options);
@@ -660,7 +681,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const std::vector<double> metric_feed = metric_feeds_of(op, options, fallback_feed);
       optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
                                     tool ? &*tool : nullptr, machine, metric_feed,
-                                    options.pose_options, options.paper);
+                                    options.pose_options, options.paper, progress);
       const std::size_t reverted = guard_passes(
           op, contacts[k], R, collision ? &*collision : nullptr, tool ? &*tool : nullptr, machine,
           metric_feed, options.pose_options, *optimised[k]);
@@ -828,6 +849,15 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   if ((options.count_free_cells || options.cspace_maps) && options.part) {
     rasteriser.emplace(options.part->mesh());
   }
+  // Progress of the checks: per point, its pose before and after and the move into it, and
+  // its C-space cells.
+  std::size_t check_items = 0;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const std::size_t n = tp.operations[k].points.size();
+    if (collision && contact_summaries[k].recovered) check_items += 3 * n;
+    if (rasteriser && !contacts[k].empty()) check_items += n;
+  }
+  detail::StageProgress checking(options.progress, "verification", check_items);
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     const Operationd& op = tp.operations[k];
@@ -933,10 +963,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         in_axes.push_back(op.points[i].axis);
         out_axes.push_back(po.points[i].axis);
       }
-      const auto before = colliding_points(*collision, tool, op, in_axes, contacts[k]);
-      const auto after = in_axes == out_axes
-                             ? before
-                             : colliding_points(*collision, tool, op, out_axes, contacts[k]);
+      const auto before = colliding_points(*collision, tool, op, in_axes, contacts[k], &checking);
+      if (in_axes == out_axes) checking.advance(op.points.size());
+      const auto after = in_axes == out_axes ? before
+                                             : colliding_points(*collision, tool, op, out_axes,
+                                                                contacts[k], &checking);
       r.colliding_before = static_cast<long>(before.size());
       r.colliding_after = static_cast<long>(after.size());
       r.verification.collision_free = after.empty();
@@ -954,7 +985,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                 lines));
       }
       const auto moves_hit =
-          colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k]);
+          colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k], &checking);
       r.verification.colliding_moves = static_cast<long>(moves_hit.size());
       if (!moves_hit.empty()) {
         r.verification.collision_free = false;
@@ -990,6 +1021,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         cs.max_deviation_deg = options.paper.max_deviation_deg;
         tbb::parallel_for(std::size_t(0), op.points.size(), [&](std::size_t i) {
           const ContactPoint& c = contacts[k][i];
+          checking.advance();
           if (c.state != ContactState::Touching) return;
           const CSpaceGrid g = rasteriser->free_axes(tool, c, reference_point(op.points[i], R),
                                                      op.points[i].axis, cs);
@@ -1044,10 +1076,12 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     r.feed_after = schedule_after[k].summary;
     r.feed_before = schedule_before[k].summary;
     if (optimised[k] && r.feed_after.cycle_time_s > r.feed_before.cycle_time_s * (1.0 + 1e-9)) {
-      res.warnings.push_back("operation " + op.name +
-                             ": at the machine's limits the new axes take " +
-                             std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
-                             std::to_string(r.feed_before.cycle_time_s) + " s");
+      res.warnings.push_back(
+          "operation " + op.name + ": at the machine's limits the new axes take " +
+          std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
+          std::to_string(r.feed_before.cycle_time_s) + " s (tip path of the feed moves " +
+          std::to_string(r.feed_after.feed_path_mm) + " mm against " +
+          std::to_string(r.feed_before.feed_path_mm) + " mm: the programmed feed applies to it)");
     }
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       r.rows[i].feed_mm_min = schedule_after[k].feed_mm_min[i];

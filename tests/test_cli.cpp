@@ -473,3 +473,22 @@ TEST_CASE("cli: the machine file's dialect picks the controller's program format
     CHECK_THAT(read_file(t.path("o.nc")), Catch::Contains(tcp_word));
   }
 }
+
+TEST_CASE("cli: -v tells each long stage's time, -q says nothing", "[cli]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  const std::string args =
+      "--in " + d + "sine.cls --part " + d + "sine.stl --gauge-length 15 --gcode " + t.path("o.nc");
+  auto r = run_taxopt(args + " -v");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* stage : {"contact recovery", "optimisation", "verification"}) {
+    CHECK_THAT(r.err, Catch::Contains(std::string("taxopt: ") + stage + ": "));
+  }
+  // Not a terminal: no bar.
+  CHECK(r.err.find('\r') == std::string::npos);
+  r = run_taxopt(args + " -q");
+  REQUIRE(r.code == 0);
+  CHECK(r.err.empty());
+  CHECK(r.out.empty());
+}

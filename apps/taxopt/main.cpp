@@ -1,7 +1,9 @@
 // taxopt command line: option parsing and wiring only (CLI.md is the contract).
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -46,6 +48,34 @@ std::optional<taxopt::LengthUnit> parse_unit(const std::string& s, const char* o
   if (s == "in") return taxopt::LengthUnit::Inch;
   throw taxopt::InputError(std::string(option) + " expects 'in' or 'mm', got '" + s + "'");
 }
+
+/// Progress on stderr: a bar for each long stage when stderr is a terminal, and with -v the
+/// time each stage took. Never on stdout (scripts read the summary table there).
+class ProgressPrinter {
+ public:
+  ProgressPrinter(bool bar, bool timings) : bar_(bar), timings_(timings) {}
+  void operator()(const std::string& stage, std::size_t done, std::size_t total) {
+    if (total == 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (stage != stage_ || done == 0) stage_ = stage, start_ = now;
+    if (bar_) {
+      const std::size_t width = 30, filled = width * done / total;
+      std::fprintf(stderr, "\r%-18s [%s%s] %3zu%%", stage.c_str(), std::string(filled, '#').c_str(),
+                   std::string(width - filled, ' ').c_str(), 100 * done / total);
+      if (done == total) std::fputc('\n', stderr);
+      std::fflush(stderr);
+    }
+    if (timings_ && done == total) {
+      std::fprintf(stderr, "taxopt: %s: %.2f s\n", stage.c_str(),
+                   std::chrono::duration<double>(now - start_).count());
+    }
+  }
+
+ private:
+  bool bar_, timings_;
+  std::string stage_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 /// "before -> after (-x %)".
 std::string before_after(double before, double after, const char* format) {
@@ -337,6 +367,12 @@ int main(int argc, char** argv) {
     options.count_free_cells = !a.points_csv.empty();
     options.cspace_maps = !a.plots.empty();
     options.feed_schedule = a.feed_schedule;
+    ProgressPrinter printer(!a.quiet && isatty(STDERR_FILENO), !a.quiet && a.verbose > 0);
+    if (!a.quiet) {
+      options.progress = [&printer](const std::string& stage, std::size_t done, std::size_t total) {
+        printer(stage, done, total);
+      };
+    }
     {
       // Tool dimensions are in the CL file's units.
       const double u = taxopt::mm_per_unit(toolpath.units);

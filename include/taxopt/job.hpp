@@ -56,6 +56,10 @@ struct JobOptions {
   bool feed_schedule = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
+  /// Receives the progress of the long stages ("contact recovery", "optimisation",
+  /// "collision check", "C-space cells"): items done of total, from 0 and once per whole
+  /// percent up to done == total. Called from any thread, never concurrently.
+  std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
 };
 
 /// What run_job proved about its output.
@@ -132,6 +136,9 @@ struct FeedSummary {
   double feed_limited_fraction = 0.0;
   /// Lowest scheduled feed, mm/min (0 when there is no feed move).
   double min_feed_mm_min = 0.0;
+  /// Length of the feed moves' tip path, mm: the programmed feed applies to it, so new axes
+  /// that swing the tip more lengthen the cycle even where no limit binds.
+  double feed_path_mm = 0.0;
   /// The joint ("X" ... "C") whose limits hold the feed down over the longest path, and
   /// whether its velocity or acceleration does; empty when the programmed feed holds.
   std::string limiting_axis, limiting_kind;

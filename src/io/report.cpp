@@ -20,6 +20,7 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSu
   j["cycle_time_s"] = f.cycle_time_s;
   j["feed_limited_fraction"] = f.feed_limited_fraction;
   j["min_feed_mm_min"] = f.min_feed_mm_min;
+  j["feed_path_mm"] = f.feed_path_mm;
   j["limiting_axis"] =
       f.limiting_axis.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.limiting_axis);
   j["limiting_kind"] =

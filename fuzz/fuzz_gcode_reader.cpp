@@ -1,4 +1,4 @@
-// Any input: moves or an InputError, nothing else.
+// Any input, in each dialect's reader: moves or an InputError, nothing else.
 #include <cstdint>
 #include <string>
 
@@ -6,9 +6,13 @@
 #include "taxopt/io/gcode.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  try {
-    taxopt::read_gcode_moves(std::string(reinterpret_cast<const char*>(data), size), "fuzz.ngc");
-  } catch (const taxopt::InputError&) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  for (taxopt::GcodeDialect d : {taxopt::GcodeDialect::LinuxCNC, taxopt::GcodeDialect::Fanuc,
+                                 taxopt::GcodeDialect::Siemens, taxopt::GcodeDialect::Heidenhain}) {
+    try {
+      taxopt::read_gcode_moves(text, "fuzz.ngc", d);
+    } catch (const taxopt::InputError&) {
+    }
   }
   return 0;
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command of the README (and of CI): installs what is missing, builds with warnings
 # as errors, runs the whole test suite, builds the example consumer against the installed
-# package, then runs the suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
+# package, then runs the suite again under AddressSanitizer + UndefinedBehaviorSanitizer and
+# under ThreadSanitizer, and fuzzes the readers for a bounded time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -28,6 +29,11 @@ cmake --preset asan
 cmake --build --preset asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --preset asan -j "$jobs"
+
+echo "== ThreadSanitizer (the parallel loops run on std::threads here: src/util/parallel.hpp)"
+cmake --preset tsan
+cmake --build --preset tsan -j "$jobs"
+TSAN_OPTIONS=halt_on_error=1 ctest --preset tsan -j "$jobs"
 
 echo "== fuzzing (libFuzzer, bounded)"
 bash scripts/fuzz.sh 30

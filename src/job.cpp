@@ -1,7 +1,5 @@
 #include "taxopt/job.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <chrono>
 #include <cmath>
 
@@ -13,6 +11,7 @@
 #include "taxopt/kinematics/feed_schedule.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
+#include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 #include "util/progress.hpp"
 
@@ -321,7 +320,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     if (!model) return true;
     return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
   };
-  tbb::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
+  detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
     const IndexRange pass = passes[q];
     PassProblem problem;
     problem.segment_mm = segment_lengths_mm(op, contacts, R, pass);
@@ -1019,7 +1018,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         // The grid's cell must divide 180 deg: the nearest such to --grid.
         cs.cell_deg = 180.0 / std::max(1.0, std::round(180.0 / options.paper.grid_deg));
         cs.max_deviation_deg = options.paper.max_deviation_deg;
-        tbb::parallel_for(std::size_t(0), op.points.size(), [&](std::size_t i) {
+        detail::parallel_for(std::size_t(0), op.points.size(), [&](std::size_t i) {
           const ContactPoint& c = contacts[k][i];
           checking.advance();
           if (c.state != ContactState::Touching) return;

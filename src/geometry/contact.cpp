@@ -1,6 +1,6 @@
 #include "taxopt/geometry/contact.hpp"
 
-#include <tbb/parallel_for.h>
+#include "util/parallel.hpp"
 
 namespace taxopt {
 
@@ -16,7 +16,7 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
   const std::size_t n = op.points.size();
   std::vector<ContactPoint> out(n);
   // Contact point, normal and curvature per point: independent, so in parallel.
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+  detail::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     const CLPointd& p = op.points[i];
     const Vec3d centre = p.tip_mm + R * p.axis;
     ContactPoint& c = out[i];

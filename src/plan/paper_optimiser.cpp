@@ -1,13 +1,12 @@
 #include "taxopt/plan/paper_optimiser.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <optional>
 
 #include "taxopt/plan/slerp.hpp"
+#include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
 namespace taxopt {
@@ -225,7 +224,7 @@ class PassPlanner {
     if (keys_.size() < 3) return;
     const std::size_t joints = keys_.size() - 2;
     std::vector<char> smoothed(joints, 0);
-    tbb::parallel_for(std::size_t(0), joints, [&](std::size_t q) {
+    detail::parallel_for(std::size_t(0), joints, [&](std::size_t q) {
       const std::size_t j = q + 1;
       const std::size_t ia = keys_[j - 1], ik = keys_[j], ib = keys_[j + 1];
       const Vec3d vk = key_axes_[j];

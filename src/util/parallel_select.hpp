@@ -2,12 +2,11 @@
 /// @file Private helper of the compiled library (not installed): a deterministic parallel
 /// filter over an index range.
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <cstddef>
 #include <vector>
+
+#include "util/parallel.hpp"
 
 namespace taxopt::detail {
 
@@ -16,10 +15,10 @@ namespace taxopt::detail {
 template <class Pred>
 std::vector<std::size_t> parallel_select(std::size_t begin, std::size_t end, const Pred& pred) {
   using List = std::vector<std::size_t>;
-  List hits = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(begin, std::max(begin, end)), List{},
-      [&](const tbb::blocked_range<std::size_t>& range, List acc) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+  List hits = parallel_reduce(
+      begin, end, List{},
+      [&](std::size_t lo, std::size_t hi, List acc) {
+        for (std::size_t i = lo; i != hi; ++i) {
           if (pred(i)) acc.push_back(i);
         }
         return acc;

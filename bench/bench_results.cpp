@@ -1,0 +1,144 @@
+// Results: --method none against --method paper on the bundled demo and on generated sine
+// surfaces (with their parts), and the paper method's runtime as the points grow. Prints the
+// markdown tables of docs/results.md.
+// Run from the source folder: build/release/bench/bench_results [data folder, default data]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "taxopt/geometry/raster_generator.hpp"
+#include "taxopt/geometry/surface.hpp"
+#include "taxopt/geometry/triangle_mesh.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/machine_file.hpp"
+#include "taxopt/io/mesh_file.hpp"
+#include "taxopt/job.hpp"
+
+using namespace taxopt;
+
+namespace {
+
+struct Case {
+  std::string name;
+  Toolpath toolpath;
+  TriangleMesh mesh;
+  Machine machine;
+  ToolOverrides tool;
+};
+
+/// A sine surface (the paper's case with other proportions), its raster passes and its part.
+Case sine_case(const std::string& name, double height_mm, double wavelength_mm, double width_mm,
+               double length_mm, double tilt_deg, double yaw_deg, double feed_mm_min = 250.0) {
+  SineSurfaced sine;
+  sine.height_mm = height_mm;
+  sine.wavelength_mm = wavelength_mm;
+  sine.x1_mm = width_mm;
+  sine.y1_mm = length_mm;
+  RasterOptions raster;
+  raster.tilt_deg = tilt_deg;
+  raster.yaw_deg = yaw_deg;
+  Operationd op;
+  op.name = name;
+  op.tool = Tool::ball_end_mill(6.0, 15.0);
+  op.tool.number = 1;
+  for (const GeneratedPoint& p : generate_raster(sine, raster)) {
+    CLPointd c;
+    c.tip_mm = p.tip_mm;
+    c.axis = p.axis;
+    c.motion = p.rapid ? Motion::Rapid : Motion::Feed;
+    c.feed_mm_per_min = p.rapid ? 0.0 : feed_mm_min;
+    op.points.push_back(c);
+  }
+  SineSurfaced big = sine;
+  const double margin = 12.0;
+  big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
+  Case k;
+  k.name = name;
+  k.toolpath = parse_cl(format_new_cl({op}), name + ".cls");
+  k.mesh = tessellate(big, static_cast<int>((big.x1_mm - big.x0_mm) / 0.5),
+                      static_cast<int>((big.y1_mm - big.y0_mm) / 0.5));
+  k.machine = default_machine();
+  k.tool.gauge_length_mm = 15.0;
+  return k;
+}
+
+struct Row {
+  JobResult result;
+  double seconds = 0.0;
+};
+
+Row run(const Case& k, Method method) {
+  const Part part(k.mesh);
+  JobOptions o;
+  o.method = method;
+  o.part = &part;
+  o.tool = k.tool;
+  const auto t0 = std::chrono::steady_clock::now();
+  Row r;
+  r.result = run_job(k.toolpath, k.machine, o);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string data = argc > 1 ? argv[1] : "data";
+  std::vector<Case> cases;
+  {
+    Case demo;
+    demo.name = "demo (data/demo/sine.cls)";
+    demo.toolpath = read_cl_file(data + "/demo/sine.cls");
+    demo.mesh = read_mesh_file(data + "/demo/sine.stl");
+    demo.machine = read_machine_file(data + "/machines/paper-ac.toml");
+    demo.tool.gauge_length_mm = 15.0;
+    cases.push_back(std::move(demo));
+  }
+  cases.push_back(sine_case("sine h10 tilt15 yaw10", 10.0, 40.0, 20.0, 80.0, 15.0, 10.0));
+  cases.push_back(sine_case("sine h6 tilt5 yaw30", 6.0, 40.0, 20.0, 80.0, 5.0, 30.0));
+  cases.push_back(sine_case("sine h4 wl30 tilt0 yaw5", 4.0, 30.0, 20.0, 60.0, 0.0, 5.0));
+  // The same at a finishing feed of 2000 mm/min, where the machine's limits bind.
+  cases.push_back(
+      sine_case("sine h10 tilt15 yaw10, F2000", 10.0, 40.0, 20.0, 80.0, 15.0, 10.0, 2000.0));
+  cases.push_back(
+      sine_case("sine h6 tilt5 yaw30, F2000", 6.0, 40.0, 20.0, 80.0, 5.0, 30.0, 2000.0));
+  cases.push_back(
+      sine_case("sine h4 wl30 tilt0 yaw5, F2000", 4.0, 30.0, 20.0, 60.0, 0.0, 5.0, 2000.0));
+
+  std::printf("bench_results %s (one run each, all threads)\n\n", data.c_str());
+  std::printf(
+      "| case | method | points | peak ω °/s | RMS a °/s² | peak a °/s² | C jumps | colliding "
+      "points | max dev ° | cycle s | feed-limited | tip path mm | runtime s |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const Case& k : cases) {
+    for (Method m : {Method::None, Method::Paper}) {
+      const Row r = run(k, m);
+      for (const OperationResult& op : r.result.operations) {
+        std::printf(
+            "| %s | %s%s | %zu | %.1f | %.1f | %.1f | %d | %ld | %.1f | %.1f | %.0f %% | %.0f | "
+            "%.2f |\n",
+            k.name.c_str(), to_string(m), r.result.ok() ? "" : " (exit 1)", op.points,
+            op.after.max_omega_deg_s, op.after.rms_accel_deg_s2, op.after.max_accel_deg_s2,
+            op.after.c_jumps, op.colliding_after, op.max_axis_change_deg,
+            op.feed_after.cycle_time_s, 100.0 * op.feed_after.feed_limited_fraction,
+            op.feed_after.feed_path_mm, r.seconds);
+      }
+    }
+  }
+
+  std::printf(
+      "\nRuntime of --method paper as the points grow (sine h10, tilt 15, yaw 10, with "
+      "the part; contact recovery, optimisation, posting and verification):\n\n");
+  std::printf("| points | runtime s | µs per point |\n|---:|---:|---:|\n");
+  for (const auto& [width, length] :
+       {std::pair<double, double>{10.0, 40.0}, {40.0, 100.0}, {100.0, 400.0}}) {
+    const Case k = sine_case("scale", 10.0, 40.0, width, length, 15.0, 10.0);
+    const Row r = run(k, Method::Paper);
+    const std::size_t n = k.toolpath.operations.front().points.size();
+    std::printf("| %zu | %.2f | %.0f |%s\n", n, r.seconds, 1e6 * r.seconds / static_cast<double>(n),
+                r.result.ok() ? "" : " (problems)");
+  }
+  return 0;
+}

@@ -1,0 +1,81 @@
+#pragma once
+/// @file Private helper of the compiled library (not installed): the parallel loops of taxopt.
+///
+/// They run on oneTBB. Under ThreadSanitizer (TAXOPT_TSAN) they run on std::threads instead:
+/// Debian's libtbb is not instrumented, so TSan cannot see the synchronisation of its task
+/// queue and reports races inside TBB's own partitioner; with std::thread (create and join)
+/// TSan sees every happens-before, and what it reports is in taxopt's loop bodies.
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#ifdef TAXOPT_TSAN
+#include <tbb/global_control.h>
+
+#include <thread>
+#else
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#endif
+
+namespace taxopt::detail {
+
+#ifdef TAXOPT_TSAN
+/// Threads to use: --threads (TBB's global limit), at least 2 so that TSan has two to watch.
+inline std::size_t tsan_threads() {
+  const std::size_t limit =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  return std::max<std::size_t>(2, std::min<std::size_t>(limit, 8));
+}
+#endif
+
+/// Calls body(i) for every i in [begin, end), in parallel.
+template <class Body>
+void parallel_for(std::size_t begin, std::size_t end, const Body& body) {
+#ifdef TAXOPT_TSAN
+  if (end <= begin) return;
+  const std::size_t n = end - begin, threads = std::min(tsan_threads(), n);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 0; t < threads; ++t) {
+    pool.emplace_back([&, t] {
+      for (std::size_t i = begin + t * n / threads; i < begin + (t + 1) * n / threads; ++i) body(i);
+    });
+  }
+  for (std::thread& th : pool) th.join();
+#else
+  tbb::parallel_for(begin, end, body);
+#endif
+}
+
+/// Reduces [begin, end) in parallel: `chunk(lo, hi, acc)` folds the indices [lo, hi) into a
+/// value started at `identity`, `join(left, right)` combines neighbouring chunks in order.
+template <class T, class Chunk, class Join>
+T parallel_reduce(std::size_t begin, std::size_t end, const T& identity, const Chunk& chunk,
+                  const Join& join) {
+#ifdef TAXOPT_TSAN
+  if (end <= begin) return identity;
+  const std::size_t n = end - begin, threads = std::min(tsan_threads(), n);
+  std::vector<T> parts(threads, identity);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 0; t < threads; ++t) {
+    pool.emplace_back([&, t] {
+      parts[t] = chunk(begin + t * n / threads, begin + (t + 1) * n / threads, identity);
+    });
+  }
+  for (std::thread& th : pool) th.join();
+  T acc = identity;
+  for (const T& p : parts) acc = join(acc, p);
+  return acc;
+#else
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(begin, std::max(begin, end)), identity,
+      [&](const tbb::blocked_range<std::size_t>& r, T acc) {
+        return chunk(r.begin(), r.end(), std::move(acc));
+      },
+      join);
+#endif
+}
+
+}  // namespace taxopt::detail

@@ -239,6 +239,73 @@ std::vector<std::size_t> colliding_points(const CollisionModel& model, const Too
   });
 }
 
+/// A guaranteed lower bound of the least distance between the part and the tool's bodies that
+/// do not cut (shank and holder, past the flutes; the flutes touch the part at a contact by
+/// design) over the CL points with axes `axes`, and the point where it occurs; empty when the
+/// tool has no such bodies. The bodies grown by d in radius and at both ends hold every point
+/// within d of them, so where the grown bodies miss the part the clearance is at least d (and
+/// at most d sqrt 2). d comes from bisecting FCL collision queries (exact distances cost 5 ms to
+/// 0.3 s a query on flat parts): at 32 spread points first, then only at the points whose
+/// bodies, grown by that bound, touch the part. Capped at 10 mm, 5 um steps; the same result
+/// whatever the thread count.
+std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionModel& model,
+                                                              const ToolModel& tool,
+                                                              const Operationd& op,
+                                                              const std::vector<Vec3d>& axes,
+                                                              detail::StageProgress* progress) {
+  constexpr double kCapMm = 10.0, kStepMm = 0.005;
+  const std::size_t n = op.points.size();
+  ToolModel above = tool;
+  if (!above.bodies.empty()) above.bodies.erase(above.bodies.begin());
+  if (above.bodies.empty() || n == 0) {
+    if (progress) progress->advance(n);
+    return std::nullopt;
+  }
+  const auto free_at = [&](std::size_t i, double d_mm) {
+    ToolModel grown = above;
+    for (ToolBody& b : grown.bodies) {
+      b.radius_mm += d_mm;
+      b.start_mm -= d_mm;
+      b.end_mm += d_mm;
+    }
+    return !model.collides(grown, reference_point(op.points[i], tool.ball_radius_mm), axes[i]);
+  };
+  // The largest d in [0, hi] (to kStepMm) with the grown bodies free at point i.
+  const auto bisect = [&](std::size_t i, double hi) {
+    if (!free_at(i, 0.0)) return 0.0;
+    if (free_at(i, hi)) return hi;
+    double lo = 0.0;
+    while (hi - lo > kStepMm) {
+      const double mid = 0.5 * (lo + hi);
+      (free_at(i, mid) ? lo : hi) = mid;
+    }
+    return lo;
+  };
+  using Least = std::pair<double, std::size_t>;
+  const auto least_over = [&](const std::vector<std::size_t>& at, double hi) {
+    return detail::parallel_reduce(
+        0, at.size(), Least{hi, n},
+        [&](std::size_t lo, std::size_t end, Least acc) {
+          for (std::size_t j = lo; j != end; ++j)
+            acc = std::min(acc, Least{bisect(at[j], hi), at[j]});
+          return acc;
+        },
+        [](const Least& a, const Least& b) { return std::min(a, b); });
+  };
+  std::vector<std::size_t> sample;
+  for (std::size_t k = 0; k < 32; ++k) sample.push_back(k * (n - 1) / 31);
+  sample.erase(std::unique(sample.begin(), sample.end()), sample.end());
+  Least bound = least_over(sample, kCapMm);
+  if (bound.second == n) bound.second = sample.front();  // every sample at the cap
+  const std::vector<std::size_t> closer = detail::parallel_select(0, n, [&](std::size_t i) {
+    const bool near = bound.first > 0.0 && !free_at(i, bound.first);
+    if (progress) progress->advance();
+    return near;
+  });
+  const Least found = least_over(closer, bound.first);
+  return found.second == n ? bound : std::min(bound, found);
+}
+
 /// Index i of every move from point i-1 to point i during which the tool hits the part, with
 /// the machine moving linearly in its joints between the values written (`xyz_w` as written,
 /// `a_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
@@ -853,7 +920,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   std::size_t check_items = 0;
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const std::size_t n = tp.operations[k].points.size();
-    if (collision && contact_summaries[k].recovered) check_items += 3 * n;
+    if (collision && contact_summaries[k].recovered) check_items += 4 * n;
     if (rasteriser && !contacts[k].empty()) check_items += n;
   }
   detail::StageProgress checking(options.progress, "verification", check_items);
@@ -986,6 +1053,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const auto moves_hit =
           colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k], &checking);
       r.verification.colliding_moves = static_cast<long>(moves_hit.size());
+      if (const auto least = clearance_bound(*collision, tool, op, out_axes, &checking)) {
+        r.verification.min_clearance_mm = least->first;
+        r.verification.min_clearance_index = least->second;
+      }
       if (!moves_hit.empty()) {
         r.verification.collision_free = false;
         const std::size_t i = moves_hit.front();

@@ -495,3 +495,40 @@ TEST_CASE("cli: -v tells each long stage's time, -q says nothing", "[cli]") {
   CHECK(r.err.empty());
   CHECK(r.out.empty());
 }
+
+TEST_CASE("cli: the report's clearance bound of shank and holder matches the closed form",
+          "[cli][verification]") {
+  TempDir t;
+  // The generator's plane, axes 5 deg off the normal, R = 3; with 5 mm flutes the shank starts
+  // 2 mm above the ball centre. Grown by d in radius and at both ends, its lowest rim point is
+  // 3 + (2 - d) cos a - (3 + d) sin a above the plane: zero at d* = (3 + 2 cos a - 3 sin a) /
+  // (cos a + sin a), the bound the report gives (the true distance, 3 + 2 cos a - 3 sin a, is
+  // at most sqrt 2 times it).
+  REQUIRE(run_taxopt("generate --surface plane --width 6 --length 20 --out-cls " + t.path("p.cls") +
+                     " --out-mesh " + t.path("p.stl"))
+              .code == 0);
+  const double a = taxopt::deg_to_rad(5.0);
+  const double bound = (3.0 + 2.0 * std::cos(a) - 3.0 * std::sin(a)) / (std::cos(a) + std::sin(a));
+  auto r = run_taxopt("--in " + t.path("p.cls") + " --part " + t.path("p.stl") +
+                      " --method none --flute-length 5 --gcode " + t.path("p.nc") + " --report " +
+                      t.path("r.json") + " -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  auto v = nlohmann::json::parse(read_file(t.path("r.json")))["operations"][0]["verification"];
+  CHECK(v["min_clearance_mm"].get<double>() == Approx(bound).margin(0.006));
+  CHECK(v["min_clearance_mm"].get<double>() <= 3.0 + 2.0 * std::cos(a) - 3.0 * std::sin(a));
+  // Far from the part (default 15 mm flutes): the 10 mm cap.
+  r = run_taxopt("--in " + t.path("p.cls") + " --part " + t.path("p.stl") +
+                 " --method none --gcode " + t.path("p.nc") + " --report " + t.path("r.json") +
+                 " -q");
+  REQUIRE(r.code == 0);
+  v = nlohmann::json::parse(read_file(t.path("r.json")))["operations"][0]["verification"];
+  CHECK(v["min_clearance_mm"].get<double>() == 10.0);
+  // Without a part nothing is measured.
+  r = run_taxopt("--in " + t.path("p.cls") + " --method none --gcode " + t.path("p.nc") +
+                 " --report " + t.path("r.json") + " -q");
+  REQUIRE(r.code == 0);
+  CHECK(nlohmann::json::parse(
+            read_file(t.path("r.json")))["operations"][0]["verification"]["min_clearance_mm"]
+            .is_null());
+}

@@ -73,6 +73,12 @@ struct Verification {
   /// Moves between consecutive CL points (sampled as the machine moves them, linear in its
   /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; -1: not checked.
   long colliding_moves = -1;
+  /// A guaranteed lower bound (true value within a factor sqrt 2 above it) of the least
+  /// distance between the part and the tool's bodies that do not cut (shank and holder, past
+  /// the flutes) at the written CL points, mm, capped at 10 mm; and the point where it
+  /// occurs. Empty without a part or when the flutes reach the holder.
+  std::optional<double> min_clearance_mm;
+  std::size_t min_clearance_index = 0;
   bool within_axis_limits = true;
   /// Joint velocities and accelerations within the limits at the written feeds, as the
   /// controller moves (linear in the joints, from rest at each chain of feed moves): the

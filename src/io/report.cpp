@@ -65,6 +65,12 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     v["collision_free"] = r.verification.collision_free
                               ? nlohmann::json(*r.verification.collision_free)
                               : nlohmann::json(nullptr);
+    v["min_clearance_mm"] = r.verification.min_clearance_mm
+                                ? nlohmann::json(*r.verification.min_clearance_mm)
+                                : nlohmann::json(nullptr);
+    if (r.verification.min_clearance_mm) {
+      v["min_clearance_point"] = r.verification.min_clearance_index;
+    }
     v["within_axis_limits"] = r.verification.within_axis_limits;
     v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
     v["colliding_moves"] = r.verification.colliding_moves >= 0

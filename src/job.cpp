@@ -122,24 +122,6 @@ std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec
   return q;
 }
 
-/// Time of the feed move into each point at its programmed feed, s, as write_gcode times it
-/// (tip distance over the feed, or rotary degrees over it when only A and C turn); 0 for the
-/// first point and rapids.
-std::vector<double> programmed_times_s(const std::vector<CLPointd>& points,
-                                       const std::vector<Posed>& poses) {
-  std::vector<double> t(points.size(), 0.0);
-  for (std::size_t i = 1; i < points.size(); ++i) {
-    if (points[i].motion != Motion::Feed || !(points[i].feed_mm_per_min > 0.0)) continue;
-    const double tip_mm = (points[i].tip_mm - points[i - 1].tip_mm).norm();
-    const double rot_deg = std::hypot(rad_to_deg(poses[i].a_rad - poses[i - 1].a_rad),
-                                      rad_to_deg(poses[i].c_rad - poses[i - 1].c_rad));
-    // A move too small to time (below 1e-9 either way) still gets a positive time: its words
-    // may differ after rounding, and the schedule needs a bound for every move.
-    t[i] = 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / points[i].feed_mm_per_min;
-  }
-  return t;
-}
-
 /// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
 /// feed move; a chain's joints are those of points begin - 1 .. end - 1.
 std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
@@ -469,15 +451,37 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       for (std::size_t i = last + 1; i < pass.end; ++i) carry(i, i - 1);
     }
   }
-  // A point outside every pass (a retract, a rapid between passes) keeps the axis of the
-  // point before it, where acceptable and within its cone: the tool leaves without turning.
+  // The points outside every pass (retracts, rapids between passes) turn the tool from one
+  // pass's last axis to the next one's first in a single move, the one of the run with the
+  // longest tip travel (on a clearance plane the rotation then costs no time beside the
+  // traverse): the points before that move keep the axis of the point before them, those
+  // from it on take the axis of the point after them, where acceptable and within their cone.
   std::vector<char> in_pass(op.points.size(), 0);
   for (const IndexRange& pass : passes) {
     std::fill(in_pass.begin() + static_cast<long>(pass.begin),
               in_pass.begin() + static_cast<long>(pass.end), 1);
   }
-  for (std::size_t i = 1; i < op.points.size(); ++i) {
-    if (!in_pass[i]) carry(i, i - 1);
+  const std::size_t n = op.points.size();
+  for (std::size_t a = 0; a < n;) {
+    if (in_pass[a]) {
+      ++a;
+      continue;
+    }
+    std::size_t b = a;  // the run is [a, b)
+    while (b < n && !in_pass[b]) ++b;
+    // Moves into points a .. b (those that exist): the turn goes into the longest one.
+    if (a == 0 && b == n) break;  // no pass at all
+    std::size_t turn = a == 0 ? 0 : b;
+    if (a > 0 && b < n) {
+      double longest = -1.0;
+      for (std::size_t j = a; j <= b; ++j) {
+        const double travel = (op.points[j].tip_mm - op.points[j - 1].tip_mm).norm();
+        if (travel > longest) longest = travel, turn = j;
+      }
+    }
+    for (std::size_t i = a; i < turn; ++i) carry(i, i - 1);
+    for (std::size_t i = b; i-- > turn;) carry(i, i + 1);  // turn == b when b == n
+    a = b;
   }
   return out;
 }
@@ -786,7 +790,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < tp.operations.size(); ++k) {
     const Operationd& op = tp.operations[k];
     const auto t0 = Clock::now();
-    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}, {}};
+    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}, {}, {}};
     if (optimised[k]) {
       const double R = ball_radius_mm(op, options);
       for (std::size_t i = 0; i < po.points.size(); ++i) {
@@ -831,6 +835,14 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       continue;
     }
     po.poses = plan.poses;
+    if (optimised[k] && machine.gcode.feed_reference == FeedReference::CutterPath) {
+      // Every feed block keeps the time of the input block at its feed: the ball centre and
+      // the contact point run as the CAM system programmed them, whatever the tip does.
+      std::vector<CLPointd> in_points = po.points;
+      for (std::size_t i = 0; i < in_points.size(); ++i) in_points[i].tip_mm = op.points[i].tip_mm;
+      po.programmed_time_s = programmed_block_times_s(
+          in_points, input_poses.back().empty() ? po.poses : input_poses.back());
+    }
     start = po.poses.back();
     posted.push_back(std::move(po));
     metric_feeds.push_back(std::move(mf));
@@ -887,7 +899,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     schedule_after.push_back(schedule_operation(po.points, written_joints(point_moves[k]),
-                                                programmed_times_s(po.points, po.poses), limits));
+                                                po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses) : po.programmed_time_s,
+                                                limits));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -899,7 +912,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         input_poses[k].empty()
             ? schedule_after.back()
             : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses[k]),
-                                 programmed_times_s(in_points, input_poses[k]), limits));
+                                 programmed_block_times_s(in_points, input_poses[k]), limits));
   }
   if (options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k)
@@ -1149,9 +1162,14 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       res.warnings.push_back(
           "operation " + op.name + ": at the machine's limits the new axes take " +
           std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
-          std::to_string(r.feed_before.cycle_time_s) + " s (tip path of the feed moves " +
-          std::to_string(r.feed_after.feed_path_mm) + " mm against " +
-          std::to_string(r.feed_before.feed_path_mm) + " mm: the programmed feed applies to it)");
+          std::to_string(r.feed_before.cycle_time_s) + " s (" +
+          (machine.gcode.feed_reference == FeedReference::Tip
+               ? "tip path of the feed moves " + std::to_string(r.feed_after.feed_path_mm) +
+                     " mm against " + std::to_string(r.feed_before.feed_path_mm) +
+                     " mm: with feed_reference \"tip\" the programmed feed applies to it)"
+               : std::string("the machine's limits hold the new axes back more; limiting axis ") +
+                     (r.feed_after.limiting_axis.empty() ? "none" : r.feed_after.limiting_axis) +
+                     ")"));
     }
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       r.rows[i].feed_mm_min = schedule_after[k].feed_mm_min[i];

@@ -1,6 +1,8 @@
 // Feed scheduling end to end: on parts no test was tuned on, --feed-schedule writes G-code that
 // LinuxCNC's rs274 reads in both feed modes, every joint stays within its limits by an
-// independent check of what rs274 read, and the optimised path is no slower than the input.
+// independent check of what rs274 read, no cut runs faster than the CL file programmed it
+// (feed_reference "cutter-path": each block at least the input block's time at its feed), and
+// the optimised path is no slower than the input.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -41,7 +43,10 @@ std::array<double, 5> joints(const CanonMove& m, bool machine_mode, const double
 
 struct Measured {
   double worst_ratio = 0.0;            // largest velocity or acceleration over its limit
-  double fastest_vs_programmed = 0.0;  // largest programmed time / written time of a feed move
+  // Largest ratio of a feed move's time in the input program at its feed (the CL file's tip
+  // distance over 250 mm/min) to its time as rs274 read it: above 1, the cut ran faster than
+  // the CAM system programmed it.
+  double fastest_vs_programmed = 0.0;
   int feed_moves = 0;
 };
 
@@ -50,7 +55,8 @@ struct Measured {
 /// feed moves from rest to rest, velocity per move and acceleration between moves over their
 /// mean time (eq. 16-18).
 Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const double c0[2],
-                 const double a0[2], const Limits& lim, double programmed_mm_min) {
+                 const double a0[2], const Limits& lim, const std::vector<Vec3d>& input_tips_mm,
+                 double programmed_mm_min) {
   Measured out;
   std::vector<double> prev_w(5, 0.0);
   double prev_t = 0.0;
@@ -73,10 +79,9 @@ Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const d
     if (len == 0.0 && rot == 0.0) continue;
     // rs274 turns a G93 word into the rate of the move in units (or degrees) per minute.
     const double t = 60.0 * (len > 0 ? len : rot) / m.feed_rate;
-    if (!machine_mode && len > 0.0) {
-      out.fastest_vs_programmed =
-          std::max(out.fastest_vs_programmed, (60.0 * len / programmed_mm_min) / t);
-    }
+    const double input_t =
+        60.0 * (input_tips_mm[i] - input_tips_mm[i - 1]).norm() / programmed_mm_min;
+    out.fastest_vs_programmed = std::max(out.fastest_vs_programmed, input_t / t);
     ++out.feed_moves;
     const auto qa = joints(p, machine_mode, c0, a0), qb = joints(m, machine_mode, c0, a0);
     std::vector<double> w(5);
@@ -99,7 +104,7 @@ TEST_CASE(
     "[feed][rs274][integration]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(4242);
-  const Limits lim{{40, 40, 40, 20, 30}, {400, 400, 400, 100, 150}};
+  const Limits lim{{40, 40, 40, 10, 15}, {400, 400, 400, 50, 75}};
   int checked = 0;
   for (const Heightfield& hf : random_heightfields(rng)) {
     for (const char* mode : {"tcp", "machine"}) {
@@ -145,15 +150,70 @@ TEST_CASE(
         INFO(rs.err);
         REQUIRE(rs.code == 0);
         REQUIRE(moves.size() == g.tips_mm.size());
-        const Measured m = measure(moves, machine_mode, c0, a0, lim, 250.0);
+        const Measured m = measure(moves, machine_mode, c0, a0, lim, g.tips_mm, 250.0);
         CHECK(m.feed_moves > 100);
         // rs274 prints 4 decimals: the check allows their rounding.
         CHECK(m.worst_ratio <= 1.0 + 1e-3);
         CHECK(m.worst_ratio > 0.5);  // the limits do bind somewhere on these parts
-        if (!machine_mode) CHECK(m.fastest_vs_programmed <= 1.0 + 1e-3);
+        CHECK(m.fastest_vs_programmed <= 1.0 + 1e-3);
         ++checked;
       }
     }
   }
   CHECK(checked == 12);
+}
+
+TEST_CASE(
+    "feed reference: cutter-path keeps every block's input time at the programmed feed, tip "
+    "keeps the FEDRAT as the new tip's speed",
+    "[feed][rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(977);
+  const Heightfield hf = random_heightfields(rng).front();
+  TempDir dir;
+  const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 2, 0.5, 20.0, 25.0, 5.0, 45.0, 80.0);
+  write_file(dir.path("in.cls"), g.text);
+  write_file(dir.path("part.stl"),
+             format_stl_binary(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0)));
+  for (const char* reference : {"cutter-path", "tip"}) {
+    INFO(hf.name << ", feed_reference " << reference);
+    write_file(dir.path("m.toml"),
+               std::string("kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = "
+                           "120\n[axes.C]\ncontinuous = true\n[gcode]\nfeed_reference = \"") +
+                   reference + "\"\n");
+    const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --part " +
+                                   dir.path("part.stl") + " --machine " + dir.path("m.toml") +
+                                   " --gcode " + dir.path("o.ngc") + " -q --grid 4");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::vector<CanonMove> moves;
+    const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
+    INFO(rs.err);
+    REQUIRE(rs.code == 0);
+    REQUIRE(moves.size() == g.tips_mm.size());
+    // Block times as rs274 reads them (tcp, G94: XYZ distance over the rate) against the
+    // input's (the CL file's tip distance over its 250 mm/min).
+    double worst_time_ratio = 0.0, most_changed = 0.0;
+    int feed_moves = 0;
+    for (std::size_t i = 1; i < moves.size(); ++i) {
+      const CanonMove &p = moves[i - 1], &m = moves[i];
+      if (!m.feed) continue;
+      const double len = std::sqrt((m.x - p.x) * (m.x - p.x) + (m.y - p.y) * (m.y - p.y) +
+                                   (m.z - p.z) * (m.z - p.z));
+      const double input_len = (g.tips_mm[i] - g.tips_mm[i - 1]).norm();
+      if (len < 0.05 || input_len < 0.05) continue;  // rounding dominates shorter moves
+      ++feed_moves;
+      const double t = 60.0 * len / m.feed_rate, input_t = 60.0 * input_len / 250.0;
+      worst_time_ratio = std::max(worst_time_ratio, std::abs(t / input_t - 1.0));
+      most_changed = std::max(most_changed, std::abs(len / input_len - 1.0));
+      if (std::string(reference) == "tip") CHECK(m.feed_rate == Approx(250.0).epsilon(1e-9));
+    }
+    CHECK(feed_moves > 100);
+    CHECK(most_changed > 0.02);  // the new axes do move the tip along another path
+    if (std::string(reference) == "cutter-path") {
+      CHECK(worst_time_ratio < 2e-3);
+    } else {
+      CHECK(worst_time_ratio > 0.02);
+    }
+  }
 }

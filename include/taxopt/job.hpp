@@ -142,8 +142,9 @@ struct FeedSummary {
   double feed_limited_fraction = 0.0;
   /// Lowest scheduled feed, mm/min (0 when there is no feed move).
   double min_feed_mm_min = 0.0;
-  /// Length of the feed moves' tip path, mm: the programmed feed applies to it, so new axes
-  /// that swing the tip more lengthen the cycle even where no limit binds.
+  /// Length of the feed moves' tip path, mm. With feed_reference "tip" the programmed feed
+  /// applies to it, so new axes that swing the tip more lengthen the cycle even where no limit
+  /// binds; with "cutter-path" (the default) each block keeps its input time instead.
   double feed_path_mm = 0.0;
   /// The joint ("X" ... "C") whose limits hold the feed down over the longest path, and
   /// whether its velocity or acceleration does; empty when the programmed feed holds.

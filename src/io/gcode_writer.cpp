@@ -145,6 +145,24 @@ class Dialect {
 
 }  // namespace
 
+std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
+                                             const std::vector<Posed>& poses) {
+  if (poses.size() != points.size()) {
+    throw std::invalid_argument("programmed_block_times_s: one pose per point is needed");
+  }
+  std::vector<double> t(points.size(), 0.0);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].motion != Motion::Feed || !(points[i].feed_mm_per_min > 0.0)) continue;
+    const double tip_mm = (points[i].tip_mm - points[i - 1].tip_mm).norm();
+    const double rot_deg = std::hypot(rad_to_deg(poses[i].a_rad - poses[i - 1].a_rad),
+                                      rad_to_deg(poses[i].c_rad - poses[i - 1].c_rad));
+    // A move too small to time still gets a positive time: its words may differ after
+    // rounding, and a feed schedule needs a bound for every move.
+    t[i] = 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / points[i].feed_mm_per_min;
+  }
+  return t;
+}
+
 GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
                          LengthUnit units, const std::vector<std::string>& comments) {
   const GcodeSettings& g = machine.gcode;
@@ -190,6 +208,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     lines(dialect.tcp_on(tcp));
     std::string prefix = dialect.first_move_prefix(tcp, current_tool);
     std::vector<int> emitted(op.points.size(), 0);
+    const std::vector<double> own_times = programmed_block_times_s(op.points, op.poses);
     last_words.clear();
     Vec3d prev_xyz = Vec3d::Zero();
     Posed prev_pose;
@@ -214,13 +233,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         if (!(p.feed_mm_per_min > 0.0)) {
           throw std::invalid_argument("write_gcode: feed move without a feed");
         }
-        // Time of the block: the tool tip moves at the programmed feed (TCP); a move that
-        // only turns the axes takes rotary degrees / feed, as under G94.
         const double tip_mm = have_prev ? (p.tip_mm - prev_tip).norm() : 0.0;
         const double rot_deg = have_prev ? std::hypot(rad_to_deg(pose.a_rad - prev_pose.a_rad),
                                                       rad_to_deg(pose.c_rad - prev_pose.c_rad))
                                          : 0.0;
-        const double programmed_min = (tip_mm > 1e-9 ? tip_mm : rot_deg) / p.feed_mm_per_min;
+        const double given_s = i < op.programmed_time_s.size() ? op.programmed_time_s[i] : 0.0;
+        const double programmed_min = (given_s > 0.0 ? given_s : own_times[i]) / 60.0;
         // A scheduled block (never faster than programmed) writes its F with 8 significant
         // digits, so that rounding cannot carry it over the limits it was scheduled for.
         const bool scheduled = i < op.block_time_s.size() && op.block_time_s[i] > 0.0 && have_prev;
@@ -253,7 +271,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
           const double joint = (xyz - prev_xyz).norm();
           f = fmt(joint > 1e-9 ? joint * scale / time_min : rot_deg / time_min, std::max(d, 3));
         } else {
-          f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
+          // TCP: the tip moves at F. Its distance over the block time is the programmed feed
+          // unless the programmed time is another path's (FeedReference::CutterPath).
+          const double tip_feed =
+              tip_mm > 1e-9 ? tip_mm / programmed_min : rot_deg / programmed_min;
+          const bool own = std::abs(tip_feed - p.feed_mm_per_min) <= 1e-9 * p.feed_mm_per_min;
+          f = fmt((own ? p.feed_mm_per_min : tip_feed) * scale, std::max(d, 3));
         }
         block = std::string(restore_inverse_time ? "G94 " : "") + dialect.linear() + " " + words;
         if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;

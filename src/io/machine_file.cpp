@@ -5,6 +5,8 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "taxopt/core/error.hpp"
 
@@ -57,42 +59,22 @@ class MachineParser {
                                    number_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
     if (const toml::table* g = table_of(root, "gcode", false)) {
-      check_keys(*g, "gcode", {"dialect", "mode", "feed_mode", "decimals"});
-      if (auto* n = g->get("dialect")) {
-        const std::string d = string_of(*n, "gcode.dialect");
-        bool known = false;
-        for (GcodeDialect v : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
-                               GcodeDialect::Heidenhain}) {
-          if (d == to_string(v)) m.gcode.dialect = v, known = true;
-        }
-        if (!known) {
-          fail(line_of(*n),
-               "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\" or \"heidenhain\", got "
-               "'" +
-                   d + "'");
-        }
-      }
-      if (auto* n = g->get("mode")) {
-        const std::string v = string_of(*n, "gcode.mode");
-        if (v == "tcp") {
-          m.gcode.mode = GcodeMode::Tcp;
-        } else if (v == "machine") {
-          m.gcode.mode = GcodeMode::Machine;
-        } else {
-          fail(line_of(*n), "gcode.mode must be \"tcp\" or \"machine\", got '" + v + "'");
-        }
-      }
-      if (auto* n = g->get("feed_mode")) {
-        const std::string v = string_of(*n, "gcode.feed_mode");
-        if (v == "units-per-minute") {
-          m.gcode.feed_mode = FeedMode::UnitsPerMinute;
-        } else if (v == "inverse-time") {
-          m.gcode.feed_mode = FeedMode::InverseTime;
-        } else {
-          fail(line_of(*n),
-               "gcode.feed_mode must be \"units-per-minute\" or \"inverse-time\", got '" + v + "'");
-        }
-      }
+      check_keys(*g, "gcode", {"dialect", "mode", "feed_mode", "feed_reference", "decimals"});
+      choose(*g, "gcode", "dialect",
+             {{"linuxcnc", GcodeDialect::LinuxCNC},
+              {"fanuc", GcodeDialect::Fanuc},
+              {"siemens", GcodeDialect::Siemens},
+              {"heidenhain", GcodeDialect::Heidenhain}},
+             m.gcode.dialect);
+      choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
+             m.gcode.mode);
+      choose(*g, "gcode", "feed_mode",
+             {{"units-per-minute", FeedMode::UnitsPerMinute},
+              {"inverse-time", FeedMode::InverseTime}},
+             m.gcode.feed_mode);
+      choose(*g, "gcode", "feed_reference",
+             {{"cutter-path", FeedReference::CutterPath}, {"tip", FeedReference::Tip}},
+             m.gcode.feed_reference);
       if (m.gcode.dialect == GcodeDialect::Heidenhain &&
           m.gcode.feed_mode == FeedMode::InverseTime) {
         fail(line_of(*g->get("feed_mode")),
@@ -142,6 +124,26 @@ class MachineParser {
   std::string string_of(const toml::node& n, const std::string& what) const {
     if (!n.is_string()) fail(line_of(n), what + " must be a string");
     return n.value<std::string>().value();
+  }
+
+  /// Sets `out` from the string key `key` of `table` (section `section`) when it is there:
+  /// one of `choices`, else an error listing them.
+  template <typename Enum>
+  void choose(const toml::table& table, const std::string& section, const std::string& key,
+              const std::vector<std::pair<std::string, Enum>>& choices, Enum& out) const {
+    const toml::node* n = table.get(key);
+    if (!n) return;
+    const std::string what = section + "." + key;
+    const std::string v = string_of(*n, what);
+    std::string list;
+    for (std::size_t i = 0; i < choices.size(); ++i) {
+      if (v == choices[i].first) {
+        out = choices[i].second;
+        return;
+      }
+      list += (i == 0 ? "" : i + 1 == choices.size() ? " or " : ", ") + ("\"" + choices[i].first + "\"");
+    }
+    fail(line_of(*n), what + " must be " + list + ", got '" + v + "'");
   }
 
   double number_of(const toml::node& n, const std::string& what) const {

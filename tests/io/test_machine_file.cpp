@@ -33,6 +33,7 @@ c_axis_y = 4.0
 dialect = "linuxcnc"
 mode = "machine"
 feed_mode = "inverse-time"
+feed_reference = "tip"
 decimals = 5
 )";
 
@@ -68,7 +69,9 @@ TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]
   CHECK(m.ac.c_axis_point_mm == Vec3d(3.0, 4.0, 0));
   CHECK(m.gcode.mode == GcodeMode::Machine);
   CHECK(m.gcode.feed_mode == FeedMode::InverseTime);
+  CHECK(m.gcode.feed_reference == FeedReference::Tip);
   CHECK(m.gcode.decimals == 5);
+  CHECK(default_machine().gcode.feed_reference == FeedReference::CutterPath);
 }
 
 TEST_CASE("machine file: X Y Z limits and jerk, and the defaults where none is given",
@@ -109,7 +112,9 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   expect_error(replace(kFull, "max_deg = 120.0", "max_deg = -130.0"), 5,
                "min_deg must be less than max_deg");
   expect_error(replace(kFull, "sense = -1", "sense = 2"), 13, "sense must be 1 or -1");
-  expect_error(replace(kFull, "decimals = 5", "decimals = 9"), 27, "decimals");
+  expect_error(replace(kFull, "decimals = 5", "decimals = 9"), 28, "decimals");
+  expect_error(replace(kFull, "\"tip\"", "\"nose\""), 27,
+               "gcode.feed_reference must be \"cutter-path\" or \"tip\", got 'nose'");
   expect_error(replace(kFull, "\"linuxcnc\"", "\"mazatrol\""), 24,
                "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\" or \"heidenhain\"");
   // Heidenhain's ISO mode has no G93: refused where the file asks for both.
@@ -141,5 +146,5 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   // (toml++ converted it with undefined behaviour before the type was tested).
   expect_error(replace(kFull, "sense = -1", "sense = 6.0e58"), 13, "sense must be 1 or -1");
   expect_error(replace(kFull, "sense = -1", "sense = 1.0"), 13, "sense must be 1 or -1");
-  expect_error(replace(kFull, "decimals = 5", "decimals = 1e300"), 27, "decimals");
+  expect_error(replace(kFull, "decimals = 5", "decimals = 1e300"), 28, "decimals");
 }

@@ -19,10 +19,20 @@ struct PostedOperation {
   bool spindle_clockwise = true;
   std::vector<CLPointd> points;
   std::vector<Posed> poses;
+  /// Optional, per point: the time of the feed move into it at the programmed feed, s
+  /// (FeedReference::CutterPath: the input block's); absent: programmed_block_times_s.
+  std::vector<double> programmed_time_s;
   /// Optional, per point: the time of the feed move into it, s, from a feed schedule
-  /// (feed_schedule.hpp); 0 or absent: the programmed feed's. Never shorter than that.
+  /// (feed_schedule.hpp); 0 or absent: the programmed time. Never shorter than that.
   std::vector<double> block_time_s;
 };
+
+/// Time of the feed move into each point at its programmed feed, s, as a controller times it
+/// under TCP: the tip distance over the feed, or the rotary distance (deg) over the feed read
+/// as deg/min when only A and C turn. 0 for the first point, rapids and feed moves without a
+/// feed; a feed move too small to time (below 1e-9 mm and deg) gets 1e-9 over its feed.
+std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
+                                             const std::vector<Posed>& poses);
 
 /// Written G-code and where each point went.
 struct GcodeProgram {

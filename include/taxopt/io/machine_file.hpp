@@ -20,12 +20,20 @@ const char* to_string(GcodeDialect dialect);
 enum class GcodeMode { Tcp, Machine };
 /// G94 units per minute, or G93 inverse time.
 enum class FeedMode { UnitsPerMinute, InverseTime };
+/// What the programmed feed is the speed of, once taxopt has turned the tool axes.
+/// cutter-path: of the cut, as the CAM system programmed it: every feed block takes the time
+/// the input block takes at its feed (its tip distance over the feed), so the ball centre and
+/// the contact point, which do not move when the axis turns, run at the programmed speed and
+/// the chip load is unchanged; the F word follows the new tip (or joint) distance.
+/// tip: of the new tool tip: F is the programmed feed, and a longer tip path takes longer.
+enum class FeedReference { CutterPath, Tip };
 
 /// How G-code is written for a machine.
 struct GcodeSettings {
   GcodeDialect dialect = GcodeDialect::LinuxCNC;
   GcodeMode mode = GcodeMode::Tcp;
   FeedMode feed_mode = FeedMode::UnitsPerMinute;
+  FeedReference feed_reference = FeedReference::CutterPath;
   /// Decimals of every coordinate and angle (0 to 8).
   int decimals = 4;
 };

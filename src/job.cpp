@@ -9,6 +9,7 @@
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
+#include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
 #include "util/parallel.hpp"
@@ -340,7 +341,65 @@ struct OptimisedOperation {
   std::size_t reverted_passes = 0;
   /// Points with no acceptable axis within the cone (they keep their input axis).
   std::vector<std::size_t> no_free_axis;
+  /// --method global: per point the pose it chose (branch, C on the pole), for plan_poses;
+  /// empty otherwise. Passes refined by it, and given back the paper's axes by its guard.
+  std::vector<std::optional<Posed>> preferred;
+  std::size_t global_passes = 0, global_reverted = 0;
 };
+
+/// Whether an axis is acceptable at point i of an operation: the machine reaches it and, with
+/// a part, the tool above the ball (and the ball, where it is in the air) misses the part.
+struct Acceptance {
+  const Operationd& op;
+  const std::vector<ContactPoint>& contacts;
+  double ball_radius_mm;
+  const CollisionModel* model;
+  const ToolModel* tool;
+  const ACMachined& machine;
+  bool operator()(std::size_t i, const Vec3d& axis) const {
+    if (!machine.reachable(axis)) return false;
+    if (!model) return true;
+    const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
+    return !model->collides(*tool, reference_point(op.points[i], ball_radius_mm), axis, in_air);
+  }
+};
+
+/// The points outside every pass (retracts, rapids between passes) turn the tool from one
+/// pass's last axis to the next one's first in a single move, the one of the run with the
+/// longest tip travel (on a clearance plane the rotation then costs no time beside the
+/// traverse): the points before that move keep the axis of the point before them, those from
+/// it on take the axis of the point after them (`carry(to, from)`, which checks).
+template <class Carry>
+void carry_between_passes(const Operationd& op, const std::vector<IndexRange>& passes,
+                          Carry&& carry) {
+  std::vector<char> in_pass(op.points.size(), 0);
+  for (const IndexRange& pass : passes) {
+    std::fill(in_pass.begin() + static_cast<long>(pass.begin),
+              in_pass.begin() + static_cast<long>(pass.end), 1);
+  }
+  const std::size_t n = op.points.size();
+  for (std::size_t a = 0; a < n;) {
+    if (in_pass[a]) {
+      ++a;
+      continue;
+    }
+    std::size_t b = a;  // the run is [a, b)
+    while (b < n && !in_pass[b]) ++b;
+    if (a == 0 && b == n) break;  // no pass at all
+    // Moves into points a .. b (those that exist): the turn goes into the longest one.
+    std::size_t turn = a == 0 ? 0 : b;
+    if (a > 0 && b < n) {
+      double longest = -1.0;
+      for (std::size_t j = a; j <= b; ++j) {
+        const double travel = (op.points[j].tip_mm - op.points[j - 1].tip_mm).norm();
+        if (travel > longest) longest = travel, turn = j;
+      }
+    }
+    for (std::size_t i = a; i < turn; ++i) carry(i, i - 1);
+    for (std::size_t i = b; i-- > turn;) carry(i, i + 1);  // turn == b when b == n
+    a = b;
+  }
+}
 
 /// Runs plan_pass_paper on every feed pass of `op` (in parallel over passes; each pass is
 /// planned alone, so the result does not depend on the thread count). An axis is acceptable
@@ -363,12 +422,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
-  // Reachable by the machine and, with a part, the tool misses it (the ball too, in the air).
-  const auto acceptable_at = [&](std::size_t i, const Vec3d& axis) {
-    if (!machine.ac.reachable(axis)) return false;
-    if (!model) return true;
-    return !model->collides(*tool, reference_point(op.points[i], R), axis, !touching(i));
-  };
+  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac};
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
     const IndexRange pass = passes[q];
     PassProblem problem;
@@ -451,38 +505,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       for (std::size_t i = last + 1; i < pass.end; ++i) carry(i, i - 1);
     }
   }
-  // The points outside every pass (retracts, rapids between passes) turn the tool from one
-  // pass's last axis to the next one's first in a single move, the one of the run with the
-  // longest tip travel (on a clearance plane the rotation then costs no time beside the
-  // traverse): the points before that move keep the axis of the point before them, those
-  // from it on take the axis of the point after them, where acceptable and within their cone.
-  std::vector<char> in_pass(op.points.size(), 0);
-  for (const IndexRange& pass : passes) {
-    std::fill(in_pass.begin() + static_cast<long>(pass.begin),
-              in_pass.begin() + static_cast<long>(pass.end), 1);
-  }
-  const std::size_t n = op.points.size();
-  for (std::size_t a = 0; a < n;) {
-    if (in_pass[a]) {
-      ++a;
-      continue;
-    }
-    std::size_t b = a;  // the run is [a, b)
-    while (b < n && !in_pass[b]) ++b;
-    // Moves into points a .. b (those that exist): the turn goes into the longest one.
-    if (a == 0 && b == n) break;  // no pass at all
-    std::size_t turn = a == 0 ? 0 : b;
-    if (a > 0 && b < n) {
-      double longest = -1.0;
-      for (std::size_t j = a; j <= b; ++j) {
-        const double travel = (op.points[j].tip_mm - op.points[j - 1].tip_mm).norm();
-        if (travel > longest) longest = travel, turn = j;
-      }
-    }
-    for (std::size_t i = a; i < turn; ++i) carry(i, i - 1);
-    for (std::size_t i = b; i-- > turn;) carry(i, i + 1);  // turn == b when b == n
-    a = b;
-  }
+  carry_between_passes(op, passes, carry);
   return out;
 }
 
@@ -501,10 +524,18 @@ PeakRates pass_peaks(const Operationd& op, const std::vector<ContactPoint>& cont
 /// machine moves it (the optimiser checks the points, not the moves: near the pole A = 0 a
 /// small turn of the axis is a large turn of C), provided the input pass is itself safe.
 /// Returns the number of passes reverted.
+/// With `reference` given (--method global against the paper's axes, with its preferred poses)
+/// the pass keeps those instead, when its peak a rises or its moves hit.
+struct GuardReference {
+  std::vector<Vec3d> axes;
+  std::vector<std::optional<Posed>> preferred;
+};
+
 std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
                          double ball_radius_mm, const CollisionModel* model, const ToolModel* tool,
                          const Machine& machine, const std::vector<double>& metric_feed,
-                         const PosePlanOptions& pose_options, OptimisedOperation& out) {
+                         const PosePlanOptions& pose_options, OptimisedOperation& out,
+                         const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
   std::vector<Vec3d> in_axes;
   std::vector<bool> rapid_into;
@@ -512,9 +543,13 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
     in_axes.push_back(op.points[i].axis);
     rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
   }
-  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options);
+  if (reference) in_axes = reference->axes;
+  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options,
+                                      reference ? reference->preferred
+                                                : std::vector<std::optional<Posed>>{});
   if (!in_plan.ok()) return 0;
-  const PosePlan out_plan = plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options);
+  const PosePlan out_plan =
+      plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options, out.preferred);
   const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses) {
     std::vector<char> hit(n, 0);
     if (!model) return hit;
@@ -552,16 +587,88 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
           pass_peaks(op, contacts, ball_radius_mm, pass, in_plan.poses, metric_feed);
       const auto after =
           pass_peaks(op, contacts, ball_radius_mm, pass, out_plan.poses, metric_feed);
-      worse = after.omega_deg_s > before.omega_deg_s * (1.0 + 1e-9) ||
+      worse = (!reference && after.omega_deg_s > before.omega_deg_s * (1.0 + 1e-9)) ||
               after.accel_deg_s2 > before.accel_deg_s2 * (1.0 + 1e-9);
     }
     if (!worse) continue;
     std::copy(in_axes.begin() + static_cast<long>(pass.begin),
               in_axes.begin() + static_cast<long>(pass.end),
               out.axes.begin() + static_cast<long>(pass.begin));
+    if (!out.preferred.empty()) {
+      for (std::size_t i = pass.begin; i < pass.end; ++i) {
+        out.preferred[i] = reference && !reference->preferred.empty() ? reference->preferred[i]
+                                                                      : std::nullopt;
+      }
+    }
     ++reverted;
   }
   return reverted;
+}
+
+/// --method global (global_optimiser.hpp) on every feed pass of `op`, from the paper's axes in
+/// `out` (the warm start), in parallel over passes. The points between passes then follow the
+/// new pass ends; a guard gives a pass back the paper's axes where its peak a would rise or its
+/// moves would hit the part.
+void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                   double ball_radius_mm, const CollisionModel* model, const ToolModel* tool,
+                   const Machine& machine, const std::vector<double>& metric_feed,
+                   const PosePlanOptions& pose_options, const GlobalOptions& options,
+                   OptimisedOperation& out, detail::StageProgress& progress) {
+  const std::size_t n = op.points.size();
+  const std::vector<IndexRange> passes = feed_passes(op);
+  std::vector<bool> rapid_into;
+  for (std::size_t i = 0; i < n; ++i) {
+    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
+  }
+  const PosePlan warm = plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options);
+  if (!warm.ok()) {
+    for (std::size_t q = 0; q < passes.size(); ++q) progress.advance();
+    return;
+  }
+  const GuardReference paper{out.axes, {}};
+  const Acceptance acceptable_at{op, contacts, ball_radius_mm, model, tool, machine.ac};
+  const double max_dev_rad = deg_to_rad(options.max_deviation_deg);
+  std::vector<std::optional<GlobalPassPlan>> plans(passes.size());
+  detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
+    const IndexRange pass = passes[q];
+    GlobalPassProblem problem;
+    std::vector<double> a_deg, c_deg;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      problem.input_axes.push_back(op.points[i].axis);
+      problem.warm_start.push_back(warm.poses[i]);
+      a_deg.push_back(rad_to_deg(warm.poses[i].a_rad));
+      c_deg.push_back(rad_to_deg(warm.poses[i].c_rad));
+    }
+    // The metrics' segment times; a move too short to time gets a floor (it would divide).
+    problem.segment_time_s =
+        segment_times_s(segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                        pass_feeds(metric_feed, pass), a_deg, c_deg);
+    for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
+    const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
+      return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
+             acceptable_at(pass.begin + j, axis);
+    };
+    if (pass.size() >= 3) plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
+    progress.advance();
+  });
+  out.preferred.assign(n, std::nullopt);
+  for (std::size_t q = 0; q < passes.size(); ++q) {
+    if (!plans[q]) continue;
+    ++out.global_passes;
+    for (std::size_t j = 0; j < passes[q].size(); ++j) {
+      out.axes[passes[q].begin + j] = plans[q]->axes[j];
+      out.preferred[passes[q].begin + j] = plans[q]->poses[j];
+    }
+  }
+  const auto carry = [&](std::size_t to, std::size_t from) {
+    if (angle_between(out.axes[from], op.points[to].axis) <= max_dev_rad + 1e-12 &&
+        acceptable_at(to, out.axes[from])) {
+      out.axes[to] = out.axes[from];
+    }
+  };
+  carry_between_passes(op, passes, carry);
+  out.global_reverted = guard_passes(op, contacts, ball_radius_mm, model, tool, machine,
+                                     metric_feed, pose_options, out, &paper);
 }
 
 }  // namespace
@@ -647,9 +754,8 @@ const char* to_string(Method method) {
 }
 
 JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
-  if (options.method == Method::Global) {
-    throw InputError(std::string("--method global is not available in taxopt ") + kVersion +
-                     "; use --method paper or --method none");
+  if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
+    throw InputError("--jerk-weight must be a number >= 0 (s^2)");
   }
   if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
     throw InputError("--max-deviation must be within [0, 90] deg");
@@ -726,7 +832,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   // The paper's optimiser: new axes about the fixed ball centres.
   std::vector<std::optional<OptimisedOperation>> optimised(tp.operations.size());
   std::vector<double> optimise_time(tp.operations.size(), 0.0);
-  if (options.method == Method::Paper) {
+  if (options.method != Method::None) {
     if (!options.part) {
       res.warnings.push_back(
           "no part given: no collision constraint; the tool axes may move up "
@@ -735,7 +841,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     std::size_t all_passes = 0;
     for (const Operationd& op : tp.operations) all_passes += feed_passes(op).size();
-    detail::StageProgress progress(options.progress, "optimisation", all_passes);
+    detail::StageProgress progress(options.progress, "optimisation",
+                                   all_passes * (options.method == Method::Global ? 2 : 1));
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
       const Operationd& op = tp.operations[k];
       const double R = ball_radius_mm(op, options);
@@ -756,6 +863,15 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           op, contacts[k], R, collision ? &*collision : nullptr, tool ? &*tool : nullptr, machine,
           metric_feed, options.pose_options, *optimised[k]);
       optimised[k]->reverted_passes = reverted;
+      if (options.method == Method::Global) {
+        GlobalOptions global = options.global;
+        global.max_deviation_deg = options.paper.max_deviation_deg;
+        global.candidate_step_deg =
+            std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
+        refine_global(op, contacts[k], R, collision ? &*collision : nullptr,
+                      tool ? &*tool : nullptr, machine, metric_feed, options.pose_options, global,
+                      *optimised[k], progress);
+      }
       if (reverted) {
         res.warnings.push_back("operation " + op.name + ": " + std::to_string(reverted) +
                                " passes keep their input axes (the optimised axes raised their "
@@ -776,7 +892,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                     std::to_string(o.repairs) + " repair keys, " +
                     std::to_string(o.smoothed_joints) + " joints smoothed, " +
                     std::to_string(o.sharp_joints) + " left sharp, " +
-                    std::to_string(o.pole_stretches) + " pole passages re-planned");
+                    std::to_string(o.pole_stretches) + " pole passages re-planned" +
+                    (options.method == Method::Global
+                         ? "; global: " + std::to_string(o.global_passes) + " passes refined, " +
+                               std::to_string(o.global_reverted) + " kept the paper's axes"
+                         : std::string()));
       }
     }
   }
@@ -817,7 +937,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       in_axes.push_back(op.points[i].axis);
       rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
     }
-    const PosePlan plan = plan_poses(machine.ac, axes, rapid_into, start, options.pose_options);
+    const PosePlan plan =
+        plan_poses(machine.ac, axes, rapid_into, start, options.pose_options,
+                   optimised[k] ? optimised[k]->preferred : std::vector<std::optional<Posed>>{});
     // The input axes as the machine would have run them, for the "before" metrics.
     if (optimised[k]) {
       const PosePlan before =

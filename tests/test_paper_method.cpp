@@ -181,6 +181,31 @@ void check_case(const Case& k) {
   CHECK(ja.worst_centre_mm <= 0.005);
   CHECK(ja.worst_dev_deg <= 30.0 + 0.01);
   CHECK(ja.hits == 0);
+
+  // --method global (issue 6's done-when): its peak a, recomputed here from what rs274 read,
+  // no higher than the paper method's, as safe, centres unchanged, axes within the cone.
+  for (const char* objective : {"sum-squares", "peak"}) {
+    INFO("--method global --objective " << objective);
+    const RunResult global_run =
+        run_taxopt(common + " -q --method global --objective " + objective + " --gcode " +
+                   dir.path("global.ngc"));
+    INFO(global_run.err);
+    REQUIRE(global_run.code == 0);
+    std::vector<CanonMove> global;
+    REQUIRE(run_rs274(dir.path("global.ngc"), global).code == 0);
+    REQUIRE(global.size() == k.cl.tips_mm.size());
+    const Peaks pg = peaks(global, k.cl, v);
+    const Judged jg = judge(global, k.cl, mesh, spheres, k.tool);
+    INFO("global: peak omega " << pg.omega_deg_s << " deg/s, peak a " << pg.accel_deg_s2
+                               << " deg/s^2; " << jg.hits << " points collide, centres moved up to "
+                               << jg.worst_centre_mm << " mm, axes up to " << jg.worst_dev_deg
+                               << " deg");
+    // The written angles have 4 decimals: the allowance covers their rounding.
+    CHECK(pg.accel_deg_s2 <= pa.accel_deg_s2 * (1.0 + 1e-3) + 1e-2);
+    CHECK(jg.worst_centre_mm <= 0.005);
+    CHECK(jg.worst_dev_deg <= 30.0 + 0.01);
+    CHECK(jg.hits == 0);
+  }
 }
 
 /// Passes along x over `hf` at the given y, the axis the surface normal leaned by `lean_deg`
@@ -223,8 +248,8 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
 // the sine-like part the passes graze the pole and C turns fast: 728 -> 683 deg/s, -6 %);
 // the pole passages re-planned in machine space (plan/pole_passage.hpp) are what meets it.
 TEST_CASE(
-    "paper method: on unseen sine-like and bump parts the peaks fall by the paper's "
-    "margins, safely",
+    "paper and global methods: on unseen sine-like and bump parts the peaks fall by the "
+    "paper's margins, and the global method's peak a is no higher than the paper's, safely",
     "[paper-done-when][integration]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(9001);
@@ -278,8 +303,8 @@ TEST_CASE(
 // exact triangle-versus-cylinder test, not FCL), ball centres where they were, every axis
 // within --max-deviation.
 TEST_CASE(
-    "paper method: a steep wall beside the path, input axes leaning into it, comes out "
-    "collision-free",
+    "paper and global methods: a steep wall beside the path, input axes leaning into it, comes "
+    "out collision-free",
     "[wall-done-when][integration]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(4242);

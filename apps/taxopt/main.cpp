@@ -27,6 +27,8 @@
 namespace {
 
 struct Args {
+  std::string objective = "sum-squares";
+  std::optional<double> jerk_weight;
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   int threads = 0;
@@ -215,6 +217,13 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--method", a.method, "none | paper | global (default paper)")
       ->check(CLI::IsMember({"none", "paper", "global"}));
+  app.add_option("--objective", a.objective,
+                 "--method global: sum-squares (sum of squared rotary accelerations, default) | "
+                 "peak (the largest one)")
+      ->check(CLI::IsMember({"sum-squares", "peak"}));
+  app.add_option("--jerk-weight", a.jerk_weight,
+                 "--method global: weight of the squared rotary jerk against the squared "
+                 "acceleration, s^2 (default 0)");
   app.add_option("--feed", a.feed_mm_per_min,
                  "feed for the metrics, mm/min (overrides FEDRAT; the feed written when the "
                  "file has none; default 1000)");
@@ -394,6 +403,9 @@ int main(int argc, char** argv) {
     options.method = a.method == "none"    ? taxopt::Method::None
                      : a.method == "paper" ? taxopt::Method::Paper
                                            : taxopt::Method::Global;
+    options.global.objective = a.objective == "peak" ? taxopt::GlobalObjective::Peak
+                                                     : taxopt::GlobalObjective::SumSquares;
+    if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     if (a.max_deviation) options.paper.max_deviation_deg = *a.max_deviation;
     options.feed_mm_per_min = a.feed_mm_per_min;

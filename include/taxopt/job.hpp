@@ -16,6 +16,7 @@
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/kinematics/metrics.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
+#include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 
 namespace taxopt {
@@ -38,6 +39,9 @@ struct JobOptions {
   /// The paper's optimiser (--method paper): deviation cone (--max-deviation), candidate
   /// grid (--grid), segmenter and joint smoothing.
   PaperOptions paper;
+  /// --method global (global_optimiser.hpp): its objective (--objective) and jerk weight
+  /// (--jerk-weight); its cone is paper.max_deviation_deg. It starts from the paper's axes.
+  GlobalOptions global;
   /// The part (not owned); without it there is no contact recovery and no collision check.
   const Part* part = nullptr;
   ContactOptions contact;

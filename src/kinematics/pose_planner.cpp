@@ -42,10 +42,18 @@ std::vector<Candidate> candidates(const ACMachined& m, const Vec3d& axis) {
 
 PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
                     const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
-                    const PosePlanOptions& options) {
+                    const PosePlanOptions& options,
+                    const std::vector<std::optional<Posed>>& preferred) {
   if (rapid_into.size() != axes.size()) {
     throw std::invalid_argument("plan_poses: rapid_into and axes differ in size");
   }
+  if (!preferred.empty() && preferred.size() != axes.size()) {
+    throw std::invalid_argument("plan_poses: preferred and axes differ in size");
+  }
+  const auto preferred_at = [&](std::size_t i) -> const std::optional<Posed>& {
+    static const std::optional<Posed> none;
+    return preferred.empty() ? none : preferred[i];
+  };
   const std::size_t n = axes.size();
   PosePlan plan;
   plan.poses.assign(n, Posed{});
@@ -53,7 +61,14 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
 
   std::vector<std::size_t> keys;  // points off the pole, in order
   std::vector<std::vector<Candidate>> cand(n);
+  // Points on the pole that the caller gave a pose keep its C, as key points.
+  const auto free_pole = [&](std::size_t i) { return m.at_pole(axes[i]) && !preferred_at(i); };
   for (std::size_t i = 0; i < n; ++i) {
+    if (m.at_pole(axes[i]) && preferred_at(i) && m.a.contains(0.0)) {
+      cand[i] = {Candidate{Posed{0.0, preferred_at(i)->c_rad}}};
+      keys.push_back(i);
+      continue;
+    }
     if (m.at_pole(axes[i])) {
       if (!m.a.contains(0.0)) {
         plan.status = PosePlan::Status::OutOfLimits;
@@ -64,6 +79,16 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       continue;
     }
     cand[i] = candidates(m, axes[i]);
+    if (const std::optional<Posed>& want = preferred_at(i)) {
+      // The caller's branch (and, for a bounded C, its turn), where the machine has it.
+      std::vector<Candidate> kept;
+      for (const Candidate& c : cand[i]) {
+        const double dc = m.c.continuous ? wrap_pi(c.pose.c_rad - want->c_rad)
+                                         : c.pose.c_rad - want->c_rad;
+        if (std::abs(c.pose.a_rad - want->a_rad) < 1e-6 && std::abs(dc) < 1e-6) kept.push_back(c);
+      }
+      if (!kept.empty()) cand[i] = std::move(kept);
+    }
     if (cand[i].empty()) {
       plan.status = PosePlan::Status::OutOfLimits;
       plan.failed_index = i;
@@ -160,12 +185,12 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
   // the ends of the sequence), so that C never jumps where it does not move the axis.
   std::size_t i = 0;
   while (i < n) {
-    if (!m.at_pole(axes[i])) {
+    if (!free_pole(i)) {
       ++i;
       continue;
     }
     std::size_t e = i;
-    while (e < n && m.at_pole(axes[e])) ++e;
+    while (e < n && free_pole(e)) ++e;
     const bool has_before = i > 0, has_after = e < n;
     const double c_before = has_before
                                 ? plan.poses[i - 1].c_rad

@@ -47,8 +47,12 @@ struct PosePlan {
 /// @param axes       unit tool axes, workpiece coordinates
 /// @param rapid_into rapid_into[i] is true when the move into point i is a rapid (size of axes)
 /// @param start      pose before the first point (previous operation), if any
+/// @param preferred  empty, or per point a pose the caller has chosen (its branch, and its C
+///                   on the pole; a continuous C still takes the turn nearest the previous
+///                   point's): `--method global` decides these by its own objective
 PosePlan plan_poses(const ACMachined& machine, const std::vector<Vec3d>& axes,
                     const std::vector<bool>& rapid_into, const std::optional<Posed>& start = {},
-                    const PosePlanOptions& options = {});
+                    const PosePlanOptions& options = {},
+                    const std::vector<std::optional<Posed>>& preferred = {});
 
 }  // namespace taxopt

@@ -1,0 +1,102 @@
+#pragma once
+/// @file `--method global`: the tool axes of one pass chosen in the machine's own coordinates,
+/// minimising the rotary-axis acceleration of eq. 16-18 itself (docs/global-method.md).
+///
+/// Problem. A pass of n points with segment times t_i = L_i / v_i (n - 1). The decision
+/// variables are the machine poses (A_i, C_i): the branch (the sign of A), the side of the pole
+/// A = 0 a pass takes and the winding of C are all in them. For G = A and C,
+///   omega_i^G = (G_{i+1} - G_i) / t_i,   a_i^G = (omega_i^G - omega_{i-1}^G) / ((t_{i-1} + t_i) / 2)
+/// (the metrics of metrics.hpp, degrees). Objective, `GlobalObjective`:
+///   sum-squares: J = sum_i (a_i^A)^2 + (a_i^C)^2  (+ w_j sum_i jerk_i^2, jerk_i = (a_{i+1} - a_i) / t_i)
+///   peak:        P = max_i sqrt((a_i^A)^2 + (a_i^C)^2), ties broken by J.
+/// Constraint: the axis of every pose is acceptable (`AxisTest`: within the deviation cone,
+/// reachable, collision-free) and A within its range.
+///
+/// Solver. (1) Dynamic programme over a coarse set of candidate poses per point: the
+/// warm start's pose, the input axis's poses and the acceptable axes of a cap grid of spacing
+/// `candidate_step_deg` over the cone, each with both inverse solutions where the pass comes
+/// near the pole (far from it a branch change mid-pass is never cheaper than keeping the
+/// branch). Since a_i couples three points, the states are pairs of consecutive candidates:
+/// O(n K^3), exact over the candidates (ties to the earlier candidate, so deterministic).
+/// This settles the basin: branch, passing through the pole (A changes sign, C holds) or
+/// around it (C turns), where the pass turns. (2) Continuous refinement in (A, C): J is a
+/// convex quadratic, J = x^T H x with H = M^T W M pentadiagonal (M the second difference of
+/// the times above); each step solves (H + lambda diag(H)) dx = -H x (Eigen sparse LDLT, O(n))
+/// and moves every point as far along dx as its constraint allows (halving, at most
+/// `bisection_steps` times, else it stays); the step is kept only when the objective falls,
+/// else lambda grows. The peak objective reweights the rows (IRLS, w_i ~ (|a_i| / peak)^6).
+/// Every iterate is feasible and the objective never rises: the result is never worse than
+/// the better of the warm start and the programme's optimum.
+
+#include <cstddef>
+#include <vector>
+
+#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/plan/paper_optimiser.hpp"
+
+namespace taxopt {
+
+enum class GlobalObjective { SumSquares, Peak };
+/// "sum-squares", "peak".
+const char* to_string(GlobalObjective objective);
+
+/// Options of plan_pass_global.
+struct GlobalOptions {
+  GlobalObjective objective = GlobalObjective::SumSquares;
+  /// Weight of the squared jerk (deg/s^3)^2 against the squared acceleration, s^2 (0: off).
+  /// Only the refinement sees it (the programme's states are pairs of points).
+  double jerk_weight_s2 = 0.0;
+  /// Radius of the cap of candidate axes around each input axis, deg (the deviation cone;
+  /// the AxisTest holds the cone itself).
+  double max_deviation_deg = 30.0;
+  /// Spacing of the programme's candidate axes, deg.
+  double candidate_step_deg = 15.0;
+  /// Refinement: largest number of accepted steps, and of halvings of a point's step.
+  int max_iterations = 40;
+  int bisection_steps = 4;
+};
+
+/// One pass as the global method sees it.
+struct GlobalPassProblem {
+  /// Input tool axes (n, unit).
+  std::vector<Vec3d> input_axes;
+  /// Segment times t_i = L_i / v_i, s (n - 1, positive).
+  std::vector<double> segment_time_s;
+  /// A feasible start (n poses, continuous C), e.g. the paper method's; its axes must be
+  /// acceptable.
+  std::vector<Posed> warm_start;
+};
+
+/// The poses of a pass and how they came about.
+struct GlobalPassPlan {
+  /// Poses (continuous C) and their axes, n.
+  std::vector<Posed> poses;
+  std::vector<Vec3d> axes;
+  /// Objective (rotary_objective) of the warm start, of the programme's best sequence, and in
+  /// the end.
+  double objective_warm = 0.0, objective_dp = 0.0, objective = 0.0;
+  /// Largest number of candidates of a point, and refinement steps accepted.
+  std::size_t max_candidates = 0;
+  int iterations = 0;
+};
+
+/// The objective of poses (continuous C) over segment times: J or P of the file comment,
+/// degrees and seconds.
+double rotary_objective(const std::vector<Posed>& poses, const std::vector<double>& segment_time_s,
+                        GlobalObjective objective, double jerk_weight_s2 = 0.0);
+
+/// The exact minimiser over discrete candidates: one index per point into `candidates[i]`,
+/// by the programme of the file comment; `value` gets the objective of the sequence (jerk not
+/// counted). With `wrap_c` (a continuous C) C is taken modulo a turn: each step of C is
+/// wrapped to (-180, 180] deg. Candidates per point: 1 to 255.
+std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<Posed>>& candidates,
+                                                 const std::vector<double>& segment_time_s,
+                                                 GlobalObjective objective, double* value,
+                                                 bool wrap_c = true);
+
+/// Plans one pass. `acceptable(i, axis)` may be called from several threads at once for
+/// different passes; the result does not depend on the thread count.
+GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProblem& problem,
+                                const AxisTest& acceptable, const GlobalOptions& options = {});
+
+}  // namespace taxopt

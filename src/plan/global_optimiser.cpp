@@ -1,0 +1,364 @@
+#include "taxopt/plan/global_optimiser.hpp"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+namespace taxopt {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
+
+/// Relative tolerance under which two objective values are equal (ties keep the earlier).
+constexpr double kTie = 1e-12;
+
+/// An objective value: the peak a^2 and the sum of a^2 (deg^2/s^4). Which one orders values
+/// depends on the objective; the other breaks ties.
+struct Value {
+  double peak_sq = 0.0, sum_sq = 0.0;
+};
+
+bool less(const Value& x, const Value& y, GlobalObjective objective) {
+  if (objective == GlobalObjective::Peak) {
+    if (x.peak_sq < y.peak_sq * (1.0 - kTie)) return true;
+    if (x.peak_sq > y.peak_sq * (1.0 + kTie)) return false;
+  }
+  return x.sum_sq < y.sum_sq * (1.0 - kTie) - 1e-300;
+}
+
+double scalar(const Value& v, GlobalObjective objective) {
+  return objective == GlobalObjective::Peak ? std::sqrt(v.peak_sq) : v.sum_sq;
+}
+
+/// Accelerations (deg/s^2) of A and C at the interior points 1 .. n-2 of poses with
+/// continuous C.
+void accelerations(const std::vector<Posed>& poses, const std::vector<double>& t,
+                   std::vector<double>& aa, std::vector<double>& ac) {
+  const std::size_t n = poses.size();
+  aa.assign(n, 0.0);
+  ac.assign(n, 0.0);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double c = 2.0 / (t[i - 1] + t[i]);
+    const double wa0 = (poses[i].a_rad - poses[i - 1].a_rad) / t[i - 1];
+    const double wa1 = (poses[i + 1].a_rad - poses[i].a_rad) / t[i];
+    const double wc0 = (poses[i].c_rad - poses[i - 1].c_rad) / t[i - 1];
+    const double wc1 = (poses[i + 1].c_rad - poses[i].c_rad) / t[i];
+    aa[i] = kRadToDeg * c * (wa1 - wa0);
+    ac[i] = kRadToDeg * c * (wc1 - wc0);
+  }
+}
+
+Value value_of(const std::vector<Posed>& poses, const std::vector<double>& t, double jerk_weight) {
+  std::vector<double> aa, ac;
+  accelerations(poses, t, aa, ac);
+  Value v;
+  for (std::size_t i = 0; i < aa.size(); ++i) {
+    const double sq = aa[i] * aa[i] + ac[i] * ac[i];
+    v.peak_sq = std::max(v.peak_sq, sq);
+    v.sum_sq += sq;
+  }
+  if (jerk_weight > 0.0) {
+    for (std::size_t i = 1; i + 2 < aa.size(); ++i) {
+      const double ja = (aa[i + 1] - aa[i]) / t[i], jc = (ac[i + 1] - ac[i]) / t[i];
+      v.sum_sq += jerk_weight * (ja * ja + jc * jc);
+    }
+  }
+  return v;
+}
+
+/// Sparse rows of the accelerations as linear functions of one coordinate (rad -> deg/s^2),
+/// weighted by `row_weight` (per interior point), and of the jerks: M, so that the objective
+/// of one coordinate is |M x|^2.
+Eigen::SparseMatrix<double> second_difference(const std::vector<double>& t,
+                                              const std::vector<double>& row_weight,
+                                              double jerk_weight) {
+  const std::size_t n = t.size() + 1;
+  std::vector<Eigen::Triplet<double>> entries;
+  const auto acc_row = [&](std::size_t i, double scale, long row) {
+    const double c = scale * kRadToDeg * 2.0 / (t[i - 1] + t[i]);
+    entries.emplace_back(row, static_cast<long>(i - 1), c / t[i - 1]);
+    entries.emplace_back(row, static_cast<long>(i), -c / t[i - 1] - c / t[i]);
+    entries.emplace_back(row, static_cast<long>(i + 1), c / t[i]);
+  };
+  long row = 0;
+  for (std::size_t i = 1; i + 1 < n; ++i) acc_row(i, std::sqrt(row_weight[i]), row++);
+  if (jerk_weight > 0.0) {
+    const double s = std::sqrt(jerk_weight);
+    for (std::size_t i = 1; i + 2 < n; ++i) {
+      acc_row(i + 1, s / t[i], row);
+      acc_row(i, -s / t[i], row);
+      ++row;
+    }
+  }
+  Eigen::SparseMatrix<double> m(row, static_cast<long>(n));
+  m.setFromTriplets(entries.begin(), entries.end());
+  return m;
+}
+
+/// The candidate poses of point i for the programme (C in (-pi, pi] for a continuous C, else
+/// every turn within its range); the warm start's pose first.
+std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const Posed& warm, const std::vector<Vec3d>& grid_axes,
+                                 bool both_branches, const AxisTest& acceptable) {
+  std::vector<Posed> out;
+  const auto add = [&](Posed p) {
+    if (!machine.a.contains(p.a_rad)) return;
+    const auto push = [&](const Posed& q) {
+      for (const Posed& o : out) {
+        if (std::abs(o.a_rad - q.a_rad) < 1e-9 && std::abs(wrap_pi(o.c_rad - q.c_rad)) < 1e-9) {
+          return;
+        }
+      }
+      if (out.size() < 255) out.push_back(q);
+    };
+    if (machine.c.continuous) {
+      p.c_rad = wrap_pi(p.c_rad);
+      push(p);
+      return;
+    }
+    const double two_pi = Constants<double>::two_pi();
+    for (int turn = -2; turn <= 2; ++turn) {
+      const Posed q{p.a_rad, wrap_pi(p.c_rad) + turn * two_pi};
+      if (machine.c.contains(q.c_rad)) push(q);
+    }
+  };
+  add(warm);
+  const bool warm_positive = warm.a_rad >= 0.0;
+  for (const Vec3d& axis : grid_axes) {
+    if (!acceptable(i, axis)) continue;
+    if (machine.at_pole(axis)) {
+      add(Posed{0.0, warm.c_rad});
+      continue;
+    }
+    for (const Posed& p : machine.inverse(axis)) {
+      if (both_branches || (p.a_rad >= 0.0) == warm_positive) add(p);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* to_string(GlobalObjective objective) {
+  return objective == GlobalObjective::Peak ? "peak" : "sum-squares";
+}
+
+double rotary_objective(const std::vector<Posed>& poses, const std::vector<double>& segment_time_s,
+                        GlobalObjective objective, double jerk_weight_s2) {
+  if (segment_time_s.size() + 1 != poses.size() && !poses.empty()) {
+    throw std::invalid_argument("rotary_objective: n poses need n - 1 segment times");
+  }
+  return scalar(value_of(poses, segment_time_s, jerk_weight_s2), objective);
+}
+
+std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<Posed>>& candidates,
+                                                 const std::vector<double>& segment_time_s,
+                                                 GlobalObjective objective, double* value,
+                                                 bool wrap_c) {
+  const std::size_t n = candidates.size();
+  if (n == 0) return {};
+  if (segment_time_s.size() + 1 != n) {
+    throw std::invalid_argument("best_candidate_sequence: n points need n - 1 segment times");
+  }
+  for (const auto& c : candidates) {
+    if (c.empty() || c.size() > 255) {
+      throw std::invalid_argument("best_candidate_sequence: 1 to 255 candidates per point");
+    }
+  }
+  if (n <= 2) {
+    if (value) *value = 0.0;
+    return std::vector<std::size_t>(n, 0);
+  }
+  const auto& t = segment_time_s;
+  // Rates (rad/s) of A and C of every pair of candidates of segment i; C steps wrapped.
+  const auto rates = [&](std::size_t i, std::vector<double>& wa, std::vector<double>& wc) {
+    const auto& p = candidates[i];
+    const auto& q = candidates[i + 1];
+    wa.resize(p.size() * q.size());
+    wc.resize(p.size() * q.size());
+    for (std::size_t r = 0; r < p.size(); ++r) {
+      for (std::size_t s = 0; s < q.size(); ++s) {
+        wa[r * q.size() + s] = (q[s].a_rad - p[r].a_rad) / t[i];
+        const double step = q[s].c_rad - p[r].c_rad;
+        wc[r * q.size() + s] = (wrap_c ? wrap_pi(step) : step) / t[i];
+      }
+    }
+  };
+  // State of point i: (candidate r at i - 1, candidate s at i), index r * K_i + s.
+  std::vector<Value> cost(candidates[0].size() * candidates[1].size());
+  std::vector<std::vector<std::uint8_t>> back(n);
+  std::vector<double> wa0, wc0, wa1, wc1;
+  rates(0, wa0, wc0);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    rates(i, wa1, wc1);
+    const std::size_t kp = candidates[i - 1].size(), k = candidates[i].size(),
+                      kn = candidates[i + 1].size();
+    const double c = kRadToDeg * 2.0 / (t[i - 1] + t[i]);
+    std::vector<Value> next(k * kn);
+    back[i + 1].assign(k * kn, 0);
+    for (std::size_t s = 0; s < k; ++s) {
+      for (std::size_t u = 0; u < kn; ++u) {
+        const double a1 = wa1[s * kn + u], c1 = wc1[s * kn + u];
+        Value best{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+        std::uint8_t arg = 0;
+        for (std::size_t r = 0; r < kp; ++r) {
+          const double da = c * (a1 - wa0[r * k + s]), dc = c * (c1 - wc0[r * k + s]);
+          const double sq = da * da + dc * dc;
+          const Value& before = cost[r * k + s];
+          const Value v{std::max(before.peak_sq, sq), before.sum_sq + sq};
+          if (less(v, best, objective)) best = v, arg = static_cast<std::uint8_t>(r);
+        }
+        next[s * kn + u] = best;
+        back[i + 1][s * kn + u] = arg;
+      }
+    }
+    cost.swap(next);
+    wa0.swap(wa1);
+    wc0.swap(wc1);
+  }
+  // Best final state, then back through the pointers.
+  const std::size_t kl = candidates[n - 1].size();
+  std::size_t best = 0;
+  for (std::size_t st = 1; st < cost.size(); ++st) {
+    if (less(cost[st], cost[best], objective)) best = st;
+  }
+  if (value) *value = scalar(cost[best], objective);
+  std::vector<std::size_t> seq(n);
+  seq[n - 1] = best % kl;
+  seq[n - 2] = best / kl;
+  for (std::size_t i = n - 1; i >= 2; --i) {
+    const std::size_t kn = candidates[i].size();
+    seq[i - 2] = back[i][seq[i - 1] * kn + seq[i]];
+  }
+  return seq;
+}
+
+GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProblem& problem,
+                                const AxisTest& acceptable, const GlobalOptions& options) {
+  const std::size_t n = problem.warm_start.size();
+  if (problem.input_axes.size() != n || (n > 0 && problem.segment_time_s.size() + 1 != n)) {
+    throw std::invalid_argument("plan_pass_global: n axes, n poses and n - 1 times are needed");
+  }
+  for (double ti : problem.segment_time_s) {
+    if (!(ti > 0.0) || !std::isfinite(ti)) {
+      throw std::invalid_argument("plan_pass_global: segment times must be positive");
+    }
+  }
+  const auto& t = problem.segment_time_s;
+  const GlobalObjective objective = options.objective;
+  const double wj = options.jerk_weight_s2;
+  GlobalPassPlan plan;
+  plan.poses = problem.warm_start;
+  const auto finish = [&] {
+    plan.axes.clear();
+    for (const Posed& p : plan.poses) plan.axes.push_back(machine.forward(p));
+    plan.objective = rotary_objective(plan.poses, t, objective, wj);
+    return plan;
+  };
+  plan.objective_warm = plan.objective_dp = rotary_objective(plan.poses, t, objective, wj);
+  if (n < 3) return finish();
+
+  // (1) The programme over coarse candidates.
+  const double radius = deg_to_rad(options.max_deviation_deg);
+  const double step = deg_to_rad(std::max(options.candidate_step_deg, 1.0));
+  // Both branches only where the pass comes within reach of the pole.
+  bool near_pole = false;
+  for (const Posed& p : problem.warm_start) {
+    near_pole = near_pole || std::abs(p.a_rad) <= 2.0 * radius + step;
+  }
+  std::vector<std::vector<Posed>> cand(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::vector<Vec3d> grid = cap_grid(problem.input_axes[i], radius, step);
+    cand[i] = candidates_at(machine, i, problem.warm_start[i], grid, near_pole, acceptable);
+    plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
+  }
+  double dp_value = 0.0;
+  const std::vector<std::size_t> seq = best_candidate_sequence(cand, t, objective, &dp_value, machine.c.continuous);
+  std::vector<Posed> dp(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    dp[i] = cand[i][seq[i]];
+    if (i > 0 && machine.c.continuous) {
+      dp[i].c_rad = dp[i - 1].c_rad + wrap_pi(dp[i].c_rad - dp[i - 1].c_rad);
+    }
+  }
+  if (machine.c.continuous) {
+    // Keep the warm start's turn of C at the first point (the programme works modulo a turn).
+    const double shift = problem.warm_start[0].c_rad - dp[0].c_rad;
+    const double turns = std::round(shift / Constants<double>::two_pi());
+    for (Posed& p : dp) p.c_rad += turns * Constants<double>::two_pi();
+  }
+  Value current = value_of(plan.poses, t, wj);
+  const Value dp_full = value_of(dp, t, wj);
+  plan.objective_dp = scalar(dp_full, objective);
+  if (less(dp_full, current, objective)) plan.poses = dp, current = dp_full;
+
+  // (2) Continuous refinement from the better start.
+  const auto feasible = [&](std::size_t i, const Posed& p) {
+    if (!machine.a.contains(p.a_rad)) return false;
+    if (!machine.c.continuous && !machine.c.contains(p.c_rad)) return false;
+    return acceptable(i, machine.forward(p));
+  };
+  std::vector<double> row_weight(n, 1.0);
+  double lambda = 1e-3;
+  int rejected = 0;
+  while (plan.iterations < options.max_iterations && rejected < 12) {
+    if (objective == GlobalObjective::Peak) {
+      std::vector<double> aa, ac;
+      accelerations(plan.poses, t, aa, ac);
+      const double peak = std::sqrt(current.peak_sq);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double r = peak > 0.0 ? std::hypot(aa[i], ac[i]) / peak : 1.0;
+        row_weight[i] = std::max(std::pow(r, 6.0), 1e-6);
+      }
+    }
+    const Eigen::SparseMatrix<double> m = second_difference(t, row_weight, wj);
+    Eigen::SparseMatrix<double> h = (m.transpose() * m).pruned();
+    Eigen::VectorXd xa(static_cast<long>(n)), xc(static_cast<long>(n));
+    for (std::size_t i = 0; i < n; ++i) {
+      xa[static_cast<long>(i)] = plan.poses[i].a_rad;
+      xc[static_cast<long>(i)] = plan.poses[i].c_rad;
+    }
+    Eigen::SparseMatrix<double> lhs = h;
+    double mean_diag = 0.0;
+    for (long i = 0; i < h.rows(); ++i) mean_diag += h.coeff(i, i);
+    mean_diag /= static_cast<double>(h.rows());
+    for (long i = 0; i < h.rows(); ++i) {
+      lhs.coeffRef(i, i) += lambda * (h.coeff(i, i) + 1e-9 * mean_diag + 1e-300);
+    }
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(lhs);
+    if (ldlt.info() != Eigen::Success) break;
+    const Eigen::VectorXd da = ldlt.solve(-(h * xa)), dc = ldlt.solve(-(h * xc));
+    if (!da.allFinite() || !dc.allFinite()) break;
+    std::vector<Posed> trial = plan.poses;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double sa = da[static_cast<long>(i)], sc = dc[static_cast<long>(i)];
+      if (std::abs(sa) + std::abs(sc) < 1e-12) continue;
+      double f = 1.0;
+      for (int b = 0; b <= options.bisection_steps; ++b, f *= 0.5) {
+        const Posed p{plan.poses[i].a_rad + f * sa, plan.poses[i].c_rad + f * sc};
+        if (feasible(i, p)) {
+          trial[i] = p;
+          break;
+        }
+      }
+    }
+    const Value v = value_of(trial, t, wj);
+    if (less(v, current, objective) &&
+        (objective == GlobalObjective::Peak || v.sum_sq < current.sum_sq * (1.0 - 1e-9))) {
+      plan.poses = std::move(trial);
+      current = v;
+      ++plan.iterations;
+      lambda = std::max(lambda * 0.3, 1e-6);
+      rejected = 0;
+    } else {
+      lambda *= 10.0;
+      ++rejected;
+    }
+  }
+  return finish();
+}
+
+}  // namespace taxopt

@@ -1,10 +1,13 @@
-// Results: --method none against --method paper on the bundled demo and on generated sine
-// surfaces (with their parts), and the paper method's runtime as the points grow. Prints the
-// markdown tables of docs/results.md.
+// Results: --method none, paper and global on the bundled demo and on generated sine surfaces
+// (with their parts), and the runtime of each as the points grow. Prints the markdown tables
+// of docs/results.md.
 // Run from the source folder: build/release/bench/bench_results [data folder, default data]
+//   [largest number of points of the runtime table, default 100000]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -69,10 +72,14 @@ struct Row {
   double seconds = 0.0;
 };
 
-Row run(const Case& k, Method method) {
+Row run(const Case& k, Method method, GlobalObjective objective = GlobalObjective::SumSquares) {
   const Part part(k.mesh);
   JobOptions o;
   o.method = method;
+  o.global.objective = objective;
+  if (const char* it = std::getenv("TAXOPT_BENCH_GLOBAL_ITERATIONS")) {
+    o.global.max_iterations = std::atoi(it);
+  }
   o.part = &part;
   o.tool = k.tool;
   const auto t0 = std::chrono::steady_clock::now();
@@ -84,8 +91,9 @@ Row run(const Case& k, Method method) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run_bench(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "data";
+  const std::size_t largest = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 100000;
   std::vector<Case> cases;
   {
     Case demo;
@@ -112,14 +120,24 @@ int main(int argc, char** argv) {
       "| case | method | points | peak ω °/s | RMS a °/s² | peak a °/s² | C jumps | colliding "
       "points | max dev ° | cycle s | feed-limited | tip path mm | runtime s |\n");
   std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  struct Variant {
+    Method method;
+    GlobalObjective objective;
+    const char* name;
+  };
+  const std::vector<Variant> variants = {
+      {Method::None, GlobalObjective::SumSquares, "none"},
+      {Method::Paper, GlobalObjective::SumSquares, "paper"},
+      {Method::Global, GlobalObjective::SumSquares, "global"},
+      {Method::Global, GlobalObjective::Peak, "global --objective peak"}};
   for (const Case& k : cases) {
-    for (Method m : {Method::None, Method::Paper}) {
-      const Row r = run(k, m);
+    for (const Variant& var : variants) {
+      const Row r = run(k, var.method, var.objective);
       for (const OperationResult& op : r.result.operations) {
         std::printf(
             "| %s | %s%s | %zu | %.1f | %.1f | %.1f | %d | %ld | %.1f | %.1f | %.0f %% | %.0f | "
             "%.2f |\n",
-            k.name.c_str(), to_string(m), r.result.ok() ? "" : " (exit 1)", op.points,
+            k.name.c_str(), var.name, r.result.ok() ? "" : " (exit 1)", op.points,
             op.after.max_omega_deg_s, op.after.rms_accel_deg_s2, op.after.max_accel_deg_s2,
             op.after.c_jumps, op.colliding_after, op.max_axis_change_deg,
             op.feed_after.cycle_time_s, 100.0 * op.feed_after.feed_limited_fraction,
@@ -129,16 +147,31 @@ int main(int argc, char** argv) {
   }
 
   std::printf(
-      "\nRuntime of --method paper as the points grow (sine h10, tilt 15, yaw 10, with "
-      "the part; contact recovery, optimisation, posting and verification):\n\n");
-  std::printf("| points | runtime s | µs per point |\n|---:|---:|---:|\n");
+      "\nRuntime as the points grow (sine h10, tilt 15, yaw 10, with the part; the whole run: "
+      "contact recovery, optimisation, posting, feed schedule and verification):\n\n");
+  std::printf(
+      "| points | none s | paper s | global s | paper µs/point | global µs/point |\n"
+      "|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& [width, length] :
-       {std::pair<double, double>{10.0, 40.0}, {40.0, 100.0}, {100.0, 400.0}}) {
+       {std::pair<double, double>{18.0, 45.0}, {57.0, 143.0}, {180.0, 454.0}}) {
     const Case k = sine_case("scale", 10.0, 40.0, width, length, 15.0, 10.0);
-    const Row r = run(k, Method::Paper);
     const std::size_t n = k.toolpath.operations.front().points.size();
-    std::printf("| %zu | %.2f | %.0f |%s\n", n, r.seconds, 1e6 * r.seconds / static_cast<double>(n),
-                r.result.ok() ? "" : " (problems)");
+    if (n > largest) break;
+    const Row none = run(k, Method::None), paper = run(k, Method::Paper),
+              global = run(k, Method::Global);
+    const double per = 1e6 / static_cast<double>(n);
+    std::printf("| %zu | %.2f | %.2f | %.2f | %.0f | %.0f |%s\n", n, none.seconds, paper.seconds,
+                global.seconds, per * paper.seconds, per * global.seconds,
+                paper.result.ok() && global.result.ok() ? "" : " (problems)");
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run_bench(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_results: %s\n", e.what());
+    return 1;
+  }
 }

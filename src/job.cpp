@@ -544,9 +544,9 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
     rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
   }
   if (reference) in_axes = reference->axes;
-  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options,
-                                      reference ? reference->preferred
-                                                : std::vector<std::optional<Posed>>{});
+  const PosePlan in_plan =
+      plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options,
+                 reference ? reference->preferred : std::vector<std::optional<Posed>>{});
   if (!in_plan.ok()) return 0;
   const PosePlan out_plan =
       plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options, out.preferred);
@@ -596,8 +596,8 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
               out.axes.begin() + static_cast<long>(pass.begin));
     if (!out.preferred.empty()) {
       for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        out.preferred[i] = reference && !reference->preferred.empty() ? reference->preferred[i]
-                                                                      : std::nullopt;
+        out.preferred[i] =
+            reference && !reference->preferred.empty() ? reference->preferred[i] : std::nullopt;
       }
     }
     ++reverted;
@@ -629,8 +629,26 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
   const Acceptance acceptable_at{op, contacts, ball_radius_mm, model, tool, machine.ac};
   const double max_dev_rad = deg_to_rad(options.max_deviation_deg);
   std::vector<std::optional<GlobalPassPlan>> plans(passes.size());
+  std::vector<IndexRange> cut(passes.size());
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
-    const IndexRange pass = passes[q];
+    // The cut: from the first to the last contact of the pass (all of it without a part). The
+    // points in the air before and after keep the axis of the nearest contact, as with the
+    // paper method: the tool comes down and leaves along the axis it cuts with.
+    IndexRange pass = passes[q];
+    if (!contacts.empty()) {
+      std::size_t first = pass.end, last = pass.end;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) {
+        if (contacts[i].state != ContactState::Touching) continue;
+        if (first == pass.end) first = i;
+        last = i;
+      }
+      if (first == pass.end) {
+        progress.advance();
+        return;
+      }
+      pass = IndexRange{first, last + 1};
+    }
+    cut[q] = pass;
     GlobalPassProblem problem;
     std::vector<double> a_deg, c_deg;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
@@ -640,32 +658,35 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
       c_deg.push_back(rad_to_deg(warm.poses[i].c_rad));
     }
     // The metrics' segment times; a move too short to time gets a floor (it would divide).
-    problem.segment_time_s =
-        segment_times_s(segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                        pass_feeds(metric_feed, pass), a_deg, c_deg);
+    problem.segment_time_s = segment_times_s(segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                                             pass_feeds(metric_feed, pass), a_deg, c_deg);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
              acceptable_at(pass.begin + j, axis);
     };
     if (pass.size() >= 3) plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
+    if (pass.size() < 3) cut[q] = IndexRange{pass.begin, pass.begin};
     progress.advance();
   });
   out.preferred.assign(n, std::nullopt);
-  for (std::size_t q = 0; q < passes.size(); ++q) {
-    if (!plans[q]) continue;
-    ++out.global_passes;
-    for (std::size_t j = 0; j < passes[q].size(); ++j) {
-      out.axes[passes[q].begin + j] = plans[q]->axes[j];
-      out.preferred[passes[q].begin + j] = plans[q]->poses[j];
-    }
-  }
   const auto carry = [&](std::size_t to, std::size_t from) {
     if (angle_between(out.axes[from], op.points[to].axis) <= max_dev_rad + 1e-12 &&
         acceptable_at(to, out.axes[from])) {
       out.axes[to] = out.axes[from];
+      out.preferred[to] = out.preferred[from];
     }
   };
+  for (std::size_t q = 0; q < passes.size(); ++q) {
+    if (!plans[q]) continue;
+    ++out.global_passes;
+    for (std::size_t j = 0; j < cut[q].size(); ++j) {
+      out.axes[cut[q].begin + j] = plans[q]->axes[j];
+      out.preferred[cut[q].begin + j] = plans[q]->poses[j];
+    }
+    for (std::size_t i = cut[q].begin; i-- > passes[q].begin;) carry(i, i + 1);
+    for (std::size_t i = cut[q].end; i < passes[q].end; ++i) carry(i, i - 1);
+  }
   carry_between_passes(op, passes, carry);
   out.global_reverted = guard_passes(op, contacts, ball_radius_mm, model, tool, machine,
                                      metric_feed, pose_options, out, &paper);
@@ -910,7 +931,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < tp.operations.size(); ++k) {
     const Operationd& op = tp.operations[k];
     const auto t0 = Clock::now();
-    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {}, {}, {}};
+    PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {},
+                       {},      {}};
     if (optimised[k]) {
       const double R = ball_radius_mm(op, options);
       for (std::size_t i = 0; i < po.points.size(); ++i) {
@@ -1021,7 +1043,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     schedule_after.push_back(schedule_operation(po.points, written_joints(point_moves[k]),
-                                                po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses) : po.programmed_time_s,
+                                                po.programmed_time_s.empty()
+                                                    ? programmed_block_times_s(po.points, po.poses)
+                                                    : po.programmed_time_s,
                                                 limits));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;

@@ -42,7 +42,7 @@ std::array<double, 5> joints(const CanonMove& m, bool machine_mode, const double
 }
 
 struct Measured {
-  double worst_ratio = 0.0;            // largest velocity or acceleration over its limit
+  double worst_ratio = 0.0;  // largest velocity or acceleration over its limit
   // Largest ratio of a feed move's time in the input program at its feed (the CL file's tip
   // distance over 250 mm/min) to its time as rs274 read it: above 1, the cut ran faster than
   // the CAM system programmed it.

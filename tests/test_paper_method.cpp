@@ -186,9 +186,8 @@ void check_case(const Case& k) {
   // no higher than the paper method's, as safe, centres unchanged, axes within the cone.
   for (const char* objective : {"sum-squares", "peak"}) {
     INFO("--method global --objective " << objective);
-    const RunResult global_run =
-        run_taxopt(common + " -q --method global --objective " + objective + " --gcode " +
-                   dir.path("global.ngc"));
+    const RunResult global_run = run_taxopt(common + " -q --method global --objective " +
+                                            objective + " --gcode " + dir.path("global.ngc"));
     INFO(global_run.err);
     REQUIRE(global_run.code == 0);
     std::vector<CanonMove> global;

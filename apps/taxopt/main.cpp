@@ -403,8 +403,8 @@ int main(int argc, char** argv) {
     options.method = a.method == "none"    ? taxopt::Method::None
                      : a.method == "paper" ? taxopt::Method::Paper
                                            : taxopt::Method::Global;
-    options.global.objective = a.objective == "peak" ? taxopt::GlobalObjective::Peak
-                                                     : taxopt::GlobalObjective::SumSquares;
+    options.global.objective =
+        a.objective == "peak" ? taxopt::GlobalObjective::Peak : taxopt::GlobalObjective::SumSquares;
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     if (a.max_deviation) options.paper.max_deviation_deg = *a.max_deviation;

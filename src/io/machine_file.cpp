@@ -68,10 +68,10 @@ class MachineParser {
              m.gcode.dialect);
       choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
              m.gcode.mode);
-      choose(*g, "gcode", "feed_mode",
-             {{"units-per-minute", FeedMode::UnitsPerMinute},
-              {"inverse-time", FeedMode::InverseTime}},
-             m.gcode.feed_mode);
+      choose(
+          *g, "gcode", "feed_mode",
+          {{"units-per-minute", FeedMode::UnitsPerMinute}, {"inverse-time", FeedMode::InverseTime}},
+          m.gcode.feed_mode);
       choose(*g, "gcode", "feed_reference",
              {{"cutter-path", FeedReference::CutterPath}, {"tip", FeedReference::Tip}},
              m.gcode.feed_reference);
@@ -141,7 +141,10 @@ class MachineParser {
         out = choices[i].second;
         return;
       }
-      list += (i == 0 ? "" : i + 1 == choices.size() ? " or " : ", ") + ("\"" + choices[i].first + "\"");
+      list += (i == 0                    ? ""
+               : i + 1 == choices.size() ? " or "
+                                         : ", ") +
+              ("\"" + choices[i].first + "\"");
     }
     fail(line_of(*n), what + " must be " + list + ", got '" + v + "'");
   }

@@ -13,6 +13,8 @@ constexpr double kTie = 1e-9;
 
 struct Candidate {
   Posed pose;
+  /// 1: the caller's preferred pose, 2: its mirror (-A, C + 180 deg); 0: neither.
+  int side = 0;
 };
 
 /// Candidate poses of a non-pole axis within the machine's ranges. With a continuous C the
@@ -65,7 +67,9 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
   const auto free_pole = [&](std::size_t i) { return m.at_pole(axes[i]) && !preferred_at(i); };
   for (std::size_t i = 0; i < n; ++i) {
     if (m.at_pole(axes[i]) && preferred_at(i) && m.a.contains(0.0)) {
-      cand[i] = {Candidate{Posed{0.0, preferred_at(i)->c_rad}}};
+      const double c = preferred_at(i)->c_rad;
+      cand[i] = {Candidate{Posed{0.0, c}, 1},
+                 Candidate{Posed{0.0, c + Constants<double>::pi()}, 2}};
       keys.push_back(i);
       continue;
     }
@@ -80,12 +84,22 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
     }
     cand[i] = candidates(m, axes[i]);
     if (const std::optional<Posed>& want = preferred_at(i)) {
-      // The caller's branch (and, for a bounded C, its turn), where the machine has it.
+      // The caller's pose and its mirror (the whole pass mirrored has the same rates: which
+      // one is left to the travel to and from the neighbouring passes), where the machine has
+      // them; a bounded C keeps the caller's turn.
       std::vector<Candidate> kept;
-      for (const Candidate& c : cand[i]) {
-        const double dc = m.c.continuous ? wrap_pi(c.pose.c_rad - want->c_rad)
-                                         : c.pose.c_rad - want->c_rad;
-        if (std::abs(c.pose.a_rad - want->a_rad) < 1e-6 && std::abs(dc) < 1e-6) kept.push_back(c);
+      for (Candidate c : cand[i]) {
+        const double dc =
+            m.c.continuous ? wrap_pi(c.pose.c_rad - want->c_rad) : c.pose.c_rad - want->c_rad;
+        const double dm = wrap_pi(c.pose.c_rad - want->c_rad - Constants<double>::pi());
+        if (std::abs(c.pose.a_rad - want->a_rad) < 1e-6 && std::abs(dc) < 1e-6) {
+          c.side = 1;
+          kept.push_back(c);
+        } else if (m.c.continuous && std::abs(c.pose.a_rad + want->a_rad) < 1e-6 &&
+                   std::abs(dm) < 1e-6) {
+          c.side = 2;
+          kept.push_back(c);
+        }
       }
       if (!kept.empty()) cand[i] = std::move(kept);
     }
@@ -151,6 +165,11 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       from[k].assign(cur.size(), -1);
       for (std::size_t s = 0; s < cur.size(); ++s) {
         for (std::size_t r = 0; r < prev.size(); ++r) {
+          // Between two preferred points the sides must agree: a pass is mirrored whole.
+          if (prev[r].side != 0 && cur[s].side != 0 && prev[r].side != cur[s].side &&
+              !rapid_into[keys[k]]) {
+            continue;
+          }
           const double c = cost[k - 1][r] + w * travel(prev[r].pose, cur[s].pose, steps);
           // Ties (within rounding) keep the earlier candidate: the a >= 0 branch of the
           // geometry first, whatever the axes' senses, so mirrored machines mirror.

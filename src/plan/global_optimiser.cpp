@@ -101,8 +101,9 @@ Eigen::SparseMatrix<double> second_difference(const std::vector<double>& t,
 
 /// The candidate poses of point i for the programme (C in (-pi, pi] for a continuous C, else
 /// every turn within its range); the warm start's pose first.
-std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const Posed& warm, const std::vector<Vec3d>& grid_axes,
-                                 bool both_branches, const AxisTest& acceptable) {
+std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const Posed& warm,
+                                 const std::vector<Vec3d>& grid_axes, bool both_branches,
+                                 const AxisTest& acceptable) {
   std::vector<Posed> out;
   const auto add = [&](Posed p) {
     if (!machine.a.contains(p.a_rad)) return;
@@ -202,7 +203,8 @@ std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<P
     for (std::size_t s = 0; s < k; ++s) {
       for (std::size_t u = 0; u < kn; ++u) {
         const double a1 = wa1[s * kn + u], c1 = wc1[s * kn + u];
-        Value best{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+        Value best{std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity()};
         std::uint8_t arg = 0;
         for (std::size_t r = 0; r < kp; ++r) {
           const double da = c * (a1 - wa0[r * k + s]), dc = c * (c1 - wc0[r * k + s]);
@@ -276,7 +278,8 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
     plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
   }
   double dp_value = 0.0;
-  const std::vector<std::size_t> seq = best_candidate_sequence(cand, t, objective, &dp_value, machine.c.continuous);
+  const std::vector<std::size_t> seq =
+      best_candidate_sequence(cand, t, objective, &dp_value, machine.c.continuous);
   std::vector<Posed> dp(n);
   for (std::size_t i = 0; i < n; ++i) {
     dp[i] = cand[i][seq[i]];

@@ -60,7 +60,8 @@ TEST_CASE("global: the programme finds the best sequence of candidates, as enume
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k = 1 + static_cast<std::size_t>(u(rng) * 4.0);  // 1 .. 4 candidates
       for (std::size_t j = 0; j < k; ++j) {
-        cand[i].push_back(Posed{deg_to_rad(-60.0 + 120.0 * u(rng)), deg_to_rad(-180.0 + 360.0 * u(rng))});
+        cand[i].push_back(
+            Posed{deg_to_rad(-60.0 + 120.0 * u(rng)), deg_to_rad(-180.0 + 360.0 * u(rng))});
       }
       if (i > 0) t.push_back(0.05 + u(rng));
     }
@@ -135,9 +136,9 @@ TEST_CASE(
       options.objective = objective;
       const GlobalPassPlan plan = plan_pass_global(m, problem, free, options);
       REQUIRE(plan.poses.size() == n);
-      INFO("objective " << plan.objective_warm << " -> programme " << plan.objective_dp
-                        << " -> " << plan.objective << " after " << plan.iterations
-                        << " steps, up to " << plan.max_candidates << " candidates a point");
+      INFO("objective " << plan.objective_warm << " -> programme " << plan.objective_dp << " -> "
+                        << plan.objective << " after " << plan.iterations << " steps, up to "
+                        << plan.max_candidates << " candidates a point");
       for (std::size_t i = 0; i < n; ++i) {
         CHECK(free(i, plan.axes[i]));
         CHECK((plan.axes[i] - m.forward(plan.poses[i])).norm() < 1e-12);

@@ -5,10 +5,11 @@
 /// Problem. A pass of n points with segment times t_i = L_i / v_i (n - 1). The decision
 /// variables are the machine poses (A_i, C_i): the branch (the sign of A), the side of the pole
 /// A = 0 a pass takes and the winding of C are all in them. For G = A and C,
-///   omega_i^G = (G_{i+1} - G_i) / t_i,   a_i^G = (omega_i^G - omega_{i-1}^G) / ((t_{i-1} + t_i) / 2)
+///   omega_i^G = (G_{i+1} - G_i) / t_i,   a_i^G = (omega_i^G - omega_{i-1}^G) / ((t_{i-1} + t_i) /
+///   2)
 /// (the metrics of metrics.hpp, degrees). Objective, `GlobalObjective`:
-///   sum-squares: J = sum_i (a_i^A)^2 + (a_i^C)^2  (+ w_j sum_i jerk_i^2, jerk_i = (a_{i+1} - a_i) / t_i)
-///   peak:        P = max_i sqrt((a_i^A)^2 + (a_i^C)^2), ties broken by J.
+///   sum-squares: J = sum_i (a_i^A)^2 + (a_i^C)^2  (+ w_j sum_i jerk_i^2, jerk_i = (a_{i+1} - a_i)
+///   / t_i) peak:        P = max_i sqrt((a_i^A)^2 + (a_i^C)^2), ties broken by J.
 /// Constraint: the axis of every pose is acceptable (`AxisTest`: within the deviation cone,
 /// reachable, collision-free) and A within its range.
 ///

@@ -117,9 +117,10 @@ int run_bench(int argc, char** argv) {
 
   std::printf("bench_results %s (one run each, all threads)\n\n", data.c_str());
   std::printf(
-      "| case | method | points | peak ω °/s | RMS a °/s² | peak a °/s² | C jumps | colliding "
+      "| case | method | points | peak ω °/s | RMS ω °/s | RMS a °/s² | peak a °/s² | C jumps | "
+      "colliding "
       "points | max dev ° | cycle s | feed-limited | tip path mm | runtime s |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   struct Variant {
     Method method;
     GlobalObjective objective;
@@ -135,11 +136,12 @@ int run_bench(int argc, char** argv) {
       const Row r = run(k, var.method, var.objective);
       for (const OperationResult& op : r.result.operations) {
         std::printf(
-            "| %s | %s%s | %zu | %.1f | %.1f | %.1f | %d | %ld | %.1f | %.1f | %.0f %% | %.0f | "
+            "| %s | %s%s | %zu | %.1f | %.1f | %.1f | %.1f | %d | %ld | %.1f | %.1f | %.0f %% | "
+            "%.0f | "
             "%.2f |\n",
             k.name.c_str(), var.name, r.result.ok() ? "" : " (exit 1)", op.points,
-            op.after.max_omega_deg_s, op.after.rms_accel_deg_s2, op.after.max_accel_deg_s2,
-            op.after.c_jumps, op.colliding_after, op.max_axis_change_deg,
+            op.after.max_omega_deg_s, op.after.rms_omega_deg_s, op.after.rms_accel_deg_s2,
+            op.after.max_accel_deg_s2, op.after.c_jumps, op.colliding_after, op.max_axis_change_deg,
             op.feed_after.cycle_time_s, 100.0 * op.feed_after.feed_limited_fraction,
             op.feed_after.feed_path_mm, r.seconds);
       }

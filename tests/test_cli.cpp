@@ -132,8 +132,8 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   CHECK(op["points"] == 4);
   CHECK(op["feed_mm_min"] == 250.0);
   for (const char* side : {"before", "after"}) {
-    for (const char* key : {"max_omega_deg_s", "max_accel_deg_s2", "rms_accel_deg_s2", "c_jumps",
-                            "colliding_points"}) {
+    for (const char* key : {"max_omega_deg_s", "max_accel_deg_s2", "rms_accel_deg_s2",
+                            "rms_omega_deg_s", "c_jumps", "colliding_points"}) {
       CHECK(op[side].contains(key));
     }
   }
@@ -235,6 +235,27 @@ TEST_CASE("cli: with a part, 1 and 2 threads give the same bytes", "[cli][collis
   }
   CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
   CHECK(read_file(t.path("1.csv")) == read_file(t.path("2.csv")));
+}
+
+TEST_CASE("cli: --method global gives the same bytes on 1 and 2 threads", "[cli][global]") {
+  TempDir t;
+  // A small sine case with its part: two passes, so that the passes run in parallel.
+  const auto g = run_taxopt(
+      "generate --surface sine --width 4 --length 30 --tilt 10 --yaw 10 "
+      "--scallop 0.5 --out-cls " +
+      t.path("s.cls") + " --out-mesh " + t.path("s.stl"));
+  REQUIRE(g.code == 0);
+  for (int n : {1, 2}) {
+    const auto r = run_taxopt("--in " + t.path("s.cls") + " --part " + t.path("s.stl") +
+                              " --method global --gauge-length 15 --threads " + std::to_string(n) +
+                              " --gcode " + t.path(std::to_string(n) + ".nc") + " --report " +
+                              t.path(std::to_string(n) + ".json") + " -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+  }
+  CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
+  const auto rep = nlohmann::json::parse(read_file(t.path("1.json")));
+  CHECK(rep["method"] == "global");
 }
 
 namespace {

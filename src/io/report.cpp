@@ -13,6 +13,7 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSu
   j["max_omega_deg_s"] = s.max_omega_deg_s;
   j["max_accel_deg_s2"] = s.max_accel_deg_s2;
   j["rms_accel_deg_s2"] = s.rms_accel_deg_s2;
+  j["rms_omega_deg_s"] = s.rms_omega_deg_s;
   j["c_jumps"] = s.c_jumps;
   // Counted only when a part is given; null says "not checked", not "none".
   j["colliding_points"] = colliding >= 0 ? nlohmann::json(colliding) : nlohmann::json(nullptr);

@@ -76,6 +76,10 @@ void accumulate(RotarySummary& s, const RotaryKinematics& k, const std::vector<d
   for (std::size_t i = 0; i < n; ++i) {
     s.max_omega_deg_s = std::max(s.max_omega_deg_s, k.omega_deg_s[i]);
     s.max_accel_deg_s2 = std::max(s.max_accel_deg_s2, k.accel_deg_s2[i]);
+    if (i + 1 < n) {
+      s.sum_sq_omega += k.omega_deg_s[i] * k.omega_deg_s[i];
+      ++s.omega_samples;
+    }
     if (i > 0 && i + 1 < n) {
       s.sum_sq_accel += k.accel_deg_s2[i] * k.accel_deg_s2[i];
       ++s.accel_samples;
@@ -84,6 +88,8 @@ void accumulate(RotarySummary& s, const RotaryKinematics& k, const std::vector<d
   }
   s.rms_accel_deg_s2 =
       s.accel_samples ? std::sqrt(s.sum_sq_accel / static_cast<double>(s.accel_samples)) : 0.0;
+  s.rms_omega_deg_s =
+      s.omega_samples ? std::sqrt(s.sum_sq_omega / static_cast<double>(s.omega_samples)) : 0.0;
 }
 
 }  // namespace taxopt

@@ -34,6 +34,11 @@ TEST_CASE("metrics: eq. 16-18 against a hand computation", "[kinematics][metrics
   CHECK(s.rms_accel_deg_s2 == Approx(std::sqrt((k.accel_deg_s2[1] * k.accel_deg_s2[1] +
                                                 k.accel_deg_s2[2] * k.accel_deg_s2[2]) /
                                                2.0)));
+  CHECK(s.omega_samples == 3);
+  CHECK(s.rms_omega_deg_s == Approx(std::sqrt((k.omega_deg_s[0] * k.omega_deg_s[0] +
+                                               k.omega_deg_s[1] * k.omega_deg_s[1] +
+                                               k.omega_deg_s[2] * k.omega_deg_s[2]) /
+                                              3.0)));
   CHECK(s.c_jumps == 0);
 }
 

@@ -32,11 +32,15 @@ struct RotarySummary {
   double max_omega_deg_s = 0.0;
   double max_accel_deg_s2 = 0.0;
   double rms_accel_deg_s2 = 0.0;
+  /// RMS of omega over the segments (every point but each pass's last).
+  double rms_omega_deg_s = 0.0;
   /// Consecutive points whose C differs by more than 90 deg.
   int c_jumps = 0;
   /// Number of interior points that entered the RMS.
   std::size_t accel_samples = 0;
   double sum_sq_accel = 0.0;
+  std::size_t omega_samples = 0;
+  double sum_sq_omega = 0.0;
 };
 
 /// Segment times in seconds. @param length_mm n-1 segment lengths

@@ -29,6 +29,12 @@ double round_to(double v, int decimals) {
   return std::round(v * s) / s;
 }
 
+/// Elements [begin, end) of `v`.
+template <class T>
+std::vector<T> slice(const std::vector<T>& v, std::size_t begin, std::size_t end) {
+  return std::vector<T>(v.begin() + static_cast<long>(begin), v.begin() + static_cast<long>(end));
+}
+
 /// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
 double ball_radius_mm(const Operationd& op, const JobOptions& options) {
   return options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
@@ -155,10 +161,8 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
   std::vector<Joint> bound_joint(n, Joint::X);
   for (const IndexRange& c : feed_chains(points)) {
     FeedChain chain;
-    chain.joints.assign(joints.begin() + static_cast<long>(c.begin) - 1,
-                        joints.begin() + static_cast<long>(c.end));
-    chain.min_time_s.assign(programmed_s.begin() + static_cast<long>(c.begin),
-                            programmed_s.begin() + static_cast<long>(c.end));
+    chain.joints = slice(joints, c.begin - 1, c.end);
+    chain.min_time_s = slice(programmed_s, c.begin, c.end);
     const FeedSchedule s = schedule_feed(chain, limits);
     out.summary.sweeps = std::max(out.summary.sweeps, s.sweeps);
     for (std::size_t i = c.begin; i < c.end; ++i) {
@@ -347,6 +351,19 @@ struct OptimisedOperation {
   std::size_t global_passes = 0, global_reverted = 0;
 };
 
+/// The cut of a pass: from its first to its last point where the ball touches the part (empty
+/// when it never does); the whole pass without contacts (no part).
+IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRange& pass) {
+  if (contacts.empty()) return pass;
+  IndexRange span{pass.end, pass.end};
+  for (std::size_t i = pass.begin; i < pass.end; ++i) {
+    if (contacts[i].state != ContactState::Touching) continue;
+    if (span.begin == pass.end) span.begin = i;
+    span.end = i + 1;
+  }
+  return span.begin == pass.end ? IndexRange{pass.begin, pass.begin} : span;
+}
+
 /// Whether an axis is acceptable at point i of an operation: the machine reaches it and, with
 /// a part, the tool above the ball (and the ball, where it is in the air) misses the part.
 struct Acceptance {
@@ -424,6 +441,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   };
   const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac};
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
+    const detail::StageProgress::Step step(progress);
     const IndexRange pass = passes[q];
     PassProblem problem;
     problem.segment_mm = segment_lengths_mm(op, contacts, R, pass);
@@ -468,7 +486,6 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
       pole_stretches[q] = pole.stretches;
     }
     plans[q] = std::move(plan);
-    progress.advance();
   });
   for (std::size_t q = 0; q < passes.size(); ++q) {
     const PassPlan& plan = plans[q];
@@ -492,18 +509,11 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   // and after its last (a retract) take the axis of that contact, where acceptable and within
   // their cone: the tool comes down and leaves along the orientation it cuts with, as CAM
   // systems do, and does not turn on the way (which the points alone would not check).
-  if (!contacts.empty()) {
-    for (const IndexRange& pass : passes) {
-      std::size_t first = pass.end, last = pass.end;
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        if (!touching(i)) continue;
-        if (first == pass.end) first = i;
-        last = i;
-      }
-      if (first == pass.end) continue;
-      for (std::size_t i = first; i-- > pass.begin;) carry(i, i + 1);
-      for (std::size_t i = last + 1; i < pass.end; ++i) carry(i, i - 1);
-    }
+  for (const IndexRange& pass : passes) {
+    const IndexRange cut = contact_span(contacts, pass);
+    if (cut.size() == 0) continue;
+    for (std::size_t i = cut.begin; i-- > pass.begin;) carry(i, i + 1);
+    for (std::size_t i = cut.end; i < pass.end; ++i) carry(i, i - 1);
   }
   carry_between_passes(op, passes, carry);
   return out;
@@ -634,20 +644,9 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     // The cut: from the first to the last contact of the pass (all of it without a part). The
     // points in the air before and after keep the axis of the nearest contact, as with the
     // paper method: the tool comes down and leaves along the axis it cuts with.
-    IndexRange pass = passes[q];
-    if (!contacts.empty()) {
-      std::size_t first = pass.end, last = pass.end;
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        if (contacts[i].state != ContactState::Touching) continue;
-        if (first == pass.end) first = i;
-        last = i;
-      }
-      if (first == pass.end) {
-        progress.advance();
-        return;
-      }
-      pass = IndexRange{first, last + 1};
-    }
+    const detail::StageProgress::Step step(progress);
+    const IndexRange pass = contact_span(contacts, passes[q]);
+    if (pass.size() < 3) return;
     cut[q] = pass;
     GlobalPassProblem problem;
     std::vector<double> a_deg, c_deg;
@@ -665,9 +664,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
       return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
              acceptable_at(pass.begin + j, axis);
     };
-    if (pass.size() >= 3) plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
-    if (pass.size() < 3) cut[q] = IndexRange{pass.begin, pass.begin};
-    progress.advance();
+    plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
   });
   out.preferred.assign(n, std::nullopt);
   const auto carry = [&](std::size_t to, std::size_t from) {
@@ -717,11 +714,8 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   };
   std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
   for (const IndexRange& c : feed_chains(po.points)) {
-    const std::vector<JointPosition> q(joints.begin() + static_cast<long>(c.begin) - 1,
-                                       joints.begin() + static_cast<long>(c.end));
-    const std::vector<double> t(written_s.begin() + static_cast<long>(c.begin),
-                                written_s.begin() + static_cast<long>(c.end));
-    const JointRates jr = joint_rates(q, t);
+    const JointRates jr =
+        joint_rates(slice(joints, c.begin - 1, c.end), slice(written_s, c.begin, c.end));
     for (std::size_t j = 0; j < kJointCount; ++j) {
       const auto keep = [](Worst& w, double v, std::size_t point) {
         if (v > w.value) w = Worst{v, point};

@@ -27,6 +27,18 @@ class StageProgress {
   /// `n` more items done (thread-safe).
   void advance(std::size_t n = 1) { report(done_ += n); }
 
+  /// One item done when it goes out of scope, whichever way the work of the item ends.
+  class Step {
+   public:
+    explicit Step(StageProgress& progress) : progress_(progress) {}
+    Step(const Step&) = delete;
+    Step& operator=(const Step&) = delete;
+    ~Step() { progress_.advance(); }
+
+   private:
+    StageProgress& progress_;
+  };
+
  private:
   void report(std::size_t done) {
     if (!callback_) return;

@@ -373,13 +373,48 @@ struct Acceptance {
   const CollisionModel* model;
   const ToolModel* tool;
   const ACMachined& machine;
+  /// The deviation cone's half-angle, rad (--max-deviation).
+  double max_deviation_rad;
   bool operator()(std::size_t i, const Vec3d& axis) const {
     if (!machine.reachable(axis)) return false;
     if (!model) return true;
     const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
     return !model->collides(*tool, reference_point(op.points[i], ball_radius_mm), axis, in_air);
   }
+  /// Acceptable and within the cone around point i's input axis.
+  bool in_cone(std::size_t i, const Vec3d& axis) const {
+    return angle_between(axis, op.points[i].axis) <= max_deviation_rad + 1e-12 && (*this)(i, axis);
+  }
 };
+
+/// Point `to` takes the axis (and the preferred pose, if any) of point `from`, where that axis
+/// is within its cone and acceptable.
+void carry_axis(OptimisedOperation& out, const Acceptance& acceptable, std::size_t to,
+                std::size_t from) {
+  if (!acceptable.in_cone(to, out.axes[from])) return;
+  out.axes[to] = out.axes[from];
+  if (!out.preferred.empty()) out.preferred[to] = out.preferred[from];
+}
+
+/// The points of `pass` in the air before its cut (an approach) and after it (a retract) take
+/// the axis of the cut's first and last point (`carry(to, from)`, which checks): the tool comes
+/// down and leaves along the orientation it cuts with, as CAM systems do, and does not turn on
+/// the way (which the points alone would not check).
+template <class Carry>
+void carry_from_cut(const IndexRange& pass, const IndexRange& cut, Carry&& carry) {
+  if (cut.size() == 0) return;
+  for (std::size_t i = cut.begin; i-- > pass.begin;) carry(i, i + 1);
+  for (std::size_t i = cut.end; i < pass.end; ++i) carry(i, i - 1);
+}
+
+/// Per point, whether the move into it is a rapid (the first point counts as one).
+std::vector<bool> rapid_into_of(const Operationd& op) {
+  std::vector<bool> rapid_into;
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
+  }
+  return rapid_into;
+}
 
 /// The points outside every pass (retracts, rapids between passes) turn the tool from one
 /// pass's last axis to the next one's first in a single move, the one of the run with the
@@ -439,7 +474,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
-  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac};
+  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac, max_dev_rad};
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
     const detail::StageProgress::Step step(progress);
     const IndexRange pass = passes[q];
@@ -476,8 +511,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     const PosePlan poses = plan_poses(machine.ac, plan.axes, rapid_into, {}, pose_options);
     if (poses.ok()) {
       const AxisTest in_cone = [&](std::size_t j, const Vec3d& axis) {
-        return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
-               acceptable(j, axis);
+        return acceptable_at.in_cone(pass.begin + j, axis);
       };
       PolePassage pole =
           smooth_pole_passages(machine.ac, plan.axes, poses.poses, problem.segment_mm,
@@ -500,21 +534,9 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(passes[q].begin + j);
   }
   const auto carry = [&](std::size_t to, std::size_t from) {
-    const Vec3d& axis = out.axes[from];
-    if (angle_between(axis, op.points[to].axis) <= max_dev_rad + 1e-12 && acceptable_at(to, axis)) {
-      out.axes[to] = axis;
-    }
+    carry_axis(out, acceptable_at, to, from);
   };
-  // The points of a pass where the ball is in the air before its first contact (an approach)
-  // and after its last (a retract) take the axis of that contact, where acceptable and within
-  // their cone: the tool comes down and leaves along the orientation it cuts with, as CAM
-  // systems do, and does not turn on the way (which the points alone would not check).
-  for (const IndexRange& pass : passes) {
-    const IndexRange cut = contact_span(contacts, pass);
-    if (cut.size() == 0) continue;
-    for (std::size_t i = cut.begin; i-- > pass.begin;) carry(i, i + 1);
-    for (std::size_t i = cut.end; i < pass.end; ++i) carry(i, i - 1);
-  }
+  for (const IndexRange& pass : passes) carry_from_cut(pass, contact_span(contacts, pass), carry);
   carry_between_passes(op, passes, carry);
   return out;
 }
@@ -547,12 +569,9 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
                          const PosePlanOptions& pose_options, OptimisedOperation& out,
                          const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
+  const std::vector<bool> rapid_into = rapid_into_of(op);
   std::vector<Vec3d> in_axes;
-  std::vector<bool> rapid_into;
-  for (std::size_t i = 0; i < n; ++i) {
-    in_axes.push_back(op.points[i].axis);
-    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
-  }
+  for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
   if (reference) in_axes = reference->axes;
   const PosePlan in_plan =
       plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options,
@@ -626,18 +645,14 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
                    OptimisedOperation& out, detail::StageProgress& progress) {
   const std::size_t n = op.points.size();
   const std::vector<IndexRange> passes = feed_passes(op);
-  std::vector<bool> rapid_into;
-  for (std::size_t i = 0; i < n; ++i) {
-    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
-  }
-  const PosePlan warm = plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options);
+  const PosePlan warm = plan_poses(machine.ac, out.axes, rapid_into_of(op), {}, pose_options);
   if (!warm.ok()) {
     for (std::size_t q = 0; q < passes.size(); ++q) progress.advance();
     return;
   }
   const GuardReference paper{out.axes, {}};
-  const Acceptance acceptable_at{op, contacts, ball_radius_mm, model, tool, machine.ac};
-  const double max_dev_rad = deg_to_rad(options.max_deviation_deg);
+  const Acceptance acceptable_at{
+      op, contacts, ball_radius_mm, model, tool, machine.ac, deg_to_rad(options.max_deviation_deg)};
   std::vector<std::optional<GlobalPassPlan>> plans(passes.size());
   std::vector<IndexRange> cut(passes.size());
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
@@ -661,18 +676,13 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
                                              pass_feeds(metric_feed, pass), a_deg, c_deg);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
-      return angle_between(axis, problem.input_axes[j]) <= max_dev_rad + 1e-12 &&
-             acceptable_at(pass.begin + j, axis);
+      return acceptable_at.in_cone(pass.begin + j, axis);
     };
     plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
   });
   out.preferred.assign(n, std::nullopt);
   const auto carry = [&](std::size_t to, std::size_t from) {
-    if (angle_between(out.axes[from], op.points[to].axis) <= max_dev_rad + 1e-12 &&
-        acceptable_at(to, out.axes[from])) {
-      out.axes[to] = out.axes[from];
-      out.preferred[to] = out.preferred[from];
-    }
+    carry_axis(out, acceptable_at, to, from);
   };
   for (std::size_t q = 0; q < passes.size(); ++q) {
     if (!plans[q]) continue;
@@ -681,8 +691,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
       out.axes[cut[q].begin + j] = plans[q]->axes[j];
       out.preferred[cut[q].begin + j] = plans[q]->poses[j];
     }
-    for (std::size_t i = cut[q].begin; i-- > passes[q].begin;) carry(i, i + 1);
-    for (std::size_t i = cut[q].end; i < passes[q].end; ++i) carry(i, i - 1);
+    carry_from_cut(passes[q], cut[q], carry);
   }
   carry_between_passes(op, passes, carry);
   out.global_reverted = guard_passes(op, contacts, ball_radius_mm, model, tool, machine,
@@ -947,11 +956,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                              std::to_string(fallback_feed) + " mm/min");
     }
     std::vector<Vec3d> axes, in_axes;
-    std::vector<bool> rapid_into;
+    const std::vector<bool> rapid_into = rapid_into_of(op);
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       axes.push_back(po.points[i].axis);
       in_axes.push_back(op.points[i].axis);
-      rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
     }
     const PosePlan plan =
         plan_poses(machine.ac, axes, rapid_into, start, options.pose_options,

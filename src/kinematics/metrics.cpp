@@ -38,7 +38,22 @@ RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
     v->assign(n, 0.0);
   }
   if (n < 2) return k;
-  const auto t = segment_times_s(length_mm, feed_mm_per_min, a_deg, c_deg);
+  return rotary_kinematics_from_times(a_deg, c_deg,
+                                      segment_times_s(length_mm, feed_mm_per_min, a_deg, c_deg));
+}
+
+RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& a_deg,
+                                              const std::vector<double>& c_deg,
+                                              const std::vector<double>& t) {
+  const std::size_t n = a_deg.size();
+  if (c_deg.size() != n || (n > 0 && t.size() + 1 != n)) {
+    throw std::invalid_argument("rotary_kinematics_from_times: sizes do not match");
+  }
+  RotaryKinematics k;
+  for (auto* v : {&k.omega_a_deg_s, &k.omega_c_deg_s, &k.omega_deg_s, &k.accel_a_deg_s2,
+                  &k.accel_c_deg_s2, &k.accel_deg_s2}) {
+    v->assign(n, 0.0);
+  }
   for (std::size_t i = 0; i + 1 < n; ++i) {
     if (t[i] > 0.0) {
       k.omega_a_deg_s[i] = (a_deg[i + 1] - a_deg[i]) / t[i];

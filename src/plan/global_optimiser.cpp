@@ -8,6 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "taxopt/kinematics/metrics.hpp"
+
 namespace taxopt {
 namespace {
 
@@ -34,22 +36,18 @@ double scalar(const Value& v, GlobalObjective objective) {
   return objective == GlobalObjective::Peak ? std::sqrt(v.peak_sq) : v.sum_sq;
 }
 
-/// Accelerations (deg/s^2) of A and C at the interior points 1 .. n-2 of poses with
-/// continuous C.
+/// Accelerations (deg/s^2) of A and C at every point of poses with continuous C (eq. 16-18,
+/// metrics.hpp; 0 at the ends).
 void accelerations(const std::vector<Posed>& poses, const std::vector<double>& t,
                    std::vector<double>& aa, std::vector<double>& ac) {
-  const std::size_t n = poses.size();
-  aa.assign(n, 0.0);
-  ac.assign(n, 0.0);
-  for (std::size_t i = 1; i + 1 < n; ++i) {
-    const double c = 2.0 / (t[i - 1] + t[i]);
-    const double wa0 = (poses[i].a_rad - poses[i - 1].a_rad) / t[i - 1];
-    const double wa1 = (poses[i + 1].a_rad - poses[i].a_rad) / t[i];
-    const double wc0 = (poses[i].c_rad - poses[i - 1].c_rad) / t[i - 1];
-    const double wc1 = (poses[i + 1].c_rad - poses[i].c_rad) / t[i];
-    aa[i] = kRadToDeg * c * (wa1 - wa0);
-    ac[i] = kRadToDeg * c * (wc1 - wc0);
+  std::vector<double> a_deg, c_deg;
+  for (const Posed& p : poses) {
+    a_deg.push_back(rad_to_deg(p.a_rad));
+    c_deg.push_back(rad_to_deg(p.c_rad));
   }
+  RotaryKinematics k = rotary_kinematics_from_times(a_deg, c_deg, t);
+  aa = std::move(k.accel_a_deg_s2);
+  ac = std::move(k.accel_c_deg_s2);
 }
 
 Value value_of(const std::vector<Posed>& poses, const std::vector<double>& t, double jerk_weight) {
@@ -277,9 +275,8 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
     cand[i] = candidates_at(machine, i, problem.warm_start[i], grid, near_pole, acceptable);
     plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
   }
-  double dp_value = 0.0;
   const std::vector<std::size_t> seq =
-      best_candidate_sequence(cand, t, objective, &dp_value, machine.c.continuous);
+      best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous);
   std::vector<Posed> dp(n);
   for (std::size_t i = 0; i < n; ++i) {
     dp[i] = cand[i][seq[i]];

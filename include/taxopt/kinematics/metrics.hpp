@@ -57,6 +57,11 @@ RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
                                    const std::vector<double>& length_mm,
                                    const std::vector<double>& feed_mm_per_min);
 
+/// The same from the segment times t_i (n - 1, s) instead of lengths and feeds.
+RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& a_deg,
+                                              const std::vector<double>& c_deg,
+                                              const std::vector<double>& segment_time_s);
+
 /// Peak synthetic omega (deg/s) and a (deg/s^2) of one pass.
 struct PeakRates {
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;

@@ -30,6 +30,7 @@ struct Args {
   std::string objective = "sum-squares";
   std::optional<double> jerk_weight;
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
+  std::string arc_direction = "auto", msys = "apply";
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   int threads = 0;
   bool force = false, quiet = false, feed_schedule = false;
@@ -232,6 +233,14 @@ int main(int argc, char** argv) {
   app.add_option("--out-cls", a.out_cls, "optimised toolpath as a CL file");
   app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)");
   app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)");
+  app.add_option("--arc-direction", a.arc_direction,
+                 "sense of CIRCLE arcs about their axis: auto (the CAM system's, checked against "
+                 "the moves beside each arc) | cw | ccw")
+      ->check(CLI::IsMember({"auto", "cw", "ccw"}));
+  app.add_option("--msys", a.msys,
+                 "NX MSYS frames: apply (post in the MCS) | ignore (post the coordinates as "
+                 "written)")
+      ->check(CLI::IsMember({"apply", "ignore"}));
   app.add_option("--tool-radius", a.tool_radius, "ball radius, in the CL file's units");
   app.add_option("--part", a.part, "part mesh (STL, OBJ, OFF, PLY) in the CL file's coordinates")
       ->check(CLI::ExistingFile);
@@ -352,7 +361,15 @@ int main(int argc, char** argv) {
         a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
     taxopt::ClReadOptions read_options;
     read_options.units = parse_unit(a.units, "--units");
+    read_options.arc_direction = a.arc_direction == "cw"    ? taxopt::ArcDirection::Clockwise
+                                 : a.arc_direction == "ccw" ? taxopt::ArcDirection::CounterClockwise
+                                                            : taxopt::ArcDirection::Auto;
+    read_options.apply_msys = a.msys == "apply";
     taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
+    if (!a.quiet) {
+      // How the file was read where it could not be read literally: always shown.
+      for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
+    }
     if (a.tool_radius) {
       if (!(*a.tool_radius > 0.0)) return error("--tool-radius must be positive", 2);
       const double r_mm = *a.tool_radius * taxopt::mm_per_unit(toolpath.units);
@@ -368,6 +385,22 @@ int main(int argc, char** argv) {
       if (toolpath.units == taxopt::LengthUnit::Inch) {
         for (auto& v : mesh.vertices)
           v *= taxopt::kMmPerInch;  // the part is in the CL file's units
+      }
+      // The part is in the CL file's coordinates: where MSYS moved them into the MCS, it moves
+      // with them.
+      if (!toolpath.frames.empty()) {
+        const taxopt::ClFrame& f = toolpath.frames.front();
+        for (const auto& g : toolpath.frames) {
+          if ((g.rotation - f.rotation).cwiseAbs().maxCoeff() > 1e-9 ||
+              (g.origin_mm - f.origin_mm).norm() > 1e-9) {
+            return error(a.in + ": its MSYS records name different frames (lines " +
+                             std::to_string(f.line) + " and " + std::to_string(g.line) +
+                             "): one --part cannot be in all of them; use --msys ignore or "
+                             "split the file",
+                         2);
+          }
+        }
+        for (auto& v : mesh.vertices) v = f.rotation.transpose() * (v - f.origin_mm);
       }
       part.emplace(std::move(mesh));
     }
@@ -415,9 +448,9 @@ int main(int argc, char** argv) {
     if (!a.quiet) {
       if (a.verbose > 0) {
         for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
-        for (const auto& [word, count] : toolpath.unknown_records) {
+        for (const auto& [word, count] : toolpath.skipped_records) {
           std::cerr << "taxopt: note: " << count << " " << word
-                    << " record(s) not interpreted, kept for --out-cls\n";
+                    << " record(s) skipped (no motion), kept for --out-cls\n";
         }
       } else if (!result.warnings.empty()) {
         std::cerr << "taxopt: " << result.warnings.size() << " warning(s); -v lists them\n";

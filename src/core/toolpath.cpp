@@ -6,6 +6,27 @@ namespace taxopt {
 
 const char* to_string(LengthUnit unit) { return unit == LengthUnit::Inch ? "in" : "mm"; }
 
+const char* to_string(ClDialect dialect) {
+  switch (dialect) {
+    case ClDialect::SiemensNx: return "siemens-nx";
+    case ClDialect::MakinoFfcam: return "makino-ffcam";
+    case ClDialect::Catia: return "catia-v5";
+    case ClDialect::SolidworksCam: return "solidworks-cam";
+    case ClDialect::Creo: return "creo";
+    case ClDialect::Generic: break;
+  }
+  return "generic-apt";
+}
+
+const char* to_string(ArcDirection direction) {
+  switch (direction) {
+    case ArcDirection::Clockwise: return "cw";
+    case ArcDirection::CounterClockwise: return "ccw";
+    case ArcDirection::Auto: break;
+  }
+  return "auto";
+}
+
 Tool Tool::ball_end_mill(double diameter_mm, double flute_length_mm) {
   Tool t;
   t.diameter_mm = diameter_mm;

@@ -5,6 +5,8 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -89,8 +91,9 @@ const std::set<std::string>& known_words() {
   static const std::set<std::string> words = {
       "GOTO",   "FROM",   "RAPID",   "FEDRAT",    "TLDATA",      "CUTTER", "LOADTL", "LOAD",
       "MULTAX", "SPINDL", "SPINDLE", "TOOL PATH", "END-OF-PATH", "PAINT",  "MSYS",   "FINI",
-      "UNITS",  "UNIT",   "CIRCLE",  "PARTNO",    "SELECT",      "END",    "COOLNT", "CUTCOM",
-      "INSERT", "PPRINT", "CSYS",    "TRNTYP",    "CYCLE",       "STOP",   "MACHIN", "TPRINT"};
+      "NURBS",  "KNOT",   "CNTRL",   "GODLTA",    "GOHOME",      "UNITS",  "UNIT",   "CIRCLE",
+      "PARTNO", "SELECT", "END",     "COOLNT",    "CUTCOM",      "INSERT", "PPRINT", "CSYS",
+      "TRNTYP", "CYCLE",  "STOP",    "MACHIN",    "TPRINT"};
   return words;
 }
 
@@ -218,45 +221,153 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
   return out;
 }
 
-struct PendingCircle {
-  Vec3d centre;
-  Vec3d axis;
-  double radius = 0.0;  // 0: from the start point
-  int turns = 0;        // TIMES,n: n extra full turns
+/// Words that bear motion but that taxopt does not interpret: a file with one stops (exit 2),
+/// since skipping it would post a program that does not move as the CAM system meant.
+const std::set<std::string>& uninterpreted_motion_words() {
+  static const std::set<std::string> words = {
+      "DEFSUB", "ENDSUB", "CALL",   "COPY",   "INDEX",  "ROTATE", "ROTABL", "TLAXIS",
+      "TRANS",  "ORIGIN", "REFSYS", "MIRROR", "GOFWD",  "GOLFT",  "GORGT",  "GOBACK",
+      "GOUP",   "GODOWN", "GO",     "INDIRV", "INDIRP", "PSIS",   "TLON",   "TLLFT",
+      "TLRGT",  "TLOFPS", "AUTOPS", "THICK",  "ARC",    "SPLINE", "BSPLIN", "POLYLN"};
+  return words;
+}
+
+/// Recognises the CAM system from its records and comments (docs/cl-files.md).
+ClDialect detect_dialect(const std::vector<LogicalLine>& lines) {
+  bool nx = false, creo = false, catia = false, solidworks = false;
+  for (const auto& ll : lines) {
+    const std::string up = upper(ll.raw);
+    if (up.find("FFCAM") != std::string::npos || up.find("MAKINO") != std::string::npos) {
+      return ClDialect::MakinoFfcam;
+    }
+    if (ll.kind == RecordKind::Comment) {
+      creo = creo || up.find("PRO/CLFILE") != std::string::npos ||
+             up.find("CREO") != std::string::npos;
+      catia = catia || up.find("CATIA") != std::string::npos;
+      continue;
+    }
+    if (ll.kind != RecordKind::Record) continue;
+    std::string args;
+    const std::string major = major_word(ll.code, args);
+    nx = nx || major == "TOOL PATH" || major == "TLDATA" || major == "END-OF-PATH" ||
+         major == "MSYS";
+    solidworks = solidworks || major.rfind("CSI_", 0) == 0 || major == "TRNTYP";
+  }
+  if (nx) return ClDialect::SiemensNx;
+  if (creo) return ClDialect::Creo;
+  if (catia) return ClDialect::Catia;
+  if (solidworks) return ClDialect::SolidworksCam;
+  return ClDialect::Generic;
+}
+
+/// The sense in which a dialect's CIRCLE records run, with the evidence (docs/cl-files.md);
+/// Auto where nothing is documented or measured.
+ArcDirection documented_arc_direction(ClDialect dialect) {
+  switch (dialect) {
+    case ClDialect::SiemensNx:  // NX CLSF manual: "axis vector ... assuming a clockwise direction"
+    case ClDialect::MakinoFfcam:  // tangent continuity: every decidable arc of real files
+      return ArcDirection::Clockwise;
+    case ClDialect::SolidworksCam:  // APT's right-hand rule; tangents of real files agree
+    case ClDialect::Creo:
+    case ClDialect::Catia: return ArcDirection::CounterClockwise;
+    case ClDialect::Generic: break;
+  }
+  return ArcDirection::Auto;
+}
+
+/// A CIRCLE whose end GOTO has been read: its chords go between points `start` and
+/// `start + 1` of operation `op` once the file's arc sense is decided.
+struct PendingArc {
+  int op = -1;
+  std::size_t start = 0;
+  Vec3d centre = Vec3d::Zero();
+  Vec3d axis = Vec3d::UnitZ();
+  double radius_mm = 0.0;  // 0: from the start point
+  int turns = 1;           // TIMES,n: n revolutions in all
+  int record = -1;
+  int line = 0;
+  /// What the straight moves before and after say: +1 counter-clockwise about `axis`,
+  /// -1 clockwise, 0 undecided; and whether every deciding side is unambiguous.
+  int evidence = 0;
+  bool strong = false;
+  bool clockwise = false;
+};
+
+struct CircleRecord {
+  Vec3d centre, axis;
+  double radius_mm = 0.0;
+  int turns = 1;
   int record = -1;
   int line = 0;
 };
+
+/// NX NURBS/ + KNOT/ + CNTRL/ records being collected.
+struct PendingSpline {
+  int record = -1;
+  int line = 0;
+  Motion motion = Motion::Feed;
+  std::vector<double> knots;
+  std::vector<Eigen::Vector4d> control;  // x, y, z (mm), weight
+};
+
+/// A drilling cycle in force (CYCLE/kind,... up to CYCLE/OFF).
+struct DrillCycle {
+  std::string kind;
+  int line = 0;
+  double depth_mm = 0.0, rapid_to_mm = 0.0, retract_to_mm = 0.0;
+  double first_peck_mm = 0.0, next_peck_mm = 0.0;
+  double feed_mm_per_min = 0.0;
+  bool feed_out = false;  // bore, ream, tap: the tool leaves the hole at the feed
+};
+
+/// The vote of one straight move on an arc's sense: +1 when it runs along the
+/// counter-clockwise tangent (about n, at radius vector r), -1 against it, 0 undecided.
+/// `strong` is cleared when the vote is less than clear-cut.
+int tangent_vote(const Vec3d& move, const Vec3d& radius, const Vec3d& n, bool& strong) {
+  const Vec3d in_plane = move - move.dot(n) * n;
+  const Vec3d tangent = n.cross(radius - radius.dot(n) * n);
+  const double m = move.norm(), p = in_plane.norm(), t = tangent.norm();
+  if (m < 1e-9 || t < 1e-9 || p < 0.5 * m) return 0;  // a plunge or no move: says nothing
+  const double c = in_plane.dot(tangent) / (p * t);
+  if (std::abs(c) < 0.9) return 0;  // a corner: says nothing
+  if (std::abs(c) < 0.99) strong = false;
+  return c > 0.0 ? 1 : -1;
+}
 
 class Reader {
  public:
   Reader(const std::string& source, const ClReadOptions& options)
       : source_(source), options_(options) {}
 
-  Toolpath run(const std::string& text) {
+  Toolpath run(const std::string& input) {
     tp_.source = source_;
+    std::string text = input;
+    if (text.rfind("\xEF\xBB\xBF", 0) == 0) {
+      text.erase(0, 3);
+      tp_.byte_order_mark = true;
+    } else if (text.rfind("\xFF\xFE", 0) == 0 || text.rfind("\xFE\xFF", 0) == 0) {
+      fail(1, "UTF-16 text: save the CL file as UTF-8 or ASCII");
+    }
     auto lines = split_logical(text, source_, tp_.line_end, tp_.final_line_end);
+    tp_.reading.dialect = detect_dialect(lines);
     determine_units(lines);
     scale_ = mm_per_unit(tp_.units);
     for (const auto& ll : lines) handle(ll);
+    if (spline_) finish_spline();
     if (pending_circle_) {
       throw InputError(source_, pending_circle_->line, "CIRCLE is not followed by its end GOTO");
     }
     if (point_count(tp_) == 0) {
       throw InputError(source_, 0, "no GOTO records: not a cutter-location file");
     }
+    expand_arcs();
     // Drop operations that received no point (a TOOL PATH block with no motion).
-    std::vector<int> remap(tp_.operations.size(), -1);
     std::vector<Operationd> kept;
-    for (std::size_t k = 0; k < tp_.operations.size(); ++k) {
-      if (!tp_.operations[k].points.empty()) {
-        remap[k] = static_cast<int>(kept.size());
-        kept.push_back(std::move(tp_.operations[k]));
-      }
+    for (auto& op : tp_.operations) {
+      if (!op.points.empty()) kept.push_back(std::move(op));
     }
     tp_.operations = std::move(kept);
-    for (auto& r : tp_.records) {
-      if (r.op >= 0) r.op = remap[static_cast<std::size_t>(r.op)];
-    }
+    index_records();
     for (std::size_t k = 0; k < tp_.operations.size(); ++k) {
       if (tp_.operations[k].name.empty()) tp_.operations[k].name = std::to_string(k + 1);
     }
@@ -266,6 +377,10 @@ class Reader {
  private:
   [[noreturn]] void fail(int line, const std::string& what) const {
     throw InputError(source_, line, what);
+  }
+
+  void notice(int line, const std::string& what) {
+    tp_.notices.push_back(format_location(source_, line, what));
   }
 
   void determine_units(const std::vector<LogicalLine>& lines) {
@@ -356,6 +471,19 @@ class Reader {
     return axis / len;
   }
 
+  /// A point of the file (in its units and frame) in taxopt's millimetres and MCS.
+  Vec3d to_mcs_point(const Vec3d& p) const {
+    const Vec3d mm = p * scale_;
+    if (frame_ < 0) return mm;
+    const ClFrame& f = tp_.frames[static_cast<std::size_t>(frame_)];
+    return f.rotation.transpose() * (mm - f.origin_mm);
+  }
+  /// A direction of the file in the MCS.
+  Vec3d to_mcs_vector(const Vec3d& v) const {
+    if (frame_ < 0) return v;
+    return tp_.frames[static_cast<std::size_t>(frame_)].rotation.transpose() * v;
+  }
+
   void add_point(const Vec3d& tip_mm, Motion motion, int record, int line) {
     auto& op = current_op();
     CLPointd p;
@@ -365,36 +493,37 @@ class Reader {
     p.motion = motion;
     p.line = line;
     p.record = record;
-    auto& r = tp_.records[static_cast<std::size_t>(record)];
-    if (r.first_point < 0) r.first_point = static_cast<int>(op.points.size());
-    r.op = op_;
-    ++r.point_count;
+    tp_.records[static_cast<std::size_t>(record)].frame = frame_;
     op.points.push_back(p);
   }
 
-  void expand_circle(const PendingCircle& c, const Vec3d& end_mm, int goto_line) {
+  const CLPointd& last_point(const std::string& major, int line) {
     auto& op = current_op();
-    if (op.points.empty()) fail(c.line, "CIRCLE has no start point (no GOTO before it)");
-    const Vec3d start = op.points.back().tip_mm;
+    if (op.points.empty()) fail(line, major + " has no start point (no GOTO or FROM before it)");
+    return op.points.back();
+  }
+
+  /// Chords of an arc from `start` to `end` (exclusive of both), counter-clockwise about
+  /// `c.axis` (already turned for the sense), within the chordal tolerance.
+  std::vector<Vec3d> arc_chords(const PendingArc& c, const Vec3d& start, const Vec3d& end_mm) {
     const Vec3d s = start - c.centre, e = end_mm - c.centre;
     const double hs = s.dot(c.axis), he = e.dot(c.axis);
     const Vec3d sp = s - hs * c.axis, ep = e - he * c.axis;
     const double rs = sp.norm(), re = ep.norm();
     const double tol = options_.arc_tolerance_mm;
     if (rs < 1e-9 || re < 1e-9) fail(c.line, "CIRCLE: start or end point lies on its axis");
-    const double r_given = c.radius > 0.0 ? c.radius : rs;
+    const double r_given = c.radius_mm > 0.0 ? c.radius_mm : rs;
     const double mismatch = std::max(std::abs(rs - r_given), std::abs(re - r_given));
     if (mismatch > 0.01 * r_given + 0.01) {
       std::ostringstream os;
-      os << source_ << ":" << goto_line << ": CIRCLE radius " << r_given
-         << " mm but the arc's ends lie at " << rs << " and " << re
+      os << "CIRCLE radius " << r_given << " mm but the arc's ends lie at " << rs << " and " << re
          << " mm from its axis; interpolated as a spiral";
-      tp_.warnings.push_back(os.str());
+      tp_.warnings.push_back(format_location(source_, c.line, os.str()));
     }
-    // Right-hand rule: the motion is counter-clockwise about the CIRCLE axis (APT).
     double phi = std::atan2(sp.cross(ep).dot(c.axis), sp.dot(ep));
     if (phi <= 1e-12) phi += Constants<double>::two_pi();
-    phi += Constants<double>::two_pi() * c.turns;
+    // TIMES,n: n revolutions in all, the last one ending at the GOTO (docs/cl-files.md).
+    phi += Constants<double>::two_pi() * (c.turns - 1);
     const double r_max = std::max(rs, re);
     const double step = tol < r_max ? 2.0 * std::acos(1.0 - tol / r_max) : phi;
     const double segments = std::ceil(phi / step);
@@ -402,13 +531,285 @@ class Reader {
       fail(c.line, "CIRCLE needs more than 1e6 chords: radius or TIMES too large");
     const int n = std::max(1, static_cast<int>(segments));
     const Vec3d u = sp / rs, w = c.axis.cross(u);
+    std::vector<Vec3d> out;
     for (int k = 1; k < n; ++k) {
       const double t = static_cast<double>(k) / n;
       const double th = phi * t, r = rs + (re - rs) * t;
-      const Vec3d p =
-          c.centre + (hs + (he - hs) * t) * c.axis + r * (std::cos(th) * u + std::sin(th) * w);
-      add_point(p, Motion::Feed, c.record, c.line);
+      out.push_back(c.centre + (hs + (he - hs) * t) * c.axis +
+                    r * (std::cos(th) * u + std::sin(th) * w));
     }
+    return out;
+  }
+
+  /// Decides the sense of every arc (the file's convention, checked against the tangents of
+  /// the straight moves beside each arc) and inserts their chords.
+  void expand_arcs() {
+    if (arcs_.empty()) return;
+    auto& rd = tp_.reading;
+    rd.arcs = static_cast<int>(arcs_.size());
+    // Which points end or start an arc: the moves into / out of them are not straight.
+    std::vector<std::set<std::size_t>> ends(tp_.operations.size()), starts(ends.size());
+    for (const auto& a : arcs_) {
+      starts[static_cast<std::size_t>(a.op)].insert(a.start);
+      ends[static_cast<std::size_t>(a.op)].insert(a.start + 1);
+    }
+    int ccw_votes = 0, cw_votes = 0;
+    for (auto& a : arcs_) {
+      const auto& pts = tp_.operations[static_cast<std::size_t>(a.op)].points;
+      const auto o = static_cast<std::size_t>(a.op);
+      const Vec3d s = pts[a.start].tip_mm, e = pts[a.start + 1].tip_mm;
+      bool strong = true;
+      int in = 0, out = 0;
+      if (a.start > 0 && !ends[o].count(a.start)) {
+        in = tangent_vote(s - pts[a.start - 1].tip_mm, s - a.centre, a.axis, strong);
+      }
+      if (a.start + 2 < pts.size() && !starts[o].count(a.start + 1)) {
+        out = tangent_vote(pts[a.start + 2].tip_mm - e, e - a.centre, a.axis, strong);
+      }
+      a.evidence = (in != 0 && out != 0 && in != out) ? 0 : (in != 0 ? in : out);
+      a.strong = strong && a.evidence != 0;
+      if (a.evidence > 0) ++ccw_votes;
+      if (a.evidence < 0) ++cw_votes;
+    }
+    rd.arcs_decidable = ccw_votes + cw_votes;
+    const auto lines_of = [this](int sign) {
+      std::string out;
+      int n = 0;
+      for (const auto& a : arcs_) {
+        if (a.evidence != sign) continue;
+        if (n++ == 5) {
+          out += ", ...";
+          break;
+        }
+        out += (out.empty() ? "" : ", ") + std::to_string(a.line);
+      }
+      return out;
+    };
+    const char* dialect = to_string(rd.dialect);
+    ArcDirection convention = options_.arc_direction;
+    if (convention != ArcDirection::Auto) {
+      rd.arc_convention_source = "option";
+    } else {
+      convention = documented_arc_direction(rd.dialect);
+      if (convention == ArcDirection::Auto) {
+        // Nothing documented for this CAM system: the file's own arcs must say it clearly.
+        const int decided = ccw_votes + cw_votes;
+        if (decided == 0) {
+          convention = ArcDirection::CounterClockwise;
+          notice(arcs_.front().line,
+                 "CIRCLE: the CAM system is not recognised and no arc's neighbouring moves "
+                 "decide its sense; APT's counter-clockwise about (i,j,k) is assumed "
+                 "(--arc-direction cw|ccw sets it)");
+        } else if (std::max(ccw_votes, cw_votes) >= 0.8 * decided) {
+          convention =
+              ccw_votes > cw_votes ? ArcDirection::CounterClockwise : ArcDirection::Clockwise;
+          rd.arc_convention_source = "tangents";
+          notice(arcs_.front().line,
+                 std::string("CIRCLE: the CAM system is not recognised; ") +
+                     std::to_string(std::max(ccw_votes, cw_votes)) + " of " +
+                     std::to_string(decided) + " decidable arcs run " +
+                     (convention == ArcDirection::Clockwise ? "clockwise" : "counter-clockwise") +
+                     " about their axis by the tangents of the moves beside them, so every arc "
+                     "is read so (--arc-direction cw|ccw sets it)");
+        } else {
+          fail(arcs_.front().line,
+               "CIRCLE: the CAM system is not recognised and its arcs disagree: " +
+                   std::to_string(ccw_votes) + " run counter-clockwise (lines " + lines_of(1) +
+                   ") and " + std::to_string(cw_votes) + " clockwise (lines " + lines_of(-1) +
+                   ") by the moves beside them; give --arc-direction cw|ccw");
+        }
+      }
+    }
+    rd.arc_convention = convention;
+    const int convention_sign = convention == ArcDirection::Clockwise ? -1 : 1;
+    const int agree = convention_sign > 0 ? ccw_votes : cw_votes;
+    const int contra = convention_sign > 0 ? cw_votes : ccw_votes;
+    rd.arcs_contradicting = contra;
+    const std::string sense =
+        convention == ArcDirection::Clockwise ? "clockwise" : "counter-clockwise";
+    if (contra > agree && rd.arc_convention_source == "documented") {
+      fail(arcs_.front().line,
+           "CIRCLE: " + std::to_string(contra) + " of " + std::to_string(contra + agree) +
+               " decidable arcs (lines " + lines_of(-convention_sign) + ") run against the " +
+               sense + " sense " + dialect +
+               " files use about (i,j,k), by the moves before and after them; if the file is "
+               "right, give --arc-direction cw|ccw");
+    }
+    if (contra > agree && rd.arc_convention_source == "option") {
+      notice(arcs_.front().line, "CIRCLE: --arc-direction " + std::string(to_string(convention)) +
+                                     " is against the tangents of " + std::to_string(contra) +
+                                     " of " + std::to_string(contra + agree) +
+                                     " decidable arcs (lines " + lines_of(-convention_sign) +
+                                     "); applied as asked");
+    }
+    for (auto& a : arcs_) {
+      a.clockwise = convention == ArcDirection::Clockwise;
+      // An arc whose neighbours all clearly contradict the convention is run their way.
+      if (rd.arc_convention_source != "option" && a.evidence == -convention_sign && a.strong) {
+        a.clockwise = !a.clockwise;
+        ++rd.arcs_reversed;
+        if (rd.reversed_arc_lines.size() < 20) rd.reversed_arc_lines.push_back(a.line);
+      }
+    }
+    if (rd.arcs_reversed > 0) {
+      std::string lines;
+      for (int l : rd.reversed_arc_lines) lines += (lines.empty() ? "" : ", ") + std::to_string(l);
+      notice(rd.reversed_arc_lines.front(),
+             std::to_string(rd.arcs_reversed) + " CIRCLE record(s) (lines " + lines +
+                 ") are run against the " + sense + " sense " + dialect +
+                 " files use: the moves before and after each of them run the other way "
+                 "(--arc-direction cw|ccw applies one sense to every arc)");
+    }
+    // Insert the chords, arc by arc, operation by operation.
+    std::vector<std::vector<const PendingArc*>> by_op(tp_.operations.size());
+    for (const auto& a : arcs_) by_op[static_cast<std::size_t>(a.op)].push_back(&a);
+    for (std::size_t o = 0; o < by_op.size(); ++o) {
+      if (by_op[o].empty()) continue;
+      auto& pts = tp_.operations[o].points;
+      std::vector<CLPointd> out;
+      std::size_t next = 0;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        out.push_back(pts[i]);
+        while (next < by_op[o].size() && by_op[o][next]->start == i) {
+          PendingArc a = *by_op[o][next++];
+          if (a.clockwise) a.axis = -a.axis;
+          const CLPointd& end = pts[i + 1];
+          for (const Vec3d& q : arc_chords(a, pts[i].tip_mm, end.tip_mm)) {
+            CLPointd p = end;
+            p.tip_mm = q;
+            p.motion = Motion::Feed;
+            p.line = a.line;
+            p.record = a.record;
+            out.push_back(p);
+          }
+        }
+      }
+      pts = std::move(out);
+    }
+  }
+
+  /// Records' operation and point ranges from the points (after arcs were inserted and empty
+  /// operations dropped).
+  void index_records() {
+    for (auto& r : tp_.records) {
+      r.op = -1;
+      r.first_point = -1;
+      r.point_count = 0;
+    }
+    for (std::size_t o = 0; o < tp_.operations.size(); ++o) {
+      const auto& pts = tp_.operations[o].points;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        if (pts[i].record < 0) continue;
+        auto& r = tp_.records[static_cast<std::size_t>(pts[i].record)];
+        if (r.first_point < 0) r.first_point = static_cast<int>(i);
+        r.op = static_cast<int>(o);
+        ++r.point_count;
+      }
+    }
+  }
+
+  /// Rational B-spline point at t (de Boor on homogeneous coordinates).
+  static Vec3d spline_point(const std::vector<double>& U, const std::vector<Eigen::Vector4d>& P,
+                            int p, double t) {
+    const int n = static_cast<int>(P.size()) - 1;
+    int k = p;
+    while (k < n && t >= U[static_cast<std::size_t>(k + 1)]) ++k;
+    std::vector<Eigen::Vector4d> d(static_cast<std::size_t>(p + 1));
+    for (int j = 0; j <= p; ++j) {
+      const Eigen::Vector4d& c = P[static_cast<std::size_t>(j + k - p)];
+      d[static_cast<std::size_t>(j)] << c.head<3>() * c[3], c[3];
+    }
+    for (int r = 1; r <= p; ++r) {
+      for (int j = p; j >= r; --j) {
+        const double lo = U[static_cast<std::size_t>(j + k - p)];
+        const double hi = U[static_cast<std::size_t>(j + 1 + k - r)];
+        const double alpha = hi > lo ? (t - lo) / (hi - lo) : 0.0;
+        d[static_cast<std::size_t>(j)] = (1.0 - alpha) * d[static_cast<std::size_t>(j - 1)] +
+                                         alpha * d[static_cast<std::size_t>(j)];
+      }
+    }
+    const Eigen::Vector4d& h = d[static_cast<std::size_t>(p)];
+    return h.head<3>() / h[3];
+  }
+
+  /// Evaluates the NURBS collected since its NURBS record into points within the chordal
+  /// tolerance. NX's layout (docs/cl-files.md): the current point is the first control
+  /// point, the CNTRL records the others; KNOT lists the knots after the p + 1 zeros and the
+  /// last of the p + 1 ones, so the degree is p = (CNTRL count + 1) - (KNOT count).
+  void finish_spline() {
+    PendingSpline sp = std::move(*spline_);
+    spline_.reset();
+    const std::string what = "NURBS at line " + std::to_string(sp.line);
+    if (sp.control.empty() || sp.knots.empty()) fail(sp.line, "NURBS without KNOT and CNTRL");
+    const Vec3d start = last_point("NURBS", sp.line).tip_mm;
+    const int m = static_cast<int>(sp.control.size());
+    const int p = m + 1 - static_cast<int>(sp.knots.size());
+    if (p < 1 || p > 9) {
+      fail(sp.line, what + ": " + std::to_string(sp.knots.size()) + " knots and " +
+                        std::to_string(m) +
+                        " control points do not fit NX's layout (degree = control points + 1 - "
+                        "knots, from 1 to 9)");
+    }
+    double prev = 0.0;
+    for (double k : sp.knots) {
+      if (k < prev || k > 1.0 + 1e-9) {
+        fail(sp.line, what + ": knots must rise from 0 to 1");
+      }
+      prev = k;
+    }
+    if (std::abs(sp.knots.back() - 1.0) > 1e-6) fail(sp.line, what + ": the last knot must be 1");
+    std::vector<double> U(static_cast<std::size_t>(p + 1), 0.0);
+    U.insert(U.end(), sp.knots.begin(), sp.knots.end() - 1);
+    U.insert(U.end(), static_cast<std::size_t>(p + 1), 1.0);
+    for (std::size_t i = static_cast<std::size_t>(p + 1);
+         i + static_cast<std::size_t>(p + 1) < U.size(); ++i) {
+      std::size_t mult = 1;
+      while (i + mult < U.size() && U[i + mult] == U[i]) ++mult;
+      if (U[i] < 1.0 && mult > static_cast<std::size_t>(p)) {
+        fail(sp.line, what + ": an inner knot repeats more than the degree");
+      }
+    }
+    std::vector<Eigen::Vector4d> P;
+    P.emplace_back(start.x(), start.y(), start.z(), 1.0);
+    P.insert(P.end(), sp.control.begin(), sp.control.end());
+    const double tol = options_.arc_tolerance_mm;
+    std::vector<Vec3d> out;
+    // Each knot span in 4 pieces, then halved while the curve strays from the chord.
+    std::function<void(double, const Vec3d&, double, const Vec3d&, int)> sample =
+        [&](double t0, const Vec3d& a, double t1, const Vec3d& b, int depth) {
+          const Vec3d chord = b - a;
+          const double len = chord.norm();
+          double dev = 0.0;
+          for (double f : {0.25, 0.5, 0.75}) {
+            const Vec3d q = spline_point(U, P, p, t0 + f * (t1 - t0)) - a;
+            const double along = len > 0.0 ? q.dot(chord) / len : 0.0;
+            dev = std::max(dev, len > 0.0 ? (q - along * chord / len).norm() : q.norm());
+          }
+          if (dev > tol && depth < 40) {
+            const double tm = 0.5 * (t0 + t1);
+            const Vec3d mpt = spline_point(U, P, p, tm);
+            sample(t0, a, tm, mpt, depth + 1);
+            sample(tm, mpt, t1, b, depth + 1);
+            return;
+          }
+          if (out.size() >= 1000000) fail(sp.line, what + " needs more than 1e6 points");
+          out.push_back(b);
+        };
+    Vec3d a = start;
+    double t0 = 0.0;
+    for (std::size_t i = static_cast<std::size_t>(p); i + 1 < U.size(); ++i) {
+      if (!(U[i + 1] > U[i])) continue;
+      for (int piece = 1; piece <= 4; ++piece) {
+        const double t1 = U[i] + (U[i + 1] - U[i]) * piece / 4.0;
+        const Vec3d b = spline_point(U, P, p, t1);
+        sample(t0, a, t1, b, 0);
+        a = b;
+        t0 = t1;
+      }
+    }
+    for (const Vec3d& q : out) add_point(q, sp.motion, sp.record, sp.line);
+    ++tp_.reading.splines;
+    tp_.reading.spline_points += static_cast<int>(out.size());
   }
 
   void handle(const LogicalLine& ll) {
@@ -431,11 +832,166 @@ class Reader {
     interpret(rec.major, args, index, ll.line);
   }
 
+  /// A feed word's value: FEDRAT/f, /{MMPM|IPM|PERMIN|MMPR|IPR|PERREV},f or /f,unit.
+  double feed_of(const std::vector<std::string>& args, std::size_t from, const std::string& major,
+                 int line) {
+    double value = -1.0;
+    int count = 0;
+    double to_mm = scale_;
+    bool per_rev = false;
+    for (std::size_t k = from; k < args.size(); ++k) {
+      const std::string u = upper(args[k]);
+      double v;
+      if (parse_number(args[k], v)) {
+        value = v;
+        ++count;
+      } else if (u == "MMPM") {
+        to_mm = 1.0;
+      } else if (u == "IPM") {
+        to_mm = kMmPerInch;
+      } else if (u == "PERMIN") {
+        to_mm = scale_;
+      } else if (u == "MMPR") {
+        to_mm = 1.0, per_rev = true;
+      } else if (u == "IPR") {
+        to_mm = kMmPerInch, per_rev = true;
+      } else if (u == "PERREV") {
+        to_mm = scale_, per_rev = true;
+      } else {
+        fail(line, major + ": expected a feed and MMPM, IPM, PERMIN, MMPR, IPR or PERREV, got '" +
+                       args[k] + "'");
+      }
+    }
+    if (count != 1) fail(line, major + " expects exactly one number (the feed)");
+    if (!(value > 0.0)) fail(line, major + ": feed must be positive");
+    if (!per_rev) return value * to_mm;
+    if (!(spindle_rpm_ > 0.0)) {
+      tp_.warnings.push_back(format_location(
+          source_, line, "feed per revolution without a spindle speed: feed unknown"));
+      return 0.0;
+    }
+    return value * to_mm * spindle_rpm_;
+  }
+
+  void start_cycle(const std::vector<std::string>& args, int line) {
+    DrillCycle c;
+    c.kind = upper(args[0]);
+    c.line = line;
+    static const std::set<std::string> kinds = {"DRILL",  "FACE", "DEEP", "DEEP2",
+                                                "BRKCHP", "BORE", "REAM", "TAP"};
+    if (!kinds.count(c.kind)) {
+      fail(line, "CYCLE/" + c.kind +
+                     ": drilling cycle not interpreted (DRILL, FACE, DEEP, DEEP2, BRKCHP, BORE, "
+                     "REAM, TAP are)");
+    }
+    c.feed_out = c.kind == "BORE" || c.kind == "REAM" || c.kind == "TAP";
+    bool depth = false;
+    std::vector<std::string> feed_words;
+    for (std::size_t k = 1; k < args.size(); ++k) {
+      const std::string w = upper(args[k]);
+      double v = 0.0;
+      const auto value = [&]() {
+        if (k + 1 >= args.size() || !parse_number(args[k + 1], v)) {
+          fail(line, "CYCLE/" + c.kind + ": " + w + " expects a number after it");
+        }
+        ++k;
+        return v;
+      };
+      if (w == "FEDTO") {
+        c.depth_mm = value() * scale_;
+        depth = true;
+      } else if (w == "RAPTO") {
+        c.rapid_to_mm = value() * scale_;
+      } else if (w == "RTRCTO") {
+        c.retract_to_mm = value() * scale_;
+      } else if (w == "1STPECK") {
+        c.first_peck_mm = value() * scale_;
+      } else if (w == "SUBPECK" || w == "STEP") {
+        c.next_peck_mm = value() * scale_;
+      } else if (w == "DWELL") {
+        value();  // time at the bottom: no motion
+      } else if (w == "MMPM" || w == "IPM" || w == "PERMIN" || w == "MMPR" || w == "IPR" ||
+                 w == "PERREV") {
+        feed_words = {args[k], std::to_string(value())};
+        c.feed_mm_per_min = feed_of(feed_words, 0, "CYCLE/" + c.kind, line);
+      } else {
+        fail(line, "CYCLE/" + c.kind + ": '" + args[k] +
+                       "' not interpreted (FEDTO, RAPTO, RTRCTO, 1STPECK, SUBPECK, DWELL and a "
+                       "feed word are; APT's positional form is not)");
+      }
+    }
+    if (!depth || !(c.depth_mm > 0.0)) fail(line, "CYCLE/" + c.kind + " needs FEDTO,depth > 0");
+    if (c.feed_mm_per_min <= 0.0) c.feed_mm_per_min = feed_mm_per_min_;
+    const bool pecks = c.kind == "DEEP" || c.kind == "DEEP2" || c.kind == "BRKCHP";
+    if (pecks && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.depth_mm;
+    if (pecks && !(c.next_peck_mm > 0.0)) c.next_peck_mm = c.first_peck_mm;
+    if (!pecks) c.first_peck_mm = c.next_peck_mm = c.depth_mm;
+    if (c.depth_mm / c.next_peck_mm > 1e5) fail(line, "CYCLE: more than 1e5 pecks");
+    cycle_ = c;
+  }
+
+  /// The moves of a drilling cycle at a hole whose top is `top`: in at the retract height, down
+  /// to the rapid plane, feed to depth in pecks (back to the rapid plane between them), out.
+  void drill_hole(const Vec3d& top, int record, int line) {
+    const DrillCycle& c = *cycle_;
+    const Vec3d u = axis_;
+    const double clear = std::max(c.retract_to_mm, c.rapid_to_mm);
+    const double saved_feed = feed_mm_per_min_;
+    add_point(top + clear * u, Motion::Rapid, record, line);
+    add_point(top + c.rapid_to_mm * u, Motion::Rapid, record, line);
+    feed_mm_per_min_ = c.feed_mm_per_min;
+    double reached = 0.0;
+    while (reached < c.depth_mm - 1e-9) {
+      const double next =
+          std::min(c.depth_mm, reached + (reached == 0.0 ? c.first_peck_mm : c.next_peck_mm));
+      if (reached > 0.0) {
+        add_point(top + c.rapid_to_mm * u, Motion::Rapid, record, line);
+        add_point(top - reached * u, Motion::Rapid, record, line);
+      }
+      add_point(top - next * u, Motion::Feed, record, line);
+      reached = next;
+    }
+    add_point(top + clear * u, c.feed_out ? Motion::Feed : Motion::Rapid, record, line);
+    feed_mm_per_min_ = saved_feed;
+    ++tp_.reading.cycle_holes;
+  }
+
+  void skipped(const std::string& major) { ++tp_.skipped_records[major]; }
+
   void interpret(const std::string& major, const std::string& args_text, int index, int line) {
     const auto args = split_args(args_text);
+    if (spline_) {
+      if (major == "KNOT") {
+        if (!spline_->control.empty()) fail(line, "KNOT after the CNTRL records of its NURBS");
+        for (double k : numbers(args, 0, args.size(), major, line)) spline_->knots.push_back(k);
+        tp_.records[static_cast<std::size_t>(index)].owner = spline_->record;
+        return;
+      }
+      if (major == "CNTRL") {
+        if (args.size() != 3 && args.size() != 4) {
+          fail(line,
+               "CNTRL expects x,y,z[,weight], got " + std::to_string(args.size()) + " fields");
+        }
+        const auto v = numbers(args, 0, args.size(), major, line);
+        const double w = v.size() == 4 ? v[3] : 1.0;
+        if (!(w > 0.0)) fail(line, "CNTRL: weight must be positive");
+        const Vec3d q = to_mcs_point(Vec3d(v[0], v[1], v[2]));
+        spline_->control.emplace_back(q.x(), q.y(), q.z(), w);
+        tp_.records[static_cast<std::size_t>(index)].owner = spline_->record;
+        return;
+      }
+      finish_spline();
+    }
+    if (major == "KNOT" || major == "CNTRL") fail(line, major + " outside a NURBS record");
     if (pending_circle_ && major != "GOTO" && major != "PAINT" && major != "FEDRAT") {
       fail(line, "CIRCLE at line " + std::to_string(pending_circle_->line) +
                      " must be followed by its end GOTO, got " + major);
+    }
+    if (uninterpreted_motion_words().count(major)) {
+      fail(line, major +
+                     ": a record that moves the tool or its frame, which taxopt does not "
+                     "interpret; it cannot be skipped (post the file without it, or expand "
+                     "it in the CAM system)");
     }
     if (major == "GOTO" || major == "FROM") {
       if (args.size() != 3 && args.size() != 6) {
@@ -443,26 +999,63 @@ class Reader {
                        std::to_string(args.size()) + " fields");
       }
       const auto v = numbers(args, 0, args.size(), major, line);
-      if (v.size() == 6) axis_ = parse_axis(v, 3, major, line);
-      const Vec3d tip = Vec3d(v[0], v[1], v[2]) * scale_;
+      if (v.size() == 6) axis_ = to_mcs_vector(parse_axis(v, 3, major, line));
+      const Vec3d tip = to_mcs_point(Vec3d(v[0], v[1], v[2]));
+      ++tp_.reading.motion_records;
       if (pending_circle_) {
-        const PendingCircle c = *pending_circle_;
+        const CircleRecord c = *pending_circle_;
         pending_circle_.reset();
-        expand_circle(c, tip, line);
+        PendingArc a;
+        last_point("CIRCLE", c.line);  // the arc starts at the point before its end GOTO
+        a.op = op_;
+        a.start = current_op().points.size() - 1;
+        a.centre = c.centre;
+        a.axis = c.axis;
+        a.radius_mm = c.radius_mm;
+        a.turns = c.turns;
+        a.record = c.record;
+        a.line = c.line;
+        arcs_.push_back(a);
+      }
+      if (major == "FROM") {
+        home_ = std::make_pair(tip, axis_);
+      }
+      if (cycle_ && major == "GOTO") {
+        rapid_next_ = false;
+        drill_hole(tip, index, line);
+        return;
       }
       const Motion m = (major == "FROM" || rapid_next_) ? Motion::Rapid : Motion::Feed;
       rapid_next_ = false;
       add_point(tip, m, index, line);
+    } else if (major == "GODLTA") {
+      if (args.size() != 1 && args.size() != 3) {
+        fail(line, "GODLTA expects dx,dy,dz or a distance along the tool axis");
+      }
+      const auto v = numbers(args, 0, args.size(), major, line);
+      const Vec3d from = last_point(major, line).tip_mm;
+      const Vec3d delta = v.size() == 3 ? to_mcs_vector(Vec3d(v[0], v[1], v[2])) * scale_
+                                        : Vec3d(axis_ * (v[0] * scale_));
+      ++tp_.reading.motion_records;
+      const Motion m = rapid_next_ ? Motion::Rapid : Motion::Feed;
+      rapid_next_ = false;
+      add_point(from + delta, m, index, line);
+    } else if (major == "GOHOME") {
+      if (!home_) fail(line, "GOHOME: no FROM point to return to");
+      axis_ = home_->second;
+      ++tp_.reading.motion_records;
+      rapid_next_ = false;
+      add_point(home_->first, Motion::Rapid, index, line);
     } else if (major == "CIRCLE") {
       std::size_t nnum = 0;
       while (nnum < args.size() && is_number_like(args[nnum])) ++nnum;
       if (nnum < 6) fail(line, "CIRCLE expects at least 6 numbers (xc,yc,zc,i,j,k[,r,...])");
       const auto v = numbers(args, 0, nnum, major, line);
-      PendingCircle c;
-      c.centre = Vec3d(v[0], v[1], v[2]) * scale_;
-      c.axis = parse_axis(v, 3, major, line);
-      c.radius = nnum >= 7 ? v[6] * scale_ : 0.0;
-      if (c.radius < 0.0) fail(line, "CIRCLE radius must not be negative");
+      CircleRecord c;
+      c.centre = to_mcs_point(Vec3d(v[0], v[1], v[2]));
+      c.axis = to_mcs_vector(parse_axis(v, 3, major, line));
+      c.radius_mm = nnum >= 7 ? v[6] * scale_ : 0.0;
+      if (c.radius_mm < 0.0) fail(line, "CIRCLE radius must not be negative");
       for (std::size_t k = nnum; k < args.size(); ++k) {
         if (upper(args[k]) == "TIMES") {
           double t = 0.0;
@@ -471,52 +1064,76 @@ class Reader {
             fail(line, "CIRCLE TIMES expects a whole number from 1 to 1000");
           }
           c.turns = static_cast<int>(t);
+          ++k;
+        } else {
+          fail(line,
+               "CIRCLE: '" + args[k] + "' not interpreted (only TIMES,n may follow the numbers)");
         }
       }
       c.record = index;
       c.line = line;
+      tp_.records[static_cast<std::size_t>(index)].frame = frame_;
       pending_circle_ = c;
+    } else if (major == "NURBS") {
+      if (!args.empty()) {
+        fail(line, "NURBS/" + args_text +
+                       ": only NX's bare NURBS/ followed by KNOT/ and CNTRL/ is interpreted");
+      }
+      PendingSpline sp;
+      sp.record = index;
+      sp.line = line;
+      sp.motion = rapid_next_ ? Motion::Rapid : Motion::Feed;
+      rapid_next_ = false;
+      spline_ = sp;
+      ++tp_.reading.motion_records;
     } else if (major == "RAPID") {
       rapid_next_ = true;
     } else if (major == "FEDRAT") {
-      double value = -1.0;
-      int count = 0;
-      double to_mm = scale_;
-      bool per_rev = false;
-      for (const auto& a : args) {
-        const std::string u = upper(a);
-        double v;
-        if (parse_number(a, v)) {
-          value = v;
-          ++count;
-        } else if (u == "MMPM") {
-          to_mm = 1.0;
-        } else if (u == "IPM") {
-          to_mm = kMmPerInch;
-        } else if (u == "MMPR") {
-          to_mm = 1.0, per_rev = true;
-        } else if (u == "IPR") {
-          to_mm = kMmPerInch, per_rev = true;
-        } else {
-          fail(line, "FEDRAT: expected a feed and MMPM, IPM, MMPR or IPR, got '" + a + "'");
-        }
+      feed_mm_per_min_ = feed_of(args, 0, major, line);
+    } else if (major == "MSYS") {
+      if (args.size() != 9) fail(line, "MSYS expects 9 numbers (origin, x axis, y axis)");
+      const auto v = numbers(args, 0, 9, major, line);
+      const Vec3d x = parse_axis(v, 3, major, line), y = parse_axis(v, 6, major, line);
+      if (std::abs(x.dot(y)) > 1e-3) fail(line, "MSYS: its x and y axes are not perpendicular");
+      ClFrame f;
+      f.rotation.col(0) = x;
+      f.rotation.col(1) = (y - y.dot(x) * x).normalized();
+      f.rotation.col(2) = x.cross(f.rotation.col(1));
+      f.origin_mm = Vec3d(v[0], v[1], v[2]) * scale_;
+      f.line = line;
+      const bool identity =
+          (f.rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-9 &&
+          f.origin_mm.norm() < 1e-9;
+      frame_ = -1;
+      if (identity) return;
+      std::ostringstream os;
+      os << "MSYS: MCS at (" << v[0] << ", " << v[1] << ", " << v[2] << "), its z axis ("
+         << f.rotation(0, 2) << ", " << f.rotation(1, 2) << ", " << f.rotation(2, 2) << ")";
+      if (!options_.apply_msys) {
+        skipped(major);
+        notice(line, os.str() + ": --msys ignore, the coordinates are posted as written");
+        return;
       }
-      if (count != 1) fail(line, "FEDRAT expects exactly one number (the feed)");
-      if (!(value > 0.0)) fail(line, "FEDRAT: feed must be positive");
-      if (per_rev) {
-        if (!(spindle_rpm_ > 0.0)) {
-          tp_.warnings.push_back(format_location(
-              source_, line, "feed per revolution without a spindle speed: feed unknown"));
-          feed_mm_per_min_ = 0.0;
-        } else {
-          feed_mm_per_min_ = value * to_mm * spindle_rpm_;
-        }
-      } else {
-        feed_mm_per_min_ = value * to_mm;
+      tp_.frames.push_back(f);
+      frame_ = static_cast<int>(tp_.frames.size()) - 1;
+      ++tp_.reading.msys_applied;
+      notice(line, os.str() +
+                       ": the coordinates that follow are moved into it and posted there "
+                       "(--msys ignore posts them as written)");
+    } else if (major == "MULTAX") {
+      if (!args.empty() && upper(args[0]) == "OFF") axis_ = Vec3d::UnitZ();  // 3-axis: +Z
+    } else if (major == "CYCLE") {
+      if (args.empty()) fail(line, "CYCLE expects a cycle type, INIT or OFF");
+      const std::string kind = upper(args[0]);
+      if (kind == "OFF") {
+        cycle_.reset();
+      } else if (kind != "INIT" && kind != "ON") {
+        start_cycle(args, line);
       }
     } else if (major == "TLDATA") {
       if (args.empty() || upper(args[0]) != "MILL") {
         tp_.warnings.push_back(format_location(source_, line, "TLDATA other than MILL ignored"));
+        skipped(major);
         return;
       }
       if (args.size() < 3) fail(line, "TLDATA/MILL expects diameter and corner radius");
@@ -565,8 +1182,8 @@ class Reader {
     } else if (major == "END-OF-PATH") {
       op_ = -1;
       in_block_ = false;
-    } else if (!known_words().count(major)) {
-      ++tp_.unknown_records[major];
+    } else if (major != "UNITS" && major != "UNIT") {
+      skipped(major);
     }
   }
 
@@ -586,6 +1203,7 @@ class Reader {
   Toolpath tp_;
   double scale_ = 1.0;
   int op_ = -1;
+  int frame_ = -1;
   bool in_block_ = false;
   std::string pending_name_;
   Tool tool_;
@@ -594,7 +1212,11 @@ class Reader {
   Vec3d axis_ = Vec3d::UnitZ();
   bool rapid_next_ = false;
   double feed_mm_per_min_ = 0.0;
-  std::optional<PendingCircle> pending_circle_;
+  std::optional<CircleRecord> pending_circle_;
+  std::vector<PendingArc> arcs_;
+  std::optional<PendingSpline> spline_;
+  std::optional<DrillCycle> cycle_;
+  std::optional<std::pair<Vec3d, Vec3d>> home_;
 };
 
 }  // namespace

@@ -10,11 +10,18 @@ bool same_point(const CLPointd& a, const CLPointd& b) {
   return (a.tip_mm - b.tip_mm).norm() <= 1e-9 && (a.axis - b.axis).norm() <= 1e-12;
 }
 
-std::string goto_line(const char* word, const CLPointd& p, double mm_per_file_unit) {
-  const Vec3d t = p.tip_mm / mm_per_file_unit;
+/// A GOTO in the file's units and in the frame its record was given in (MSYS).
+std::string goto_line(const char* word, const CLPointd& p, double mm_per_file_unit,
+                      const ClFrame* frame = nullptr) {
+  Vec3d tip = p.tip_mm, axis = p.axis;
+  if (frame) {
+    tip = frame->rotation * tip + frame->origin_mm;
+    axis = frame->rotation * axis;
+  }
+  const Vec3d t = tip / mm_per_file_unit;
   char buf[256];
   std::snprintf(buf, sizeof buf, "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f", word, t.x(), t.y(), t.z(),
-                p.axis.x(), p.axis.y(), p.axis.z());
+                axis.x(), axis.y(), axis.z());
   return buf;
 }
 
@@ -31,7 +38,7 @@ std::string format_cl(const Toolpath& original, const std::vector<Operationd>& o
     }
   }
   const double scale = mm_per_unit(original.units);
-  std::string out;
+  std::string out = original.byte_order_mark ? "\xEF\xBB\xBF" : "";
   const auto emit = [&](const std::string& text) {
     for (char c : text) {
       if (c == '\n') {
@@ -42,25 +49,34 @@ std::string format_cl(const Toolpath& original, const std::vector<Operationd>& o
     }
     out += original.line_end;
   };
-  for (const auto& r : original.records) {
-    if (r.point_count == 0 || r.op < 0) {
-      emit(r.text);
-      continue;
-    }
+  // A record whose points changed is written as GOTOs; the records it owns (a NURBS's KNOT
+  // and CNTRL) go with it.
+  std::vector<char> changed(original.records.size(), 0);
+  for (std::size_t k = 0; k < original.records.size(); ++k) {
+    const auto& r = original.records[k];
+    if (r.point_count == 0 || r.op < 0) continue;
     const auto& before = original.operations[static_cast<std::size_t>(r.op)].points;
     const auto& after = operations[static_cast<std::size_t>(r.op)].points;
-    bool changed = false;
-    for (int k = 0; k < r.point_count; ++k) {
-      const auto i = static_cast<std::size_t>(r.first_point + k);
-      changed = changed || !same_point(before[i], after[i]);
+    for (int j = 0; j < r.point_count && !changed[k]; ++j) {
+      const auto i = static_cast<std::size_t>(r.first_point + j);
+      changed[k] = !same_point(before[i], after[i]);
     }
-    if (!changed) {
+  }
+  for (std::size_t k = 0; k < original.records.size(); ++k) {
+    const auto& r = original.records[k];
+    if (r.owner >= 0 && changed[static_cast<std::size_t>(r.owner)]) continue;
+    if (!changed[k]) {
       emit(r.text);
       continue;
     }
     const char* word = r.major == "FROM" ? "FROM" : "GOTO";
-    for (int k = 0; k < r.point_count; ++k) {
-      emit(goto_line(word, after[static_cast<std::size_t>(r.first_point + k)], scale));
+    const ClFrame* frame =
+        r.frame >= 0 ? &original.frames[static_cast<std::size_t>(r.frame)] : nullptr;
+    for (int j = 0; j < r.point_count; ++j) {
+      emit(goto_line(word,
+                     operations[static_cast<std::size_t>(r.op)]
+                         .points[static_cast<std::size_t>(r.first_point + j)],
+                     scale, frame));
     }
   }
   if (!original.final_line_end && !out.empty()) {

@@ -115,7 +115,17 @@ TEST_CASE("cl reader: NX traps: modal axis, IPM feed, inch ball mill, listing li
     if (q.line == 16) p = &q;
   }
   REQUIRE(p);
-  CHECK(p->tip_mm.x() == Approx(-3.5411 * 25.4));
+  // MSYS/3,3,0,... puts the MCS at (3, 3, 0): the point is posted in it.
+  CHECK(p->tip_mm.x() == Approx((-3.5411 - 3.0) * 25.4));
+  CHECK(p->tip_mm.y() == Approx((-3.0016 - 3.0) * 25.4));
+  CHECK(tp.reading.msys_applied == 1);
+  CHECK(tp.notices.size() == 1);
+  const Toolpath as_written = [] {
+    ClReadOptions o;
+    o.apply_msys = false;
+    return read_cl_file(real_data("mech491-variable-axis-ballmill.cls"), o);
+  }();
+  CHECK(as_written.operations.at(0).points.at(2).tip_mm.x() == Approx(-3.5411 * 25.4));
   CHECK(p->axis.x() == Approx(-0.3778015).margin(1e-6));
   CHECK(p->feed_mm_per_min == Approx(10.0 * 25.4));
   CHECK(p->motion == Motion::Feed);
@@ -166,7 +176,11 @@ TEST_CASE("cl reader: '$' joins without a separator, also inside numbers", "[io]
 TEST_CASE("cl reader: Creo comments continue over '$' and are no records", "[io][cl]") {
   const Toolpath tp = read_cl_file(real_data("creopost-profilfraesen.ncl"));
   CHECK(tp.warnings.empty());
-  CHECK(tp.unknown_records.empty());
+  // The `$$->` records are comments: only the file's own non-motion words are skipped.
+  std::set<std::string> skipped;
+  for (const auto& [word, count] : tp.skipped_records) skipped.insert(word);
+  CHECK(skipped == std::set<std::string>{"FINI", "MACHIN", "PARTNO"});
+  CHECK(tp.reading.dialect == ClDialect::Creo);
   CHECK(tp.units == LengthUnit::Millimetre);
 }
 
@@ -245,7 +259,9 @@ TEST_CASE("cl reader: CIRCLE becomes chords within tolerance, counter-clockwise 
   CHECK(format_cl(tp, tp.operations) == "GOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10,0.01\nGOTO/0,10,0\n");
 }
 
-TEST_CASE("cl reader: a CIRCLE with TIMES is a helix of extra full turns", "[io][cl]") {
+TEST_CASE("cl reader: a CIRCLE with TIMES,n is a helix of n revolutions in all", "[io][cl]") {
+  // NX's helical ramps (mech491-project2-multiop.cls, lines 4641 and 4689): read as n turns in
+  // all, the ramp climbs at 3.00 deg, NX's ramp angle; with n extra turns it would be 2.62.
   const Toolpath tp =
       parse_cl("GOTO/10,0,5\nCIRCLE/0,0,0,0,0,1,10,0.01,TIMES,2\nGOTO/0,10,0\n", "t");
   const auto& pts = tp.operations[0].points;
@@ -256,7 +272,7 @@ TEST_CASE("cl reader: a CIRCLE with TIMES is a helix of extra full turns", "[io]
     turned += wrap_pi(a1 - a0);
     CHECK(pts[i].tip_mm.z() <= pts[i - 1].tip_mm.z() + 1e-12);
   }
-  CHECK(rad_to_deg(turned) == Approx(2 * 360.0 + 90.0).margin(1e-6));
+  CHECK(rad_to_deg(turned) == Approx(360.0 + 90.0).margin(1e-6));
 }
 
 TEST_CASE("cl writer: changed points become GOTOs in the file's units", "[io][cl]") {

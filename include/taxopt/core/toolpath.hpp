@@ -22,6 +22,50 @@ inline double mm_per_unit(LengthUnit unit) { return unit == LengthUnit::Inch ? k
 /// "mm" or "in".
 const char* to_string(LengthUnit unit);
 
+/// The CAM system a CL file comes from, as the reader recognises it by its records and
+/// comments (docs/cl-files.md lists the markers and what each dialect's records mean).
+enum class ClDialect { Generic, SiemensNx, MakinoFfcam, Catia, SolidworksCam, Creo };
+/// "generic-apt", "siemens-nx", "makino-ffcam", "catia-v5", "solidworks-cam", "creo".
+const char* to_string(ClDialect dialect);
+
+/// Sense in which a CIRCLE record's arc runs about its axis (i,j,k), looking from the tip of
+/// (i,j,k) down onto the arc's plane. `Auto`: the dialect's documented convention, checked
+/// against the tangents of the moves before and after each arc.
+enum class ArcDirection { Auto, Clockwise, CounterClockwise };
+/// "auto", "cw", "ccw".
+const char* to_string(ArcDirection direction);
+
+/// What the reader made of the motion records of a file: how arcs were read and why, and how
+/// much motion splines, drilling cycles and frames contributed. The report carries it.
+struct ClReadSummary {
+  ClDialect dialect = ClDialect::Generic;
+  /// The sense applied to CIRCLE records (never Auto), and where it comes from:
+  /// "documented" (the dialect's), "tangents" (the file's own arcs decided it), "option".
+  ArcDirection arc_convention = ArcDirection::CounterClockwise;
+  std::string arc_convention_source = "documented";
+  /// CIRCLE records; those whose neighbouring straight moves decide their sense; those whose
+  /// tangents contradict the convention; and of these, the ones run in their tangents' sense.
+  int arcs = 0, arcs_decidable = 0, arcs_contradicting = 0, arcs_reversed = 0;
+  /// CL lines of the reversed arcs (the first 20).
+  std::vector<int> reversed_arc_lines;
+  /// NX NURBS records evaluated, and the points they became.
+  int splines = 0, spline_points = 0;
+  /// Hole positions inside CYCLE/... CYCLE/OFF expanded into their drilling moves.
+  int cycle_holes = 0;
+  /// MSYS records whose frame moved the coordinates that follow (non-identity, applied).
+  int msys_applied = 0;
+  /// Motion records read: GOTO, FROM, GODLTA, GOHOME.
+  int motion_records = 0;
+};
+
+/// A frame a file's coordinates were given in (NX MSYS): a point p of the file is
+/// rotation * q + origin_mm for the point q taxopt works with.
+struct ClFrame {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3d origin_mm = Vec3d::Zero();
+  int line = 0;
+};
+
 /// How the machine reaches a CL point from the one before it.
 enum class Motion { Rapid, Feed };
 
@@ -122,6 +166,11 @@ struct ClRecord {
   int op = -1;
   int first_point = -1;
   int point_count = 0;
+  /// The record whose motion this one is part of (a KNOT or CNTRL of a NURBS), else -1: it is
+  /// left out where the owner is written as new GOTOs.
+  int owner = -1;
+  /// Index in Toolpath::frames of the frame its coordinates are in (-1: taxopt's own).
+  int frame = -1;
 };
 
 /// A CL file in memory: operations to optimise, plus every record for the round trip.
@@ -132,12 +181,22 @@ struct Toolpath {
   /// Line end used by the file ("\n" or "\r\n") and whether its last line ended with one.
   std::string line_end = "\n";
   bool final_line_end = true;
+  /// The file began with a UTF-8 byte-order mark (stripped for reading, kept for writing).
+  bool byte_order_mark = false;
   std::vector<ClRecord> records;
   std::vector<Operationd> operations;
   /// Non-fatal findings of the reader (skipped lines, assumptions), one line each.
   std::vector<std::string> warnings;
-  /// Major words the reader did not interpret, with their counts (kept for the round trip).
-  std::map<std::string, int> unknown_records;
+  /// Findings a user must see even without -v: how the reader decided what the file means
+  /// where it could not be read literally (arcs taken by their tangents, MSYS applied, arc
+  /// sense from evidence), one line each with the file and line.
+  std::vector<std::string> notices;
+  /// Major words of records the reader kept but did not interpret (display, comments,
+  /// machine words: none bears motion), with their counts.
+  std::map<std::string, int> skipped_records;
+  ClReadSummary reading;
+  /// Frames of MSYS records that were applied (ClRecord::frame).
+  std::vector<ClFrame> frames;
 };
 
 /// Number of CL points over all operations.

@@ -18,6 +18,14 @@ struct ClReadOptions {
   double arc_tolerance_mm = 0.001;
   /// Largest accepted | |(i,j,k)| - 1 | of a tool axis; the axis is then normalised.
   double axis_length_tolerance = 1e-3;
+  /// Sense of CIRCLE arcs (--arc-direction). Auto: the dialect's documented sense; an arc
+  /// whose neighbouring moves contradict it on every side they decide is run in their sense
+  /// (a notice says which); when most decidable arcs contradict it, reading stops (exit 2).
+  /// An explicit sense is applied to every arc as given.
+  ArcDirection arc_direction = ArcDirection::Auto;
+  /// Apply NX MSYS frames (--msys apply|ignore): the coordinates after an MSYS record are
+  /// given in the frame it names and are moved into its MCS, in which the G-code is posted.
+  bool apply_msys = true;
 };
 
 /// Parses CL text. `source` names the file in errors and warnings.

@@ -3,11 +3,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -64,9 +66,21 @@ bool have_rs274() { return run("command -v rs274").code == 0; }
 
 RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) {
   TempDir tmp;
+  // rs274 knows only the tools of its table: every T number the program uses is in it.
+  std::set<long> tools;
+  for (long t = 1; t < 100; ++t) tools.insert(t);
+  const std::string program = read_file(ngc_path);
+  for (std::size_t i = 0; i + 1 < program.size(); ++i) {
+    if ((program[i] == 'T' || program[i] == 't') &&
+        std::isdigit(static_cast<unsigned char>(program[i + 1])) &&
+        (i == 0 || !std::isalpha(static_cast<unsigned char>(program[i - 1])))) {
+      tools.insert(std::strtol(program.c_str() + i + 1, nullptr, 10));
+    }
+  }
   std::string table;
-  for (int t = 1; t < 100; ++t) {
-    table += "T" + std::to_string(t) + " P" + std::to_string(t) + " D6 Z0 ;\n";
+  int pocket = 0;
+  for (long t : tools) {
+    table += "T" + std::to_string(t) + " P" + std::to_string(++pocket) + " D6 Z0 ;\n";
   }
   write_file(tmp.path("tool.tbl"), table);
   // rs274 keeps its parameter file (rs274ngc.var) in the working directory, and it opens

@@ -4,8 +4,10 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <sstream>
 
 #include "support.hpp"
+#include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/io/machine_file.hpp"
 
@@ -148,11 +150,24 @@ TEST_CASE("rs274: sense -1 writes mirrored A and C for the same tool axes",
 TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for move",
           "[rs274][integration]") {
   REQUIRE(have_rs274());
-  for (const char* f :
-       {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
-        "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
-        "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
+  // What each file means, read by scripts/cl_reference.py (no code shared with the reader):
+  // its motion records, CIRCLE records, and the length of its path with every arc run in the
+  // sense of the straight moves beside it.
+  std::istringstream table(read_file(real_data("reference.tsv")));
+  std::string row;
+  std::getline(table, row);  // header
+  int files = 0;
+  while (std::getline(table, row)) {
+    std::istringstream fields(row);
+    std::string f;
+    int motion_records = 0, circles = 0;
+    double path_mm = 0.0;
+    fields >> f >> motion_records >> circles >> path_mm;
     INFO(f);
+    ++files;
+    const Toolpath tp = read_cl_file(real_data(f));
+    CHECK(tp.reading.motion_records == motion_records);
+    CHECK(tp.reading.arcs == circles);
     TempDir dir;
     const RunResult r =
         run_taxopt("--in " + real_data(f) + " --gcode " + dir.path("o.ngc") + " --method none -q");
@@ -168,7 +183,17 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
       REQUIRE(moves[i].a == Approx(ours[i].a_deg).margin(1e-4));
       REQUIRE(moves[i].c == Approx(ours[i].c_deg).margin(1e-4));
     }
+    // The whole path as rs274 moves the tip (TCP mode), from the first point on.
+    double rs274_mm = 0.0;
+    for (std::size_t i = 1; i < moves.size(); ++i) {
+      rs274_mm += Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
+                        moves[i].z - moves[i - 1].z)
+                      .norm();
+    }
+    rs274_mm *= mm_per_unit(tp.units);
+    CHECK(rs274_mm == Approx(path_mm).epsilon(0.002));
   }
+  CHECK(files == 7);
 }
 
 TEST_CASE("rs274: inch output of a millimetre file", "[rs274][integration]") {
@@ -196,8 +221,8 @@ TEST_CASE("rs274: taxopt demo writes G-code rs274 accepts, with the paper's C fl
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK_THAT(r.out, Catch::Contains("SINE_FINISH"));
-  for (const char* plot : {"op1-angles-a.svg", "op1-angles-c.svg", "op1-omega.svg",
-                           "op1-accel.svg"}) {
+  for (const char* plot :
+       {"op1-angles-a.svg", "op1-angles-c.svg", "op1-omega.svg", "op1-accel.svg"}) {
     CHECK(file_exists(dir.path("demo/plots/") + plot));
   }
   std::vector<CanonMove> moves;

@@ -40,6 +40,17 @@ double ball_radius_mm(const Operationd& op, const JobOptions& options) {
   return options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
 }
 
+/// Why an operation with no ball radius is left alone: no tool at all in the file, or another
+/// kind of tool.
+std::string not_a_ball(const Operationd& op) {
+  if (!op.tool.from_file) {
+    return "operation " + op.name +
+           ": the CL file defines no tool (no TLDATA or CUTTER record); give the ball radius "
+           "with --tool-radius";
+  }
+  return "operation " + op.name + ": not a ball-end mill";
+}
+
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
 /// not move when the axis turns, so before and after share one arc length), else the tip.
 Vec3d reference_point(const CLPointd& p, double ball_radius_mm) {
@@ -811,8 +822,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       } advance{progress};
       const double ball_r = options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
       if (!(ball_r > 0.0)) {
-        res.warnings.push_back("operation " + op.name +
-                               ": not a ball-end mill, no contact recovery and no collision check");
+        res.warnings.push_back(not_a_ball(op) + ", no contact recovery and no collision check");
         continue;
       }
       contacts[k] = recover_contacts(*options.part, op, ball_r, options.contact);
@@ -871,8 +881,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const Operationd& op = tp.operations[k];
       const double R = ball_radius_mm(op, options);
       if (!(R > 0.0)) {
-        res.warnings.push_back("operation " + op.name +
-                               ": not a ball-end mill, the input tool axes are kept");
+        res.warnings.push_back(not_a_ball(op) + ", the input tool axes are kept");
         continue;
       }
       if (options.part && !contact_summaries[k].recovered) continue;

@@ -42,6 +42,25 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["ok"] = result.ok();
   j["problems"] = result.problems;
   j["warnings"] = result.warnings;
+  // How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
+  // and the motion that splines, drilling cycles and MSYS frames contributed.
+  const ClReadSummary& rd = toolpath.reading;
+  nlohmann::json cl;
+  cl["dialect"] = to_string(rd.dialect);
+  cl["motion_records"] = rd.motion_records;
+  cl["arcs"] = {{"count", rd.arcs},
+                {"convention", to_string(rd.arc_convention)},
+                {"convention_from", rd.arc_convention_source},
+                {"decidable", rd.arcs_decidable},
+                {"contradicting", rd.arcs_contradicting},
+                {"reversed_by_tangents", rd.arcs_reversed},
+                {"reversed_lines", rd.reversed_arc_lines}};
+  cl["splines"] = {{"count", rd.splines}, {"points", rd.spline_points}};
+  cl["drill_cycle_holes"] = rd.cycle_holes;
+  cl["msys_applied"] = rd.msys_applied;
+  cl["skipped_records"] = toolpath.skipped_records;
+  cl["notices"] = toolpath.notices;
+  j["cl_input"] = cl;
   nlohmann::json ops = nlohmann::json::array();
   for (const auto& r : result.operations) {
     nlohmann::json o;

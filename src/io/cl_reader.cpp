@@ -485,6 +485,7 @@ class Reader {
   }
 
   void add_point(const Vec3d& tip_mm, Motion motion, int record, int line) {
+    if (++points_ > 20000000) fail(line, "more than 2e7 CL points: the file cannot be posted");
     auto& op = current_op();
     CLPointd p;
     p.tip_mm = tip_mm;
@@ -674,7 +675,11 @@ class Reader {
           PendingArc a = *by_op[o][next++];
           if (a.clockwise) a.axis = -a.axis;
           const CLPointd& end = pts[i + 1];
-          for (const Vec3d& q : arc_chords(a, pts[i].tip_mm, end.tip_mm)) {
+          const std::vector<Vec3d> chords = arc_chords(a, pts[i].tip_mm, end.tip_mm);
+          points_ += chords.size();
+          if (points_ > 20000000)
+            fail(a.line, "more than 2e7 CL points: the file cannot be posted");
+          for (const Vec3d& q : chords) {
             CLPointd p = end;
             p.tip_mm = q;
             p.motion = Motion::Feed;
@@ -926,7 +931,7 @@ class Reader {
     if (pecks && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.depth_mm;
     if (pecks && !(c.next_peck_mm > 0.0)) c.next_peck_mm = c.first_peck_mm;
     if (!pecks) c.first_peck_mm = c.next_peck_mm = c.depth_mm;
-    if (c.depth_mm / c.next_peck_mm > 1e5) fail(line, "CYCLE: more than 1e5 pecks");
+    if (c.depth_mm / c.next_peck_mm > 1e4) fail(line, "CYCLE: more than 1e4 pecks");
     cycle_ = c;
   }
 
@@ -1217,6 +1222,7 @@ class Reader {
   std::optional<PendingSpline> spline_;
   std::optional<DrillCycle> cycle_;
   std::optional<std::pair<Vec3d, Vec3d>> home_;
+  std::size_t points_ = 0;
 };
 
 }  // namespace

@@ -349,7 +349,17 @@ int main(int argc, char** argv) {
           return error(opt + " and " + other_opt + " name the same file " + path, 2);
         }
       }
+      // Checked before any work: a run of minutes must not end in "cannot write".
+      const std::string why = taxopt::writable_output_problem(path);
+      if (!why.empty()) return error(opt + " " + path + ": cannot write there: " + why, 2);
       outputs[opt] = path;
+    }
+    if (!a.plots.empty()) {
+      std::error_code ec;
+      const auto plots_dir = std::filesystem::absolute(a.plots, ec);
+      if (std::filesystem::exists(plots_dir, ec) && !std::filesystem::is_directory(plots_dir, ec)) {
+        return error("--plots " + a.plots + " is a file, not a folder", 2);
+      }
     }
     const int threads = a.threads > 0
                             ? a.threads
@@ -366,10 +376,7 @@ int main(int argc, char** argv) {
                                                             : taxopt::ArcDirection::Auto;
     read_options.apply_msys = a.msys == "apply";
     taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
-    if (!a.quiet) {
-      // How the file was read where it could not be read literally: always shown.
-      for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
-    }
+
     if (a.tool_radius) {
       if (!(*a.tool_radius > 0.0)) return error("--tool-radius must be positive", 2);
       const double r_mm = *a.tool_radius * taxopt::mm_per_unit(toolpath.units);
@@ -445,7 +452,17 @@ int main(int argc, char** argv) {
     options.units_out = parse_unit(a.units_out, "--units-out");
     const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);
 
+    // Errors first (the first 10; -v all of them), then how the file was read, then warnings.
+    const std::size_t shown = a.verbose > 0 ? result.problems.size() : 10;
+    for (std::size_t i = 0; i < result.problems.size() && i < shown; ++i) {
+      std::cerr << "taxopt: error: " << result.problems[i] << "\n";
+    }
+    if (result.problems.size() > shown) {
+      std::cerr << "taxopt: error: ... and " << result.problems.size() - shown
+                << " more (-v lists them all)\n";
+    }
     if (!a.quiet) {
+      for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
       if (a.verbose > 0) {
         for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
         for (const auto& [word, count] : toolpath.skipped_records) {
@@ -456,10 +473,14 @@ int main(int argc, char** argv) {
         std::cerr << "taxopt: " << result.warnings.size() << " warning(s); -v lists them\n";
       }
     }
-    for (const auto& p : result.problems) std::cerr << "taxopt: error: " << p << "\n";
     if (!result.ok() && !a.force) {
       std::cerr << "taxopt: no output written (--force writes it anyway)\n";
       return 1;
+    }
+    if (!a.gcode.empty() && result.gcode.text.find_first_of("\n") == std::string::npos) {
+      return error("no G-code to write: no point of the program could be posted" +
+                       (result.problems.empty() ? std::string() : " (" + result.problems[0] + ")"),
+                   1);
     }
     taxopt::OutputTransaction tx;
     if (!a.gcode.empty()) tx.stage(a.gcode, result.gcode.text);

@@ -1,17 +1,81 @@
 #include "taxopt/io/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 
 #include "taxopt/core/error.hpp"
 
 namespace taxopt {
+namespace {
+
+// Temporary files not yet renamed into place, for the SIGINT/SIGTERM handler: it may only call
+// async-signal-safe functions, so the paths live in fixed slots (a slot is published by its
+// `used` flag after its path is written, and withdrawn before it is reused).
+constexpr std::size_t kSlots = 64;
+struct PendingSlot {
+  std::atomic<bool> used{false};
+  char path[4096] = {};
+};
+std::array<PendingSlot, kSlots> g_pending;
+std::mutex g_pending_mutex;
+
+extern "C" void remove_pending_and_reraise(int sig) {
+  for (auto& s : g_pending) {
+    if (s.used.load()) ::unlink(s.path);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void install_handlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction sa {};
+      sa.sa_handler = remove_pending_and_reraise;
+      sigemptyset(&sa.sa_mask);
+      struct sigaction old {};
+      // Keep a handler someone else installed (or SIG_IGN): only the default is replaced.
+      if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_DFL) {
+        ::sigaction(sig, &sa, nullptr);
+      }
+    }
+  });
+}
+
+/// Publishes a temporary path for the signal handler; -1 when every slot is taken (the file
+/// is then only removed by the transaction itself).
+int publish_pending(const std::string& path) {
+  std::lock_guard<std::mutex> lock(g_pending_mutex);
+  if (path.size() >= sizeof(PendingSlot::path)) return -1;
+  for (std::size_t k = 0; k < kSlots; ++k) {
+    if (!g_pending[k].used.load()) {
+      std::memcpy(g_pending[k].path, path.c_str(), path.size() + 1);
+      g_pending[k].used.store(true);
+      return static_cast<int>(k);
+    }
+  }
+  return -1;
+}
+
+void withdraw_pending(int slot) {
+  if (slot < 0) return;
+  std::lock_guard<std::mutex> lock(g_pending_mutex);
+  g_pending[static_cast<std::size_t>(slot)].used.store(false);
+}
+
+}  // namespace
 
 OutputTransaction::~OutputTransaction() { abort(); }
 
@@ -24,12 +88,21 @@ void OutputTransaction::stage(const std::string& path, const std::string& conten
   std::string templ = (dir / ("." + target.filename().string() + ".taxopt-XXXXXX")).string();
   std::vector<char> buf(templ.begin(), templ.end());
   buf.push_back('\0');
+  install_handlers();
+  // No signal between creating the temporary file and publishing it to the handler.
+  sigset_t block, saved;
+  sigemptyset(&block);
+  sigaddset(&block, SIGINT);
+  sigaddset(&block, SIGTERM);
+  sigaddset(&block, SIGHUP);
+  ::pthread_sigmask(SIG_BLOCK, &block, &saved);
   const int fd = ::mkstemp(buf.data());
+  const int mkstemp_errno = errno;
+  if (fd >= 0) staged_.push_back({buf.data(), path, publish_pending(buf.data())});
+  ::pthread_sigmask(SIG_SETMASK, &saved, nullptr);
   if (fd < 0) {
-    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(errno));
+    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(mkstemp_errno));
   }
-  const std::string temp(buf.data());
-  staged_.push_back({temp, path});
   std::size_t done = 0;
   while (done < content.size()) {
     const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
@@ -54,16 +127,21 @@ void OutputTransaction::commit() {
   for (std::size_t k = 0; k < staged_.size(); ++k) {
     if (std::rename(staged_[k].temp.c_str(), staged_[k].target.c_str()) != 0) {
       const int err = errno;
+      for (std::size_t j = 0; j < k; ++j) withdraw_pending(staged_[j].slot);
       staged_.erase(staged_.begin(), staged_.begin() + static_cast<long>(k));
       throw InputError(staged_.front().target, 0,
                        std::string("cannot write: ") + std::strerror(err));
     }
+    withdraw_pending(staged_[k].slot);
   }
   staged_.clear();
 }
 
 void OutputTransaction::abort() noexcept {
-  for (const auto& s : staged_) std::remove(s.temp.c_str());
+  for (const auto& s : staged_) {
+    std::remove(s.temp.c_str());
+    withdraw_pending(s.slot);
+  }
   staged_.clear();
 }
 
@@ -71,7 +149,29 @@ bool same_file(const std::string& a, const std::string& b) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
-  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+  // Not both there yet: compare absolute paths with links and "." and ".." resolved as far as
+  // the folders exist ("same.out" and "./same.out" are one file).
+  const auto resolved = [](const std::string& p) {
+    std::error_code e;
+    const fs::path abs = fs::absolute(p, e);
+    const fs::path r = fs::weakly_canonical(abs, e);
+    return (e ? abs : r).lexically_normal();
+  };
+  return resolved(a) == resolved(b);
+}
+
+std::string writable_output_problem(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return "is a folder";
+  const fs::path target = fs::absolute(path, ec);
+  const fs::path dir = target.parent_path();
+  if (!fs::exists(dir, ec)) return "its folder " + dir.string() + " does not exist";
+  if (!fs::is_directory(dir, ec)) return dir.string() + " is not a folder";
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+    return "cannot write in its folder " + dir.string() + ": " + std::strerror(errno);
+  }
+  return "";
 }
 
 }  // namespace taxopt

@@ -232,6 +232,28 @@ const std::set<std::string>& uninterpreted_motion_words() {
   return words;
 }
 
+/// The lines NX's listing window puts around a CLSF: "Information listing created by<TAB>...",
+/// "Date<TAB>...", "Current work part<TAB>...", "Node name<TAB>..." and the trailer "Tool Path
+/// Listing has N lines.".
+bool is_listing_line(const std::string& code) {
+  const std::size_t tab = code.find('\t');
+  if (tab != std::string::npos && tab > 0) {
+    bool words = true;
+    for (std::size_t i = 0; i < tab; ++i) {
+      const unsigned char c = static_cast<unsigned char>(code[i]);
+      words = words && (std::isalpha(c) || c == ' ');
+    }
+    if (words) return true;
+  }
+  const std::string t = trim(code);
+  const std::string head = "Tool Path Listing has ";
+  if (t.rfind(head, 0) != 0) return false;
+  std::size_t i = head.size();
+  const std::size_t digits = i;
+  while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) ++i;
+  return i > digits && (t.substr(i) == " lines." || t.substr(i) == " lines");
+}
+
 /// Recognises the CAM system from its records and comments (docs/cl-files.md).
 ClDialect detect_dialect(const std::vector<LogicalLine>& lines) {
   bool nx = false, creo = false, catia = false, solidworks = false;
@@ -486,6 +508,7 @@ class Reader {
 
   void add_point(const Vec3d& tip_mm, Motion motion, int record, int line) {
     if (++points_ > 20000000) fail(line, "more than 2e7 CL points: the file cannot be posted");
+    check_reach(tip_mm, tp_.records[static_cast<std::size_t>(record)].major, line);
     auto& op = current_op();
     CLPointd p;
     p.tip_mm = tip_mm;
@@ -497,6 +520,17 @@ class Reader {
     tp_.records[static_cast<std::size_t>(record)].frame = frame_;
     op.points.push_back(p);
   }
+
+  /// Coordinates beyond any machine (1e6 mm = 1 km) are a broken file, not a program.
+  void check_reach(const Vec3d& p_mm, const std::string& major, int line) const {
+    if (p_mm.cwiseAbs().maxCoeff() > kMaxCoordinateMm) {
+      std::ostringstream os;
+      os << major << ": point (" << p_mm.x() << ", " << p_mm.y() << ", " << p_mm.z()
+         << ") mm lies beyond +-1e6 mm: not a machinable coordinate";
+      fail(line, os.str());
+    }
+  }
+  static constexpr double kMaxCoordinateMm = 1e6;
 
   const CLPointd& last_point(const std::string& major, int line) {
     auto& op = current_op();
@@ -680,6 +714,7 @@ class Reader {
           if (points_ > 20000000)
             fail(a.line, "more than 2e7 CL points: the file cannot be posted");
           for (const Vec3d& q : chords) {
+            check_reach(q, "CIRCLE", a.line);
             CLPointd p = end;
             p.tip_mm = q;
             p.motion = Motion::Feed;
@@ -826,6 +861,12 @@ class Reader {
     if (ll.kind == RecordKind::Record) {
       rec.major = major_word(ll.code, args);
       if (rec.major.empty()) {
+        // Only the lines NX's listing window adds around a CLSF are no records; anything
+        // else that cannot be read is an error, never a skipped line (it may be UNITS).
+        if (!is_listing_line(ll.code)) {
+          fail(ll.line, "not a CL record: '" + trim(ll.code).substr(0, 60) +
+                            "' (expected a record word such as GOTO/, or a $$ comment)");
+        }
         rec.kind = RecordKind::NotRecord;
         tp_.warnings.push_back(format_location(
             source_, ll.line, "not a CL record, skipped: '" + trim(ll.code).substr(0, 60) + "'"));

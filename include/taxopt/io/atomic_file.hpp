@@ -1,7 +1,8 @@
 #pragma once
 /// @file Atomic output: every file of a run is first written to a temporary file beside its
 /// target, and only when all are written are they renamed into place. A failed run leaves no
-/// partial file and never overwrites a good one.
+/// partial file and never overwrites a good one. A SIGINT, SIGTERM or SIGHUP (whose handler
+/// is the default one) removes the pending temporary files before the process ends by it.
 
 #include <string>
 #include <vector>
@@ -31,11 +32,17 @@ class OutputTransaction {
   struct Staged {
     std::string temp;
     std::string target;
+    int slot = -1;  // where the signal handler finds it
   };
   std::vector<Staged> staged_;
 };
 
-/// True when `a` and `b` name the same existing file, or the same path.
+/// True when `a` and `b` name the same existing file, or the same path once made absolute and
+/// resolved (links, ".", "..") as far as it exists.
 bool same_file(const std::string& a, const std::string& b);
+
+/// Why an output file cannot be written at `path` ("" when it can): a folder, a missing
+/// folder, a folder without write permission. Checked before any work is done.
+std::string writable_output_problem(const std::string& path);
 
 }  // namespace taxopt

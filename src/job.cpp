@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
@@ -1137,6 +1138,23 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
               tp.source, want.line,
               "operation " + op.name + ": written A " + std::to_string(last->a_deg) + " / C " +
                   std::to_string(last->c_deg) + " deg is outside the machine's axis ranges"));
+        }
+        r.verification.within_axis_limits = false;
+      }
+      // The linear travel, in machine coordinates, where the machine file gives it.
+      const Vec3d joints_mm = machine.gcode.mode == GcodeMode::Machine
+                                  ? last->xyz_mm
+                                  : machine.ac.to_machine_mm(last->xyz_mm, written);
+      for (int q = 0; q < 3; ++q) {
+        const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
+        if (range.contains(joints_mm[q])) continue;
+        if (r.verification.within_axis_limits) {
+          std::ostringstream os;
+          os << "operation " << op.name << ": "
+             << "XYZ"[q] << " would be " << joints_mm[q]
+             << " mm in machine coordinates, outside the machine's travel [" << range.min_mm << ", "
+             << range.max_mm << "] mm";
+          res.problems.push_back(format_location(tp.source, want.line, os.str()));
         }
         r.verification.within_axis_limits = false;
       }

@@ -47,8 +47,21 @@ class MachineParser {
     for (Joint j : {Joint::X, Joint::Y, Joint::Z}) {
       const std::string name = to_string(j);
       if (const toml::table* t = table_of(*axes, name, false, "axes.")) {
-        check_keys(*t, "axes." + name, {"max_velocity_mm_s", "max_accel_mm_s2", "max_jerk_mm_s3"});
+        check_keys(*t, "axes." + name,
+                   {"min_mm", "max_mm", "max_velocity_mm_s", "max_accel_mm_s2", "max_jerk_mm_s3"});
         parse_limits(*t, "axes." + name, "mm", m.limits[static_cast<std::size_t>(j)]);
+        const toml::node* lo = t->get("min_mm");
+        const toml::node* hi = t->get("max_mm");
+        if (lo || hi) {
+          if (!lo || !hi)
+            fail(line_of(lo ? *lo : *hi), "axes." + name + " needs min_mm and max_mm");
+          auto& range = m.linear_range[static_cast<std::size_t>(j)];
+          range.min_mm = number_of(*lo, "axes." + name + ".min_mm");
+          range.max_mm = number_of(*hi, "axes." + name + ".max_mm");
+          if (!(range.min_mm < range.max_mm)) {
+            fail(line_of(*lo), "axes." + name + ": min_mm must be less than max_mm");
+          }
+        }
       }
     }
     if (const toml::table* pivot = table_of(root, "pivot", false)) {

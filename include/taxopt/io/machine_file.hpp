@@ -2,6 +2,9 @@
 /// @file The machine file (TOML, CLI.md "Machine file"): kinematics, axis ranges and senses,
 /// pivot, G-code settings.
 
+#include <array>
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "taxopt/kinematics/ac_machine.hpp"
@@ -46,6 +49,15 @@ struct Machine {
   /// Velocity, acceleration and jerk limits of X Y Z (mm) and A C (deg) as the machine file
   /// gives them; 0: not given (effective_limits fills in the defaults).
   JointLimits limits{};
+  /// Travel of X, Y, Z in machine coordinates (the machine-mode convention of CLI.md), mm:
+  /// [axes.X] min_mm/max_mm; unbounded where the file gives none.
+  struct LinearRange {
+    double min_mm = -std::numeric_limits<double>::infinity();
+    double max_mm = std::numeric_limits<double>::infinity();
+    bool contains(double v_mm) const { return v_mm >= min_mm && v_mm <= max_mm; }
+    bool bounded() const { return std::isfinite(min_mm) || std::isfinite(max_mm); }
+  };
+  std::array<LinearRange, 3> linear_range;
   GcodeSettings gcode;
 };
 

@@ -1,0 +1,242 @@
+// The silent holes of issue 23, each a regression test: every case exits non-zero with a clear
+// message (file, line or face, what was expected), or gives the same G-code as the good input.
+#include <catch2/catch.hpp>
+#include <cstring>
+#include <filesystem>
+#include <random>
+
+#include "support.hpp"
+#include "taxopt/core/types.hpp"
+#include "taxopt/io/mesh_file.hpp"
+
+using namespace taxopt::test;
+using taxopt::Vec3d;
+
+namespace {
+
+const char* kInchCl =
+    "UNITS/INCHES\nTOOL PATH/T,TOOL,BALL\nTLDATA/MILL,0.25,0.125,1.0,0,0\nRAPID\n"
+    "GOTO/0,0,1,0,0,1\nFEDRAT/IPM,10\nGOTO/0,0,0\nGOTO/1,0,0\nGOTO/2,0.5,0\nEND-OF-PATH\n";
+
+/// A binary STL of one or more triangles, its header count set to `count`.
+std::string stl_with_count(const taxopt::TriangleMesh& mesh, std::uint32_t count) {
+  std::string bytes = taxopt::format_stl_binary(mesh);
+  std::memcpy(&bytes[80], &count, 4);
+  return bytes;
+}
+
+taxopt::TriangleMesh plane(int n) {
+  taxopt::TriangleMesh m;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) m.vertices.emplace_back(10.0 * i - 50, 10.0 * j - 50, -1.0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const int a = i * (n + 1) + j, b = a + 1, c = a + n + 1, d = c + 1;
+      m.faces.push_back({a, c, b});
+      m.faces.push_back({b, c, d});
+    }
+  }
+  return m;
+}
+
+bool leftover_temps(const std::string& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().filename().string().find(".taxopt-") != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("bad input: a UTF-8 byte-order mark changes nothing: same units, names, G-code",
+          "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kInchCl);
+  write_file(t.path("b.cls"), std::string("\xEF\xBB\xBF") + kInchCl);
+  const auto a =
+      run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("a.nc") + " --method none -q");
+  const auto b =
+      run_taxopt("--in " + t.path("b.cls") + " --gcode " + t.path("b.nc") + " --method none -q");
+  REQUIRE(a.code == 0);
+  REQUIRE(b.code == 0);
+  std::string ga = read_file(t.path("a.nc")), gb = read_file(t.path("b.nc"));
+  // The header names the source file; everything after it is the same.
+  ga = ga.substr(ga.find("(machine"));
+  gb = gb.substr(gb.find("(machine"));
+  CHECK(ga == gb);
+  CHECK_THAT(gb, Catch::Contains("G20"));
+  CHECK_THAT(gb, Catch::Contains("(operation T)"));
+  // UTF-16 is refused by name.
+  write_file(t.path("u.cls"), std::string("\xFF\xFEG\0O\0", 6));
+  const auto u = run_taxopt("--in " + t.path("u.cls") + " --gcode " + t.path("u.nc"));
+  CHECK(u.code == 2);
+  CHECK_THAT(u.err, Catch::Contains("UTF-16"));
+}
+
+TEST_CASE("bad input: a line that is no record is an error with its line, not a skip",
+          "[cli][bad-input]") {
+  TempDir t;
+  std::string text = kInchCl;
+  text.replace(0, 1, "\xC3\x9C");  // "ÜNITS/INCHES"
+  write_file(t.path("a.cls"), text);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: " + t.path("a.cls") + ":1: not a CL record"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+}
+
+TEST_CASE("bad input: a binary STL whose header count disagrees with its size is refused",
+          "[cli][bad-input]") {
+  TempDir t;
+  const auto mesh = plane(4);  // 32 triangles
+  write_file(t.path("a.cls"), kInchCl);
+  for (const std::uint32_t count : {20u, 40u}) {
+    INFO(count);
+    write_file(t.path("p.stl"), stl_with_count(mesh, count));
+    const auto r = run_taxopt("--in " + t.path("a.cls") + " --part " + t.path("p.stl") +
+                              " --gcode " + t.path("o.nc") + " --method none");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("header says " + std::to_string(count) + " triangles"));
+    CHECK_THAT(r.err, Catch::Contains("the file has " + std::to_string(84 + 50 * 32) + " bytes"));
+    CHECK_FALSE(file_exists(t.path("o.nc")));
+  }
+  // A binary STL whose header begins with "solid" is still binary (told by its size).
+  std::string bytes = taxopt::format_stl_binary(mesh);
+  bytes.replace(0, 5, "solid");
+  write_file(t.path("s.stl"), bytes);
+  CHECK(taxopt::read_mesh_file(t.path("s.stl")).faces.size() == 32);
+}
+
+TEST_CASE("bad input: a NaN or infinite vertex in a binary STL names its face",
+          "[cli][bad-input]") {
+  TempDir t;
+  std::string bytes = taxopt::format_stl_binary(plane(4));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(&bytes[84 + 50 * 6 + 12 + 12 + 4], &nan, 4);  // face 7, vertex 2, y
+  write_file(t.path("p.stl"), bytes);
+  write_file(t.path("a.cls"), kInchCl);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --part " + t.path("p.stl") + " --gcode " +
+                            t.path("o.nc") + " --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("face 7 has a vertex that is not finite"));
+}
+
+TEST_CASE("bad input: outputs that alias each other or cannot be written are refused first",
+          "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kInchCl);
+  // The same file spelled two ways.
+  const auto r = run("cd " + t.dir() + " && " + std::string(TAXOPT_EXE) +
+                     " --in a.cls --gcode same.out --report ./same.out --method none");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--report and --gcode name the same file"));
+  CHECK_FALSE(file_exists(t.path("same.out")));
+  // A folder that is not there, a folder that is a file: refused before any work.
+  const auto m = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("nowhere/o.nc"));
+  CHECK(m.code == 2);
+  CHECK_THAT(m.err, Catch::Contains("--gcode " + t.path("nowhere/o.nc") + ": cannot write there"));
+  const auto f = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("a.cls/o.nc"));
+  CHECK(f.code == 2);
+  CHECK_THAT(f.err, Catch::Contains("is not a folder"));
+}
+
+TEST_CASE("bad input: a coordinate beyond any machine is refused at its CL line",
+          "[cli][bad-input]") {
+  TempDir t;
+  std::string text = kInchCl;
+  text.replace(text.find("GOTO/1,0,0"), 10, "GOTO/1e308,0,0");
+  write_file(t.path("a.cls"), text);
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains(t.path("a.cls") + ":8: GOTO: point"));
+  CHECK_THAT(r.err, Catch::Contains("beyond +-1e6 mm"));
+}
+
+TEST_CASE("bad input: the machine's linear travel is checked, errors come first and few",
+          "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kInchCl);
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n"
+             "[axes.C]\ncontinuous = true\n[axes.X]\nmin_mm = -10\nmax_mm = 30\n");
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                            " --gcode " + t.path("o.nc") + " --method none");
+  CHECK(r.code == 1);
+  // X reaches 2 in = 50.8 mm at line 9.
+  CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: " + t.path("a.cls") +
+                                      ":9: operation T: X would be 50.8 mm"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  write_file(t.path("bad.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n"
+             "[axes.C]\ncontinuous = true\n[axes.Y]\nmin_mm = 10\n");
+  const auto b = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("bad.toml") +
+                            " --gcode " + t.path("o.nc"));
+  CHECK(b.code == 2);
+  CHECK_THAT(b.err, Catch::Contains("axes.Y needs min_mm and max_mm"));
+  // Many operations out of range: ten lines and a count, not one line each.
+  std::string many;
+  for (int k = 0; k < 30; ++k) {
+    many += "TOOL PATH/T" + std::to_string(k) +
+            ",TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nGOTO/0,0,1,0,0.8,0.6\nGOTO/100,0,1\nEND-OF-PATH\n";
+  }
+  write_file(t.path("many.cls"), many);
+  const auto n = run_taxopt("--in " + t.path("many.cls") + " --machine " + t.path("m.toml") +
+                            " --gcode " + t.path("o.nc") + " --method none");
+  CHECK(n.code == 1);
+  std::size_t lines = 0;
+  for (std::size_t p = n.err.find("taxopt: error:"); p != std::string::npos;
+       p = n.err.find("taxopt: error:", p + 1))
+    ++lines;
+  CHECK(lines == 11);
+  CHECK_THAT(n.err, Catch::Contains("... and 20 more (-v lists them all)"));
+}
+
+TEST_CASE("bad input: --force never writes an empty program", "[cli][bad-input]") {
+  TempDir t;
+  write_file(t.path("a.cls"), kInchCl);
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 50\nmax_deg = 60\n"
+             "[axes.C]\ncontinuous = true\n");
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                            " --gcode " + t.path("o.nc") + " --method none --force");
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("no G-code to write"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+}
+
+TEST_CASE("bad input: a signal during the run or the write leaves no temporary file",
+          "[cli][bad-input][signals]") {
+  // A run long enough to be cut at many moments: the demo part, the paper method.
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  write_file(t.path("o.nc"), "previous good program\n");
+  const std::string cmd = std::string(TAXOPT_EXE) + " --in " + d + "demo/sine.cls --machine " + d +
+                          "machines/paper-ac.toml --method paper --gcode " + t.path("o.nc") +
+                          " --report " + t.path("r.json") + " --points-csv " + t.path("p.csv") +
+                          " --out-cls " + t.path("o.cls") + " -q";
+  // How long a whole run takes, then signals spread over it (and past its write).
+  const auto t0 = std::chrono::steady_clock::now();
+  REQUIRE(run(cmd).code == 0);
+  const double whole_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_file(t.path("o.nc"), "previous good program\n");
+  int interrupted = 0;
+  // Spread over the run, and dense over its last fifth, where the outputs are written.
+  std::vector<double> moments;
+  for (int k = 1; k <= 12; ++k) moments.push_back(whole_s * k / 12.0);
+  for (int k = 0; k < 16; ++k) moments.push_back(whole_s * (0.8 + 0.0175 * k));
+  for (const double at_s : moments) {
+    for (const char* sig : {"INT", "TERM"}) {
+      const auto r = run("timeout -s " + std::string(sig) + " " + std::to_string(at_s) + " " + cmd);
+      INFO(sig << " at " << at_s << " s, exit " << r.code);
+      CHECK_FALSE(leftover_temps(t.dir()));
+      // Either the run finished (a whole new program) or the old one is intact.
+      const std::string g = read_file(t.path("o.nc"));
+      CHECK((g == "previous good program\n" || g.find("M30") != std::string::npos ||
+             g.find("M2") != std::string::npos));
+      if (r.code == 124) ++interrupted;
+      write_file(t.path("o.nc"), "previous good program\n");
+    }
+  }
+  CHECK(interrupted > 0);
+}

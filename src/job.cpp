@@ -789,7 +789,36 @@ const char* to_string(Method method) {
   return "none";
 }
 
-JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& given) {
+  JobResult res;
+  // The deviation cone: as given; without a part to check the axes against, no wider than a
+  // controller's own orientation tolerance unless asked for.
+  JobOptions options = given;
+  if (given.max_deviation_deg) {
+    options.paper.max_deviation_deg = *given.max_deviation_deg;
+  } else if (!given.part) {
+    options.paper.max_deviation_deg =
+        std::min(options.paper.max_deviation_deg, kNoPartMaxDeviationDeg);
+  }
+  res.collision_checked = given.part != nullptr;
+  if (!given.part) {
+    std::ostringstream os;
+    os << "no part (--part): the tool and holder are not checked against the part";
+    if (given.method != Method::None) {
+      os << "; each tool axis stays within " << options.paper.max_deviation_deg
+         << " deg of its input";
+      if (given.max_deviation_deg && *given.max_deviation_deg > kNoPartMaxDeviationDeg) {
+        os << " as --max-deviation asks, unchecked: give --part to check it";
+      } else {
+        os << " (--max-deviation widens it, unchecked)";
+      }
+    }
+    res.safety_warnings.push_back(os.str());
+  } else if (!given.tool.holder_radius_mm) {
+    res.safety_warnings.push_back(
+        "no holder model (--holder-radius, --holder-length): the holder is not checked against "
+        "the part, only the tool");
+  }
   if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
     throw InputError("--jerk-weight must be a number >= 0 (s^2)");
   }
@@ -802,7 +831,6 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
     throw InputError("--feed must be positive");
   }
-  JobResult res;
   res.warnings = tp.warnings;
   res.gcode_units = options.units_out.value_or(tp.units);
   const int decimals = machine.gcode.decimals;
@@ -868,12 +896,6 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   std::vector<std::optional<OptimisedOperation>> optimised(tp.operations.size());
   std::vector<double> optimise_time(tp.operations.size(), 0.0);
   if (options.method != Method::None) {
-    if (!options.part) {
-      res.warnings.push_back(
-          "no part given: no collision constraint; the tool axes may move up "
-          "to --max-deviation (" +
-          std::to_string(options.paper.max_deviation_deg) + " deg) from the input axes");
-    }
     std::size_t all_passes = 0;
     for (const Operationd& op : tp.operations) all_passes += feed_passes(op).size();
     detail::StageProgress progress(options.progress, "optimisation",

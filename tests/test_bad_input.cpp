@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "support.hpp"
@@ -239,4 +240,37 @@ TEST_CASE("bad input: a signal during the run or the write leaves no temporary f
     }
   }
   CHECK(interrupted > 0);
+}
+
+TEST_CASE("safe by default: without a part no real file's axis turns more than 1 deg, and "
+          "the user is told nothing was checked",
+          "[cli][safety]") {
+  TempDir t;
+  for (const char* f :
+       {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
+        "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
+        "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
+    for (const char* method : {"paper", "global"}) {
+      INFO(f << " --method " << method);
+      // mech491-project2-multiop.cls turns its tool over within a pass: the paper method threw
+      // "slerp: opposite axes" on it before.
+      const auto r = run_taxopt("--in " + real_data(f) + " --gcode " + t.path("o.nc") +
+                                " --report " + t.path("r.json") + " --method " + method);
+      REQUIRE(r.code == 0);
+      CHECK_THAT(r.err, Catch::StartsWith("taxopt: warning: NOT CHECKED: no part (--part)"));
+      const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
+      CHECK(j["collision_checked"] == false);
+      for (const auto& op : j["operations"]) {
+        CHECK(op["max_axis_change_deg"].get<double>() <= 1.0 + 1e-9);
+        CHECK(op["after"]["colliding_points"].is_null());
+      }
+    }
+  }
+  // --max-deviation widens the cone, and the warning says it is unchecked.
+  const auto w = run_taxopt("--in " + real_data("mech491-variable-axis-ballmill.cls") +
+                            " --gcode " + t.path("o.nc") + " --max-deviation 10");
+  CHECK(w.code == 0);
+  CHECK_THAT(w.err, Catch::Contains("within 10 deg of its input as --max-deviation asks, "
+                                    "unchecked"));
+  CHECK_THAT(w.out, Catch::Contains("unchecked"));
 }

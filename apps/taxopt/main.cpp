@@ -98,11 +98,14 @@ void print_summary(const taxopt::JobResult& result) {
     const auto count = [](long before, long after) {
       return before < 0 ? std::string("-") : std::to_string(before) + "->" + std::to_string(after);
     };
+    const std::string collide = result.collision_checked
+                                    ? count(r.colliding_before, r.colliding_after)
+                                    : std::string("unchecked");
     std::printf("%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %7.2f\n", r.name.c_str(), r.points,
                 before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
                 before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
                 count(r.before.c_jumps, r.after.c_jumps).c_str(),
-                count(r.colliding_before, r.colliding_after).c_str(), r.max_axis_change_deg,
+                collide.c_str(), r.max_axis_change_deg,
                 before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
                 r.time_cspace_s + r.time_optimise_s + r.time_post_s);
   }
@@ -447,7 +450,7 @@ int main(int argc, char** argv) {
         a.objective == "peak" ? taxopt::GlobalObjective::Peak : taxopt::GlobalObjective::SumSquares;
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
-    if (a.max_deviation) options.paper.max_deviation_deg = *a.max_deviation;
+    options.max_deviation_deg = a.max_deviation;
     options.feed_mm_per_min = a.feed_mm_per_min;
     options.units_out = parse_unit(a.units_out, "--units-out");
     const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);
@@ -462,15 +465,17 @@ int main(int argc, char** argv) {
                 << " more (-v lists them all)\n";
     }
     if (!a.quiet) {
+      // What was not checked first, then how the file was read, then the other warnings.
+      for (const auto& w : result.safety_warnings) {
+        std::cerr << "taxopt: warning: NOT CHECKED: " << w << "\n";
+      }
       for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
+      for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
       if (a.verbose > 0) {
-        for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
         for (const auto& [word, count] : toolpath.skipped_records) {
           std::cerr << "taxopt: note: " << count << " " << word
                     << " record(s) skipped (no motion), kept for --out-cls\n";
         }
-      } else if (!result.warnings.empty()) {
-        std::cerr << "taxopt: " << result.warnings.size() << " warning(s); -v lists them\n";
       }
     }
     if (!result.ok() && !a.force) {

@@ -26,6 +26,11 @@ enum class Method { None, Paper, Global };
 /// "none", "paper", "global".
 const char* to_string(Method method);
 
+/// Largest change of a tool axis without a part to check it against, deg: what a controller
+/// smooths orientations by on its own, with no part model (Sinumerik's CYCLE832 examples
+/// program OTOL = 1 deg for 5-axis finishing; docs/cli.md).
+constexpr double kNoPartMaxDeviationDeg = 1.0;
+
 /// Options of run_job, with the CLI's defaults.
 struct JobOptions {
   Method method = Method::Paper;
@@ -42,8 +47,13 @@ struct JobOptions {
   /// --method global (global_optimiser.hpp): its objective (--objective) and jerk weight
   /// (--jerk-weight); its cone is paper.max_deviation_deg. It starts from the paper's axes.
   GlobalOptions global;
-  /// The part (not owned); without it there is no contact recovery and no collision check.
+  /// The part (not owned); without it there is no contact recovery and no collision check,
+  /// and the deviation cone shrinks to kNoPartMaxDeviationDeg unless `max_deviation_deg` is
+  /// given (JobResult::safety_warnings says so).
   const Part* part = nullptr;
+  /// The deviation cone (--max-deviation), deg; overrides paper.max_deviation_deg. Empty: that
+  /// one with a part, at most kNoPartMaxDeviationDeg without.
+  std::optional<double> max_deviation_deg;
   ContactOptions contact;
   /// Tool dimensions overriding the CL file's (mm), for contact recovery and collision checks.
   ToolOverrides tool;
@@ -184,7 +194,11 @@ struct OperationResult {
 struct JobResult {
   std::vector<OperationResult> operations;
   std::vector<std::string> problems;
+  /// What was not checked and could hurt a machine (no part, no holder model), shown first.
+  std::vector<std::string> safety_warnings;
   std::vector<std::string> warnings;
+  /// The tool axes were checked against a part (collision_free and colliding_* mean something).
+  bool collision_checked = false;
   GcodeProgram gcode;
   std::string out_cls;
   LengthUnit gcode_units = LengthUnit::Millimetre;

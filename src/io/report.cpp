@@ -42,6 +42,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["ok"] = result.ok();
   j["problems"] = result.problems;
   j["warnings"] = result.warnings;
+  j["safety_warnings"] = result.safety_warnings;
+  j["collision_checked"] = result.collision_checked;
   // How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
   // and the motion that splines, drilling cycles and MSYS frames contributed.
   const ClReadSummary& rd = toolpath.reading;

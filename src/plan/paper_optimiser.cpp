@@ -168,6 +168,15 @@ class PassPlanner {
     const std::size_t e = keys_[k], f = keys_[k + 1];
     const std::vector<double> len(p_.segment_mm.begin() + static_cast<long>(e),
                                   p_.segment_mm.begin() + static_cast<long>(f));
+    // Keys that (nearly) oppose each other have no unique great circle between them (an input
+    // that turns the tool over within a pass, as real NX output does): the interval keeps its
+    // input axes there; repair() then splits it where those are not acceptable.
+    if (angle_between(key_axes_[k], key_axes_[k + 1]) > Constants<double>::pi() - 1e-3) {
+      for (std::size_t i = e + 1; i < f; ++i) axes_[i] = p_.input_axes[i];
+      axes_[e] = key_axes_[k];
+      axes_[f] = key_axes_[k + 1];
+      return;
+    }
     const std::vector<Vec3d> v = arc_length_slerp(key_axes_[k], key_axes_[k + 1], len);
     std::copy(v.begin(), v.end(), axes_.begin() + static_cast<long>(e));
   }

@@ -52,6 +52,23 @@ std::string not_a_ball(const Operationd& op) {
   return "operation " + op.name + ": not a ball-end mill";
 }
 
+/// The margins the collision checks judge the tool's bodies by (ToolMargins).
+ToolMargins margins_of(const JobOptions& options) {
+  ToolMargins m;
+  m.shank_clearance_mm = options.shank_clearance_mm;
+  m.holder_clearance_mm = options.holder_clearance_mm;
+  if (options.part) {
+    m.flute_tolerance_mm =
+        options.part_tolerance_mm.value_or(contact_tolerance_mm(*options.part, options.contact));
+  }
+  return m;
+}
+
+/// The tool of an operation as the collision checks judge it.
+ToolModel judged_tool(const Operationd& op, const JobOptions& options) {
+  return ToolModel::ball_end(op.tool, options.tool).judged(margins_of(options));
+}
+
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
 /// not move when the axis turns, so before and after share one arc length), else the tip.
 Vec3d reference_point(const CLPointd& p, double ball_radius_mm) {
@@ -910,7 +927,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       if (options.part && !contact_summaries[k].recovered) continue;
       const auto t0 = Clock::now();
       std::optional<ToolModel> tool;
-      if (collision) tool = ToolModel::ball_end(op.tool, options.tool);
+      if (collision) tool = judged_tool(op, options);
       const std::vector<double> metric_feed = metric_feeds_of(op, options, fallback_feed);
       optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
                                     tool ? &*tool : nullptr, machine, metric_feed,
@@ -1233,7 +1250,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     if (collision && r.contact.recovered) {
       const auto t0 = Clock::now();
-      const ToolModel tool = ToolModel::ball_end(op.tool, options.tool);
+      // Judged with the margins; the clearance is measured from the real bodies.
+      const ToolModel real_tool = ToolModel::ball_end(op.tool, options.tool);
+      const ToolModel tool = real_tool.judged(margins_of(options));
       std::vector<Vec3d> in_axes, out_axes;
       for (std::size_t i = 0; i < op.points.size(); ++i) {
         in_axes.push_back(op.points[i].axis);
@@ -1256,14 +1275,15 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         res.problems.push_back(format_location(
             tp.source, op.points[after.front()].line,
             "operation " + op.name + ": " + std::to_string(after.size()) +
-                " CL points where the tool (shank, holder, or a ball in the air) hits the part, "
+                " CL points where the tool hits the part (the shank or holder within its "
+                "clearance, the flutes deeper than the part tolerance, or a ball in the air), "
                 "at lines " +
                 lines));
       }
       const auto moves_hit =
           colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k], &checking);
       r.verification.colliding_moves = static_cast<long>(moves_hit.size());
-      if (const auto least = clearance_bound(*collision, tool, op, out_axes, &checking)) {
+      if (const auto least = clearance_bound(*collision, real_tool, op, out_axes, &checking)) {
         r.verification.min_clearance_mm = least->first;
         r.verification.min_clearance_index = least->second;
       }
@@ -1294,7 +1314,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       if (rasteriser && ball_radius_mm(op, options) > 0.0) {
         const auto t0 = Clock::now();
         const double R = ball_radius_mm(op, options);
-        const ToolModel tool = ToolModel::ball_end(op.tool, options.tool);
+        const ToolModel tool = judged_tool(op, options);
         CSpaceOptions cs;
         // The grid's cell must divide 180 deg: the nearest such to --grid.
         cs.cell_deg = 180.0 / std::max(1.0, std::round(180.0 / options.paper.grid_deg));

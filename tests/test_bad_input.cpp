@@ -242,9 +242,10 @@ TEST_CASE("bad input: a signal during the run or the write leaves no temporary f
   CHECK(interrupted > 0);
 }
 
-TEST_CASE("safe by default: without a part no real file's axis turns more than 1 deg, and "
-          "the user is told nothing was checked",
-          "[cli][safety]") {
+TEST_CASE(
+    "safe by default: without a part no real file's axis turns more than 1 deg, and "
+    "the user is told nothing was checked",
+    "[cli][safety]") {
   TempDir t;
   for (const char* f :
        {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
@@ -273,4 +274,43 @@ TEST_CASE("safe by default: without a part no real file's axis turns more than 1
   CHECK_THAT(w.err, Catch::Contains("within 10 deg of its input as --max-deviation asks, "
                                     "unchecked"));
   CHECK_THAT(w.out, Catch::Contains("unchecked"));
+}
+
+TEST_CASE(
+    "safe by default: flutes that touch the surface they cut within the part tolerance "
+    "are no collision; deeper they are",
+    "[cli][safety][collision]") {
+  // A plane z = 0; a ball of R = 3 with its axis lying flat (+X), its centre 0.02 mm lower than
+  // touching: the flute cylinder reaches 0.02 mm into the part, as a concave fillet's faceting
+  // makes real flutes do.
+  TempDir t;
+  taxopt::TriangleMesh mesh;
+  mesh.vertices = {Vec3d(-100, -100, 0), Vec3d(100, -100, 0), Vec3d(100, 100, 0),
+                   Vec3d(-100, 100, 0)};
+  mesh.faces = {{0, 1, 2}, {0, 2, 3}};
+  write_file(t.path("p.stl"), taxopt::format_stl_binary(mesh));
+  std::string cl = "TOOL PATH/FLAT,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nFEDRAT/MMPM,500\n";
+  for (int k = 0; k <= 10; ++k) {
+    cl += "GOTO/-3," + std::to_string(2.0 * k) + ",2.98,1,0,0\n";
+  }
+  cl += "END-OF-PATH\n";
+  write_file(t.path("f.cls"), cl);
+  // A necked shank (radius 2, 2.5 with its clearance) stays clear of the plane.
+  const std::string base = "--in " + t.path("f.cls") + " --part " + t.path("p.stl") +
+                           " --method none --machine " + std::string(TAXOPT_SOURCE_DIR) +
+                           "/data/machines/paper-ac.toml --gcode " + t.path("o.nc");
+  // Default part tolerance (the contact tolerance, 0.05 mm and more): no collision.
+  const auto ok = run_taxopt(base + " --shank-radius 2 --report " + t.path("r.json"));
+  INFO(ok.err);
+  CHECK(ok.code == 0);
+  // A part tolerance below the 0.02 mm: the flutes are judged as hitting.
+  const auto hit = run_taxopt(base + " --shank-radius 2 --part-tolerance 0.01");
+  CHECK(hit.code == 1);
+  CHECK_THAT(hit.err, Catch::Contains("CL points where the tool hits the part"));
+  // A shank 2.9 mm wide lying 2.98 mm above the plane clears it by 0.08 mm: free without a
+  // clearance, a collision with the default 0.5 mm. It never cuts, so it gets no tolerance.
+  const auto shank = run_taxopt(base + " --shank-radius 2.9");
+  CHECK(shank.code == 1);
+  const auto shank_free = run_taxopt(base + " --shank-radius 2.9 --shank-clearance 0");
+  CHECK(shank_free.code == 0);
 }

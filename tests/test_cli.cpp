@@ -194,9 +194,11 @@ TEST_CASE("cli: an input path whose shank hits the part exits 1, names the lines
           "[cli][collision]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  // The tool's exact bodies first (no clearances): 60 points.
   const std::string base = "--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " +
                            d + "machines/paper-ac.toml --method none --gauge-length 18 --gcode " +
-                           t.path("o.nc") + " --report " + t.path("r.json");
+                           t.path("o.nc") + " --report " + t.path("r.json") +
+                           " --shank-clearance 0 --holder-clearance 0";
   write_file(t.path("o.nc"), "previous good program\n");
   const auto r = run_taxopt(base);
   CHECK(r.code == 1);
@@ -211,7 +213,13 @@ TEST_CASE("cli: an input path whose shank hits the part exits 1, names the lines
   CHECK(j["ok"] == false);
   CHECK(j["operations"][0]["after"]["colliding_points"] == 60);
   CHECK(j["operations"][0]["verification"]["collision_free"] == false);
-  // With the demo's 15 mm stub tool the path is clear.
+  // The default clearances (shank 0.5 mm) judge more points, never fewer.
+  const auto m = run_taxopt(base.substr(0, base.find(" --shank-clearance")) + " --force -q");
+  CHECK(m.code == 1);
+  CHECK(nlohmann::json::parse(
+            read_file(t.path("r.json")))["operations"][0]["after"]["colliding_points"]
+            .get<int>() > 60);
+  // With the demo's 15 mm stub tool the path is clear, clearances included.
   const auto ok =
       run_taxopt("--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " + d +
                  "machines/paper-ac.toml --method none --gauge-length 15 --report " +
@@ -436,19 +444,27 @@ TEST_CASE("cli: --points-csv counts the free C-space cells of each contact (clos
   write_file(t.path("in.cls"), raster_cl(hf, 3.0, 0.0, 1, 2.0, 0.0, 0.0, 0.0, 20.0).text);
   write_file(t.path("plane.stl"),
              taxopt::format_stl_binary(heightfield_mesh(hf, 20.0, -150.0, 170.0, -150.0, 150.0)));
-  double lo = 0.0, hi = 1.5;
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (17.0 * std::cos(mid) - 40.0 * std::sin(mid) + 3.0 > 0 ? lo : hi) = mid;
-  }
-  int rows_free = 0;
-  for (double a = 1.5; a < 30.0; a += 3.0) rows_free += taxopt::deg_to_rad(a) < lo ? 1 : 0;
+  // With a holder clearance h the judged holder is 40 + h wide and its face h lower.
+  const auto free_rows = [](double h) {
+    double lo = 0.0, hi = 1.5;
+    for (int i = 0; i < 100; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      ((17.0 - h) * std::cos(mid) - (40.0 + h) * std::sin(mid) + 3.0 > 0 ? lo : hi) = mid;
+    }
+    int rows = 0;
+    for (double a = 1.5; a < 30.0; a += 3.0) rows += taxopt::deg_to_rad(a) < lo ? 1 : 0;
+    return rows;
+  };
+  const int rows_free = free_rows(0.0), rows_free_h4 = free_rows(4.0);
   REQUIRE(rows_free > 0);
   REQUIRE(rows_free < 10);
-  for (const auto& [args, expected] :
-       {std::pair<std::string, int>{"", 1200},
-        {"--holder-radius 40 --holder-length 20 --flute-length 15 --gauge-length 20",
-         120 * rows_free}}) {
+  REQUIRE(rows_free_h4 < rows_free);
+  const std::string holder =
+      "--holder-radius 40 --holder-length 20 --flute-length 15 "
+      "--gauge-length 20 ";
+  for (const auto& [args, expected] : {std::pair<std::string, int>{"", 1200},
+                                       {holder + "--holder-clearance 0", 120 * rows_free},
+                                       {holder + "--holder-clearance 4", 120 * rows_free_h4}}) {
     INFO(args);
     const RunResult r = run_taxopt("--in " + t.path("in.cls") + " --part " + t.path("plane.stl") +
                                    " --method none --grid 3 -q --report " + t.path("r.json") +

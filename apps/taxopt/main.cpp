@@ -32,6 +32,8 @@ struct Args {
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
   std::string arc_direction = "auto", msys = "apply";
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
+  double shank_clearance_mm = 0.5, holder_clearance_mm = 1.0;
+  std::optional<double> part_tolerance;
   int threads = 0;
   bool force = false, quiet = false, feed_schedule = false;
   int verbose = 0;
@@ -104,8 +106,8 @@ void print_summary(const taxopt::JobResult& result) {
     std::printf("%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %7.2f\n", r.name.c_str(), r.points,
                 before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
                 before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
-                count(r.before.c_jumps, r.after.c_jumps).c_str(),
-                collide.c_str(), r.max_axis_change_deg,
+                count(r.before.c_jumps, r.after.c_jumps).c_str(), collide.c_str(),
+                r.max_axis_change_deg,
                 before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
                 r.time_cspace_s + r.time_optimise_s + r.time_post_s);
   }
@@ -262,6 +264,14 @@ int main(int argc, char** argv) {
   app.add_option("--flute-length", a.flute_length,
                  "flute length from the tip (default: TLDATA/CUTTER)");
   app.add_option("--holder-radius", a.holder_radius, "holder radius (default: no holder)");
+  app.add_option("--shank-clearance", a.shank_clearance_mm,
+                 "distance the shank (past the flutes) keeps from the part in every check, mm "
+                 "(0.5)");
+  app.add_option("--holder-clearance", a.holder_clearance_mm,
+                 "distance the holder keeps from the part in every check, mm (1)");
+  app.add_option("--part-tolerance", a.part_tolerance,
+                 "how far the flutes may reach into the part mesh (its chordal error) without a "
+                 "collision, mm (default: the contact tolerance)");
   app.add_option("--holder-length", a.holder_length, "holder length (default 40 mm)");
   app.add_option("--gauge-length", a.gauge_length,
                  "tip to holder face (default: max(flute length, 10 diameters))");
@@ -451,6 +461,13 @@ int main(int argc, char** argv) {
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     options.max_deviation_deg = a.max_deviation;
+    if (!(a.shank_clearance_mm >= 0.0) || !(a.holder_clearance_mm >= 0.0) ||
+        (a.part_tolerance && !(*a.part_tolerance >= 0.0))) {
+      return error("--shank-clearance, --holder-clearance and --part-tolerance must be >= 0", 2);
+    }
+    options.shank_clearance_mm = a.shank_clearance_mm;
+    options.holder_clearance_mm = a.holder_clearance_mm;
+    options.part_tolerance_mm = a.part_tolerance;
     options.feed_mm_per_min = a.feed_mm_per_min;
     options.units_out = parse_unit(a.units_out, "--units-out");
     const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);

@@ -57,6 +57,14 @@ struct JobOptions {
   ContactOptions contact;
   /// Tool dimensions overriding the CL file's (mm), for contact recovery and collision checks.
   ToolOverrides tool;
+  /// Clearances the shank (past the flutes) and the holder keep from the part in every check
+  /// (--shank-clearance, --holder-clearance), mm: the optimisers accept, and the verification
+  /// passes, only axes where the grown bodies are free (docs/cli.md).
+  double shank_clearance_mm = 0.5;
+  double holder_clearance_mm = 1.0;
+  /// How far the flutes may reach into the part mesh without a collision: its chordal error
+  /// (--part-tolerance), mm; empty: the contact tolerance (max(0.05, 0.1 x mean edge)).
+  std::optional<double> part_tolerance_mm;
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
   bool count_free_cells = false;

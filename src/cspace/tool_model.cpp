@@ -32,9 +32,28 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
     const double hl = o.holder_length_mm.value_or(40.0);
     if (!(hr >= shank)) throw InputError("holder radius must be at least the shank radius");
     if (!(hl > 0.0)) throw InputError("holder length must be positive");
+    m.holder_body = static_cast<int>(m.bodies.size());
     m.bodies.push_back({hr, gauge - R, gauge - R + hl});
   } else if (o.holder_length_mm) {
     throw InputError("--holder-length needs --holder-radius");
+  }
+  return m;
+}
+
+ToolModel ToolModel::judged(const ToolMargins& margins) const {
+  ToolModel m = *this;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    ToolBody& b = m.bodies[i];
+    if (static_cast<int>(i) < flute_bodies) {
+      b.radius_mm = std::max(0.5 * ball_radius_mm, b.radius_mm - margins.flute_tolerance_mm);
+    } else if (static_cast<int>(i) == holder_body) {
+      b.radius_mm += margins.holder_clearance_mm;
+      // Towards the tip too (its face), but not below where the shank starts.
+      const double floor_mm = i > 0 ? bodies[i - 1].start_mm : 0.0;
+      b.start_mm = std::max(floor_mm, b.start_mm - margins.holder_clearance_mm);
+    } else {
+      b.radius_mm += margins.shank_clearance_mm;
+    }
   }
   return m;
 }

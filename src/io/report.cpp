@@ -44,6 +44,10 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["warnings"] = result.warnings;
   j["safety_warnings"] = result.safety_warnings;
   j["collision_checked"] = result.collision_checked;
+  // How the bodies are judged (docs/cli.md "What is checked").
+  j["clearances_mm"] = {{"shank", options.shank_clearance_mm},
+                        {"holder", options.holder_clearance_mm},
+                        {"holder_modelled", options.tool.holder_radius_mm.has_value()}};
   // How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
   // and the motion that splines, drilling cycles and MSYS frames contributed.
   const ClReadSummary& rd = toolpath.reading;

@@ -26,6 +26,17 @@ struct ToolBody {
   double end_mm = 0.0;
 };
 
+/// How the collision checks judge each body (docs/cli.md, "What is checked"): the flutes cut,
+/// so they may touch the surface they cut within the part's tolerance (the mesh's chordal
+/// error): their cylinder is checked that much thinner; the shank past the flutes and the
+/// holder never cut: they are checked grown by their clearances (radius, and the holder also
+/// towards the tip), so a free verdict keeps them at least that far from the part.
+struct ToolMargins {
+  double flute_tolerance_mm = 0.0;
+  double shank_clearance_mm = 0.0;
+  double holder_clearance_mm = 0.0;
+};
+
 /// Tool dimensions given on the command line (mm), overriding the CL file's.
 struct ToolOverrides {
   std::optional<double> ball_radius_mm, shank_radius_mm, flute_length_mm, holder_radius_mm,
@@ -46,6 +57,15 @@ struct ToolModel {
   /// @throws InputError when the dimensions contradict each other (shank thinner than zero,
   /// gauge length shorter than the flutes, a holder thinner than the shank).
   static ToolModel ball_end(const Tool& tool, const ToolOverrides& overrides = {});
+
+  /// The bodies as the collision checks judge them (ToolMargins): the flutes thinner by
+  /// their tolerance (never below half the ball radius), the shank and holder grown.
+  ToolModel judged(const ToolMargins& margins) const;
+
+  /// Number of leading bodies that are flutes (0 or 1).
+  int flute_bodies = 1;
+  /// Index of the holder body, -1 when there is none.
+  int holder_body = -1;
 };
 
 }  // namespace taxopt

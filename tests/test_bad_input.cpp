@@ -314,3 +314,26 @@ TEST_CASE(
   const auto shank_free = run_taxopt(base + " --shank-radius 2.9 --shank-clearance 0");
   CHECK(shank_free.code == 0);
 }
+
+TEST_CASE(
+    "safe by default: the machine file's usual holder and clearances apply where the "
+    "command line gives none",
+    "[cli][safety]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  write_file(t.path("m.toml"), read_file(d + "machines/paper-ac.toml") +
+                                   "\n[checks]\nshank_clearance_mm = 0.2\nholder_clearance_mm = "
+                                   "3\n[holder]\nradius_mm = 12\nlength_mm = 50\n"
+                                   "gauge_length_mm = 15\n");
+  const std::string base = "--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " +
+                           t.path("m.toml") + " --method none --report " + t.path("r.json");
+  const auto r = run_taxopt(base + " --force");
+  const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
+  CHECK(j["clearances_mm"]["shank"] == 0.2);
+  CHECK(j["clearances_mm"]["holder"] == 3.0);
+  CHECK(j["clearances_mm"]["holder_modelled"] == true);
+  CHECK_THAT(r.err, !Catch::Contains("no holder model"));
+  // The command line wins.
+  run_taxopt(base + " --holder-clearance 0.5 --force");
+  CHECK(nlohmann::json::parse(read_file(t.path("r.json")))["clearances_mm"]["holder"] == 0.5);
+}

@@ -124,7 +124,15 @@ struct Judged {
 Judged judge(const std::vector<CanonMove>& moves, const GeneratedCl& cl, const TriangleMesh& mesh,
              const std::vector<FaceSphere>& spheres, const ToolOverrides& overrides) {
   const ACMachined machine = default_ac_machine();
-  const ToolModel tool = ToolModel::ball_end(Tool::ball_end_mill(6.0, 30.0), overrides);
+  // The bodies grown here by taxopt's default clearances (shank 0.5 mm, holder 1 mm, also
+  // below its face): a point counts as a hit when the shank or holder comes closer than that.
+  // The flutes are judged exact.
+  ToolModel tool = ToolModel::ball_end(Tool::ball_end_mill(6.0, 30.0), overrides);
+  for (std::size_t b = 1; b < tool.bodies.size(); ++b) {
+    const bool holder = overrides.holder_radius_mm && b + 1 == tool.bodies.size();
+    tool.bodies[b].radius_mm += holder ? 1.0 : 0.5;
+    if (holder) tool.bodies[b].start_mm -= 1.0;
+  }
   Judged j;
   for (std::size_t i = 0; i < moves.size(); ++i) {
     const CanonMove& m = moves[i];

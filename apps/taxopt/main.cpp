@@ -32,8 +32,7 @@ struct Args {
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
   std::string arc_direction = "auto", msys = "apply";
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
-  double shank_clearance_mm = 0.5, holder_clearance_mm = 1.0;
-  std::optional<double> part_tolerance;
+  std::optional<double> shank_clearance_mm, holder_clearance_mm, part_tolerance;
   int threads = 0;
   bool force = false, quiet = false, feed_schedule = false;
   int verbose = 0;
@@ -266,9 +265,10 @@ int main(int argc, char** argv) {
   app.add_option("--holder-radius", a.holder_radius, "holder radius (default: no holder)");
   app.add_option("--shank-clearance", a.shank_clearance_mm,
                  "distance the shank (past the flutes) keeps from the part in every check, mm "
-                 "(0.5)");
+                 "(default: the machine file's [checks], else 0.5)");
   app.add_option("--holder-clearance", a.holder_clearance_mm,
-                 "distance the holder keeps from the part in every check, mm (1)");
+                 "distance the holder keeps from the part in every check, mm (default: the "
+                 "machine file's [checks], else 1)");
   app.add_option("--part-tolerance", a.part_tolerance,
                  "how far the flutes may reach into the part mesh (its chordal error) without a "
                  "collision, mm (default: the contact tolerance)");
@@ -448,6 +448,15 @@ int main(int argc, char** argv) {
       options.tool.holder_radius_mm = mm(a.holder_radius);
       options.tool.holder_length_mm = mm(a.holder_length);
       options.tool.gauge_length_mm = mm(a.gauge_length);
+      // The machine's usual holder where the command line names none (machine file, mm).
+      if (!options.tool.holder_radius_mm && machine.holder_radius_mm) {
+        options.tool.holder_radius_mm = machine.holder_radius_mm;
+        if (!options.tool.holder_length_mm)
+          options.tool.holder_length_mm = machine.holder_length_mm;
+        if (!options.tool.gauge_length_mm) {
+          options.tool.gauge_length_mm = machine.holder_gauge_length_mm;
+        }
+      }
     }
     if (a.contact_tolerance) {
       if (!(*a.contact_tolerance > 0.0)) return error("--contact-tolerance must be positive", 2);
@@ -461,12 +470,15 @@ int main(int argc, char** argv) {
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     options.max_deviation_deg = a.max_deviation;
-    if (!(a.shank_clearance_mm >= 0.0) || !(a.holder_clearance_mm >= 0.0) ||
-        (a.part_tolerance && !(*a.part_tolerance >= 0.0))) {
-      return error("--shank-clearance, --holder-clearance and --part-tolerance must be >= 0", 2);
+    for (const auto& v : {a.shank_clearance_mm, a.holder_clearance_mm, a.part_tolerance}) {
+      if (v && !(*v >= 0.0)) {
+        return error("--shank-clearance, --holder-clearance and --part-tolerance must be >= 0", 2);
+      }
     }
-    options.shank_clearance_mm = a.shank_clearance_mm;
-    options.holder_clearance_mm = a.holder_clearance_mm;
+    options.shank_clearance_mm = a.shank_clearance_mm.value_or(
+        machine.shank_clearance_mm.value_or(options.shank_clearance_mm));
+    options.holder_clearance_mm = a.holder_clearance_mm.value_or(
+        machine.holder_clearance_mm.value_or(options.holder_clearance_mm));
     options.part_tolerance_mm = a.part_tolerance;
     options.feed_mm_per_min = a.feed_mm_per_min;
     options.units_out = parse_unit(a.units_out, "--units-out");

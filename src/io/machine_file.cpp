@@ -28,7 +28,7 @@ class MachineParser {
                        "not valid TOML: " + std::string(e.description()));
     }
     Machine m = default_machine();
-    check_keys(root, "", {"name", "kinematics", "axes", "pivot", "gcode"});
+    check_keys(root, "", {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder"});
     if (auto* n = root.get("name")) m.name = string_of(*n, "name");
     const toml::node* kin = root.get("kinematics");
     if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\")");
@@ -63,6 +63,28 @@ class MachineParser {
           }
         }
       }
+    }
+    const auto positive = [&](const toml::table& t, const std::string& where,
+                              const std::string& key, bool zero_ok) -> std::optional<double> {
+      const toml::node* n = t.get(key);
+      if (!n) return std::nullopt;
+      const double v = number_of(*n, where + "." + key);
+      if (!(zero_ok ? v >= 0.0 : v > 0.0)) {
+        fail(line_of(*n), where + "." + key + (zero_ok ? " must be >= 0" : " must be positive"));
+      }
+      return v;
+    };
+    if (const toml::table* c = table_of(root, "checks", false)) {
+      check_keys(*c, "checks", {"shank_clearance_mm", "holder_clearance_mm"});
+      m.shank_clearance_mm = positive(*c, "checks", "shank_clearance_mm", true);
+      m.holder_clearance_mm = positive(*c, "checks", "holder_clearance_mm", true);
+    }
+    if (const toml::table* h = table_of(root, "holder", false)) {
+      check_keys(*h, "holder", {"radius_mm", "length_mm", "gauge_length_mm"});
+      m.holder_radius_mm = positive(*h, "holder", "radius_mm", false);
+      m.holder_length_mm = positive(*h, "holder", "length_mm", false);
+      m.holder_gauge_length_mm = positive(*h, "holder", "gauge_length_mm", false);
+      if (!m.holder_radius_mm) fail(0, "[holder] needs radius_mm");
     }
     if (const toml::table* pivot = table_of(root, "pivot", false)) {
       check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});

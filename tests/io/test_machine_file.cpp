@@ -148,3 +148,37 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   expect_error(replace(kFull, "sense = -1", "sense = 1.0"), 13, "sense must be 1 or -1");
   expect_error(replace(kFull, "decimals = 5", "decimals = 1e300"), 28, "decimals");
 }
+
+TEST_CASE("machine file: clearances, the usual holder and the linear travel", "[io][machine]") {
+  const std::string head =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n";
+  const Machine m = parse_machine_toml(
+      head +
+          "[axes.Z]\nmin_mm = -300\nmax_mm = 50\n[checks]\nshank_clearance_mm = 0.3\n"
+          "holder_clearance_mm = 2\n[holder]\nradius_mm = 16\nlength_mm = 60\n"
+          "gauge_length_mm = 45\n",
+      "m.toml");
+  CHECK(m.shank_clearance_mm == Approx(0.3));
+  CHECK(m.holder_clearance_mm == Approx(2.0));
+  CHECK(m.holder_radius_mm == Approx(16.0));
+  CHECK(m.holder_length_mm == Approx(60.0));
+  CHECK(m.holder_gauge_length_mm == Approx(45.0));
+  CHECK(m.linear_range[2].min_mm == -300.0);
+  CHECK(m.linear_range[2].max_mm == 50.0);
+  CHECK_FALSE(m.linear_range[0].bounded());
+  const auto refused = [&](const std::string& text, const std::string& says) {
+    try {
+      parse_machine_toml(head + text, "m.toml");
+    } catch (const InputError& e) {
+      INFO(e.what());
+      return std::string(e.what()).find(says) != std::string::npos;
+    }
+    return false;
+  };
+  CHECK(refused("[checks]\nshank_clearance_mm = -1\n", "checks.shank_clearance_mm must be >= 0"));
+  CHECK(refused("[holder]\nlength_mm = 60\n", "[holder] needs radius_mm"));
+  CHECK(refused("[holder]\nradius_mm = 0\n", "holder.radius_mm must be positive"));
+  CHECK(refused("[axes.X]\nmin_mm = 5\nmax_mm = -5\n", "min_mm must be less than max_mm"));
+  CHECK(refused("[checks]\nclearance = 1\n", "clearance"));
+}

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "taxopt/kinematics/ac_machine.hpp"
@@ -58,6 +59,12 @@ struct Machine {
     bool bounded() const { return std::isfinite(min_mm) || std::isfinite(max_mm); }
   };
   std::array<LinearRange, 3> linear_range;
+  /// [checks]: the clearances the shank and holder keep from the part (mm), where the command
+  /// line gives none; empty: taxopt's defaults (JobOptions).
+  std::optional<double> shank_clearance_mm, holder_clearance_mm;
+  /// [holder]: the machine's usual holder (mm), used where the command line names none:
+  /// radius_mm, length_mm and the tool's gauge_length_mm (tip to holder face).
+  std::optional<double> holder_radius_mm, holder_length_mm, holder_gauge_length_mm;
   GcodeSettings gcode;
 };
 

@@ -1267,18 +1267,44 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       r.colliding_after = static_cast<long>(after.size());
       r.verification.collision_free = after.empty();
       if (!after.empty()) {
-        std::string lines;
-        for (std::size_t j = 0; j < after.size() && j < 10; ++j) {
-          lines += (j ? ", " : "") + std::to_string(op.points[after[j]].line);
+        // Told apart: the flutes reaching deeper than the part tolerance (a gouge of the cutter)
+        // and the bodies that never cut (shank, holder, a ball in the air) within their margins.
+        ToolModel flutes = tool, rest = tool;
+        flutes.bodies.resize(static_cast<std::size_t>(tool.flute_bodies));
+        rest.bodies.erase(rest.bodies.begin(), rest.bodies.begin() + tool.flute_bodies);
+        std::vector<std::size_t> gouges, hits;
+        for (std::size_t i : after) {
+          const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * out_axes[i];
+          const bool in_air = contacts[k].empty() || contacts[k][i].state != ContactState::Touching;
+          if (!flutes.bodies.empty() && collision->collides(flutes, centre, out_axes[i], false)) {
+            gouges.push_back(i);
+          }
+          if (collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
         }
-        if (after.size() > 10) lines += ", ...";
-        res.problems.push_back(format_location(
-            tp.source, op.points[after.front()].line,
-            "operation " + op.name + ": " + std::to_string(after.size()) +
-                " CL points where the tool hits the part (the shank or holder within its "
-                "clearance, the flutes deeper than the part tolerance, or a ball in the air), "
-                "at lines " +
-                lines));
+        r.verification.flute_gouge_points = static_cast<long>(gouges.size());
+        const auto report = [&](const std::vector<std::size_t>& at, const std::string& what) {
+          if (at.empty()) return;
+          std::string lines;
+          for (std::size_t j = 0; j < at.size() && j < 10; ++j) {
+            lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
+          }
+          if (at.size() > 10) lines += ", ...";
+          res.problems.push_back(format_location(tp.source, op.points[at.front()].line,
+                                                 "operation " + op.name + ": " +
+                                                     std::to_string(at.size()) + " CL points " +
+                                                     what + ", at lines " + lines));
+        };
+        report(hits,
+               "where the tool hits the part (the shank or holder within its clearance, or a "
+               "ball in the air)");
+        report(gouges,
+               "where the flutes reach into the part deeper than the part tolerance "
+               "(a gouge; --part-tolerance)");
+        if (hits.empty() && gouges.empty()) {
+          report(after, "where the tool hits the part");  // never: the bodies are the same
+        }
+      } else {
+        r.verification.flute_gouge_points = 0;
       }
       const auto moves_hit =
           colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k], &checking);

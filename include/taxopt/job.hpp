@@ -100,6 +100,9 @@ struct Verification {
   /// the flutes) at the written CL points, mm, capped at 10 mm; and the point where it
   /// occurs. Empty without a part or when the flutes reach the holder.
   std::optional<double> min_clearance_mm;
+  /// Written CL points where the flutes reach deeper into the part than the part tolerance (a
+  /// gouge of the cutter, told apart from collisions of the shank and holder); -1: not checked.
+  long flute_gouge_points = -1;
   std::size_t min_clearance_index = 0;
   bool within_axis_limits = true;
   /// Joint velocities and accelerations within the limits at the written feeds, as the

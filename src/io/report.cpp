@@ -97,6 +97,9 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     if (r.verification.min_clearance_mm) {
       v["min_clearance_point"] = r.verification.min_clearance_index;
     }
+    v["flute_gouge_points"] = r.verification.flute_gouge_points >= 0
+                                  ? nlohmann::json(r.verification.flute_gouge_points)
+                                  : nlohmann::json(nullptr);
     v["within_axis_limits"] = r.verification.within_axis_limits;
     v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
     v["colliding_moves"] = r.verification.colliding_moves >= 0

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <sstream>
 
 #include "taxopt/core/error.hpp"
@@ -984,7 +985,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     const Operationd& op = tp.operations[k];
     const auto t0 = Clock::now();
     PostedOperation po{op.name, op.tool, op.spindle_rpm, op.spindle_clockwise, op.points, {},
-                       {},      {}};
+                       {},      {},      op.arcs};
     if (optimised[k]) {
       const double R = ball_radius_mm(op, options);
       for (std::size_t i = 0; i < po.points.size(); ++i) {
@@ -1054,18 +1055,39 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
   std::vector<GcodeMove> moves =
       read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect);
-  // Per operation and point, the move read back that put the machine there.
+  // Per operation and point, the move read back that put the machine there. A chord point
+  // inside a G2/G3 block gets the point of the arc read back at its angle (with the block's
+  // words), so that every check sees the path the controller runs; the blocks that split an
+  // arc at 180 deg belong to no point and are stepped over.
+  std::deque<GcodeMove> on_arcs;
   const auto moves_of_points = [&] {
+    on_arcs.clear();
     std::vector<std::vector<const GcodeMove*>> out(posted.size());
     std::size_t next = 0;
+    const auto mismatch = [] {
+      throw std::logic_error("run_job: G-code read back does not match what was written");
+    };
     for (std::size_t k = 0; k < posted.size(); ++k) {
       const GcodeMove* last = nullptr;
       for (std::size_t i = 0; i < posted[k].points.size(); ++i) {
-        if (res.gcode.emitted[k][i] > 0) {
-          if (next >= moves.size() || moves[next].line != res.gcode.emitted[k][i]) {
-            throw std::logic_error("run_job: G-code read back does not match what was written");
-          }
+        const int line = res.gcode.emitted[k][i];
+        if (line != 0) {
+          while (next < moves.size() && moves[next].line < std::abs(line)) last = &moves[next++];
+          if (next >= moves.size() || moves[next].line != std::abs(line)) mismatch();
+        }
+        if (line > 0) {
           last = &moves[next++];
+        } else if (line < 0) {
+          const GcodeMove& arc = moves[next];
+          if (!arc.arc || !last) mismatch();
+          const PostedOperation& po = posted[k];
+          const Vec3d want = machine.gcode.mode == GcodeMode::Machine
+                                 ? machine.ac.to_machine_mm(po.points[i].tip_mm, po.poses[i])
+                                 : po.points[i].tip_mm;
+          GcodeMove at = arc;
+          at.xyz_mm = point_on_arc(last->xyz_mm, arc, want);
+          on_arcs.push_back(at);
+          last = &on_arcs.back();
         }
         if (!last) throw std::logic_error("run_job: first point of an operation not written");
         out[k].push_back(last);

@@ -95,11 +95,47 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
   std::string line;
   double feed_rate = 0.0;
   bool inverse_time = false;
+  int plane = 2;  // the axis normal to the selected plane
   while (std::getline(in, line)) {
     if (line.find("feed mode set to inverse time") != std::string::npos) inverse_time = true;
     if (line.find("feed mode set to units per minute") != std::string::npos) inverse_time = false;
     if (const auto at = line.find("SET_FEED_RATE("); at != std::string::npos) {
       feed_rate = std::strtod(line.c_str() + at + 14, nullptr);
+    }
+    if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 2;
+    if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
+    if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 0;
+    if (const auto at = line.find("ARC_FEED("); at != std::string::npos) {
+      // ARC_FEED(first_end, second_end, first_axis, second_axis, rotation, axis_end, a, b, c):
+      // first/second are X/Y (XY plane), Z/X (XZ), Y/Z (YZ); rotation > 0 counter-clockwise
+      // about the plane's normal, |rotation| - 1 extra full turns.
+      double fe, se, fc, sc, rot, ae;
+      CanonMove m;
+      if (std::sscanf(line.c_str() + at + 9, "%lf, %lf, %lf, %lf, %lf, %lf, %lf, %lf, %lf", &fe,
+                      &se, &fc, &sc, &rot, &ae, &m.a, &m.b, &m.c) != 9) {
+        throw std::runtime_error("cannot parse rs274 line: " + line);
+      }
+      const int first = plane == 2 ? 0 : plane == 1 ? 2 : 1;
+      const int second = plane == 2 ? 1 : plane == 1 ? 0 : 2;
+      double start[3] = {0, 0, 0};
+      if (!moves.empty())
+        start[0] = moves.back().x, start[1] = moves.back().y, start[2] = moves.back().z;
+      double end[3];
+      end[first] = fe, end[second] = se, end[plane] = ae;
+      const double a0 = std::atan2(start[second] - sc, start[first] - fc);
+      const double a1 = std::atan2(end[second] - sc, end[first] - fc);
+      double sweep = rot > 0 ? a1 - a0 : a0 - a1;
+      while (sweep <= 1e-12) sweep += 2.0 * M_PI;
+      sweep += 2.0 * M_PI * (std::fabs(rot) - 1.0);
+      const double radius = std::hypot(start[first] - fc, start[second] - sc);
+      m.feed = true;
+      m.arc = true;
+      m.arc_length = std::hypot(sweep * radius, end[plane] - start[plane]);
+      m.x = end[0], m.y = end[1], m.z = end[2];
+      m.feed_rate = feed_rate;
+      m.inverse_time = inverse_time;
+      moves.push_back(m);
+      continue;
     }
     const bool feed = line.find("STRAIGHT_FEED(") != std::string::npos;
     const bool trav = line.find("STRAIGHT_TRAVERSE(") != std::string::npos;

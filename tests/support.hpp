@@ -53,6 +53,10 @@ struct CanonMove {
   /// minute of the move) and whether the program is in inverse time (G93).
   double feed_rate = 0;
   bool inverse_time = false;
+  /// An ARC_FEED (G2/G3): x y z are its end; arc_length_mm its length from the move before
+  /// (program units despite the name's unit when the program is in inches).
+  bool arc = false;
+  double arc_length = 0;
 };
 /// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
 RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves);

@@ -185,11 +185,18 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
     }
     // The whole path as rs274 moves the tip (TCP mode), from the first point on.
     double rs274_mm = 0.0;
+    std::size_t arcs = 0;
     for (std::size_t i = 1; i < moves.size(); ++i) {
-      rs274_mm += Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
-                        moves[i].z - moves[i - 1].z)
-                      .norm();
+      arcs += moves[i].arc ? 1 : 0;
+      rs274_mm += moves[i].arc ? moves[i].arc_length
+                               : Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
+                                       moves[i].z - moves[i - 1].z)
+                                     .norm();
     }
+    // Arcs kept as arcs where their plane and axes allow (never more blocks than CIRCLEs need
+    // at 180 deg each; none without a CIRCLE).
+    if (circles == 0) CHECK(arcs == 0);
+    INFO("G2/G3 blocks: " << arcs << " for " << circles << " CIRCLE records");
     rs274_mm *= mm_per_unit(tp.units);
     CHECK(rs274_mm == Approx(path_mm).epsilon(0.002));
   }
@@ -243,4 +250,124 @@ TEST_CASE("rs274: taxopt demo writes G-code rs274 accepts, with the paper's C fl
         (1.0 - 0.248) * op["before"]["max_accel_deg_s2"].get<double>());
   CHECK(op["after"]["colliding_points"] == 0);
   CHECK(op["max_axis_change_deg"].get<double>() <= 30.0 + 1e-6);
+}
+
+TEST_CASE(
+    "rs274: CIRCLE arcs are written as G2/G3 in XY, XZ and YZ, helical and in turns, and "
+    "rs274 moves them the length the file means",
+    "[rs274][integration][arcs]") {
+  REQUIRE(have_rs274());
+  // NX (clockwise about (i,j,k)), every arc tangent to the moves beside it: a quarter in XY,
+  // a half in XZ, a quarter in YZ, a helix of TIMES,2 (a half turn plus one more: 540 deg)
+  // falling 4 mm.
+  const std::string cl =
+      "TOOL PATH/ARCS,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nFEDRAT/MMPM,600\n"
+      "GOTO/0,10,0,0,0,1\nGOTO/10,10,0\nCIRCLE/10,0,0,0,0,1,10\nGOTO/20,0,0\n"          // XY
+      "GOTO/20,-10,0\nCIRCLE/30,-10,0,0,-1,0,10\nGOTO/40,-10,0\n"                       // XZ
+      "GOTO/40,-10,-5\nGOTO/40,-20,-5\nCIRCLE/40,-20,-15,-1,0,0,10\nGOTO/40,-30,-15\n"  // YZ
+      "GOTO/40,-30,-25\nGOTO/70,-30,-25\nGOTO/60,-30,-25\n"
+      "CIRCLE/60,-20,-25,0,0,1,10,TIMES,2\nGOTO/60,-10,-29\nGOTO/70,-10,-29\nEND-OF-PATH\n";
+  // The path the file means, by hand.
+  const double quarter = M_PI / 2 * 10;
+  const double expect_mm = 10 + quarter + 10 + 2 * quarter + 5 + 10 + quarter + 10 + 30 + 10 +
+                           std::hypot(6 * quarter, 4.0) + 10;
+  TempDir dir;
+  write_file(dir.path("a.cls"), cl);
+  for (const char* dialect : {"linuxcnc", "fanuc", "siemens", "heidenhain"}) {
+    INFO(dialect);
+    write_file(dir.path("m.toml"),
+               "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+               "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n"
+               "dialect = \"" +
+                   std::string(dialect) + "\"\n");
+    const RunResult r =
+        run_taxopt("--in " + dir.path("a.cls") + " --machine " + dir.path("m.toml") + " --gcode " +
+                   dir.path("o.nc") + " --method none -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);  // the read-back verification passed, arcs included
+    const std::string g = read_file(dir.path("o.nc"));
+    if (std::string(dialect) == "heidenhain") {
+      CHECK(g.find("G02") == std::string::npos);  // chords: I J K are not written there
+      CHECK(g.find("G03") == std::string::npos);
+      continue;
+    }
+    // Clockwise about +Z is G2 in G17; clockwise about -Y and about -X are counter-clockwise
+    // about +Y and +X: G3 in G18 and G19; the helix: G2 in G17, in 3 blocks of 180 deg.
+    CHECK_THAT(g, Catch::Contains("G17 G2 X20"));
+    CHECK_THAT(g, Catch::Contains("G18 G3 X40"));
+    CHECK_THAT(g, Catch::Contains("G19 G3 X40"));
+    if (std::string(dialect) != "linuxcnc") continue;
+    std::vector<CanonMove> moves;
+    const RunResult rs = run_rs274(dir.path("o.nc"), moves);
+    REQUIRE(rs.code == 0);
+    double path = 0.0;
+    int arcs = 0;
+    for (std::size_t i = 1; i < moves.size(); ++i) {
+      arcs += moves[i].arc ? 1 : 0;
+      path += moves[i].arc ? moves[i].arc_length
+                           : Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
+                                   moves[i].z - moves[i - 1].z)
+                                 .norm();
+    }
+    CHECK(arcs == 1 + 1 + 1 + 3);
+    CHECK(path == Approx(expect_mm).epsilon(1e-5));
+    // The feed is the programmed one on every arc block.
+    for (const auto& m : moves) {
+      if (m.arc) CHECK(m.feed_rate == Approx(600.0));
+    }
+  }
+  // Inverse time (G93) or a tilted plane in TCP mode: chords; the path is the same.
+  write_file(dir.path("g93.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+             "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n"
+             "feed_mode = \"inverse-time\"\n");
+  const RunResult r93 =
+      run_taxopt("--in " + dir.path("a.cls") + " --machine " + dir.path("g93.toml") + " --gcode " +
+                 dir.path("o93.nc") + " --method none -q");
+  REQUIRE(r93.code == 0);
+  CHECK(read_file(dir.path("o93.nc")).find(" G2 ") == std::string::npos);
+  std::vector<CanonMove> moves;
+  REQUIRE(run_rs274(dir.path("o93.nc"), moves).code == 0);
+  double path = 0.0;
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    path +=
+        Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y, moves[i].z - moves[i - 1].z)
+            .norm();
+  }
+  CHECK(path == Approx(expect_mm).epsilon(1e-4));
+}
+
+TEST_CASE("rs274: a 3+2 arc in a tilted plane is G17 in machine mode, chords in TCP mode",
+          "[rs274][integration][arcs]") {
+  REQUIRE(have_rs274());
+  // Tool axis tilted 30 deg about X; the arc lies in the plane normal to it (NX, clockwise).
+  const double s = std::sin(deg_to_rad(30.0)), c = std::cos(deg_to_rad(30.0));
+  const auto p = [&](double x, double y) {  // a point of the tilted plane through the origin
+    return std::to_string(x) + "," + std::to_string(y * c) + "," + std::to_string(y * s);
+  };
+  const std::string axis = "0," + std::to_string(-s) + "," + std::to_string(c);
+  const std::string cl =
+      "TOOL PATH/TILT,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nFEDRAT/MMPM,600\n"
+      "GOTO/" +
+      p(0, 10) + "," + axis + "\nGOTO/" + p(10, 10) + "\nCIRCLE/" + p(10, 0) + "," + axis +
+      ",10\nGOTO/" + p(20, 0) + "\nGOTO/" + p(20, -10) + "\nEND-OF-PATH\n";
+  TempDir dir;
+  write_file(dir.path("a.cls"), cl);
+  for (const char* mode : {"tcp", "machine"}) {
+    INFO(mode);
+    write_file(dir.path("m.toml"),
+               "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+               "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\nmode = \"" +
+                   std::string(mode) + "\"\n");
+    const RunResult r =
+        run_taxopt("--in " + dir.path("a.cls") + " --machine " + dir.path("m.toml") + " --gcode " +
+                   dir.path("o.nc") + " --method none -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::vector<CanonMove> moves;
+    REQUIRE(run_rs274(dir.path("o.nc"), moves).code == 0);
+    int arcs = 0;
+    for (const auto& m : moves) arcs += m.arc ? 1 : 0;
+    CHECK(arcs == (std::string(mode) == "machine" ? 1 : 0));
+  }
 }

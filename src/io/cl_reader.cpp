@@ -538,6 +538,16 @@ class Reader {
     return op.points.back();
   }
 
+  /// The angle an arc turns from `start` to `end`, counter-clockwise about `c.axis` (already
+  /// turned for the sense), with TIMES' extra revolutions.
+  static double arc_sweep_rad(const PendingArc& c, const Vec3d& start, const Vec3d& end_mm) {
+    const Vec3d s = start - c.centre, e = end_mm - c.centre;
+    const Vec3d sp = s - s.dot(c.axis) * c.axis, ep = e - e.dot(c.axis) * c.axis;
+    double phi = std::atan2(sp.cross(ep).dot(c.axis), sp.dot(ep));
+    if (phi <= 1e-12) phi += Constants<double>::two_pi();
+    return phi + Constants<double>::two_pi() * (c.turns - 1);
+  }
+
   /// Chords of an arc from `start` to `end` (exclusive of both), counter-clockwise about
   /// `c.axis` (already turned for the sense), within the chordal tolerance.
   std::vector<Vec3d> arc_chords(const PendingArc& c, const Vec3d& start, const Vec3d& end_mm) {
@@ -555,10 +565,8 @@ class Reader {
          << " mm from its axis; interpolated as a spiral";
       tp_.warnings.push_back(format_location(source_, c.line, os.str()));
     }
-    double phi = std::atan2(sp.cross(ep).dot(c.axis), sp.dot(ep));
-    if (phi <= 1e-12) phi += Constants<double>::two_pi();
     // TIMES,n: n revolutions in all, the last one ending at the GOTO (docs/cl-files.md).
-    phi += Constants<double>::two_pi() * (c.turns - 1);
+    const double phi = arc_sweep_rad(c, start, end_mm);
     const double r_max = std::max(rs, re);
     const double step = tol < r_max ? 2.0 * std::acos(1.0 - tol / r_max) : phi;
     const double segments = std::ceil(phi / step);
@@ -710,6 +718,14 @@ class Reader {
           if (a.clockwise) a.axis = -a.axis;
           const CLPointd& end = pts[i + 1];
           const std::vector<Vec3d> chords = arc_chords(a, pts[i].tip_mm, end.tip_mm);
+          ArcRun run;
+          run.start = out.size() - 1;
+          run.end = run.start + chords.size() + 1;
+          run.centre_mm = a.centre;
+          run.normal = a.axis;
+          run.start_tip_mm = pts[i].tip_mm;
+          run.sweep_rad = arc_sweep_rad(a, pts[i].tip_mm, end.tip_mm);
+          tp_.operations[o].arcs.push_back(run);
           points_ += chords.size();
           if (points_ > 20000000)
             fail(a.line, "more than 2e7 CL points: the file cannot be posted");

@@ -38,6 +38,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
   double scale = 1.0;
   bool inverse_time = false;
   int motion = -1;
+  int plane = 2;  // the axis normal to the plane: 0 (G19, YZ), 1 (G18, XZ), 2 (G17, XY)
   double feed = 0.0;
   Vec3d xyz = Vec3d::Zero();
   double a = 0.0, c = 0.0;
@@ -84,6 +85,9 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     if (depth != 0) throw InputError(source, line_no, "unclosed comment");
     if (code.empty() || code == "%") continue;
     bool has_axis = false;
+    const Vec3d start = xyz;
+    Vec3d offset = Vec3d::Zero();
+    bool has_offset[3] = {false, false, false};
     std::size_t i = 0;
     while (i < code.size()) {
       const char letter = code[i++];
@@ -112,6 +116,10 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
             motion = 0;
           else if (gv == 10)
             motion = 1;
+          else if ((gv == 20 || gv == 30) && dialect != GcodeDialect::Heidenhain)
+            motion = gv / 10;
+          else if (gv == 170 || gv == 180 || gv == 190)
+            plane = gv == 170 ? 2 : gv == 180 ? 1 : 0;
           else if (iso_units && (gv == 200 || gv == 210))
             scale = gv == 200 ? kMmPerInch : 1.0;
           else if (dialect == GcodeDialect::Siemens && (gv == 7000 || gv == 7100))
@@ -120,7 +128,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
             inverse_time = true;
           else if (gv == 940)
             inverse_time = false;
-          else if (gv == 900 || gv == 170 || gv == 400 || gv == 490 || gv == 800) {
+          else if (gv == 900 || gv == 400 || gv == 490 || gv == 800) {
           } else if (dialect == GcodeDialect::Fanuc && (gv == 434 || gv == 430)) {
           } else {
             throw InputError(source, line_no,
@@ -149,6 +157,16 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           has_axis = true;
           break;
         case 'F': feed = v; break;
+        case 'I':
+        case 'J':
+        case 'K':
+          if (dialect == GcodeDialect::Heidenhain) {
+            throw InputError(source, line_no,
+                             std::string("word '") + letter + "' is outside taxopt's subset");
+          }
+          offset[letter - 'I'] = v * scale;
+          has_offset[letter - 'I'] = true;
+          break;
         case 'M':
         case 'T':
         case 'S':
@@ -172,17 +190,84 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     }
     if (has_axis) {
       if (motion < 0) throw InputError(source, line_no, "axis words without G0 or G1");
-      moves.push_back(GcodeMove{motion == 0, xyz, a, c, feed, inverse_time, line_no});
+      GcodeMove m{motion == 0, xyz, a, c, feed, inverse_time, line_no};
+      if (motion == 2 || motion == 3) {
+        // The centre is the start plus I J K in the plane (incremental, as taxopt writes).
+        for (int q = 0; q < 3; ++q) {
+          if (q != plane && !has_offset[q]) {
+            throw InputError(source, line_no,
+                             std::string("G2/G3 needs its centre word '") +
+                                 static_cast<char>('I' + q) + "' in this plane");
+          }
+        }
+        m.arc = true;
+        m.arc_centre_mm = start + offset;
+        m.arc_centre_mm[plane] = start[plane];
+        m.arc_normal = Vec3d::Unit(plane) * (motion == 3 ? 1.0 : -1.0);
+        const Vec3d rs = start - m.arc_centre_mm, re = xyz - m.arc_centre_mm;
+        const double r_start = std::hypot(rs[(plane + 1) % 3], rs[(plane + 2) % 3]);
+        const double r_end = std::hypot(re[(plane + 1) % 3], re[(plane + 2) % 3]);
+        if (!(r_start > 0.0) || std::abs(r_start - r_end) > 0.002 + 1e-3 * r_start) {
+          throw InputError(source, line_no,
+                           "G2/G3: the radius to the end (" + std::to_string(r_end) +
+                               " mm) differs from the radius to the start (" +
+                               std::to_string(r_start) + " mm)");
+        }
+      } else if (has_offset[0] || has_offset[1] || has_offset[2]) {
+        throw InputError(source, line_no, "I J K without G2 or G3");
+      }
+      moves.push_back(m);
     }
     if (end == text.size()) break;
   }
   return moves;
 }
 
+namespace {
+
+/// Angle of an arc from its start to `p`, counter-clockwise about its normal, in [0, 2 pi);
+/// and the in-plane parts.
+double arc_angle(const Vec3d& start_rel, const Vec3d& p_rel, const Vec3d& n) {
+  const Vec3d a = start_rel - start_rel.dot(n) * n, b = p_rel - p_rel.dot(n) * n;
+  double t = std::atan2(a.cross(b).dot(n), a.dot(b));
+  if (t < 0.0) t += 2.0 * M_PI;
+  return t;
+}
+
+/// The arc's sweep: the end's angle, a full turn when it ends where it starts.
+double arc_sweep(const Vec3d& from_mm, const GcodeMove& to) {
+  const Vec3d s = from_mm - to.arc_centre_mm, e = to.xyz_mm - to.arc_centre_mm;
+  const double t = arc_angle(s, e, to.arc_normal);
+  return t < 1e-12 ? 2.0 * M_PI : t;
+}
+
+}  // namespace
+
+Vec3d point_on_arc(const Vec3d& from_mm, const GcodeMove& to, const Vec3d& near_mm) {
+  const Vec3d& n = to.arc_normal;
+  const Vec3d s = from_mm - to.arc_centre_mm, e = to.xyz_mm - to.arc_centre_mm;
+  const double sweep = arc_sweep(from_mm, to);
+  double t = arc_angle(s, near_mm - to.arc_centre_mm, n);
+  if (t > sweep) t = (t - sweep < 2.0 * M_PI - t) ? sweep : 0.0;  // past the end: nearer end
+  const double f = sweep > 0.0 ? t / sweep : 0.0;
+  const Vec3d u = s - s.dot(n) * n, ue = e - e.dot(n) * n;
+  const double r = u.norm() + (ue.norm() - u.norm()) * f;
+  const Vec3d dir = (u.norm() > 0.0 ? u / u.norm() : u);
+  const Vec3d rotated = std::cos(t) * dir + std::sin(t) * n.cross(dir);
+  return to.arc_centre_mm + (s.dot(n) + (e.dot(n) - s.dot(n)) * f) * n + r * rotated;
+}
+
+double arc_length_mm(const Vec3d& from_mm, const GcodeMove& to) {
+  const Vec3d& n = to.arc_normal;
+  const Vec3d s = from_mm - to.arc_centre_mm, e = to.xyz_mm - to.arc_centre_mm;
+  const double r = 0.5 * ((s - s.dot(n) * n).norm() + (e - e.dot(n) * n).norm());
+  return std::hypot(arc_sweep(from_mm, to) * r, (e - s).dot(n));
+}
+
 double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units) {
   if (!(to.feed > 0.0)) return 0.0;
   if (to.inverse_time) return 60.0 / to.feed;
-  const double xyz_mm = (to.xyz_mm - from.xyz_mm).norm();
+  const double xyz_mm = to.arc ? arc_length_mm(from.xyz_mm, to) : (to.xyz_mm - from.xyz_mm).norm();
   // A move whose XYZ words repeat has a rounded distance of exactly zero.
   if (xyz_mm > 0.0) return 60.0 * xyz_mm / (to.feed * mm_per_unit(units));
   return 60.0 * std::hypot(to.a_deg - from.a_deg, to.c_deg - from.c_deg) / to.feed;

@@ -214,16 +214,120 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     Posed prev_pose;
     Vec3d prev_tip = Vec3d::Zero();
     bool have_prev = false;
+    const auto out_xyz = [&](const Vec3d& tip, const Posed& pose) {
+      return g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, pose) : tip;
+    };
+    const auto angle_words = [&](const Posed& pose) {
+      return " A" + dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
+             dialect.number(rad_to_deg(pose.c_rad), d);
+    };
+    const auto xyz_words = [&](const Vec3d& xyz) {
+      return "X" + dialect.number(xyz.x() * scale, d) + " Y" + dialect.number(xyz.y() * scale, d) +
+             " Z" + dialect.number(xyz.z() * scale, d);
+    };
+    // Writes the arc `run` as G2/G3 blocks when it can be (PostedOperation::arcs); false: it
+    // is left to its chords.
+    const auto write_arc = [&](const ArcRun& run) {
+      if (g.feed_mode != FeedMode::UnitsPerMinute || g.dialect == GcodeDialect::Heidenhain ||
+          !have_prev || run.end >= op.points.size() || run.end <= run.start + 1) {
+        return false;
+      }
+      const std::string pose_words = angle_words(op.poses[run.start]);
+      double programmed_s = 0.0;
+      bool own = true;
+      for (std::size_t j = run.start + 1; j <= run.end; ++j) {
+        const CLPointd& q = op.points[j];
+        if (q.motion != Motion::Feed || !(q.feed_mm_per_min > 0.0) ||
+            angle_words(op.poses[j]) != pose_words ||
+            (j < op.block_time_s.size() && op.block_time_s[j] > 0.0) ||
+            q.feed_mm_per_min != op.points[run.end].feed_mm_per_min) {
+          return false;
+        }
+        const double given_s = j < op.programmed_time_s.size() ? op.programmed_time_s[j] : 0.0;
+        own = own && (given_s <= 0.0 || std::abs(given_s - own_times[j]) <= 1e-9 * own_times[j]);
+        programmed_s += given_s > 0.0 ? given_s : own_times[j];
+      }
+      if (xyz_words(out_xyz(op.points[run.start].tip_mm, op.poses[run.start])) + pose_words !=
+          last_words) {
+        return false;
+      }
+      // The arc where the points are now (new axes move the tips by the same vector where the
+      // axis is the same along the arc), in the output frame.
+      const Posed& pose = op.poses[run.start];
+      const Vec3d centre_tip = run.centre_mm + (op.points[run.start].tip_mm - run.start_tip_mm);
+      const Vec3d c = out_xyz(centre_tip, pose);
+      const Vec3d n = (out_xyz(centre_tip + run.normal, pose) - c).normalized();
+      int axis = -1;
+      for (int q = 0; q < 3; ++q) {
+        if (std::abs(std::abs(n[q]) - 1.0) < 1e-9) axis = q;
+      }
+      if (axis < 0) return false;
+      const Vec3d s0 = out_xyz(op.points[run.start].tip_mm, pose) - c;
+      const Vec3d u0 = s0 - s0.dot(n) * n;
+      const double r0 = u0.norm();
+      if (r0 < 1e-3) return false;
+      for (std::size_t j = run.start; j <= run.end; ++j) {
+        const Vec3d dj = out_xyz(op.points[j].tip_mm, op.poses[j]) - c;
+        if (std::abs((dj - dj.dot(n) * n).norm() - r0) > 1e-6 * std::max(1.0, r0)) return false;
+      }
+      const Vec3d e_out = out_xyz(op.points[run.end].tip_mm, op.poses[run.end]);
+      const double hs = s0.dot(n), he = (e_out - c).dot(n);
+      const double length_mm = std::hypot(run.sweep_rad * r0, he - hs);
+      const double feed =
+          own ? op.points[run.end].feed_mm_per_min : length_mm / (programmed_s / 60.0);
+      const std::string f = fmt(feed * scale, std::max(d, 3));
+      const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
+      const char* plane = axis == 2 ? "G17" : axis == 1 ? "G18" : "G19";
+      const char* sense = n[axis] > 0.0 ? "G3" : "G2";
+      std::vector<int> piece_line(static_cast<std::size_t>(pieces));
+      Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, pose) * scale) / scale;
+      const Vec3d dir = u0 / r0, side = n.cross(dir);
+      for (int k = 1; k <= pieces; ++k) {
+        const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
+        const Vec3d to = k == pieces ? e_out
+                                     : c + (hs + (he - hs) * frac) * n +
+                                           r0 * (std::cos(th) * dir + std::sin(th) * side);
+        const Vec3d offset = (c - from) * scale;
+        std::string block = std::string(plane) + " " + sense + " " + xyz_words(to);
+        for (int q = 0; q < 3; ++q) {
+          if (q != axis)
+            block += std::string(" ") + static_cast<char>('I' + q) + dialect.number(offset[q], d);
+        }
+        if (f != last_feed) block += " F" + f;
+        last_feed = f;
+        piece_line[static_cast<std::size_t>(k - 1)] = line(block);
+        ++prog.arc_blocks;
+        from = rounded(to * scale) / scale;
+      }
+      for (std::size_t j = run.start + 1; j < run.end; ++j) {
+        const double frac =
+            static_cast<double>(j - run.start) / static_cast<double>(run.end - run.start);
+        const auto piece = std::min<std::size_t>(static_cast<std::size_t>(frac * pieces),
+                                                 static_cast<std::size_t>(pieces - 1));
+        emitted[j] = -piece_line[piece];
+      }
+      emitted[run.end] = piece_line.back();
+      last_words = xyz_words(e_out) + pose_words;
+      prev_xyz = e_out;
+      prev_pose = op.poses[run.end];
+      prev_tip = op.points[run.end].tip_mm;
+      return true;
+    };
+    std::size_t arc_cursor = 0;
     for (std::size_t i = 0; i < op.points.size(); ++i) {
+      while (arc_cursor < op.arcs.size() && op.arcs[arc_cursor].start + 1 < i) ++arc_cursor;
+      if (arc_cursor < op.arcs.size() && op.arcs[arc_cursor].start + 1 == i) {
+        if (write_arc(op.arcs[arc_cursor])) {
+          ++prog.arcs_kept;
+          i = op.arcs[arc_cursor].end;
+          continue;
+        }
+        ++prog.arcs_chorded;
+      }
       const CLPointd& p = op.points[i];
       const Posed& pose = op.poses[i];
-      const Vec3d xyz =
-          g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(p.tip_mm, pose) : p.tip_mm;
-      const std::string words = "X" + dialect.number(xyz.x() * scale, d) + " Y" +
-                                dialect.number(xyz.y() * scale, d) + " Z" +
-                                dialect.number(xyz.z() * scale, d) + " A" +
-                                dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
-                                dialect.number(rad_to_deg(pose.c_rad), d);
+      const Vec3d xyz = out_xyz(p.tip_mm, pose);
+      const std::string words = xyz_words(xyz) + angle_words(pose);
       if (words == last_words) continue;  // nothing would move
       std::string block;
       bool restore_inverse_time = false;

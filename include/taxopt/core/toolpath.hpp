@@ -111,6 +111,19 @@ struct IndexRange {
   std::size_t size() const { return end - begin; }
 };
 
+/// A CIRCLE of the CL file as taxopt read it: the arc runs from point `start` to point `end`
+/// of its operation (the points between are its chords), counter-clockwise about `normal`
+/// (already turned for the file's sense) through `sweep_rad` (more than 2 pi for TIMES),
+/// about `centre_mm`, the tip at `start` being `start_tip_mm` when it was read. The G-code
+/// writer keeps it as G2/G3 where the axes allow (gcode.hpp).
+struct ArcRun {
+  std::size_t start = 0, end = 0;
+  Vec3d centre_mm = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitZ();
+  double sweep_rad = 0.0;
+  Vec3d start_tip_mm = Vec3d::Zero();
+};
+
 /// One machining operation (an NX `TOOL PATH` block, or the moves of one tool).
 template <class S>
 struct Operation {
@@ -119,6 +132,8 @@ struct Operation {
   double spindle_rpm = 0.0;
   bool spindle_clockwise = true;
   std::vector<CLPoint<S>> points;
+  /// The CIRCLE arcs among the points, in order (ArcRun).
+  std::vector<ArcRun> arcs;
 };
 using Operationd = Operation<double>;
 

@@ -25,6 +25,11 @@ struct PostedOperation {
   /// Optional, per point: the time of the feed move into it, s, from a feed schedule
   /// (feed_schedule.hpp); 0 or absent: the programmed time. Never shorter than that.
   std::vector<double> block_time_s;
+  /// The CL file's arcs among the points (ArcRun). Where the written A and C stay put over an
+  /// arc, its plane is the written XY, XZ or YZ plane and the feeds are units per minute and
+  /// not scheduled, the arc is written as G2/G3 blocks of at most 180 deg each (not in the
+  /// Heidenhain dialect); else as its chords.
+  std::vector<ArcRun> arcs;
 };
 
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it
@@ -38,8 +43,11 @@ std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points
 struct GcodeProgram {
   std::string text;
   /// emitted[k][i]: 1-based G-code line of point i of operation k; 0 when the point was not
-  /// written because it repeats the previous block exactly (nothing would move).
+  /// written because it repeats the previous block exactly (nothing would move); minus the
+  /// line of the G2/G3 block the point lies on when it is a chord point inside that block.
   std::vector<std::vector<int>> emitted;
+  /// CL arcs written as G2/G3 (in arc_blocks blocks), and those left to their chords.
+  std::size_t arcs_kept = 0, arcs_chorded = 0, arc_blocks = 0;
 };
 
 /// Writes G-code. Feed moves need a positive feed. `comments` go into the header.
@@ -57,14 +65,25 @@ struct GcodeMove {
   double feed = 0.0;
   bool inverse_time = false;
   int line = 0;
+  /// A G2/G3 block: it runs from the previous move's XYZ counter-clockwise about
+  /// `arc_normal` (+ or - the plane's axis: G3 or G2) around `arc_centre_mm`, to xyz_mm.
+  bool arc = false;
+  Vec3d arc_centre_mm = Vec3d::Zero();
+  Vec3d arc_normal = Vec3d::UnitZ();
 };
+
+/// The point of the arc of `to` (a G2/G3 move starting at `from_mm`) at the same angle as
+/// `near_mm`, clamped to the arc; and the arc's length from its start to there, mm.
+Vec3d point_on_arc(const Vec3d& from_mm, const GcodeMove& to, const Vec3d& near_mm);
+double arc_length_mm(const Vec3d& from_mm, const GcodeMove& to);
 
 /// Time the controller takes for the feed move `to` from `from` (both read back, `units` the
 /// program's): under G94 the XYZ distance over F, or the rotary distance (deg) over F when
 /// only A and C move; under G93 one over F minutes.
 double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units);
 
-/// Reads the motion blocks of G-code in the subset taxopt writes for `dialect` (G0/G1,
+/// Reads the motion blocks of G-code in the subset taxopt writes for `dialect` (G0/G1, G2/G3
+/// with incremental I J K in G17/G18/G19 (not Heidenhain),
 /// G90, G93/G94, X Y Z A C F, comments; units G20/G21, Sinumerik G700/G710, Heidenhain
 /// G70/G71; Fanuc's %, O, G43.4/G43 H, G49; Sinumerik's TRAORI, ORIAXES, TRAFOOF, D; the
 /// Heidenhain ISO program blocks, N numbers and "*"). @throws InputError on anything outside.

@@ -154,6 +154,20 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
   return r;
 }
 
+double path_length(const std::vector<CanonMove>& moves, std::size_t* arcs) {
+  double path = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    n += moves[i].arc ? 1 : 0;
+    path += moves[i].arc ? moves[i].arc_length
+                         : std::sqrt(std::pow(moves[i].x - moves[i - 1].x, 2) +
+                                     std::pow(moves[i].y - moves[i - 1].y, 2) +
+                                     std::pow(moves[i].z - moves[i - 1].z, 2));
+  }
+  if (arcs) *arcs = n;
+  return path;
+}
+
 namespace {
 
 Heightfield make(const std::string& name, std::function<double(double, double)> z) {

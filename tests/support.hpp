@@ -60,6 +60,9 @@ struct CanonMove {
 };
 /// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
 RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves);
+/// Length of the path rs274 moves the tool from its first move's end on (arcs by their
+/// length), program units; `arcs` receives the number of ARC_FEEDs when given.
+double path_length(const std::vector<CanonMove>& moves, std::size_t* arcs = nullptr);
 
 /// A heightfield z = f(x, y) with its gradient.
 struct Heightfield {

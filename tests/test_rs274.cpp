@@ -184,20 +184,12 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
       REQUIRE(moves[i].c == Approx(ours[i].c_deg).margin(1e-4));
     }
     // The whole path as rs274 moves the tip (TCP mode), from the first point on.
-    double rs274_mm = 0.0;
     std::size_t arcs = 0;
-    for (std::size_t i = 1; i < moves.size(); ++i) {
-      arcs += moves[i].arc ? 1 : 0;
-      rs274_mm += moves[i].arc ? moves[i].arc_length
-                               : Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
-                                       moves[i].z - moves[i - 1].z)
-                                     .norm();
-    }
+    const double rs274_mm = path_length(moves, &arcs) * mm_per_unit(tp.units);
     // Arcs kept as arcs where their plane and axes allow (never more blocks than CIRCLEs need
     // at 180 deg each; none without a CIRCLE).
     if (circles == 0) CHECK(arcs == 0);
     INFO("G2/G3 blocks: " << arcs << " for " << circles << " CIRCLE records");
-    rs274_mm *= mm_per_unit(tp.units);
     CHECK(rs274_mm == Approx(path_mm).epsilon(0.002));
   }
   CHECK(files == 7);
@@ -300,15 +292,8 @@ TEST_CASE(
     std::vector<CanonMove> moves;
     const RunResult rs = run_rs274(dir.path("o.nc"), moves);
     REQUIRE(rs.code == 0);
-    double path = 0.0;
-    int arcs = 0;
-    for (std::size_t i = 1; i < moves.size(); ++i) {
-      arcs += moves[i].arc ? 1 : 0;
-      path += moves[i].arc ? moves[i].arc_length
-                           : Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y,
-                                   moves[i].z - moves[i - 1].z)
-                                 .norm();
-    }
+    std::size_t arcs = 0;
+    const double path = path_length(moves, &arcs);
     CHECK(arcs == 1 + 1 + 1 + 3);
     CHECK(path == Approx(expect_mm).epsilon(1e-5));
     // The feed is the programmed one on every arc block.
@@ -328,12 +313,7 @@ TEST_CASE(
   CHECK(read_file(dir.path("o93.nc")).find(" G2 ") == std::string::npos);
   std::vector<CanonMove> moves;
   REQUIRE(run_rs274(dir.path("o93.nc"), moves).code == 0);
-  double path = 0.0;
-  for (std::size_t i = 1; i < moves.size(); ++i) {
-    path +=
-        Vec3d(moves[i].x - moves[i - 1].x, moves[i].y - moves[i - 1].y, moves[i].z - moves[i - 1].z)
-            .norm();
-  }
+  const double path = path_length(moves);
   CHECK(path == Approx(expect_mm).epsilon(1e-4));
 }
 
@@ -366,8 +346,8 @@ TEST_CASE("rs274: a 3+2 arc in a tilted plane is G17 in machine mode, chords in 
     REQUIRE(r.code == 0);
     std::vector<CanonMove> moves;
     REQUIRE(run_rs274(dir.path("o.nc"), moves).code == 0);
-    int arcs = 0;
-    for (const auto& m : moves) arcs += m.arc ? 1 : 0;
-    CHECK(arcs == (std::string(mode) == "machine" ? 1 : 0));
+    std::size_t arcs = 0;
+    path_length(moves, &arcs);
+    CHECK(arcs == (std::string(mode) == "machine" ? 1u : 0u));
   }
 }

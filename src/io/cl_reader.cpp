@@ -256,12 +256,11 @@ bool is_listing_line(const std::string& code) {
 
 /// Recognises the CAM system from its records and comments (docs/cl-files.md).
 ClDialect detect_dialect(const std::vector<LogicalLine>& lines) {
-  bool nx = false, creo = false, catia = false, solidworks = false;
+  bool nx = false, creo = false, catia = false, solidworks = false, ffcam = false, makino = false;
   for (const auto& ll : lines) {
     const std::string up = upper(ll.raw);
-    if (up.find("FFCAM") != std::string::npos || up.find("MAKINO") != std::string::npos) {
-      return ClDialect::MakinoFfcam;
-    }
+    ffcam = ffcam || up.find("FFCAM") != std::string::npos;
+    makino = makino || up.find("MAKINO") != std::string::npos;
     if (ll.kind == RecordKind::Comment) {
       creo = creo || up.find("PRO/CLFILE") != std::string::npos ||
              up.find("CREO") != std::string::npos;
@@ -275,10 +274,13 @@ ClDialect detect_dialect(const std::vector<LogicalLine>& lines) {
          major == "MSYS";
     solidworks = solidworks || major.rfind("CSI_", 0) == 0 || major == "TRNTYP";
   }
+  // FFCAM names itself; a machine called Makino in another system's file does not make it one.
+  if (ffcam) return ClDialect::MakinoFfcam;
   if (nx) return ClDialect::SiemensNx;
   if (creo) return ClDialect::Creo;
   if (catia) return ClDialect::Catia;
   if (solidworks) return ClDialect::SolidworksCam;
+  if (makino) return ClDialect::MakinoFfcam;
   return ClDialect::Generic;
 }
 

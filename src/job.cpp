@@ -328,12 +328,19 @@ std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionMod
 /// `a_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
 /// only the bodies above the ball are checked (the ball's path between contacts is the CAM
 /// system's chord tolerance); where either end is in the air, the ball too.
-std::vector<std::size_t> colliding_moves(const CollisionModel& model, const ToolModel& tool,
-                                         const Machine& machine, const std::vector<Vec3d>& xyz_w,
-                                         const std::vector<double>& a_deg,
-                                         const std::vector<double>& c_deg,
-                                         const std::vector<ContactPoint>& contacts,
-                                         detail::StageProgress* progress = nullptr) {
+/// One written position on the way between two points (a linearisation block): X Y Z as
+/// written (machine or tip by the mode), A and C in degrees.
+struct WayPoint {
+  Vec3d xyz = Vec3d::Zero();
+  double a_deg = 0.0, c_deg = 0.0;
+};
+
+std::vector<std::size_t> colliding_moves(
+    const CollisionModel& model, const ToolModel& tool, const Machine& machine,
+    const std::vector<Vec3d>& xyz_w, const std::vector<double>& a_deg,
+    const std::vector<double>& c_deg, const std::vector<ContactPoint>& contacts,
+    detail::StageProgress* progress = nullptr,
+    const std::vector<std::vector<WayPoint>>* between = nullptr) {
   const double R = tool.ball_radius_mm;
   return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
     struct Advance {  // on every return of this move's check
@@ -342,21 +349,30 @@ std::vector<std::size_t> colliding_moves(const CollisionModel& model, const Tool
         if (p) p->advance();
       }
     } advance{progress};
-    const double da = a_deg[i] - a_deg[i - 1], dc = c_deg[i] - c_deg[i - 1];
-    const double dx = (xyz_w[i] - xyz_w[i - 1]).norm();
-    const int steps = static_cast<int>(
-        std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
     const bool in_air = contacts[i - 1].state != ContactState::Touching ||
                         contacts[i].state != ContactState::Touching;
-    for (int s = 1; s < steps; ++s) {
-      const double t = static_cast<double>(s) / steps;
-      const Posed pose{deg_to_rad(a_deg[i - 1] + t * da), deg_to_rad(c_deg[i - 1] + t * dc)};
-      const Vec3d xyz = xyz_w[i - 1] + t * (xyz_w[i] - xyz_w[i - 1]);
-      const Vec3d tip =
-          machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz, pose) : xyz;
-      const Vec3d axis = machine.ac.forward(pose);
-      if (model.collides(tool, tip + R * axis, axis, in_air)) {
-        return true;
+    // The move as the machine runs it: joint-linear between the written blocks.
+    std::vector<WayPoint> chain = {{xyz_w[i - 1], a_deg[i - 1], c_deg[i - 1]}};
+    if (between && i < between->size()) {
+      chain.insert(chain.end(), (*between)[i].begin(), (*between)[i].end());
+    }
+    chain.push_back({xyz_w[i], a_deg[i], c_deg[i]});
+    for (std::size_t k = 1; k < chain.size(); ++k) {
+      const WayPoint &p0 = chain[k - 1], &p1 = chain[k];
+      const double da = p1.a_deg - p0.a_deg, dc = p1.c_deg - p0.c_deg;
+      const double dx = (p1.xyz - p0.xyz).norm();
+      const int steps = static_cast<int>(
+          std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
+      for (int s = (k == 1 ? 1 : 0); s < steps; ++s) {
+        const double t = static_cast<double>(s) / steps;
+        const Posed pose{deg_to_rad(p0.a_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
+        const Vec3d xyz = p0.xyz + t * (p1.xyz - p0.xyz);
+        const Vec3d tip =
+            machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz, pose) : xyz;
+        const Vec3d axis = machine.ac.forward(pose);
+        if (model.collides(tool, tip + R * axis, axis, in_air)) {
+          return true;
+        }
       }
     }
     return false;
@@ -609,6 +625,9 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
   if (!in_plan.ok()) return 0;
   const PosePlan out_plan =
       plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options, out.preferred);
+  // In machine mode with linearisation the tip runs the straight line as in TCP mode.
+  Machine path_machine = machine;
+  if (machine.gcode.program.linearise_tolerance_mm > 0.0) path_machine.gcode.mode = GcodeMode::Tcp;
   const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses) {
     std::vector<char> hit(n, 0);
     if (!model) return hit;
@@ -616,14 +635,15 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
     std::vector<double> a, c;
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
-      xyz.push_back(
-          machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, poses[i]) : tip);
+      xyz.push_back(path_machine.gcode.mode == GcodeMode::Machine
+                        ? machine.ac.to_machine_mm(tip, poses[i])
+                        : tip);
       a.push_back(rad_to_deg(poses[i].a_rad));
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
     std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
-    for (std::size_t i :
-         colliding_moves(*model, *tool, machine, xyz, a, c, contacts.empty() ? air : contacts)) {
+    for (std::size_t i : colliding_moves(*model, *tool, path_machine, xyz, a, c,
+                                         contacts.empty() ? air : contacts)) {
       hit[i] = 1;
     }
     for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts)) hit[i] = 1;
@@ -738,12 +758,25 @@ namespace {
 /// problems, jerk a warning (the schedule does not bound it).
 void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::vector<JointPosition>& joints,
-                          const std::vector<const GcodeMove*>& at, JobResult& res,
+                          const std::vector<const GcodeMove*>& at,
+                          const std::vector<GcodeMove>& moves, JobResult& res,
                           const std::string& source, const JointLimits& check, bool scheduled) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
+  const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
+    if (moves.empty() || m < moves.data() || m >= moves.data() + moves.size()) return -1;
+    return m - moves.data();
+  };
   for (std::size_t i = 1; i < n; ++i) {
-    if (po.points[i].motion == Motion::Feed && at[i] != at[i - 1]) {
+    if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
+    // A linearised move: the blocks between the points, each at its own F.
+    const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
+    if (from >= 0 && to > from + 1) {
+      for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+        written_s[i] += block_time_s(moves[static_cast<std::size_t>(j - 1)],
+                                     moves[static_cast<std::size_t>(j)], res.gcode_units);
+      }
+    } else {
       written_s[i] = block_time_s(*at[i - 1], *at[i], res.gcode_units);
     }
   }
@@ -1053,15 +1086,18 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
   auto t_write = Clock::now();
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-  std::vector<GcodeMove> moves =
-      read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect);
+  std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code",
+                                                  machine.gcode.dialect, res.gcode.verbatim_lines);
   // Per operation and point, the move read back that put the machine there. A chord point
   // inside a G2/G3 block gets the point of the arc read back at its angle (with the block's
   // words), so that every check sees the path the controller runs; the blocks that split an
   // arc at 180 deg belong to no point and are stepped over.
   std::deque<GcodeMove> on_arcs;
+  // Per operation and point, the linearisation blocks on the way into it.
+  std::vector<std::vector<std::vector<WayPoint>>> way_points;
   const auto moves_of_points = [&] {
     on_arcs.clear();
+    way_points.assign(posted.size(), {});
     std::vector<std::vector<const GcodeMove*>> out(posted.size());
     std::size_t next = 0;
     const auto mismatch = [] {
@@ -1069,13 +1105,21 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     };
     for (std::size_t k = 0; k < posted.size(); ++k) {
       const GcodeMove* last = nullptr;
+      way_points[k].resize(posted[k].points.size());
       for (std::size_t i = 0; i < posted[k].points.size(); ++i) {
         const int line = res.gcode.emitted[k][i];
         if (line != 0) {
-          while (next < moves.size() && moves[next].line < std::abs(line)) last = &moves[next++];
+          while (next < moves.size() && moves[next].line < std::abs(line)) {
+            const GcodeMove& m = moves[next++];
+            if (i > 0 && !m.arc && !m.positioning) {
+              way_points[k][i].push_back({m.xyz_mm, m.a_deg, m.c_deg});
+            }
+            last = &m;
+          }
           if (next >= moves.size() || moves[next].line != std::abs(line)) mismatch();
         }
         if (line > 0) {
+          if (moves[next].positioning) mismatch();
           last = &moves[next++];
         } else if (line < 0) {
           const GcodeMove& arc = moves[next];
@@ -1137,7 +1181,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     for (std::size_t k = 0; k < posted.size(); ++k)
       posted[k].block_time_s = schedule_after[k].time_s;
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-    moves = read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect);
+    moves = read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect,
+                             res.gcode.verbatim_lines);
     point_moves = moves_of_points();
   }
   const double write_time = seconds_since(t_write);
@@ -1176,6 +1221,20 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     r.rows.resize(op.points.size());
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       const GcodeMove* last = point_moves[k][i];
+      // Where TCP is asked for, the controller's must be on, with the tool length offset
+      // (LinuxCNC's kinematics steer the spindle nose without it); in machine mode the offset.
+      const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
+      if (!last->length_offset || (tcp_mode && !last->tcp)) {
+        if (r.verification.tool_length_active) {
+          res.problems.push_back(
+              "operation " + op.name + ": G-code line " + std::to_string(last->line) +
+              " moves with " +
+              (!last->length_offset ? std::string("the tool length offset off")
+                                    : std::string("tool centre point control off")) +
+              " (the written program must switch it on before the operation's first move)");
+        }
+        r.verification.tool_length_active = false;
+      }
       a_w[i] = last->a_deg;
       xyz_w[i] = last->xyz_mm;
       c_w[i] = last->c_deg;
@@ -1328,8 +1387,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       } else {
         r.verification.flute_gouge_points = 0;
       }
-      const auto moves_hit =
-          colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w, contacts[k], &checking);
+      const auto moves_hit = colliding_moves(*collision, tool, machine, xyz_w, a_w, c_w,
+                                             contacts[k], &checking, &way_points[k]);
       r.verification.colliding_moves = static_cast<long>(moves_hit.size());
       if (const auto least = clearance_bound(*collision, real_tool, op, out_axes, &checking)) {
         r.verification.min_clearance_mm = least->first;
@@ -1440,8 +1499,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       r.rows[i].feed_mm_min = schedule_after[k].feed_mm_min[i];
       r.rows[i].feed_before_mm_min = schedule_before[k].feed_mm_min[i];
     }
-    check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], res, tp.source,
-                         options.feed_schedule ? limits : machine.limits, options.feed_schedule);
+    check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], moves, res,
+                         tp.source, options.feed_schedule ? limits : machine.limits,
+                         options.feed_schedule);
     res.operations.push_back(std::move(r));
   }
   res.out_cls = format_cl(tp, out_ops);

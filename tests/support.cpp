@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "taxopt/geometry/surface.hpp"
+#include "taxopt/io/gcode.hpp"
 
 namespace taxopt::test {
 
@@ -64,7 +65,8 @@ RunResult run_taxopt(const std::string& args) { return run(std::string(TAXOPT_EX
 
 bool have_rs274() { return run("command -v rs274").code == 0; }
 
-RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) {
+RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
+                    const Rs274Options& options, std::vector<CanonMove>* all_moves) {
   TempDir tmp;
   // rs274 knows only the tools of its table: every T number the program uses is in it.
   std::set<long> tools;
@@ -80,17 +82,27 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
   std::string table;
   int pocket = 0;
   for (long t : tools) {
-    table += "T" + std::to_string(t) + " P" + std::to_string(++pocket) + " D6 Z0 ;\n";
+    table += "T" + std::to_string(t) + " P" + std::to_string(++pocket) + " D6 Z" +
+             std::to_string(options.tool_length) + " ;\n";
   }
-  write_file(tmp.path("tool.tbl"), table);
+  std::string dir = tmp.dir(), ini_arg;
+  if (!options.ini.empty()) {
+    const std::filesystem::path ini(options.ini);
+    std::filesystem::copy(ini.parent_path(), tmp.path("config"),
+                          std::filesystem::copy_options::recursive);
+    dir = tmp.path("config");
+    ini_arg = " -i " + ini.filename().string();
+  }
+  write_file(dir + "/tool.tbl", table);
   // rs274 keeps its parameter file (rs274ngc.var) in the working directory, and it opens
   // $HOME/.tool.mmap with O_TRUNC and maps it MAP_SHARED: two concurrent runs (ctest -j)
   // truncate each other's mapping and one dies of SIGBUS (exit 135). Each run gets its own
   // folder and its own HOME.
   const std::string abs = std::filesystem::absolute(ngc_path).string();
-  RunResult r = run("cd " + tmp.dir() + " && HOME=" + tmp.dir() +
-                    " rs274 -t tool.tbl -v rs274ngc.var -g " + abs);
+  RunResult r = run("cd " + dir + " && HOME=" + tmp.dir() + " rs274" + ini_arg +
+                    " -t tool.tbl -v rs274ngc.var -g " + abs);
   moves.clear();
+  double tool_length = 0.0;
   std::istringstream in(r.out);
   std::string line;
   double feed_rate = 0.0;
@@ -101,6 +113,10 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
     if (line.find("feed mode set to units per minute") != std::string::npos) inverse_time = false;
     if (const auto at = line.find("SET_FEED_RATE("); at != std::string::npos) {
       feed_rate = std::strtod(line.c_str() + at + 14, nullptr);
+    }
+    if (const auto at = line.find("USE_TOOL_LENGTH_OFFSET("); at != std::string::npos) {
+      double x = 0, y = 0;
+      std::sscanf(line.c_str() + at + 23, "%lf %lf %lf", &x, &y, &tool_length);
     }
     if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 2;
     if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
@@ -134,6 +150,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
       m.x = end[0], m.y = end[1], m.z = end[2];
       m.feed_rate = feed_rate;
       m.inverse_time = inverse_time;
+      m.tool_length = tool_length;
       moves.push_back(m);
       continue;
     }
@@ -149,7 +166,22 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves) 
                     &m.b, &m.c) != 6) {
       throw std::runtime_error("cannot parse rs274 line: " + line);
     }
+    m.tool_length = tool_length;
     moves.push_back(m);
+  }
+  if (all_moves) *all_moves = moves;
+  // The program's own positioning moves (safe retract, table turn) belong to no point.
+  try {
+    const auto ours = read_gcode_moves(program, ngc_path);
+    if (ours.size() == moves.size()) {
+      std::vector<CanonMove> kept;
+      for (std::size_t i = 0; i < ours.size(); ++i) {
+        if (!ours[i].positioning) kept.push_back(moves[i]);
+      }
+      moves.swap(kept);
+    }
+  } catch (const std::exception&) {
+    // Not taxopt's subset: every move is kept, and the caller's comparison tells.
   }
   return r;
 }

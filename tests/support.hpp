@@ -57,9 +57,22 @@ struct CanonMove {
   /// (program units despite the name's unit when the program is in inches).
   bool arc = false;
   double arc_length = 0;
+  /// The tool length offset in force (USE_TOOL_LENGTH_OFFSET's Z), program units.
+  double tool_length = 0;
+};
+/// How rs274 is run: the tool length of every tool in its table (program units of the INI,
+/// inches without one), and a LinuxCNC INI file (its folder copied, so that its remaps and
+/// subroutines are found).
+struct Rs274Options {
+  double tool_length = 0.0;
+  std::string ini;
 };
 /// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
-RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves);
+/// `moves` are the moves of the program's points: the safe retracts and the table turns
+/// before an operation's first point (GcodeMove::positioning, by taxopt's reader of the same
+/// file) are left out; `all_moves`, when given, receives every move.
+RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
+                    const Rs274Options& options = {}, std::vector<CanonMove>* all_moves = nullptr);
 /// Length of the path rs274 moves the tool from its first move's end on (arcs by their
 /// length), program units; `arcs` receives the number of ARC_FEEDs when given.
 double path_length(const std::vector<CanonMove>& moves, std::size_t* arcs = nullptr);

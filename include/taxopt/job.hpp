@@ -105,6 +105,9 @@ struct Verification {
   long flute_gouge_points = -1;
   std::size_t min_clearance_index = 0;
   bool within_axis_limits = true;
+  /// Every written point's move runs with the tool length offset on, and in tcp mode with the
+  /// controller's tool centre point control on (read back from the G-code).
+  bool tool_length_active = true;
   /// Joint velocities and accelerations within the limits at the written feeds, as the
   /// controller moves (linear in the joints, from rest at each chain of feed moves): the
   /// machine file's limits, or with --feed-schedule the effective ones (true when none).

@@ -10,8 +10,10 @@ namespace taxopt {
 
 namespace {
 
-/// Removes the whole words `keywords` (Sinumerik's TRAORI ...) from a line, outside comments.
-std::string without_keywords(const std::string& line, std::initializer_list<const char*> keywords) {
+/// Removes the whole words `keywords` (Sinumerik's TRAORI ...) from a line, outside comments;
+/// `found` receives which were there.
+std::string without_keywords(const std::string& line, std::initializer_list<const char*> keywords,
+                             std::vector<std::string>* found = nullptr) {
   std::string out = line;
   for (const char* k : keywords) {
     const std::string key = k;
@@ -22,6 +24,7 @@ std::string without_keywords(const std::string& line, std::initializer_list<cons
                         out[end] == ';';
       if (starts && ends) {
         out.replace(at, key.size(), " ");
+        if (found) found->push_back(key);
       } else {
         at = end;
       }
@@ -33,8 +36,18 @@ std::string without_keywords(const std::string& line, std::initializer_list<cons
 }  // namespace
 
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
-                                        GcodeDialect dialect) {
+                                        GcodeDialect dialect,
+                                        const std::vector<int>& verbatim_lines) {
   std::vector<GcodeMove> moves;
+  // Workpiece positions known of X Y Z A C: none before the first full move, nor of an axis
+  // moved in machine coordinates since.
+  bool known[5] = {false, false, false, false, false};
+  // A TNC applies the length of the tool in the spindle always (its TOOL CALL may come
+  // before the program); LinuxCNC's TCP is its kinematics.
+  bool length_offset = dialect == GcodeDialect::Heidenhain;
+  bool tcp = dialect == GcodeDialect::LinuxCNC;
+  bool incremental = false;
+  std::size_t next_verbatim = 0;
   double scale = 1.0;
   bool inverse_time = false;
   int motion = -1;
@@ -50,8 +63,22 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     std::string ln = text.substr(pos, end - pos);
     pos = end + 1;
     ++line_no;
+    while (next_verbatim < verbatim_lines.size() && verbatim_lines[next_verbatim] < line_no) {
+      ++next_verbatim;
+    }
+    if (next_verbatim < verbatim_lines.size() && verbatim_lines[next_verbatim] == line_no) {
+      if (end == text.size()) break;
+      continue;
+    }
+    bool machine_coordinates = false;
     if (dialect == GcodeDialect::Siemens) {
-      ln = without_keywords(ln, {"TRAORI", "ORIAXES", "TRAFOOF"});
+      std::vector<std::string> found;
+      ln = without_keywords(ln, {"TRAORI", "ORIAXES", "TRAFOOF", "SUPA"}, &found);
+      for (const auto& k : found) {
+        if (k == "TRAORI") tcp = true;
+        if (k == "TRAFOOF") tcp = false;
+        if (k == "SUPA") machine_coordinates = true;
+      }
     } else if (dialect == GcodeDialect::Heidenhain) {
       // Program begin and end blocks (%NAME G71 *), and the block end "*".
       if (ln.find('%') != std::string::npos) {
@@ -85,7 +112,10 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     if (depth != 0) throw InputError(source, line_no, "unclosed comment");
     if (code.empty() || code == "%") continue;
     bool has_axis = false;
+    bool given[5] = {false, false, false, false, false};
+    bool reference_return = false;
     const Vec3d start = xyz;
+    const Vec3d xyz_before = xyz;
     Vec3d offset = Vec3d::Zero();
     bool has_offset[3] = {false, false, false};
     std::size_t i = 0;
@@ -128,8 +158,24 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
             inverse_time = true;
           else if (gv == 940)
             inverse_time = false;
-          else if (gv == 900 || gv == 400 || gv == 490 || gv == 800) {
-          } else if (dialect == GcodeDialect::Fanuc && (gv == 434 || gv == 430)) {
+          else if (gv == 900)
+            incremental = false;
+          else if (gv == 400 || gv == 800 || gv == 540) {
+          } else if (gv == 490 && dialect != GcodeDialect::Heidenhain &&
+                     dialect != GcodeDialect::Siemens) {
+            length_offset = false;
+            if (dialect == GcodeDialect::Fanuc) tcp = false;
+          } else if ((dialect == GcodeDialect::Fanuc || dialect == GcodeDialect::LinuxCNC) &&
+                     gv == 430) {
+            length_offset = true;
+          } else if (dialect == GcodeDialect::Fanuc && gv == 434) {
+            length_offset = tcp = true;
+          } else if (dialect == GcodeDialect::LinuxCNC && gv == 530) {
+            machine_coordinates = true;
+          } else if (dialect == GcodeDialect::Fanuc && gv == 910) {
+            incremental = true;
+          } else if (dialect == GcodeDialect::Fanuc && gv == 280) {
+            reference_return = machine_coordinates = true;
           } else {
             throw InputError(source, line_no,
                              "G" + std::to_string(v) + " is outside taxopt's subset");
@@ -138,23 +184,23 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
         }
         case 'X':
           xyz.x() = v * scale;
-          has_axis = true;
+          has_axis = given[0] = true;
           break;
         case 'Y':
           xyz.y() = v * scale;
-          has_axis = true;
+          has_axis = given[1] = true;
           break;
         case 'Z':
           xyz.z() = v * scale;
-          has_axis = true;
+          has_axis = given[2] = true;
           break;
         case 'A':
           a = v;
-          has_axis = true;
+          has_axis = given[3] = true;
           break;
         case 'C':
           c = v;
-          has_axis = true;
+          has_axis = given[4] = true;
           break;
         case 'F': feed = v; break;
         case 'I':
@@ -167,11 +213,22 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           offset[letter - 'I'] = v * scale;
           has_offset[letter - 'I'] = true;
           break;
-        case 'M':
+        case 'M': {
+          const long mv = std::lround(v);
+          if (dialect == GcodeDialect::Heidenhain && (mv == 128 || mv == 129)) tcp = mv == 128;
+          if (dialect == GcodeDialect::Heidenhain && mv == 91) machine_coordinates = true;
+          break;
+        }
         case 'T':
+          if (dialect == GcodeDialect::Heidenhain) length_offset = true;  // the tool call
+          break;
         case 'S':
         case 'N': break;
         case 'H':
+          if (dialect != GcodeDialect::Fanuc && dialect != GcodeDialect::LinuxCNC) {
+            throw InputError(source, line_no, "word 'H' is outside taxopt's subset");
+          }
+          break;
         case 'O':
           if (dialect != GcodeDialect::Fanuc) {
             throw InputError(source, line_no,
@@ -182,15 +239,40 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           if (dialect != GcodeDialect::Siemens) {
             throw InputError(source, line_no, "word 'D' is outside taxopt's subset");
           }
+          length_offset = v > 0.0;
           break;
         default:
           throw InputError(source, line_no,
                            std::string("word '") + letter + "' is outside taxopt's subset");
       }
     }
+    if (has_axis && (machine_coordinates || incremental)) {
+      // The safe retract: in machine coordinates (or Fanuc's reference return); where the
+      // axes it moves are in the workpiece is not known until they are written again.
+      if (incremental && !reference_return) {
+        throw InputError(source, line_no, "incremental moves (G91) are outside taxopt's subset");
+      }
+      if (given[3] || given[4] || (!reference_return && motion != 0)) {
+        throw InputError(source, line_no,
+                         "a move in machine coordinates must be a rapid of X, Y or Z");
+      }
+      xyz = xyz_before;
+      for (int q = 0; q < 3; ++q) known[q] = known[q] && !given[q];
+      GcodeMove m{true, xyz, a, c, feed, inverse_time, line_no};
+      m.positioning = true;
+      m.length_offset = length_offset;
+      m.tcp = tcp;
+      moves.push_back(m);
+      if (end == text.size()) break;
+      continue;
+    }
     if (has_axis) {
       if (motion < 0) throw InputError(source, line_no, "axis words without G0 or G1");
+      for (int q = 0; q < 5; ++q) known[q] = known[q] || given[q];
       GcodeMove m{motion == 0, xyz, a, c, feed, inverse_time, line_no};
+      m.positioning = !(known[0] && known[1] && known[2] && known[3] && known[4]);
+      m.length_offset = length_offset;
+      m.tcp = tcp;
       if (motion == 2 || motion == 3) {
         // The centre is the start plus I J K in the plane (incremental, as taxopt writes).
         for (int q = 0; q < 3; ++q) {

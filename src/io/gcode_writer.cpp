@@ -46,7 +46,8 @@ std::string comment_text(const std::string& text) {
 /// How one controller dialect writes a program (docs/gcode-dialects.md).
 class Dialect {
  public:
-  Dialect(GcodeDialect d, LengthUnit units) : d_(d), inch_(units == LengthUnit::Inch) {}
+  Dialect(const GcodeSettings& g, LengthUnit units)
+      : d_(g.dialect), t_(g.program), inch_(units == LengthUnit::Inch) {}
 
   /// A block as written: Heidenhain ISO numbers blocks and ends them with " *".
   std::string block(const std::string& words) {
@@ -63,12 +64,13 @@ class Dialect {
     }
     return {};
   }
+  std::string name() const { return t_.name.empty() ? "TAXOPT" : t_.name; }
   /// Lines before the comments: the program start.
   std::vector<std::string> start() const {
     switch (d_) {
-      case GcodeDialect::Fanuc: return {"%", "O1000 (TAXOPT)"};
-      case GcodeDialect::Heidenhain:
-        return {std::string("%TAXOPT ") + (inch_ ? "G70" : "G71") + " *"};
+      case GcodeDialect::Fanuc:
+        return {"%", "O" + four_digits(t_.number) + " (" + comment_text(name()) + ")"};
+      case GcodeDialect::Heidenhain: return {"%" + name() + (inch_ ? " G70" : " G71") + " *"};
       default: return {};
     }
   }
@@ -85,12 +87,51 @@ class Dialect {
     }
     return {};
   }
-  std::vector<std::string> tool_change(int tool) const {
-    const std::string t = "T" + std::to_string(tool);
+  /// The work offset block: the template's, else G54 (none on a TNC: its active preset).
+  std::string work_offset() const {
+    if (t_.work_offset == "none") return {};
+    if (!t_.work_offset.empty()) return t_.work_offset;
+    return d_ == GcodeDialect::Heidenhain ? std::string() : "G54";
+  }
+  /// The retract to machine Z (SafeRetract::MachineZ), in the dialect's own way; the tool
+  /// length offset is off after it (Sinumerik D0; the others cancel it before).
+  std::vector<std::string> retract(const std::string& z) const {
+    if (t_.retract == SafeRetract::None) return {};
     switch (d_) {
-      case GcodeDialect::Siemens: return {t + " D1 M6"};
-      case GcodeDialect::Heidenhain: return {t + " G17"};
-      default: return {t + " M6"};
+      case GcodeDialect::LinuxCNC: return {"G53 G0 Z" + z};
+      case GcodeDialect::Fanuc: return {"G91 G28 Z0.", "G90"};
+      case GcodeDialect::Siemens: return {"G0 SUPA Z" + z + " D0"};
+      case GcodeDialect::Heidenhain: return {"G00 Z" + z + " M91"};
+    }
+    return {};
+  }
+  /// The tool change; true when the lines are the template's (written as they are).
+  std::pair<std::vector<std::string>, bool> tool_change(int tool) const {
+    const std::string n = std::to_string(tool);
+    if (!t_.tool_change.empty()) {
+      std::vector<std::string> out;
+      for (std::string line : t_.tool_change) {
+        for (std::size_t at = line.find("{tool}"); at != std::string::npos;
+             at = line.find("{tool}", at + n.size())) {
+          line.replace(at, 6, n);
+        }
+        out.push_back(line);
+      }
+      return {out, true};
+    }
+    switch (d_) {
+      case GcodeDialect::Heidenhain: return {{"T" + n + " G17"}, false};
+      default: return {{"T" + n + " M6"}, false};
+    }
+  }
+  /// The tool length offset switched on for an operation, as its own block (LinuxCNC G43,
+  /// Sinumerik D); Fanuc's is on the first move, a TNC's comes with the tool call.
+  std::vector<std::string> length_on(int tool) const {
+    const std::string h = std::to_string(std::max(tool, 1));
+    switch (d_) {
+      case GcodeDialect::LinuxCNC: return {"G43 H" + h};
+      case GcodeDialect::Siemens: return {"D1"};
+      default: return {};
     }
   }
   /// Tool centre point control on (tcp mode): blocks before an operation's first move.
@@ -110,13 +151,22 @@ class Dialect {
   }
   std::vector<std::string> tcp_off(bool tcp) const {
     switch (d_) {
+      case GcodeDialect::LinuxCNC:
       case GcodeDialect::Fanuc: return {"G49"};
       case GcodeDialect::Siemens:
         return tcp ? std::vector<std::string>{"TRAFOOF"} : std::vector<std::string>{};
       case GcodeDialect::Heidenhain:
         return tcp ? std::vector<std::string>{"M129"} : std::vector<std::string>{};
-      default: return {};
     }
+    return {};
+  }
+  std::string coolant_on() const {
+    switch (t_.coolant) {
+      case Coolant::Flood: return "M8";
+      case Coolant::Mist: return "M7";
+      case Coolant::None: return {};
+    }
+    return {};
   }
   std::string rapid() const { return d_ == GcodeDialect::Heidenhain ? "G00" : "G0"; }
   std::string linear() const { return d_ == GcodeDialect::Heidenhain ? "G01" : "G1"; }
@@ -125,7 +175,7 @@ class Dialect {
     switch (d_) {
       case GcodeDialect::Fanuc: return {"%"};
       case GcodeDialect::Heidenhain:
-        return {std::string("N99999999 %TAXOPT ") + (inch_ ? "G70" : "G71") + " *"};
+        return {"N99999999 %" + name() + (inch_ ? " G70" : " G71") + " *"};
       default: return {};
     }
   }
@@ -138,7 +188,13 @@ class Dialect {
   }
 
  private:
+  static std::string four_digits(int n) {
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%04d", n);
+    return buf;
+  }
   GcodeDialect d_;
+  const ProgramTemplate& t_;
   bool inch_;
   int block_no_ = 0;
 };
@@ -163,6 +219,59 @@ std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points
   return t;
 }
 
+std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& from_tip_mm,
+                                        const Posed& from, const Vec3d& to_tip_mm, const Posed& to,
+                                        double tolerance_mm) {
+  std::vector<double> at = {0.0, 1.0};
+  if (!(tolerance_mm > 0.0)) return at;
+  const Vec3d from_joint = machine.to_machine_mm(from_tip_mm, from);
+  const Vec3d to_joint = machine.to_machine_mm(to_tip_mm, to);
+  // Largest distance of the tip from the straight line between t0 and t1 while the joints
+  // run linearly from their values at t0 to those at t1 (sampled; the deviation is smooth).
+  const auto joints_at = [&](double t) {
+    const Posed pose{from.a_rad + t * (to.a_rad - from.a_rad),
+                     from.c_rad + t * (to.c_rad - from.c_rad)};
+    const Vec3d xyz =
+        (t == 0.0 || t == 1.0)
+            ? (t == 0.0 ? from_joint : to_joint)
+            : machine.to_machine_mm(from_tip_mm + t * (to_tip_mm - from_tip_mm), pose);
+    return std::make_pair(xyz, pose);
+  };
+  const auto deviation = [&](double t0, double t1) {
+    const auto [x0, p0] = joints_at(t0);
+    const auto [x1, p1] = joints_at(t1);
+    const Vec3d a = from_tip_mm + t0 * (to_tip_mm - from_tip_mm);
+    const Vec3d b = from_tip_mm + t1 * (to_tip_mm - from_tip_mm);
+    double worst = 0.0;
+    constexpr int kSamples = 16;
+    for (int s = 1; s < kSamples; ++s) {
+      const double u = static_cast<double>(s) / kSamples;
+      const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad), p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+      const Vec3d tip = machine.from_machine_mm(x0 + u * (x1 - x0), pose);
+      const Vec3d ab = b - a;
+      const double len2 = ab.squaredNorm();
+      const double w = len2 > 0.0 ? std::clamp((tip - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+      worst = std::max(worst, (tip - (a + w * ab)).norm());
+    }
+    return worst;
+  };
+  // Halve every piece that deviates more than the tolerance, at most 2^12 pieces a move.
+  for (int depth = 0; depth < 12; ++depth) {
+    std::vector<double> next = {0.0};
+    bool split = false;
+    for (std::size_t j = 1; j < at.size(); ++j) {
+      if (deviation(at[j - 1], at[j]) > tolerance_mm) {
+        next.push_back(0.5 * (at[j - 1] + at[j]));
+        split = true;
+      }
+      next.push_back(at[j]);
+    }
+    at.swap(next);
+    if (!split) break;
+  }
+  return at;
+}
+
 GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
                          LengthUnit units, const std::vector<std::string>& comments) {
   const GcodeSettings& g = machine.gcode;
@@ -174,7 +283,14 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   if (g.dialect == GcodeDialect::Heidenhain && g.feed_mode == FeedMode::InverseTime) {
     throw std::invalid_argument("write_gcode: the heidenhain dialect has no inverse time (G93)");
   }
-  Dialect dialect(g.dialect, units);
+  if (d < 0 || d > max_decimals(g.dialect)) {
+    throw std::invalid_argument("write_gcode: " + std::to_string(d) + " decimals are more than " +
+                                to_string(g.dialect) + " takes (" +
+                                std::to_string(max_decimals(g.dialect)) + ")");
+  }
+  const int fd = feed_decimals(g);
+  const int max_fd = max_feed_decimals(g.dialect);
+  Dialect dialect(g, units);
   GcodeProgram prog;
   int line_no = 0;
   const auto raw = [&](const std::string& s) {
@@ -186,10 +302,20 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   const auto lines = [&](const std::vector<std::string>& v) {
     for (const auto& s : v) line(s);
   };
+  // Blocks of the template, written as they are: the reader steps over them.
+  const auto verbatim = [&](const std::vector<std::string>& v) {
+    for (const auto& s : v) prog.verbatim_lines.push_back(line(s));
+  };
   const bool tcp = g.mode == GcodeMode::Tcp;
+  const std::string retract_z = dialect.number(g.program.retract_z_mm * scale, d);
   for (const auto& s : dialect.start()) raw(s);
+  if (g.dialect == GcodeDialect::LinuxCNC || g.dialect == GcodeDialect::Siemens) {
+    raw(dialect.comment("program " + dialect.name()));
+  }
   for (const auto& c : comments) raw(dialect.comment(c));
   line(dialect.setup(g.feed_mode == FeedMode::InverseTime));
+  if (const std::string w = dialect.work_offset(); !w.empty()) verbatim({w});
+  verbatim(g.program.header);
   int current_tool = -1;
   std::string last_words;
   std::string last_feed;
@@ -198,13 +324,29 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
     }
     raw(dialect.comment("operation " + op.name));
+    // Safe start: up to the retract height, the tool, the spindle and the coolant, the table
+    // turned to the first pose with the tool up, then the tool length and TCP on.
+    lines(dialect.retract(retract_z));
     if (op.tool.number > 0 && op.tool.number != current_tool) {
-      lines(dialect.tool_change(op.tool.number));
+      const auto [change, custom] = dialect.tool_change(op.tool.number);
+      if (custom) {
+        verbatim(change);
+      } else {
+        lines(change);
+      }
       current_tool = op.tool.number;
     }
     if (op.spindle_rpm > 0.0) {
       line("S" + fmt(op.spindle_rpm, 0) + (op.spindle_clockwise ? " M3" : " M4"));
     }
+    const std::string coolant = dialect.coolant_on();
+    if (!coolant.empty()) line(coolant);
+    if (g.program.retract != SafeRetract::None && !op.points.empty()) {
+      line(dialect.rapid() + " A" + dialect.number(rad_to_deg(op.poses.front().a_rad), d) + " C" +
+           dialect.number(rad_to_deg(op.poses.front().c_rad), d));
+    }
+    verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
+    lines(dialect.length_on(current_tool));
     lines(dialect.tcp_on(tcp));
     std::string prefix = dialect.first_move_prefix(tcp, current_tool);
     std::vector<int> emitted(op.points.size(), 0);
@@ -275,7 +417,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       const double length_mm = std::hypot(run.sweep_rad * r0, he - hs);
       const double feed =
           own ? op.points[run.end].feed_mm_per_min : length_mm / (programmed_s / 60.0);
-      const std::string f = fmt(feed * scale, std::max(d, 3));
+      const std::string f = fmt(feed * scale, fd);
       const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
       const char* plane = axis == 2 ? "G17" : axis == 1 ? "G18" : "G19";
       const char* sense = n[axis] > 0.0 ? "G3" : "G2";
@@ -344,43 +486,82 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         const double given_s = i < op.programmed_time_s.size() ? op.programmed_time_s[i] : 0.0;
         const double programmed_min = (given_s > 0.0 ? given_s : own_times[i]) / 60.0;
         // A scheduled block (never faster than programmed) writes its F with 8 significant
-        // digits, so that rounding cannot carry it over the limits it was scheduled for.
+        // digits, so that rounding cannot carry it over the limits it was scheduled for; where
+        // the controller takes fewer decimals, F is rounded down (slower, never faster).
         const bool scheduled = i < op.block_time_s.size() && op.block_time_s[i] > 0.0 && have_prev;
         const double time_min =
             scheduled ? std::max(programmed_min, op.block_time_s[i] / 60.0) : programmed_min;
         const auto fmt_feed = [&](double f) {
-          if (!scheduled) return fmt(f, std::max(d, 3));
-          const int digits = 7 - static_cast<int>(std::floor(std::log10(std::max(f, 1e-300))));
-          return fmt(f, std::clamp(digits, std::max(d, 3), 15));
+          if (!scheduled) return fmt(f, fd);
+          const int digits =
+              std::clamp(7 - static_cast<int>(std::floor(std::log10(std::max(f, 1e-300)))), fd, 15);
+          if (digits <= max_fd) return fmt(f, digits);
+          const double unit = std::pow(10.0, max_fd);
+          return fmt(std::max(std::floor(f * unit), 1.0) / unit, max_fd);
+        };
+        // F of a joint-space block (machine mode, inverse time, a schedule) from `from` to
+        // `to` that takes `minutes`.
+        const auto joint_feed = [&](const Vec3d& from, const Posed& from_pose, const Vec3d& to,
+                                    const Posed& to_pose, double minutes) {
+          if (g.feed_mode == FeedMode::InverseTime) return fmt_feed(1.0 / minutes);
+          if (scheduled) {
+            // The controller times the block from the written (rounded) words: so does F.
+            const double len = (rounded(to * scale) - rounded(from * scale)).norm();
+            const double rot = std::hypot(
+                round_to(rad_to_deg(to_pose.a_rad), d) - round_to(rad_to_deg(from_pose.a_rad), d),
+                round_to(rad_to_deg(to_pose.c_rad), d) - round_to(rad_to_deg(from_pose.c_rad), d));
+            return fmt_feed((len > 0.0 ? len : rot) / minutes);
+          }
+          // Joint-space XYZ moves differ from the tip's: F makes the block take the time
+          // of the tip at the programmed feed.
+          const double joint = (to - from).norm();
+          const double rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
+                                        rad_to_deg(to_pose.c_rad - from_pose.c_rad));
+          return fmt(joint > 1e-9 ? joint * scale / minutes : rot / minutes, fd);
         };
         std::string f;
         if (!have_prev) {
           // First block of an operation at feed: where the tool comes from is unknown, so
           // the move is written at the programmed feed in G94 (G93 needs a block time).
-          f = fmt(p.feed_mm_per_min * scale, std::max(d, 3));
+          f = fmt(p.feed_mm_per_min * scale, fd);
           restore_inverse_time = g.feed_mode == FeedMode::InverseTime;
-        } else if (g.feed_mode == FeedMode::InverseTime) {
-          f = fmt_feed(1.0 / time_min);
-        } else if (scheduled) {
-          // The controller times the block from the written (rounded) words: so does F.
-          const Vec3d written = rounded(xyz * scale), before = rounded(prev_xyz * scale);
-          const double len = (written - before).norm();
-          const double rot = std::hypot(
-              round_to(rad_to_deg(pose.a_rad), d) - round_to(rad_to_deg(prev_pose.a_rad), d),
-              round_to(rad_to_deg(pose.c_rad), d) - round_to(rad_to_deg(prev_pose.c_rad), d));
-          f = fmt_feed((len > 0.0 ? len : rot) / time_min);
         } else if (g.mode == GcodeMode::Machine) {
-          // Joint-space XYZ moves differ from the tip's: scale F so the block takes the
-          // same time as the tip at the programmed feed.
-          const double joint = (xyz - prev_xyz).norm();
-          f = fmt(joint > 1e-9 ? joint * scale / time_min : rot_deg / time_min, std::max(d, 3));
+          // Linearisation: where the joints moving linearly would take the tip off the
+          // straight line by more than the tolerance, blocks in between keep it on.
+          const std::vector<double> at = linearise_fractions(
+              machine.ac, prev_tip, prev_pose, p.tip_mm, pose, g.program.linearise_tolerance_mm);
+          Vec3d from = prev_xyz;
+          Posed from_pose = prev_pose;
+          for (std::size_t j = 1; j < at.size(); ++j) {
+            const Posed mid{prev_pose.a_rad + at[j] * (pose.a_rad - prev_pose.a_rad),
+                            prev_pose.c_rad + at[j] * (pose.c_rad - prev_pose.c_rad)};
+            const Vec3d mid_xyz = out_xyz(prev_tip + at[j] * (p.tip_mm - prev_tip), mid);
+            const double minutes = time_min * (at[j] - at[j - 1]);
+            if (j + 1 == at.size()) {
+              f = joint_feed(from, from_pose, xyz, pose, minutes);
+              break;
+            }
+            const std::string piece = joint_feed(from, from_pose, mid_xyz, mid, minutes);
+            std::string mid_block = dialect.linear() + " " + xyz_words(mid_xyz) + angle_words(mid);
+            if (g.feed_mode == FeedMode::InverseTime || piece != last_feed) {
+              mid_block += " F" + piece;
+            }
+            last_feed = piece;
+            line(prefix + mid_block);
+            prefix.clear();
+            ++prog.linearised_blocks;
+            from = mid_xyz;
+            from_pose = mid;
+          }
+        } else if (g.feed_mode == FeedMode::InverseTime || scheduled) {
+          f = joint_feed(prev_xyz, prev_pose, xyz, pose, time_min);
         } else {
           // TCP: the tip moves at F. Its distance over the block time is the programmed feed
           // unless the programmed time is another path's (FeedReference::CutterPath).
           const double tip_feed =
               tip_mm > 1e-9 ? tip_mm / programmed_min : rot_deg / programmed_min;
           const bool own = std::abs(tip_feed - p.feed_mm_per_min) <= 1e-9 * p.feed_mm_per_min;
-          f = fmt((own ? p.feed_mm_per_min : tip_feed) * scale, std::max(d, 3));
+          f = fmt((own ? p.feed_mm_per_min : tip_feed) * scale, fd);
         }
         block = std::string(restore_inverse_time ? "G94 " : "") + dialect.linear() + " " + words;
         if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;
@@ -397,8 +578,13 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     }
     prog.emitted.push_back(std::move(emitted));
     lines(dialect.tcp_off(tcp));
+    verbatim(tcp ? g.program.tcp_off : std::vector<std::string>{});
+    if (!coolant.empty()) line("M9");
     if (op.spindle_rpm > 0.0) line("M5");
+    last_words.clear();
   }
+  lines(dialect.retract(retract_z));
+  verbatim(g.program.footer);
   line(dialect.end());
   for (const auto& s : dialect.finish()) raw(s);
   return prog;

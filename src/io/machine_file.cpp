@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -94,7 +96,11 @@ class MachineParser {
                                    number_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
     if (const toml::table* g = table_of(root, "gcode", false)) {
-      check_keys(*g, "gcode", {"dialect", "mode", "feed_mode", "feed_reference", "decimals"});
+      check_keys(*g, "gcode",
+                 {"dialect", "mode", "feed_mode", "feed_reference", "decimals", "feed_decimals",
+                  "program_name", "program_number", "work_offset", "coolant", "header", "footer",
+                  "tool_change", "tcp_on", "tcp_off", "safe_retract", "retract_z_mm",
+                  "linearise_tolerance_mm"});
       choose(*g, "gcode", "dialect",
              {{"linuxcnc", GcodeDialect::LinuxCNC},
               {"fanuc", GcodeDialect::Fanuc},
@@ -116,12 +122,66 @@ class MachineParser {
              "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
              "mode has no G93); use \"units-per-minute\"");
       }
+      const std::string dialect = to_string(m.gcode.dialect);
       if (auto* n = g->get("decimals")) {
-        // Test the type first: toml++'s value<int64_t>() converts a float, with undefined
-        // behaviour when it does not fit (fuzz_machine_file found sense = 6e58).
-        const int64_t v = n->is_integer() ? n->as_integer()->get() : -1;
-        if (v < 0 || v > 8) fail(line_of(*n), "gcode.decimals must be a whole number from 0 to 8");
-        m.gcode.decimals = static_cast<int>(v);
+        const int most = max_decimals(m.gcode.dialect);
+        m.gcode.decimals =
+            whole(*n, "gcode.decimals", 0, most, " (the most " + dialect + " takes)");
+      }
+      if (auto* n = g->get("feed_decimals")) {
+        const int most = max_feed_decimals(m.gcode.dialect);
+        m.gcode.feed_decimals =
+            whole(*n, "gcode.feed_decimals", 0, most, " (the most " + dialect + " takes)");
+      }
+      ProgramTemplate& t = m.gcode.program;
+      if (auto* n = g->get("program_name")) {
+        t.name = string_of(*n, "gcode.program_name");
+        // A TNC program name is a file name; the others go into a comment.
+        for (char ch : t.name) {
+          if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-')) {
+            fail(line_of(*n), "gcode.program_name may hold letters, digits, '_' and '-' only");
+          }
+        }
+        if (t.name.empty() || t.name.size() > 24) {
+          fail(line_of(*n), "gcode.program_name must have 1 to 24 characters");
+        }
+      }
+      if (auto* n = g->get("program_number")) {
+        t.number = whole(*n, "gcode.program_number", 1, 9999, " (Fanuc's O1 to O9999)");
+      }
+      if (auto* n = g->get("work_offset")) {
+        t.work_offset = string_of(*n, "gcode.work_offset");
+        if (t.work_offset.empty()) fail(line_of(*n), "gcode.work_offset is empty (\"none\"?)");
+        if (t.work_offset != "none") check_block(*n, t.work_offset, "gcode.work_offset");
+      }
+      choose(*g, "gcode", "coolant",
+             {{"none", Coolant::None}, {"flood", Coolant::Flood}, {"mist", Coolant::Mist}},
+             t.coolant);
+      choose(*g, "gcode", "safe_retract",
+             {{"machine-z", SafeRetract::MachineZ}, {"none", SafeRetract::None}}, t.retract);
+      t.retract_z_mm = number_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
+      if (auto* n = g->get("linearise_tolerance_mm")) {
+        t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
+        if (t.linearise_tolerance_mm < 0.0) {
+          fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
+        }
+      }
+      const std::pair<const char*, std::vector<std::string>*> blocks[] = {
+          {"header", &t.header},
+          {"footer", &t.footer},
+          {"tool_change", &t.tool_change},
+          {"tcp_on", &t.tcp_on},
+          {"tcp_off", &t.tcp_off}};
+      for (const auto& [key, out] : blocks) {
+        const toml::node* n = g->get(key);
+        if (!n) continue;
+        const std::string what = std::string("gcode.") + key;
+        if (!n->is_array()) fail(line_of(*n), what + " must be a list of blocks (strings)");
+        for (const toml::node& e : *n->as_array()) {
+          const std::string b = string_of(e, what + " entries");
+          check_block(e, b, what);
+          out->push_back(b);
+        }
       }
     }
     return m;
@@ -154,6 +214,66 @@ class MachineParser {
     }
     if (!n->is_table()) fail(line_of(*n), "'" + prefix + key + "' must be a table");
     return n->as_table();
+  }
+
+  int whole(const toml::node& n, const std::string& what, int lo, int hi,
+            const std::string& why) const {
+    // Test the type first: toml++'s value<int64_t>() converts a float, with undefined
+    // behaviour when it does not fit (fuzz_machine_file found sense = 6e58).
+    const int64_t v = n.is_integer() ? n.as_integer()->get() : lo - 1;
+    if (v < lo || v > hi) {
+      fail(line_of(n), what + " must be a whole number from " + std::to_string(lo) + " to " +
+                           std::to_string(hi) + why);
+    }
+    return static_cast<int>(v);
+  }
+
+  /// A block of the program template is written as it is and not read back: it may not move
+  /// the machine nor change a mode the written program relies on.
+  void check_block(const toml::node& n, const std::string& block, const std::string& what) const {
+    std::string code;
+    int depth = 0;
+    for (char ch : block) {
+      if (ch == '\n' || ch == '\r') fail(line_of(n), what + ": one block per string");
+      if (ch == '(') ++depth;
+      if (ch == ')') depth = std::max(0, depth - 1);
+      if (ch == ';' && depth == 0) break;
+      if (depth == 0 && ch != '(' && ch != ')') {
+        code += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      }
+    }
+    static const char* const kForbidden[] = {"G0",  "G1",    "G2",  "G3",   "G20", "G21", "G28",
+                                             "G43", "G43.4", "G49", "G53",  "G70", "G71", "G90",
+                                             "G91", "G93",   "G94", "G700", "G710"};
+    for (std::size_t i = 0; i < code.size(); ++i) {
+      const char c = code[i];
+      const bool word_start = i == 0 || !std::isalpha(static_cast<unsigned char>(code[i - 1]));
+      if (!word_start || !std::isalpha(static_cast<unsigned char>(c))) continue;
+      std::size_t j = i + 1;
+      while (j < code.size() && std::isspace(static_cast<unsigned char>(code[j]))) ++j;
+      const bool number = j < code.size() && (std::isdigit(static_cast<unsigned char>(code[j])) ||
+                                              code[j] == '-' || code[j] == '+' || code[j] == '.');
+      if (!number) continue;
+      if (std::string("XYZABCUVWIJK").find(c) != std::string::npos) {
+        fail(line_of(n),
+             what + ": '" + block + "' moves an axis (" + c + "); taxopt writes every move itself");
+      }
+      if (c == 'G') {
+        std::size_t e = j;
+        while (e < code.size() &&
+               (std::isdigit(static_cast<unsigned char>(code[e])) || code[e] == '.')) {
+          ++e;
+        }
+        std::string g = code.substr(j, e - j);
+        while (g.size() > 1 && g[0] == '0' && g[1] != '.') g.erase(0, 1);
+        for (const char* f : kForbidden) {
+          if ("G" + g == f) {
+            fail(line_of(n), what + ": '" + block + "' holds G" + g +
+                                 ", a motion or mode taxopt writes itself (use the [gcode] keys)");
+          }
+        }
+      }
+    }
   }
 
   std::string string_of(const toml::node& n, const std::string& what) const {
@@ -270,6 +390,21 @@ const char* to_string(GcodeDialect dialect) {
 }
 
 Machine default_machine() { return Machine{}; }
+
+int max_decimals(GcodeDialect dialect) {
+  switch (dialect) {
+    case GcodeDialect::Fanuc:
+    case GcodeDialect::Heidenhain: return 4;
+    default: return 8;
+  }
+}
+
+int max_feed_decimals(GcodeDialect dialect) { return dialect == GcodeDialect::Heidenhain ? 3 : 15; }
+
+int feed_decimals(const GcodeSettings& settings) {
+  if (settings.feed_decimals >= 0) return settings.feed_decimals;
+  return std::min(std::max(settings.decimals, 3), max_feed_decimals(settings.dialect));
+}
 
 JointLimits default_joint_limits() {
   JointLimits l;

@@ -104,6 +104,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                                   ? nlohmann::json(r.verification.flute_gouge_points)
                                   : nlohmann::json(nullptr);
     v["within_axis_limits"] = r.verification.within_axis_limits;
+    v["tool_length_active"] = r.verification.tool_length_active;
     v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
     v["colliding_moves"] = r.verification.colliding_moves >= 0
                                ? nlohmann::json(r.verification.colliding_moves)

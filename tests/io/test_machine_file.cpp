@@ -120,9 +120,16 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   // Heidenhain's ISO mode has no G93: refused where the file asks for both.
   expect_error(replace(kFull, "\"linuxcnc\"", "\"heidenhain\""), 26, "no G93");
   for (const char* d : {"linuxcnc", "fanuc", "siemens"}) {
-    const Machine m = parse_machine_toml(replace(kFull, "linuxcnc", d), "m.toml");
+    const Machine m = parse_machine_toml(
+        replace(replace(kFull, "linuxcnc", d), "decimals = 5", "decimals = 4"), "m.toml");
     CHECK(std::string(to_string(m.gcode.dialect)) == d);
   }
+  // A controller's number format: Fanuc takes 4 decimals at most (IS-C), a TNC 4 and F 3.
+  expect_error(replace(kFull, "\"linuxcnc\"", "\"fanuc\""), 28, "0 to 4 (the most fanuc takes)");
+  expect_error(replace(replace(replace(kFull, "\"linuxcnc\"", "\"heidenhain\""), "\"inverse-time\"",
+                               "\"units-per-minute\""),
+                       "decimals = 5", "decimals = 4\nfeed_decimals = 4"),
+               29, "0 to 3 (the most heidenhain takes)");
   expect_error(replace(kFull, "mode = \"machine\"", "mode = \"head\""), 25, "tcp");
   expect_error(replace(kFull, "min_deg = -120.0", "min_deg = \"low\""), 5, "must be a number");
   expect_error(replace(kFull, "[axes.C]\ncontinuous = true\n", "[axes.C]\n"), 11,

@@ -48,7 +48,22 @@ struct GcodeProgram {
   std::vector<std::vector<int>> emitted;
   /// CL arcs written as G2/G3 (in arc_blocks blocks), and those left to their chords.
   std::size_t arcs_kept = 0, arcs_chorded = 0, arc_blocks = 0;
+  /// Machine mode: blocks written between points to keep the tip on the straight line
+  /// (linearisation); they belong to no point.
+  std::size_t linearised_blocks = 0;
+  /// Lines of the program template written as they are (header, footer, a tool change or
+  /// kinematics switch of the machine file's): the reader steps over them.
+  std::vector<int> verbatim_lines;
 };
+
+/// Linearisation of a machine-mode feed move from (from_tip_mm, from) to (to_tip_mm, to):
+/// the fractions of the move, 0 first and 1 last, at which blocks are written so that, with
+/// the joints moving linearly between them (A and C at the same fractions of their change,
+/// the tip on the straight line there), the tip stays within `tolerance_mm` of the straight
+/// line. {0, 1} when it does already or the tolerance is 0 (off).
+std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& from_tip_mm,
+                                        const Posed& from, const Vec3d& to_tip_mm, const Posed& to,
+                                        double tolerance_mm);
 
 /// Writes G-code. Feed moves need a positive feed. `comments` go into the header.
 /// @param units units of the output (G20/G21); coordinates inside are mm.
@@ -70,6 +85,15 @@ struct GcodeMove {
   bool arc = false;
   Vec3d arc_centre_mm = Vec3d::Zero();
   Vec3d arc_normal = Vec3d::UnitZ();
+  /// A move in machine coordinates (the safe retract: G53, G28, SUPA, M91), or one with an
+  /// axis whose workpiece position is not known since (the table turned before the first
+  /// point): it belongs to no point, and xyz_mm holds the last known values.
+  bool positioning = false;
+  /// The tool length offset is on (G43/G43.4 H, Sinumerik D1..., a TNC's tool call), and the
+  /// controller's tool centre point control (LinuxCNC: its kinematics, always; Fanuc G43.4,
+  /// Sinumerik TRAORI, TNC M128).
+  bool length_offset = false;
+  bool tcp = false;
 };
 
 /// The point of the arc of `to` (a G2/G3 move starting at `from_mm`) at the same angle as
@@ -87,7 +111,11 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// G90, G93/G94, X Y Z A C F, comments; units G20/G21, Sinumerik G700/G710, Heidenhain
 /// G70/G71; Fanuc's %, O, G43.4/G43 H, G49; Sinumerik's TRAORI, ORIAXES, TRAFOOF, D; the
 /// Heidenhain ISO program blocks, N numbers and "*"). @throws InputError on anything outside.
+/// `verbatim_lines` (GcodeProgram::verbatim_lines) are stepped over. The safe retracts
+/// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
+/// `G00 Z M91`) are read as positioning moves.
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
-                                        GcodeDialect dialect = GcodeDialect::LinuxCNC);
+                                        GcodeDialect dialect = GcodeDialect::LinuxCNC,
+                                        const std::vector<int>& verbatim_lines = {});
 
 }  // namespace taxopt

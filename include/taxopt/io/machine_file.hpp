@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "taxopt/kinematics/ac_machine.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
@@ -32,15 +33,64 @@ enum class FeedMode { UnitsPerMinute, InverseTime };
 /// tip: of the new tool tip: F is the programmed feed, and a longer tip path takes longer.
 enum class FeedReference { CutterPath, Tip };
 
+/// Coolant switched on for every operation (off after it): none, flood (M8) or mist (M7).
+enum class Coolant { None, Flood, Mist };
+
+/// The retract before an operation's first move and after the program's last: to a Z height
+/// in machine coordinates in the dialect's own way (LinuxCNC G53, Fanuc G28 reference return,
+/// Sinumerik SUPA, Heidenhain M91), or none (the user takes care of it; a warning says so).
+enum class SafeRetract { MachineZ, None };
+
+/// What a program holds besides its moves; empty strings and lists take the dialect's
+/// defaults (docs/gcode-dialects.md "Program template").
+struct ProgramTemplate {
+  /// Program name (Heidenhain %NAME, a comment elsewhere); "" -> "TAXOPT".
+  std::string name;
+  /// Fanuc program number O1..O9999.
+  int number = 1000;
+  /// Work offset block after the set-up ("G54"); "" -> the dialect's (G54; none on a TNC,
+  /// whose active preset is used); "none" -> none.
+  std::string work_offset;
+  Coolant coolant = Coolant::None;
+  /// Blocks written as they are: after the set-up, before the program end.
+  std::vector<std::string> header, footer;
+  /// The tool change; "{tool}" is replaced by the tool number; empty -> the dialect's.
+  std::vector<std::string> tool_change;
+  /// Blocks before TCP is switched on and after it is off (a kinematics switch such as
+  /// LinuxCNC's M428 / M429 of its switchkins configurations).
+  std::vector<std::string> tcp_on, tcp_off;
+  SafeRetract retract = SafeRetract::MachineZ;
+  /// The machine Z of the retract, mm (LinuxCNC, Sinumerik, Heidenhain; Fanuc's G28 goes to
+  /// its reference point).
+  double retract_z_mm = 0.0;
+  /// Machine mode: the largest distance the tip may leave the straight line between two
+  /// points while the joints move linearly; longer moves are split (linearisation), mm.
+  double linearise_tolerance_mm = 0.01;
+};
+
 /// How G-code is written for a machine.
 struct GcodeSettings {
   GcodeDialect dialect = GcodeDialect::LinuxCNC;
   GcodeMode mode = GcodeMode::Tcp;
   FeedMode feed_mode = FeedMode::UnitsPerMinute;
   FeedReference feed_reference = FeedReference::CutterPath;
-  /// Decimals of every coordinate and angle (0 to 8).
+  /// Decimals of every coordinate and angle (0 to max_decimals(dialect)).
   int decimals = 4;
+  /// Decimals of a units-per-minute F word; -1: the dialect's (feed_decimals()).
+  int feed_decimals = -1;
+  /// The program template (docs/gcode-dialects.md "Program template").
+  ProgramTemplate program;
 };
+
+/// The most decimals a controller takes for positions and angles: LinuxCNC 8, Fanuc 4
+/// (IS-C, 0.0001 mm), Siemens 6, Heidenhain TNC ISO 4 (0.0001 mm).
+int max_decimals(GcodeDialect dialect);
+/// Decimals of an F word the controller takes: Heidenhain TNC ISO 3; the others 15 (no
+/// limit of theirs is known to taxopt; a feed schedule writes 8 significant digits).
+int max_feed_decimals(GcodeDialect dialect);
+/// The F decimals written: settings.feed_decimals, else the least of max(decimals, 3) and the
+/// dialect's.
+int feed_decimals(const GcodeSettings& settings);
 
 /// A machine: name, kinematics and how to write its G-code.
 struct Machine {

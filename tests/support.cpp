@@ -82,8 +82,10 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
   std::string table;
   int pocket = 0;
   for (long t : tools) {
-    table += "T" + std::to_string(t) + " P" + std::to_string(++pocket) + " D6 Z" +
-             std::to_string(options.tool_length) + " ;\n";
+    // rs274 on its own reads the tool table in inches, whatever the INI says.
+    char z[32];
+    std::snprintf(z, sizeof z, "%.8f", options.tool_length / 25.4);
+    table += "T" + std::to_string(t) + " P" + std::to_string(++pocket) + " D6 Z" + z + " ;\n";
   }
   std::string dir = tmp.dir(), ini_arg;
   if (!options.ini.empty()) {
@@ -92,6 +94,13 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
                           std::filesystem::copy_options::recursive);
     dir = tmp.path("config");
     ini_arg = " -i " + ini.filename().string();
+    if (options.stub_switchkins) {
+      for (const char* m : {"428", "429", "430"}) {
+        const std::string name = std::string(m) + "remap";
+        write_file(dir + "/remap_subs/" + name + ".ngc",
+                   "o<" + name + ">sub\n(MSG, kins switch M" + m + ")\no<" + name + ">endsub\n");
+      }
+    }
   }
   write_file(dir + "/tool.tbl", table);
   // rs274 keeps its parameter file (rs274ngc.var) in the working directory, and it opens
@@ -103,6 +112,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
                     " -t tool.tbl -v rs274ngc.var -g " + abs);
   moves.clear();
   double tool_length = 0.0;
+  int kins = -1;
   std::istringstream in(r.out);
   std::string line;
   double feed_rate = 0.0;
@@ -114,6 +124,8 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
     if (const auto at = line.find("SET_FEED_RATE("); at != std::string::npos) {
       feed_rate = std::strtod(line.c_str() + at + 14, nullptr);
     }
+    if (line.find("kins switch M428\")") != std::string::npos) kins = 1;
+    if (line.find("kins switch M429\")") != std::string::npos) kins = 0;
     if (const auto at = line.find("USE_TOOL_LENGTH_OFFSET("); at != std::string::npos) {
       double x = 0, y = 0;
       std::sscanf(line.c_str() + at + 23, "%lf %lf %lf", &x, &y, &tool_length);
@@ -151,6 +163,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
       m.feed_rate = feed_rate;
       m.inverse_time = inverse_time;
       m.tool_length = tool_length;
+      m.kins = kins;
       moves.push_back(m);
       continue;
     }
@@ -167,6 +180,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
       throw std::runtime_error("cannot parse rs274 line: " + line);
     }
     m.tool_length = tool_length;
+    m.kins = kins;
     moves.push_back(m);
   }
   if (all_moves) *all_moves = moves;

@@ -59,13 +59,18 @@ struct CanonMove {
   double arc_length = 0;
   /// The tool length offset in force (USE_TOOL_LENGTH_OFFSET's Z), program units.
   double tool_length = 0;
+  /// The kinematics last switched to by the stubbed M428 (1, TCP) / M429 (0, identity);
+  /// -1 before either.
+  int kins = -1;
 };
-/// How rs274 is run: the tool length of every tool in its table (program units of the INI,
-/// inches without one), and a LinuxCNC INI file (its folder copied, so that its remaps and
-/// subroutines are found).
+/// How rs274 is run: the tool length of every tool in its table (mm), and a LinuxCNC INI file (its
+/// folder copied, so that its remaps and subroutines are found).
 struct Rs274Options {
   double tool_length = 0.0;
   std::string ini;
+  /// Replace the configuration's remapped M428/M429/M430 by stubs that only say they ran
+  /// (LinuxCNC's own read a HAL pin, which rs274 alone does not have).
+  bool stub_switchkins = false;
 };
 /// Runs `rs274 -g` on a G-code file (with a tool table holding tools 1-99); code is its exit.
 /// `moves` are the moves of the program's points: the safe retracts and the table turns

@@ -153,11 +153,14 @@ TEST_CASE("rs274: sense -1 writes mirrored A and C for the same tool axes",
                      " --method none -q")
               .code == 0);
   REQUIRE(run_taxopt("--in " + dir.path("in.cls") + " --gcode " + dir.path("m.ngc") +
-                     " --method none -q --machine " + std::string(TAXOPT_SOURCE_DIR) +
-                     "/data/machines/linuxcnc-xyzac-trt.toml")
+                     " --method none -q --feed-schedule --machine " +
+                     std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml")
               .code == 0);
   REQUIRE(run_rs274(dir.path("p.ngc"), plus).code == 0);
-  REQUIRE(run_rs274(dir.path("m.ngc"), minus).code == 0);
+  Rs274Options sample;  // the preset is LinuxCNC's sample configuration: run with its INI
+  sample.ini = std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini";
+  sample.stub_switchkins = true;
+  REQUIRE(run_rs274(dir.path("m.ngc"), minus, sample).code == 0);
   REQUIRE(plus.size() == minus.size());
   const Machine mm =
       read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
@@ -375,4 +378,92 @@ TEST_CASE("rs274: a 3+2 arc in a tilted plane is G17 in machine mode, chords in 
     path_length(moves, &arcs);
     CHECK(arcs == (std::string(mode) == "machine" ? 1u : 0u));
   }
+}
+
+TEST_CASE(
+    "rs274: with LinuxCNC's sample xyzac-trt configuration and a 50 mm tool, every TCP move "
+    "runs with the tool length offset on and the TCP kinematics switched in",
+    "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(31);
+  const auto hfs = random_heightfields(rng);
+  const GeneratedCl g = raster_cl(hfs[1], 3.0, 8.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0);
+  TempDir dir;
+  write_file(dir.path("in.cls"), g.text);
+  const std::string preset =
+      std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml";
+  const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --gcode " + dir.path("o.ngc") +
+                                 " --method none -q --feed-schedule --machine " + preset);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  Rs274Options opt;
+  opt.ini = std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini";
+  opt.stub_switchkins = true;
+  opt.tool_length = 50.0;
+  std::vector<CanonMove> points, all;
+  const RunResult rs = run_rs274(dir.path("o.ngc"), points, opt, &all);
+  INFO(rs.out.substr(rs.out.size() > 600 ? rs.out.size() - 600 : 0));
+  REQUIRE(rs.code == 0);
+  REQUIRE(points.size() == g.tips_mm.size());  // the sample INI ran the whole program
+  for (const CanonMove& m : points) {
+    CHECK(m.tool_length == Approx(50.0));
+    CHECK(m.kins == 1);
+  }
+  // The safe retracts run in identity kinematics with no tool length: the spindle goes to
+  // the top of Z's travel (its MAX_LIMIT, 120 mm) before the first and after the last move.
+  REQUIRE(all.size() > points.size());
+  CHECK(all.front().z == Approx(120.0));
+  CHECK(all.front().kins == -1);
+  CHECK(all.front().tool_length == 0.0);
+  CHECK(all.back().z == Approx(120.0));
+  CHECK(all.back().kins == 0);
+  CHECK(all.back().tool_length == 0.0);
+}
+
+TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt configuration",
+          "[cli][machine]") {
+  TempDir dir;
+  const std::string ini =
+      std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini";
+  const RunResult r =
+      run_taxopt("machine --from-linuxcnc-ini " + ini + " --out " + dir.path("m.toml"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const Machine imported = read_machine_file(dir.path("m.toml"));
+  const Machine preset =
+      read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
+  // The sample's HAL: y-offset 20, z-offset 10, rot points 0; its [AXIS_*] limits.
+  CHECK(imported.ac.a_axis_point_mm.isApprox(Vec3d(0, 20, 10)));
+  CHECK(imported.ac.c_axis_point_mm.norm() == 0.0);
+  CHECK(rad_to_deg(imported.ac.a.min_rad) == Approx(-100));
+  CHECK(rad_to_deg(imported.ac.a.max_rad) == Approx(50));
+  CHECK(imported.ac.a.sense == -1);
+  CHECK(imported.ac.c.sense == -1);
+  CHECK(imported.limits[static_cast<std::size_t>(Joint::A)].max_velocity_per_s == 30.0);
+  CHECK(imported.linear_range[1].min_mm == -100.0);
+  CHECK(imported.gcode.program.tcp_on == std::vector<std::string>{"M428"});
+  CHECK(imported.gcode.program.retract_z_mm == 120.0);
+  // The preset says the same.
+  CHECK(preset.ac.a_axis_point_mm == imported.ac.a_axis_point_mm);
+  CHECK(preset.ac.c_axis_point_mm == imported.ac.c_axis_point_mm);
+  CHECK(preset.ac.a.min_rad == imported.ac.a.min_rad);
+  CHECK(preset.ac.a.max_rad == imported.ac.a.max_rad);
+  CHECK(preset.ac.c.min_rad == imported.ac.c.min_rad);
+  CHECK(preset.ac.c.max_rad == imported.ac.c.max_rad);
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    CHECK(preset.limits[j].max_velocity_per_s == imported.limits[j].max_velocity_per_s);
+    CHECK(preset.limits[j].max_accel_per_s2 == imported.limits[j].max_accel_per_s2);
+  }
+  for (std::size_t q = 0; q < 3; ++q) {
+    CHECK(preset.linear_range[q].min_mm == imported.linear_range[q].min_mm);
+    CHECK(preset.linear_range[q].max_mm == imported.linear_range[q].max_mm);
+  }
+  CHECK(preset.gcode.program.tcp_on == imported.gcode.program.tcp_on);
+  CHECK(preset.gcode.program.tcp_off == imported.gcode.program.tcp_off);
+  CHECK(preset.gcode.program.retract_z_mm == imported.gcode.program.retract_z_mm);
+  // Another kinematics is refused by name and line.
+  write_file(dir.path("bc.ini"), "[KINS]\nKINEMATICS = xyzbc-trt-kins\n");
+  const RunResult bc = run_taxopt("machine --from-linuxcnc-ini " + dir.path("bc.ini"));
+  CHECK(bc.code == 2);
+  CHECK_THAT(bc.err, Catch::Contains("bc.ini:2") && Catch::Contains("xyzac-trt-kins"));
 }

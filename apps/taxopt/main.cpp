@@ -20,6 +20,7 @@
 #include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/linuxcnc_ini.hpp"
 #include "taxopt/io/mesh_file.hpp"
 #include "taxopt/io/plots.hpp"
 #include "taxopt/job.hpp"
@@ -301,6 +302,13 @@ int main(int argc, char** argv) {
   generate->add_option("--feed", gen.feed_mm_per_min, "feed, mm/min (250)");
   generate->add_option("--spindle", gen.spindle_rpm, "spindle speed, rpm (3000)");
   generate->add_option("--mesh-step", gen.mesh_step_mm, "mesh grid spacing, mm (0.5)");
+  std::string ini_in, machine_out;
+  auto* machine_cmd = app.add_subcommand(
+      "machine", "make a machine file from a LinuxCNC configuration (xyzac-trt-kins)");
+  machine_cmd->add_option("--from-linuxcnc-ini", ini_in, "the configuration's INI file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  machine_cmd->add_option("--out", machine_out, "machine file to write (default: stdout)");
   std::string demo_out = "taxopt-demo";
   auto* demo = app.add_subcommand("demo", "run the bundled sine-surface case from data/");
   demo->add_option("--out", demo_out, "output folder (taxopt-demo)");
@@ -317,6 +325,25 @@ int main(int argc, char** argv) {
   if (*generate) {
     try {
       return run_generate(gen);
+    } catch (const taxopt::InputError& e) {
+      return error(e.what(), 2);
+    }
+  }
+  if (*machine_cmd) {
+    try {
+      const taxopt::ImportedMachine m = taxopt::machine_from_linuxcnc_ini(ini_in);
+      for (const auto& note : m.assumptions) std::cerr << "taxopt: note: " << note << "\n";
+      if (machine_out.empty()) {
+        std::cout << m.toml;
+        return 0;
+      }
+      if (const std::string why = taxopt::writable_output_problem(machine_out); !why.empty()) {
+        return error("--out " + machine_out + ": " + why, 2);
+      }
+      taxopt::OutputTransaction out;
+      out.stage(machine_out, m.toml);
+      out.commit();
+      return 0;
     } catch (const taxopt::InputError& e) {
       return error(e.what(), 2);
     }

@@ -1,5 +1,6 @@
 #include "taxopt/kinematics/pose_planner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -31,11 +32,18 @@ std::vector<Candidate> candidates(const ACMachined& m, const Vec3d& axis) {
     const double two_pi = Constants<double>::two_pi();
     const double k_lo = std::ceil((m.c.min_rad - 1e-9 - p.c_rad) / two_pi);
     const double k_hi = std::floor((m.c.max_rad + 1e-9 - p.c_rad) / two_pi);
+    // Where turns cost the same, the programme keeps the first: the turn nearest C = 0, not
+    // the end of a range of many turns (LinuxCNC's sample gives C +-36000 deg).
+    const std::size_t first = out.size();
     for (double k = k_lo; k <= k_hi; k += 1.0) {
       Posed q = p;
       q.c_rad = p.c_rad + k * two_pi;
       out.push_back({q});
     }
+    std::stable_sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+                     [](const Candidate& x, const Candidate& y) {
+                       return std::abs(x.pose.c_rad) < std::abs(y.pose.c_rad) - 1e-12;
+                     });
   }
   return out;
 }

@@ -1,0 +1,247 @@
+#include "taxopt/io/linuxcnc_ini.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "taxopt/core/error.hpp"
+#include "taxopt/core/types.hpp"
+#include "taxopt/io/machine_file.hpp"
+
+namespace taxopt {
+namespace {
+
+std::string trim(const std::string& s) {
+  std::size_t b = 0, e = s.size();
+  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  return s.substr(b, e - b);
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open the LinuxCNC configuration file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// A value of the INI with where it was found.
+struct IniValue {
+  std::string text;
+  int line = 0;
+};
+
+/// INI sections -> keys -> values (a key given twice, as HALCMD and HALFILE are, keeps all).
+using Ini = std::map<std::string, std::multimap<std::string, IniValue>>;
+
+Ini parse_ini(const std::string& text) {
+  Ini ini;
+  std::string section;
+  std::istringstream in(text);
+  std::string raw;
+  int line = 0;
+  while (std::getline(in, raw)) {
+    ++line;
+    const std::string s = trim(raw);
+    if (s.empty() || s[0] == '#' || s[0] == ';') continue;
+    if (s.front() == '[' && s.back() == ']') {
+      section = s.substr(1, s.size() - 2);
+      continue;
+    }
+    const std::size_t eq = s.find('=');
+    if (eq == std::string::npos) continue;
+    ini[section].insert({trim(s.substr(0, eq)), IniValue{trim(s.substr(eq + 1)), line}});
+  }
+  return ini;
+}
+
+const IniValue* first(const Ini& ini, const std::string& section, const std::string& key) {
+  const auto s = ini.find(section);
+  if (s == ini.end()) return nullptr;
+  const auto k = s->second.find(key);
+  return k == s->second.end() ? nullptr : &k->second;
+}
+
+/// The HAL commands that set the kinematics' pins: `setp pin value`, `net signal pin...`,
+/// `sets signal value`.
+class HalPins {
+ public:
+  void command(const std::string& line) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) {
+      if (x[0] == '#') break;
+      w.push_back(x);
+    }
+    if (w.size() >= 3 && w[0] == "setp") pins_[w[1]] = w[2];
+    if (w.size() >= 3 && w[0] == "sets") signals_[w[1]] = w[2];
+    if (w.size() >= 3 && w[0] == "net") {
+      for (std::size_t i = 2; i < w.size(); ++i) {
+        if (w[i] != "<=" && w[i] != "=>" && w[i] != "<=>") net_of_[w[i]] = w[1];
+      }
+    }
+  }
+  std::optional<std::string> value(const std::string& pin) const {
+    if (const auto p = pins_.find(pin); p != pins_.end()) return p->second;
+    if (const auto n = net_of_.find(pin); n != net_of_.end()) {
+      if (const auto s = signals_.find(n->second); s != signals_.end()) return s->second;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::map<std::string, std::string> pins_, signals_, net_of_;
+};
+
+std::string number_text(double v) {
+  std::ostringstream os;
+  os.precision(12);
+  os << v;
+  std::string s = os.str();
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+}  // namespace
+
+ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
+  const Ini ini = parse_ini(read_text(ini_path));
+  ImportedMachine out;
+  const auto fail = [&](int line, const std::string& what) -> void {
+    throw InputError(ini_path, line, what);
+  };
+  const IniValue* kins = first(ini, "KINS", "KINEMATICS");
+  if (!kins) fail(0, "no [KINS] KINEMATICS: which kinematics is this machine?");
+  std::string module;
+  std::istringstream(kins->text) >> module;
+  if (module != "xyzac-trt-kins" && module != "xyzac-trt") {
+    fail(kins->line, "KINEMATICS = " + kins->text +
+                         ": only xyzac-trt-kins (an A/C table-table machine) is imported");
+  }
+  double unit_mm = 1.0;
+  if (const IniValue* u = first(ini, "TRAJ", "LINEAR_UNITS")) {
+    const std::string t = u->text;
+    if (t == "inch" || t == "in" || t == "imperial") {
+      unit_mm = kMmPerInch;
+    } else if (t != "mm" || t.empty()) {
+      if (t != "mm" && t != "metric") fail(u->line, "LINEAR_UNITS must be mm or inch");
+    }
+  } else {
+    out.assumptions.push_back("[TRAJ] LINEAR_UNITS not given: mm");
+  }
+  const auto number = [&](const std::string& section, const std::string& key,
+                          bool required) -> std::optional<double> {
+    const IniValue* v = first(ini, section, key);
+    if (!v) {
+      if (required) fail(0, "[" + section + "] " + key + " is missing");
+      return std::nullopt;
+    }
+    char* end = nullptr;
+    const double d = std::strtod(v->text.c_str(), &end);
+    if (end == v->text.c_str() || !std::isfinite(d) || trim(end) != "") {
+      fail(v->line, "[" + section + "] " + key + " = " + v->text + " is not a number");
+    }
+    return d;
+  };
+  // The kinematics' pins, from the HALCMD lines and the HAL files beside the INI.
+  HalPins hal;
+  const auto hal_section = ini.find("HAL");
+  const std::filesystem::path dir = std::filesystem::path(ini_path).parent_path();
+  if (hal_section != ini.end()) {
+    for (const auto& [key, v] : hal_section->second) {
+      if (key == "HALCMD") hal.command(v.text);
+      if (key == "HALFILE" || key == "POSTGUI_HALFILE") {
+        if (v.text.rfind("LIB:", 0) == 0) continue;  // LinuxCNC's own library files
+        const std::filesystem::path f = dir / v.text;
+        if (!std::filesystem::exists(f) || f.extension() != ".hal") {
+          out.assumptions.push_back("HAL file " + v.text + " not read (not a .hal file here)");
+          continue;
+        }
+        std::istringstream lines(read_text(f.string()));
+        for (std::string line; std::getline(lines, line);) hal.command(line);
+      }
+    }
+  }
+  const auto pin = [&](const std::string& name) {
+    for (const std::string prefix : {"xyzac-trt-kins.", "xyzac-trt."}) {
+      if (const auto v = hal.value(prefix + name)) {
+        char* end = nullptr;
+        const double d = std::strtod(v->c_str(), &end);
+        if (end != v->c_str() && std::isfinite(d)) return d * unit_mm;
+      }
+    }
+    out.assumptions.push_back("pin " + name + " not set in the HAL commands: 0");
+    return 0.0;
+  };
+  const double x_rot = pin("x-rot-point"), y_rot = pin("y-rot-point"), z_rot = pin("z-rot-point");
+  const double y_off = pin("y-offset"), z_off = pin("z-offset");
+
+  std::ostringstream t;
+  const std::string name = std::filesystem::path(ini_path).stem().string();
+  t << "# Made by taxopt machine --from-linuxcnc-ini " << std::filesystem::path(ini_path).filename()
+    << "\n# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 on A and C.\n"
+    << "# Pivot: C through (x-rot-point, y-rot-point), A at y = y-rot-point + y-offset,\n"
+    << "# z = z-rot-point + z-offset.\n"
+    << "name = \"" << name << "\"\nkinematics = \"ac-table-table\"\n";
+  for (const char* axis : {"X", "Y", "Z"}) {
+    const std::string section = std::string("AXIS_") + axis;
+    const auto lo = number(section, "MIN_LIMIT", true), hi = number(section, "MAX_LIMIT", true);
+    t << "\n[axes." << axis << "]\nmin_mm = " << number_text(*lo * unit_mm)
+      << "\nmax_mm = " << number_text(*hi * unit_mm) << "\n";
+    if (const auto v = number(section, "MAX_VELOCITY", false)) {
+      t << "max_velocity_mm_s = " << number_text(*v * unit_mm) << "\n";
+    }
+    if (const auto a = number(section, "MAX_ACCELERATION", false)) {
+      t << "max_accel_mm_s2 = " << number_text(*a * unit_mm) << "\n";
+    }
+  }
+  for (const char* axis : {"A", "C"}) {
+    const std::string section = std::string("AXIS_") + axis;
+    const auto lo = number(section, "MIN_LIMIT", true), hi = number(section, "MAX_LIMIT", true);
+    t << "\n[axes." << axis << "]\nmin_deg = " << number_text(*lo)
+      << "\nmax_deg = " << number_text(*hi) << "\nsense = -1\n";
+    if (const auto v = number(section, "MAX_VELOCITY", false)) {
+      t << "max_velocity_deg_s = " << number_text(*v) << "\n";
+    }
+    if (const auto a = number(section, "MAX_ACCELERATION", false)) {
+      t << "max_accel_deg_s2 = " << number_text(*a) << "\n";
+    }
+  }
+  const double z_top = *number("AXIS_Z", "MAX_LIMIT", true) * unit_mm;
+  t << "\n[pivot]\na_axis_y = " << number_text(y_rot + y_off)
+    << "\na_axis_z = " << number_text(z_rot + z_off) << "\nc_axis_x = " << number_text(x_rot)
+    << "\nc_axis_y = " << number_text(y_rot) << "\n"
+    << "\n[gcode]\ndialect = \"linuxcnc\"\nmode = \"tcp\"\nfeed_mode = \"units-per-minute\"\n"
+    << "decimals = 4\n# The retract before and after each operation: Z's upper limit.\n"
+    << "retract_z_mm = " << number_text(z_top) << "\n";
+  // A switchkins configuration that starts in identity kinematics (sparm=identityfirst, as
+  // LinuxCNC's xyzac-trt sample does) switches TCP on with its remapped M428 and off with M429.
+  bool remaps_428 = false;
+  if (const auto rs = ini.find("RS274NGC"); rs != ini.end()) {
+    const auto range = rs->second.equal_range("REMAP");
+    for (auto it = range.first; it != range.second; ++it) {
+      if (it->second.text.rfind("M428", 0) == 0) remaps_428 = true;
+    }
+  }
+  if (kins->text.find("identityfirst") != std::string::npos) {
+    if (!remaps_428) {
+      fail(kins->line,
+           "the kinematics start as identity (sparm=identityfirst) and no M428 is "
+           "remapped to switch TCP on: give the switch as [gcode] tcp_on");
+    }
+    t << "# The kinematics start as identity (sparm=identityfirst): M428 switches TCP on.\n"
+      << "tcp_on = [\"M428\"]\ntcp_off = [\"M429\"]\n";
+    out.assumptions.push_back("switchkins, identity first: TCP switched on by M428, off by M429");
+  }
+  out.toml = t.str();
+  parse_machine_toml(out.toml, ini_path + " (imported)");  // reads back, or says why not
+  return out;
+}
+
+}  // namespace taxopt

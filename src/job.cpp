@@ -870,6 +870,17 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         "no holder model (--holder-radius, --holder-length): the holder is not checked against "
         "the part, only the tool");
   }
+  if (machine.gcode.program.retract == SafeRetract::None) {
+    res.safety_warnings.push_back(
+        "the machine file's gcode.safe_retract is \"none\": no retract before an operation's "
+        "first move nor after the last, and the table turns where the tool stands");
+  }
+  if (machine.gcode.mode == GcodeMode::Machine &&
+      !(machine.gcode.program.linearise_tolerance_mm > 0.0)) {
+    res.safety_warnings.push_back(
+        "the machine file's gcode.linearise_tolerance_mm is 0: the tip leaves the straight line "
+        "between points where the table turns (the moves are checked as the joints run)");
+  }
   if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
     throw InputError("--jerk-weight must be a number >= 0 (s^2)");
   }

@@ -58,7 +58,7 @@ Checked check_against(const std::string& ngc, const GeneratedCl& g, const Machin
       const double w = std::clamp((tip - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
       out.max_between_mm = std::max(out.max_between_mm, (tip - (a + w * (b - a))).norm());
       ++out.between;
-      REQUIRE(cm.feed);
+      REQUIRE(cm.feed == !g.rapid[i]);  // a rapid's blocks between are rapids
       continue;
     }
     REQUIRE(i < g.tips_mm.size());
@@ -466,4 +466,42 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   const RunResult bc = run_taxopt("machine --from-linuxcnc-ini " + dir.path("bc.ini"));
   CHECK(bc.code == 2);
   CHECK_THAT(bc.err, Catch::Contains("bc.ini:2") && Catch::Contains("xyzac-trt-kins"));
+}
+
+TEST_CASE(
+    "rs274: the demo in machine mode with its part: linearisation keeps the tip on the path, "
+    "no move between points hits the part",
+    "[rs274][integration]") {
+  REQUIRE(have_rs274());
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  TempDir dir;
+  const std::string machine = read_file(d + "machines/paper-ac.toml");
+  write_file(dir.path("m.toml"), machine + "mode = \"machine\"\n");
+  write_file(dir.path("m0.toml"), machine + "mode = \"machine\"\nlinearise_tolerance_mm = 0\n");
+  const std::string args = "--in " + d + "demo/sine.cls --part " + d +
+                           "demo/sine.stl --gauge-length 15 -q --report " + dir.path("r.json");
+  const RunResult r =
+      run_taxopt(args + " --machine " + dir.path("m.toml") + " --gcode " + dir.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
+  const std::size_t blocks = rep["gcode"]["linearised_blocks"];
+  CHECK(blocks > 0);
+  for (const auto& op : rep["operations"]) {
+    CHECK(op["verification"]["colliding_moves"] == 0);
+    CHECK(op["verification"]["collision_free"] == true);
+    CHECK(op["verification"]["tool_length_active"] == true);
+  }
+  // rs274 runs every block: the points and the blocks between them.
+  std::vector<CanonMove> moves;
+  REQUIRE(run_rs274(dir.path("o.ngc"), moves).code == 0);
+  std::size_t points = 0;
+  for (const auto& op : rep["operations"]) points += op["points"].get<std::size_t>();
+  CHECK(moves.size() <= points + blocks);
+  CHECK(moves.size() + 10 >= points + blocks);  // points that repeat the last block are not written
+  // Without linearisation the joints' straight lines swing the tool into the part.
+  const RunResult bare =
+      run_taxopt(args + " --machine " + dir.path("m0.toml") + " --gcode " + dir.path("o0.ngc"));
+  CHECK(bare.code == 1);
+  CHECK_THAT(bare.err, Catch::Contains("between CL points"));
 }

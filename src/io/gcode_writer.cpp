@@ -474,6 +474,21 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       std::string block;
       bool restore_inverse_time = false;
       if (p.motion == Motion::Rapid) {
+        if (g.mode == GcodeMode::Machine && have_prev) {
+          // Rapids too: a table that turns while the tool traverses above the part would
+          // swing the tip through it (the controller must run G0 linearly in the joints, as
+          // LinuxCNC does; Fanuc: non-linear positioning off).
+          const std::vector<double> at = linearise_fractions(
+              machine.ac, prev_tip, prev_pose, p.tip_mm, pose, g.program.linearise_tolerance_mm);
+          for (std::size_t j = 1; j + 1 < at.size(); ++j) {
+            const Posed mid{prev_pose.a_rad + at[j] * (pose.a_rad - prev_pose.a_rad),
+                            prev_pose.c_rad + at[j] * (pose.c_rad - prev_pose.c_rad)};
+            const Vec3d mid_xyz = out_xyz(prev_tip + at[j] * (p.tip_mm - prev_tip), mid);
+            line(prefix + dialect.rapid() + " " + xyz_words(mid_xyz) + angle_words(mid));
+            prefix.clear();
+            ++prog.linearised_blocks;
+          }
+        }
         block = dialect.rapid() + " " + words;
       } else {
         if (!(p.feed_mm_per_min > 0.0)) {

@@ -69,7 +69,9 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["cl_input"] = cl;
   j["gcode"] = {{"arcs_kept", result.gcode.arcs_kept},
                 {"arcs_chorded", result.gcode.arcs_chorded},
-                {"arc_blocks", result.gcode.arc_blocks}};
+                {"linearised_blocks", result.gcode.linearised_blocks},
+                {"arc_blocks", result.gcode.arc_blocks},
+                {"linearised_blocks", result.gcode.linearised_blocks}};
   nlohmann::json ops = nlohmann::json::array();
   for (const auto& r : result.operations) {
     nlohmann::json o;

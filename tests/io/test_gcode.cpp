@@ -232,3 +232,128 @@ TEST_CASE("gcode: golden programs of each dialect, mode and feed mode", "[io][gc
     CHECK(written == op.points.size() + prog.linearised_blocks);
   }
 }
+
+namespace {
+/// Line (0-based) of the first line holding `what` at or after `from`; npos when none.
+std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
+                    std::size_t from = 0) {
+  for (std::size_t i = from; i < lines.size(); ++i) {
+    if (lines[i].find(what) != std::string::npos) return i;
+  }
+  return std::string::npos;
+}
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    out.push_back(text.substr(at, end - at));
+    at = end == std::string::npos ? text.size() : end + 1;
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][gcode]") {
+  struct Want {
+    GcodeDialect dialect;
+    const char* retract;
+    const char* length_on;  // the block that switches the tool length (and TCP) on
+    const char* tcp_off;
+  };
+  const Want wants[] = {
+      {GcodeDialect::LinuxCNC, "G53 G0 Z25.0000", "G43 H3", "G49"},
+      {GcodeDialect::Fanuc, "G91 G28 Z0.", "G43.4 H3 G0", "G49"},
+      {GcodeDialect::Siemens, "G0 SUPA Z25.0000 D0", "TRAORI", "TRAFOOF"},
+      {GcodeDialect::Heidenhain, "G00 Z25.0000 M91 *", "M128 *", "M129 *"},
+  };
+  for (const Want& w : wants) {
+    INFO(to_string(w.dialect));
+    Machine m = default_machine();
+    m.gcode.dialect = w.dialect;
+    m.gcode.program.retract_z_mm = 25.0;
+    PostedOperation a = simple_op(), b = simple_op();
+    b.tool.number = 4;
+    const GcodeProgram prog = write_gcode({a, b}, m, LengthUnit::Millimetre, {});
+    const auto lines = lines_of(prog.text);
+    const std::size_t first_move = static_cast<std::size_t>(prog.emitted[0][0] - 1);
+    const std::size_t last_move = static_cast<std::size_t>(prog.emitted[1].back() - 1);
+    // Before the first point: retract, tool change, the table turned, then length/TCP on.
+    const std::size_t retract = line_of(lines, w.retract);
+    const std::size_t tool = line_of(lines, "T3", retract);
+    const std::size_t turn =
+        line_of(lines, std::string(w.dialect == GcodeDialect::Heidenhain ? "G00 A" : "G0 A"), tool);
+    const std::size_t on = line_of(lines, w.length_on, turn);
+    REQUIRE(retract != std::string::npos);
+    CHECK(retract < tool);
+    CHECK(tool < turn);
+    CHECK(turn < on);
+    CHECK(on <= first_move);
+    // The second operation retracts before its tool change; the program retracts at its end,
+    // after TCP is off, and nothing moves after that.
+    const std::size_t second = line_of(lines, w.retract, first_move);
+    CHECK(second < line_of(lines, "T4", first_move));
+    const std::size_t off = line_of(lines, w.tcp_off, last_move);
+    const std::size_t end_retract = line_of(lines, w.retract, last_move);
+    REQUIRE(off != std::string::npos);
+    REQUIRE(end_retract != std::string::npos);
+    CHECK(off < end_retract);
+    // Read back: the retracts and table turns are positioning moves, no point's.
+    const auto moves = read_gcode_moves(prog.text, "t", w.dialect);
+    std::size_t positioning = 0;
+    for (const GcodeMove& g : moves) positioning += g.positioning ? 1 : 0;
+    CHECK(positioning == 2 + 2 + (w.dialect == GcodeDialect::Fanuc ? 1 : 1));
+    CHECK(moves.back().positioning);
+  }
+}
+
+TEST_CASE("gcode: the program template of the machine file", "[io][gcode]") {
+  for (GcodeDialect d : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
+                         GcodeDialect::Heidenhain}) {
+    INFO(to_string(d));
+    Machine m = default_machine();
+    m.gcode.dialect = d;
+    ProgramTemplate& t = m.gcode.program;
+    t.name = "PART_42";
+    t.number = 42;
+    t.work_offset = "G55";
+    t.coolant = Coolant::Flood;
+    t.header = {"M98 P9000 (warm up)", "#100 = 1"};
+    t.footer = {"M140 MB MAX"};
+    t.tool_change = {"T{tool} M6", "M98 P{tool}0"};
+    t.tcp_on = {"M428"};
+    t.tcp_off = {"M429"};
+    const PostedOperation op = simple_op();
+    const GcodeProgram prog = write_gcode({op}, m, LengthUnit::Millimetre, {});
+    const auto lines = lines_of(prog.text);
+    CHECK(line_of(lines, "PART_42") != std::string::npos);
+    if (d == GcodeDialect::Fanuc) CHECK(lines[1].rfind("O0042 (PART_42)", 0) == 0);
+    if (d == GcodeDialect::Heidenhain) CHECK(lines[0] == "%PART_42 G71 *");
+    CHECK(line_of(lines, "G55") < line_of(lines, "M98 P9000"));
+    CHECK(line_of(lines, "M98 P30") == line_of(lines, "T3 M6") + 1);
+    CHECK(line_of(lines, "M8") < static_cast<std::size_t>(prog.emitted[0][0] - 1));
+    const std::size_t last = static_cast<std::size_t>(prog.emitted[0].back() - 1);
+    const std::size_t end = line_of(lines, d == GcodeDialect::LinuxCNC ? "M2" : "M30", last);
+    REQUIRE(end != std::string::npos);
+    CHECK(line_of(lines, "M9", last) < end);
+    CHECK(line_of(lines, "M428") < static_cast<std::size_t>(prog.emitted[0][0] - 1));
+    CHECK(line_of(lines, "M429") > static_cast<std::size_t>(prog.emitted[0].back() - 1));
+    CHECK(line_of(lines, "M140 MB MAX") > line_of(lines, "M429"));
+    // The template's blocks are stepped over by the reader, told by the writer.
+    CHECK(prog.verbatim_lines.size() == 1 + 2 + 1 + 2 + 1 + 1);
+    CHECK_THROWS_AS(read_gcode_moves(prog.text, "t", d), InputError);
+    std::size_t points = 0;
+    for (const GcodeMove& g : read_gcode_moves(prog.text, "t", d, prog.verbatim_lines)) {
+      points += g.positioning ? 0 : 1;
+    }
+    CHECK(points == op.points.size());
+  }
+  // Heidenhain: F with 3 decimals, also under a schedule (rounded down).
+  Machine tnc = default_machine();
+  tnc.gcode.dialect = GcodeDialect::Heidenhain;
+  PostedOperation op = simple_op();
+  op.block_time_s = {0.0, 1.5, 2.25, 3.0, 4.0};
+  const std::string text = write_gcode({op}, tnc, LengthUnit::Millimetre, {}).text;
+  CHECK(text.find("F400.000 *") != std::string::npos);
+  CHECK(text.find("F266.666 *") != std::string::npos);  // 10 mm in 2.25 s: 266.6667 down
+}

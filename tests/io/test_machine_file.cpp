@@ -189,3 +189,40 @@ TEST_CASE("machine file: clearances, the usual holder and the linear travel", "[
   CHECK(refused("[axes.X]\nmin_mm = 5\nmax_mm = -5\n", "min_mm must be less than max_mm"));
   CHECK(refused("[checks]\nclearance = 1\n", "clearance"));
 }
+
+TEST_CASE("machine file: the program template and the safe retract", "[io][machine]") {
+  const std::string head =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n[gcode]\ndialect = \"fanuc\"\n";
+  const Machine m = parse_machine_toml(
+      head +
+          "program_name = \"PART_7\"\nprogram_number = 7\nwork_offset = \"G54.1 P3\"\n"
+          "coolant = \"mist\"\nheader = [\"M98 P100\"]\nfooter = [\"M1\"]\n"
+          "tool_change = [\"T{tool} M6\"]\nsafe_retract = \"none\"\nretract_z_mm = -5\n"
+          "linearise_tolerance_mm = 0.002\nfeed_decimals = 2\n",
+      "m.toml");
+  const ProgramTemplate& t = m.gcode.program;
+  CHECK(t.name == "PART_7");
+  CHECK(t.number == 7);
+  CHECK(t.work_offset == "G54.1 P3");
+  CHECK(t.coolant == Coolant::Mist);
+  CHECK(t.header == std::vector<std::string>{"M98 P100"});
+  CHECK(t.footer == std::vector<std::string>{"M1"});
+  CHECK(t.tool_change == std::vector<std::string>{"T{tool} M6"});
+  CHECK(t.retract == SafeRetract::None);
+  CHECK(t.retract_z_mm == -5.0);
+  CHECK(t.linearise_tolerance_mm == 0.002);
+  CHECK(m.gcode.feed_decimals == 2);
+  // A template block may not move the machine nor change a mode taxopt writes itself.
+  expect_error(head + "header = [\"M3 X0\"]\n", 9, "moves an axis (X)");
+  expect_error(head + "header = [\"G0 X0\"]\n", 9, "holds G0");
+  expect_error(head + "footer = [\"G91 G28 Z0\"]\n", 9, "holds G91");
+  expect_error(head + "tcp_on = [\"G49\"]\n", 9, "holds G49");
+  expect_error(head + "tool_change = [\"T{tool} M6\", \"G20\"]\n", 9, "holds G20");
+  expect_error(head + "work_offset = \"G43 H1\"\n", 9, "holds G43");
+  expect_error(head + "header = \"M98\"\n", 9, "list of blocks");
+  expect_error(head + "program_number = 10000\n", 9, "from 1 to 9999");
+  expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");
+  expect_error(head + "coolant = \"through\"\n", 9, "\"none\", \"flood\" or \"mist\"");
+  expect_error(head + "linearise_tolerance_mm = -1\n", 9, ">= 0");
+}

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "support.hpp"
+#include "taxopt/core/digest.hpp"
 #include "taxopt/core/types.hpp"
 #include "taxopt/io/mesh_file.hpp"
 
@@ -570,4 +571,70 @@ TEST_CASE("cli: the report's clearance bound of shank and holder matches the clo
   CHECK(nlohmann::json::parse(
             read_file(t.path("r.json")))["operations"][0]["verification"]["min_clearance_mm"]
             .is_null());
+}
+
+TEST_CASE("cli: the report can be reproduced from itself, its numbers tidy", "[cli]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  // Global options after the subcommand, as a user types them.
+  const RunResult r = run_taxopt("demo --out " + t.path("demo") + " -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.empty());
+  const std::string text = read_file(t.path("demo/report.json"));
+  const auto rep = nlohmann::json::parse(text);
+  const auto& run = rep["run"];
+  CHECK_THAT(run["command_line"].get<std::string>(),
+             Catch::EndsWith("demo --out " + t.path("demo") + " -q"));
+  CHECK(run["machine_file"] == d + "machines/paper-ac.toml");
+  CHECK(run["machine_file_sha256"] == taxopt::sha256_hex(read_file(d + "machines/paper-ac.toml")));
+  CHECK(run["part_file"] == d + "demo/sine.stl");
+  const std::string when = run["started_utc"];
+  CHECK(when.size() == 20);
+  CHECK(when[10] == 'T');
+  CHECK(when.back() == 'Z');
+  CHECK(rep["options"]["method"] == "paper");
+  CHECK(rep["options"]["gcode"]["dialect"] == "linuxcnc");
+  // The tool as the checks model it: the demo's 15 mm gauge length is visible.
+  const auto& tool = rep["operations"][0]["tool"];
+  CHECK(tool["diameter_mm"] == 6.0);
+  CHECK(tool["model"]["bodies"].back()["to_mm"].get<double>() == Approx(15.0 - 3.0));
+  // A null comes with its reason; no number carries float noise.
+  const auto& v = rep["operations"][0]["verification"];
+  CHECK(v["min_clearance_mm"].is_null());
+  CHECK(v["null_reasons"].contains("min_clearance_mm"));
+  CHECK(rep["operations"][0]["max_axis_change_deg"] == 30.0);
+  CHECK(text.find("0000000000") == std::string::npos);
+  CHECK(text.find("9999999999") == std::string::npos);
+  // The CSV has no negative zero.
+  const std::string csv = read_file(t.path("demo/points.csv"));
+  for (const char* neg : {",-0.000000,", ",-0.000000000,", ",-0.0000,"}) {
+    CHECK(csv.find(neg) == std::string::npos);
+  }
+}
+
+TEST_CASE("cli: help in groups with units, exit codes and examples; a bare call says what to do",
+          "[cli]") {
+  const RunResult help = run_taxopt("--help");
+  CHECK(help.code == 0);
+  for (const char* group : {"Input:", "Tool:", "Machine:", "Method:", "Outputs:", "Diagnostics:"}) {
+    CHECK_THAT(help.out, Catch::Contains(group));
+  }
+  CHECK_THAT(help.out, Catch::Contains("--gauge-length LENGTH") &&
+                           Catch::Contains("--max-deviation DEG") &&
+                           Catch::Contains("Exit codes:") && Catch::Contains("Examples:"));
+  CHECK(help.out.find("INT:INT") == std::string::npos);
+  CHECK(help.out.find("TEXT:{") == std::string::npos);
+  const RunResult bare = run_taxopt("");
+  CHECK(bare.code == 2);
+  CHECK_THAT(bare.err, Catch::Contains("--help"));
+  const RunResult threads = run_taxopt("--threads 0 --in x");
+  CHECK(threads.code == 2);
+  // SHA-256 of the report's machine digest: FIPS 180-4's test vectors.
+  CHECK(taxopt::sha256_hex("abc") ==
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(taxopt::sha256_hex("") ==
+        "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(taxopt::sha256_hex(std::string(1000000, 'a')) ==
+        "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }

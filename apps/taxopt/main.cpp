@@ -6,13 +6,17 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 
+#include "taxopt/core/digest.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/geometry/part.hpp"
@@ -210,79 +214,140 @@ int run_generate(const GenerateArgs& g) {
 
 }  // namespace
 
+/// The command line as typed, each argument quoted where a shell would need it.
+std::string quoted_command_line(int argc, char** argv) {
+  std::string out;
+  for (int i = 0; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool plain = !arg.empty() && arg.find_first_not_of(
+                                           "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                           "0123456789-_./=:,+@%") == std::string::npos;
+    if (i) out += ' ';
+    if (plain) {
+      out += arg;
+    } else {
+      out += '\'';
+      for (char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      out += '\'';
+    }
+  }
+  return out;
+}
+
+/// Now, UTC, ISO 8601.
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
 int main(int argc, char** argv) {
+  const std::string command_line = quoted_command_line(argc, argv);
+  const std::string started_utc = utc_now();
   Args a;
   CLI::App app{
       "taxopt: tool-axis optimisation for 5-axis ball-end finishing on A/C machines.\n"
       "Reads a cutter-location file, plans the machine's A/C axes and writes G-code.",
       "taxopt"};
   app.set_version_flag("--version", std::string("taxopt ") + taxopt::kVersion);
-  app.add_option("--in", a.in, "cutter-location file (APT / NX CLSF)")->check(CLI::ExistingFile);
-  app.add_option("--gcode", a.gcode, "G-code to write");
+  app.add_option("--in", a.in, "cutter-location file (APT / NX CLSF)")
+      ->check(CLI::ExistingFile)
+      ->group("Input");
+  app.add_option("--gcode", a.gcode, "G-code to write")->group("Outputs");
   app.add_option("--machine", a.machine, "machine file (TOML); default: generic A/C table-table")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->group("Machine");
   app.add_option("--method", a.method, "none | paper | global (default paper)")
-      ->check(CLI::IsMember({"none", "paper", "global"}));
+      ->check(CLI::IsMember({"none", "paper", "global"}))
+      ->group("Method");
   app.add_option("--objective", a.objective,
                  "--method global: sum-squares (sum of squared rotary accelerations, default) | "
                  "peak (the largest one)")
-      ->check(CLI::IsMember({"sum-squares", "peak"}));
+      ->check(CLI::IsMember({"sum-squares", "peak"}))
+      ->group("Method");
   app.add_option("--jerk-weight", a.jerk_weight,
                  "--method global: weight of the squared rotary jerk against the squared "
-                 "acceleration, s^2 (default 0)");
+                 "acceleration, s^2 (default 0)")
+      ->group("Method");
   app.add_option("--feed", a.feed_mm_per_min,
                  "feed for the metrics, mm/min (overrides FEDRAT; the feed written when the "
-                 "file has none; default 1000)");
-  app.add_option("--report", a.report, "JSON report to write");
-  app.add_option("--points-csv", a.points_csv, "per-point CSV to write");
-  app.add_option("--out-cls", a.out_cls, "optimised toolpath as a CL file");
-  app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)");
-  app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)");
+                 "file has none; default 1000)")
+      ->group("Machine");
+  app.add_option("--report", a.report, "JSON report to write")->group("Outputs");
+  app.add_option("--points-csv", a.points_csv, "per-point CSV to write")->group("Outputs");
+  app.add_option("--out-cls", a.out_cls, "optimised toolpath as a CL file")->group("Outputs");
+  app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)")
+      ->group("Input");
+  app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)")
+      ->group("Outputs");
   app.add_option("--arc-direction", a.arc_direction,
                  "sense of CIRCLE arcs about their axis: auto (the CAM system's, checked against "
                  "the moves beside each arc) | cw | ccw")
-      ->check(CLI::IsMember({"auto", "cw", "ccw"}));
+      ->check(CLI::IsMember({"auto", "cw", "ccw"}))
+      ->group("Input");
   app.add_option("--msys", a.msys,
                  "NX MSYS frames: apply (post in the MCS) | ignore (post the coordinates as "
                  "written)")
-      ->check(CLI::IsMember({"apply", "ignore"}));
-  app.add_option("--tool-radius", a.tool_radius, "ball radius, in the CL file's units");
+      ->check(CLI::IsMember({"apply", "ignore"}))
+      ->group("Input");
+  app.add_option("--tool-radius", a.tool_radius,
+                 "ball radius, CL file units (default: TLDATA/CUTTER)")
+      ->group("Tool");
   app.add_option("--part", a.part, "part mesh (STL, OBJ, OFF, PLY) in the CL file's coordinates")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->group("Input");
   app.add_option(
-      "--contact-tolerance", a.contact_tolerance,
-      "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, 0.1 x mean edge))");
-  app.add_option("--threads", a.threads, "worker threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
+         "--contact-tolerance", a.contact_tolerance,
+         "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, 0.1 x mean edge))")
+      ->group("Input");
+  app.add_option("--threads", a.threads, "worker threads, 1 to 1024 (default: all cores)")
+      ->group("Diagnostics");
   app.add_flag("--feed-schedule", a.feed_schedule,
                "write per block the fastest feed the machine's limits allow (never above the "
-               "programmed feed)");
-  app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)");
-  app.add_flag("-q,--quiet", a.quiet, "only errors on stderr");
-  app.add_flag("-v", a.verbose, "more on stderr");
-  app.add_option("--shank-radius", a.shank_radius, "shank radius (default: the ball radius)");
+               "programmed feed)")
+      ->group("Machine");
+  app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)")
+      ->group("Outputs");
+  app.add_flag("-q,--quiet", a.quiet, "only errors on stderr")->group("Diagnostics");
+  app.add_flag("-v", a.verbose, "more on stderr")->group("Diagnostics");
+  app.add_option("--shank-radius", a.shank_radius,
+                 "shank radius, CL file units (default: the ball radius)")
+      ->group("Tool");
   app.add_option("--flute-length", a.flute_length,
-                 "flute length from the tip (default: TLDATA/CUTTER)");
-  app.add_option("--holder-radius", a.holder_radius, "holder radius (default: no holder)");
+                 "flute length from the tip, CL file units (default: TLDATA/CUTTER)")
+      ->group("Tool");
+  app.add_option("--holder-radius", a.holder_radius,
+                 "holder radius, CL file units (default: the machine file's [holder], else none)")
+      ->group("Tool");
   app.add_option("--shank-clearance", a.shank_clearance_mm,
                  "distance the shank (past the flutes) keeps from the part in every check, mm "
-                 "(default: the machine file's [checks], else 0.5)");
+                 "(default: the machine file's [checks], else 0.5)")
+      ->group("Tool");
   app.add_option("--holder-clearance", a.holder_clearance_mm,
                  "distance the holder keeps from the part in every check, mm (default: the "
-                 "machine file's [checks], else 1)");
+                 "machine file's [checks], else 1)")
+      ->group("Tool");
   app.add_option("--part-tolerance", a.part_tolerance,
                  "how far the flutes may reach into the part mesh (its chordal error) without a "
-                 "collision, mm (default: the contact tolerance)");
-  app.add_option("--holder-length", a.holder_length, "holder length (default 40 mm)");
+                 "collision, mm (default: the contact tolerance)")
+      ->group("Input");
+  app.add_option("--holder-length", a.holder_length, "holder length, CL file units (default 40 mm)")
+      ->group("Tool");
   app.add_option("--gauge-length", a.gauge_length,
-                 "tip to holder face (default: max(flute length, 10 diameters))");
-  app.add_option("--grid", a.grid,
-                 "C-space cell size, deg: spacing of the key-axis candidates (2)");
+                 "tip to holder face, CL file units (default: max(flute length, 10 diameters))")
+      ->group("Tool");
+  app.add_option("--grid", a.grid, "C-space cell size, deg: spacing of the key-axis candidates (2)")
+      ->group("Method");
   app.add_option("--max-deviation", a.max_deviation,
-                 "largest angle between an output axis and its input axis, deg (30)");
+                 "largest angle between an output axis and its input axis, deg (30)")
+      ->group("Method");
   app.add_option("--plots", a.plots,
                  "folder for SVG plots: A, C, omega and a against arc length, before and after; "
-                 "C-space maps (with --part)");
+                 "C-space maps (with --part)")
+      ->group("Outputs");
 
   GenerateArgs gen;
   auto* generate =
@@ -313,6 +378,59 @@ int main(int argc, char** argv) {
   auto* demo = app.add_subcommand("demo", "run the bundled sine-surface case from data/");
   demo->add_option("--out", demo_out, "output folder (taxopt-demo)");
 
+  // What each option takes, in words a user knows (not the parser's types).
+  const std::map<std::string, std::string> takes = {{"--in", "FILE"},
+                                                    {"--gcode", "FILE"},
+                                                    {"--machine", "FILE"},
+                                                    {"--method", "none|paper|global"},
+                                                    {"--objective", "sum-squares|peak"},
+                                                    {"--jerk-weight", "S^2"},
+                                                    {"--feed", "MM/MIN"},
+                                                    {"--report", "FILE"},
+                                                    {"--points-csv", "FILE"},
+                                                    {"--out-cls", "FILE"},
+                                                    {"--units", "in|mm"},
+                                                    {"--units-out", "in|mm"},
+                                                    {"--arc-direction", "auto|cw|ccw"},
+                                                    {"--msys", "apply|ignore"},
+                                                    {"--tool-radius", "LENGTH"},
+                                                    {"--part", "FILE"},
+                                                    {"--contact-tolerance", "MM"},
+                                                    {"--threads", "N"},
+                                                    {"--shank-radius", "LENGTH"},
+                                                    {"--flute-length", "LENGTH"},
+                                                    {"--holder-radius", "LENGTH"},
+                                                    {"--shank-clearance", "MM"},
+                                                    {"--holder-clearance", "MM"},
+                                                    {"--part-tolerance", "MM"},
+                                                    {"--holder-length", "LENGTH"},
+                                                    {"--gauge-length", "LENGTH"},
+                                                    {"--grid", "DEG"},
+                                                    {"--max-deviation", "DEG"},
+                                                    {"--plots", "FOLDER"}};
+  for (CLI::Option* o : app.get_options()) {
+    for (const auto& name : o->get_lnames()) {
+      if (const auto t = takes.find("--" + name); t != takes.end()) o->option_text(t->second);
+    }
+  }
+  // The global options may follow a subcommand too ("taxopt demo -q").
+  generate->fallthrough();
+  machine_cmd->fallthrough();
+  demo->fallthrough();
+  app.footer(
+      "Exit codes: 0 written and verified; 1 verification failed or limits exceeded (nothing "
+      "written\nwithout --force); 2 bad input or options (file, line and what was expected on "
+      "stderr).\n\nExamples:\n"
+      "  taxopt demo --out demo                       the bundled sine case, all outputs\n"
+      "  taxopt --in path.cls --part part.stl --machine data/machines/paper-ac.toml \\\n"
+      "         --gcode out.nc --report report.json   optimise, check against the part, post\n"
+      "  taxopt machine --from-linuxcnc-ini my.ini --out my.toml\n"
+      "Documentation: docs/cli.md (options, machine file, report), docs/gcode-dialects.md.");
+  if (argc == 1) {
+    std::cerr << "taxopt: nothing to do: give --in FILE --gcode FILE, or a subcommand (demo, "
+                 "generate, machine)\nRun 'taxopt --help' for the options.\n";
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -322,6 +440,9 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  if (app.count("--threads") && (a.threads < 1 || a.threads > 1024)) {
+    return error("--threads must be a whole number from 1 to 1024", 2);
+  }
   if (*generate) {
     try {
       return run_generate(gen);
@@ -546,8 +667,20 @@ int main(int argc, char** argv) {
     taxopt::OutputTransaction tx;
     if (!a.gcode.empty()) tx.stage(a.gcode, result.gcode.text);
     if (!a.out_cls.empty()) tx.stage(a.out_cls, result.out_cls);
-    if (!a.report.empty())
-      tx.stage(a.report, taxopt::report_json(result, toolpath, machine, options));
+    if (!a.report.empty()) {
+      taxopt::RunInfo run;
+      run.command_line = command_line;
+      run.started_utc = started_utc;
+      if (!a.machine.empty()) {
+        run.machine_file = a.machine;
+        std::ifstream m(a.machine, std::ios::binary);
+        std::ostringstream bytes;
+        bytes << m.rdbuf();
+        run.machine_sha256 = taxopt::sha256_hex(bytes.str());
+      }
+      run.part_file = a.part;
+      tx.stage(a.report, taxopt::report_json(result, toolpath, machine, options, run));
+    }
     if (!a.points_csv.empty()) tx.stage(a.points_csv, taxopt::points_csv(result));
     if (!a.plots.empty()) {
       std::error_code ec;

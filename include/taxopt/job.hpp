@@ -225,9 +225,24 @@ struct JobResult {
 /// JobResult::problems.
 JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
 
-/// JSON report (CLI.md): `input`, `machine_name` and the run's options are recorded too.
+/// What a report records of the run itself, so that it can be reproduced (given by the
+/// caller: the library does not know its command line or clock).
+struct RunInfo {
+  /// The command line as typed (arguments quoted where the shell needs it).
+  std::string command_line;
+  /// When the run started, UTC, ISO 8601 ("2026-11-24T06:30:00Z").
+  std::string started_utc;
+  /// The machine file's path and the SHA-256 of its bytes; empty: the built-in machine.
+  std::string machine_file, machine_sha256;
+  /// The part mesh's path, when one was given.
+  std::string part_file;
+};
+
+/// JSON report (CLI.md): the input, the machine, the run (RunInfo), the options and every
+/// operation's tool model are recorded too; a null value comes with its reason
+/// (`null_reasons`); numbers are written with 12 significant digits at most, never -0.
 std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                        const JobOptions& options);
+                        const JobOptions& options, const RunInfo& run = {});
 
 /// Per-point CSV (CLI.md column names).
 std::string points_csv(const JobResult& result);

@@ -1,8 +1,11 @@
 // JSON report and per-point CSV of a run (CLI.md "JSON report", "Per-point CSV").
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 
 #include "taxopt/core/version.hpp"
+#include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/job.hpp"
 
 namespace taxopt {
@@ -26,18 +29,104 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSu
       f.limiting_axis.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.limiting_axis);
   j["limiting_kind"] =
       f.limiting_kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.limiting_kind);
+  nlohmann::json why = nlohmann::json::object();
+  if (colliding < 0) why["colliding_points"] = "not checked (no part, or no ball-end mill)";
+  if (f.limiting_axis.empty()) why["limiting_axis"] = "no axis limit binds: the programmed feed";
+  if (f.limiting_kind.empty()) why["limiting_kind"] = "no axis limit binds: the programmed feed";
+  if (!why.empty()) j["null_reasons"] = why;
   return j;
+}
+
+/// Numbers as a reader wants them: 12 significant digits at most (no 30.000000000000004), and
+/// no negative zero.
+void tidy_numbers(nlohmann::json& j) {
+  if (j.is_object() || j.is_array()) {
+    for (auto& e : j) tidy_numbers(e);
+  } else if (j.is_number_float()) {
+    const double v = j.get<double>();
+    if (!std::isfinite(v)) return;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.12g", v);
+    double r = std::strtod(buf, nullptr);
+    if (r == 0.0) r = 0.0;  // -0 -> 0
+    j = r;
+  }
+}
+
+/// The bodies of an operation's tool as the checks model them (mm from the ball centre along
+/// the axis), or null with the reason.
+nlohmann::json tool_json(const Tool& tool, const JobOptions& options) {
+  nlohmann::json t = {{"number", tool.number},
+                      {"name", tool.name},
+                      {"from_file", tool.from_file},
+                      {"diameter_mm", tool.diameter_mm},
+                      {"corner_radius_mm", tool.corner_radius_mm},
+                      {"flute_length_mm", tool.flute_length_mm}};
+  try {
+    const ToolModel m = ToolModel::ball_end(tool, options.tool);
+    nlohmann::json bodies = nlohmann::json::array();
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+      const ToolBody& b = m.bodies[i];
+      const bool holder = options.tool.holder_radius_mm && i + 1 == m.bodies.size() &&
+                          static_cast<int>(i) >= m.flute_bodies;
+      bodies.push_back({{"kind", static_cast<int>(i) < m.flute_bodies ? "flutes"
+                                 : holder                             ? "holder"
+                                                                      : "shank"},
+                        {"radius_mm", b.radius_mm},
+                        {"from_mm", b.start_mm},
+                        {"to_mm", b.end_mm}});
+    }
+    t["model"] = {{"ball_radius_mm", m.ball_radius_mm}, {"bodies", bodies}};
+  } catch (const std::exception& e) {
+    t["model"] = nullptr;
+    t["null_reasons"] = {{"model", e.what()}};
+  }
+  return t;
 }
 
 }  // namespace
 
 std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                        const JobOptions& options) {
+                        const JobOptions& options, const RunInfo& run) {
   nlohmann::json j;
   j["taxopt_version"] = kVersion;
   j["method"] = to_string(options.method);
   j["input"] = toolpath.source;
   j["machine"] = machine.name;
+  // The run, to reproduce it: command line, time, the machine file by digest, the options.
+  j["run"] = {
+      {"command_line", run.command_line},
+      {"started_utc", run.started_utc},
+      {"machine_file",
+       run.machine_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.machine_file)},
+      {"machine_file_sha256",
+       run.machine_sha256.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.machine_sha256)},
+      {"part_file",
+       run.part_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.part_file)}};
+  if (run.machine_file.empty()) j["run"]["null_reasons"] = {{"machine_file", "built-in machine"}};
+  j["options"] = {
+      {"method", to_string(options.method)},
+      {"max_deviation_deg", options.paper.max_deviation_deg},
+      {"grid_deg", options.paper.grid_deg},
+      {"objective", options.global.objective == GlobalObjective::Peak ? "peak" : "sum-squares"},
+      {"jerk_weight_s2", options.global.jerk_weight_s2},
+      {"feed_mm_min", options.feed_mm_per_min ? nlohmann::json(*options.feed_mm_per_min)
+                                              : nlohmann::json(nullptr)},
+      {"feed_schedule", options.feed_schedule},
+      {"shank_clearance_mm", options.shank_clearance_mm},
+      {"holder_clearance_mm", options.holder_clearance_mm},
+      {"part_tolerance_mm", options.part_tolerance_mm ? nlohmann::json(*options.part_tolerance_mm)
+                                                      : nlohmann::json(nullptr)},
+      {"gcode",
+       {{"dialect", to_string(machine.gcode.dialect)},
+        {"mode", machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine"},
+        {"feed_mode",
+         machine.gcode.feed_mode == FeedMode::InverseTime ? "inverse-time" : "units-per-minute"},
+        {"decimals", machine.gcode.decimals},
+        {"feed_decimals", feed_decimals(machine.gcode)},
+        {"safe_retract", machine.gcode.program.retract == SafeRetract::None ? "none" : "machine-z"},
+        {"retract_z_mm", machine.gcode.program.retract_z_mm},
+        {"linearise_tolerance_mm", machine.gcode.program.linearise_tolerance_mm}}}};
   j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
   j["ok"] = result.ok();
   j["problems"] = result.problems;
@@ -81,6 +170,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
     o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
     o["feed_schedule_written"] = options.feed_schedule;
+    const std::size_t k = static_cast<std::size_t>(&r - result.operations.data());
+    if (k < toolpath.operations.size()) o["tool"] = tool_json(toolpath.operations[k].tool, options);
     o["max_axis_change_deg"] = r.max_axis_change_deg;
     o["segments"] = r.segments;
     if (r.contact.recovered) {
@@ -111,6 +202,21 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     v["colliding_moves"] = r.verification.colliding_moves >= 0
                                ? nlohmann::json(r.verification.colliding_moves)
                                : nlohmann::json(nullptr);
+    // Why a value is null.
+    nlohmann::json why = nlohmann::json::object();
+    const std::string no_part = "no part given (--part): not checked";
+    const std::string no_ball = "the tool is no ball-end mill: no contact recovery, not checked";
+    const std::string unchecked = result.collision_checked ? no_ball : no_part;
+    if (!r.verification.collision_free) why["collision_free"] = unchecked;
+    if (r.verification.colliding_moves < 0) why["colliding_moves"] = unchecked;
+    if (r.verification.flute_gouge_points < 0) why["flute_gouge_points"] = unchecked;
+    if (!r.verification.min_clearance_mm) {
+      why["min_clearance_mm"] =
+          r.verification.collision_free
+              ? "no shank or holder past the flutes to measure (the flutes reach the holder)"
+              : unchecked;
+    }
+    if (!why.empty()) v["null_reasons"] = why;
     o["verification"] = v;
     o["timings_s"] = {
         {"cspace", r.time_cspace_s}, {"optimise", r.time_optimise_s}, {"post", r.time_post_s}};
@@ -128,6 +234,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     limits[to_string(static_cast<Joint>(q))] = l;
   }
   j["axis_limits"] = limits;
+  tidy_numbers(j);
   return j.dump(2) + "\n";
 }
 
@@ -136,6 +243,24 @@ std::string points_csv(const JobResult& result) {
       "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
       "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min\n";
   char buf[512];
+  // A value that rounds to zero is written without its sign ("-0.000000" would say a side).
+  const auto no_negative_zero = [](char* text) {
+    std::string t = text, kept;
+    std::size_t start = 0;
+    while (start <= t.size()) {
+      std::size_t end = t.find(',', start);
+      if (end == std::string::npos) end = t.size();
+      std::string field = t.substr(start, end - start);
+      if (!field.empty() && field[0] == '-' &&
+          field.find_first_not_of("-0.") == std::string::npos) {
+        field.erase(0, 1);
+      }
+      kept += field;
+      if (end < t.size()) kept += ',';
+      start = end + 1;
+    }
+    std::snprintf(text, 512, "%s", kept.c_str());
+  };
   for (const auto& r : result.operations) {
     std::string op = r.name;
     if (op.find_first_of(",\"\n") != std::string::npos) {
@@ -146,18 +271,21 @@ std::string points_csv(const JobResult& result) {
     for (const auto& p : r.rows) {
       std::snprintf(buf, sizeof buf, ",%zu,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,", p.index, p.arc_mm,
                     p.tip_mm.x(), p.tip_mm.y(), p.tip_mm.z(), p.axis.x(), p.axis.y(), p.axis.z());
+      no_negative_zero(buf);
       out += op;
       out += buf;
       if (p.has_contact) {
         std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,", p.cc_mm.x(),
                       p.cc_mm.y(), p.cc_mm.z(), p.normal.x(), p.normal.y(), p.normal.z(),
                       p.tilt_deg, p.yaw_deg);
+        no_negative_zero(buf);
         out += buf;
       } else {
         out += ",,,,,,,,";
       }
       std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,", p.a_deg, p.c_deg, p.omega_deg_s,
                     p.accel_deg_s2);
+      no_negative_zero(buf);
       out += buf;
       if (p.free_cells) out += std::to_string(*p.free_cells);
       out += ",";

@@ -12,16 +12,12 @@
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/types.hpp"
 #include "taxopt/io/machine_file.hpp"
+#include "util/text.hpp"
 
 namespace taxopt {
 namespace {
 
-std::string trim(const std::string& s) {
-  std::size_t b = 0, e = s.size();
-  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
-  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
-  return s.substr(b, e - b);
-}
+using detail::trim;
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

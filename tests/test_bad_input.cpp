@@ -1,5 +1,6 @@
 // The silent holes of issue 23, each a regression test: every case exits non-zero with a clear
 // message (file, line or face, what was expected), or gives the same G-code as the good input.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <filesystem>
@@ -215,11 +216,16 @@ TEST_CASE("bad input: a signal during the run or the write leaves no temporary f
                           "machines/paper-ac.toml --method paper --gcode " + t.path("o.nc") +
                           " --report " + t.path("r.json") + " --points-csv " + t.path("p.csv") +
                           " --out-cls " + t.path("o.cls") + " -q";
-  // How long a whole run takes, then signals spread over it (and past its write).
-  const auto t0 = std::chrono::steady_clock::now();
-  REQUIRE(run(cmd).code == 0);
-  const double whole_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // How long a whole run takes (the shorter of two: a first run on a busy machine can take
+  // several times as long, and signals timed from it would all come after the end), then
+  // signals spread over it (and past its write).
+  double whole_s = 1e9;
+  for (int k = 0; k < 2; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    REQUIRE(run(cmd).code == 0);
+    whole_s = std::min(
+        whole_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
   write_file(t.path("o.nc"), "previous good program\n");
   // Spread over the run, and dense over its last fifth, where the outputs are written; SIGINT
   // and SIGTERM in turn.

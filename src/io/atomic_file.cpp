@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <random>
 
 #include "taxopt/core/error.hpp"
 
@@ -85,23 +86,37 @@ void OutputTransaction::stage(const std::string& path, const std::string& conten
   if (fs::is_directory(path, ec)) throw InputError(path, 0, "cannot write: is a directory");
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string templ = (dir / ("." + target.filename().string() + ".taxopt-XXXXXX")).string();
-  std::vector<char> buf(templ.begin(), templ.end());
-  buf.push_back('\0');
   install_handlers();
-  // No signal between creating the temporary file and publishing it to the handler.
+  // The temporary file's name is chosen and published to the signal handler before the file
+  // is created (O_EXCL), so that a signal taken on any thread, at any moment, finds it: a
+  // handler that unlinks a name not yet created does no harm. This thread blocks the signals
+  // meanwhile so that it does not run the handler between publishing and recording the file.
   sigset_t block, saved;
   sigemptyset(&block);
   sigaddset(&block, SIGINT);
   sigaddset(&block, SIGTERM);
   sigaddset(&block, SIGHUP);
-  ::pthread_sigmask(SIG_BLOCK, &block, &saved);
-  const int fd = ::mkstemp(buf.data());
-  const int mkstemp_errno = errno;
-  if (fd >= 0) staged_.push_back({buf.data(), path, publish_pending(buf.data())});
-  ::pthread_sigmask(SIG_SETMASK, &saved, nullptr);
+  static constexpr char kChars[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+  std::random_device random;
+  int fd = -1, open_errno = 0;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    std::string name = "." + target.filename().string() + ".taxopt-";
+    for (int k = 0; k < 12; ++k) name += kChars[random() % (sizeof(kChars) - 1)];
+    const std::string temp = (dir / name).string();
+    ::pthread_sigmask(SIG_BLOCK, &block, &saved);
+    const int slot = publish_pending(temp);
+    fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    open_errno = errno;
+    if (fd >= 0) {
+      staged_.push_back({temp, path, slot});
+    } else {
+      withdraw_pending(slot);
+    }
+    ::pthread_sigmask(SIG_SETMASK, &saved, nullptr);
+    if (fd < 0 && open_errno != EEXIST) break;
+  }
   if (fd < 0) {
-    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(mkstemp_errno));
+    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(open_errno));
   }
   std::size_t done = 0;
   while (done < content.size()) {

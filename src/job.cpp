@@ -14,6 +14,7 @@
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
+#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 #include "util/progress.hpp"
@@ -245,9 +246,11 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
 std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
                                           const Operationd& op, const std::vector<Vec3d>& axes,
                                           const std::vector<ContactPoint>& contacts,
-                                          detail::StageProgress* progress = nullptr) {
+                                          detail::StageProgress* progress = nullptr,
+                                          const std::vector<char>* only = nullptr) {
   const double R = tool.ball_radius_mm;
   return detail::parallel_select(0, op.points.size(), [&](std::size_t i) {
+    if (only && !(*only)[i]) return false;
     const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
     const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
     const bool hit = model.collides(tool, centre, axes[i], in_air);
@@ -340,9 +343,11 @@ std::vector<std::size_t> colliding_moves(
     const std::vector<Vec3d>& xyz_w, const std::vector<double>& a_deg,
     const std::vector<double>& c_deg, const std::vector<ContactPoint>& contacts,
     detail::StageProgress* progress = nullptr,
-    const std::vector<std::vector<WayPoint>>* between = nullptr) {
+    const std::vector<std::vector<WayPoint>>* between = nullptr,
+    const std::vector<char>* only = nullptr) {
   const double R = tool.ball_radius_mm;
   return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
+    if (only && !(*only)[i]) return false;
     struct Advance {  // on every return of this move's check
       detail::StageProgress* p;
       ~Advance() {
@@ -387,14 +392,16 @@ struct OptimisedOperation {
   std::size_t pole_stretches = 0;
   /// Key points (ends of the optimiser's intervals), indices into the operation, ascending.
   std::vector<std::size_t> keys;
-  /// Passes the guard gave back their input axes.
-  std::size_t reverted_passes = 0;
+  /// What the guard after the paper's optimiser gave back their input axes.
+  StretchGuardResult guard;
   /// Points with no acceptable axis within the cone (they keep their input axis).
   std::vector<std::size_t> no_free_axis;
   /// --method global: per point the pose it chose (branch, C on the pole), for plan_poses;
   /// empty otherwise. Passes refined by it, and given back the paper's axes by its guard.
   std::vector<std::optional<Posed>> preferred;
-  std::size_t global_passes = 0, global_reverted = 0;
+  std::size_t global_passes = 0;
+  /// What the guard after --method global gave back the paper's axes.
+  StretchGuardResult global_guard;
 };
 
 /// The cut of a pass: from its first to its last point where the ball touches the part (empty
@@ -587,48 +594,39 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   return out;
 }
 
-/// Peak synthetic omega and a of one pass for poses of the whole operation.
-PeakRates pass_peaks(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                     double ball_radius_mm, const IndexRange& pass, const std::vector<Posed>& poses,
-                     const std::vector<double>& metric_feed) {
-  return peak_rates(std::vector<Posed>(poses.begin() + static_cast<long>(pass.begin),
-                                       poses.begin() + static_cast<long>(pass.end)),
-                    segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                    pass_feeds(metric_feed, pass));
-}
-
-/// The guard after the optimiser: a pass keeps its input axes when its optimised axes would
-/// raise its peak omega or a, or sweep the tool through the part between two CL points as the
-/// machine moves it (the optimiser checks the points, not the moves: near the pole A = 0 a
-/// small turn of the axis is a large turn of C), provided the input pass is itself safe.
-/// Returns the number of passes reverted.
+/// The guard after the optimiser (plan/stretch_guard.hpp): where the optimised axes would
+/// raise a pass's peak omega or a, or sweep the tool through the part between two CL points as
+/// the machine moves it, the pass keeps its input axes over those stretches, provided the
+/// input pass is itself safe; whole when a few rounds of joins do not make it good.
 /// With `reference` given (--method global against the paper's axes, with its preferred poses)
-/// the pass keeps those instead, when its peak a rises or its moves hit.
+/// the stretches keep those instead, when the peak a rises or the moves hit.
 struct GuardReference {
   std::vector<Vec3d> axes;
   std::vector<std::optional<Posed>> preferred;
 };
 
-std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                         double ball_radius_mm, const CollisionModel* model, const ToolModel* tool,
-                         const Machine& machine, const std::vector<double>& metric_feed,
-                         const PosePlanOptions& pose_options, OptimisedOperation& out,
-                         const GuardReference* reference = nullptr) {
+StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                                double ball_radius_mm, const CollisionModel* model,
+                                const ToolModel* tool, const Machine& machine,
+                                const std::vector<double>& metric_feed,
+                                const PosePlanOptions& pose_options, OptimisedOperation& out,
+                                const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
   const std::vector<bool> rapid_into = rapid_into_of(op);
   std::vector<Vec3d> in_axes;
   for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
   if (reference) in_axes = reference->axes;
+  const std::vector<std::optional<Posed>> in_preferred =
+      reference ? reference->preferred : std::vector<std::optional<Posed>>{};
   const PosePlan in_plan =
-      plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options,
-                 reference ? reference->preferred : std::vector<std::optional<Posed>>{});
-  if (!in_plan.ok()) return 0;
-  const PosePlan out_plan =
-      plan_poses(machine.ac, out.axes, rapid_into, {}, pose_options, out.preferred);
+      plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options, in_preferred);
+  if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n, KeptWhy::None)};
   // In machine mode with linearisation the tip runs the straight line as in TCP mode.
   Machine path_machine = machine;
   if (machine.gcode.program.linearise_tolerance_mm > 0.0) path_machine.gcode.mode = GcodeMode::Tcp;
-  const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses) {
+  // Points (and the moves into them) that hit the part, among those marked in `check`.
+  const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
+                             const std::vector<char>& check) {
     std::vector<char> hit(n, 0);
     if (!model) return hit;
     std::vector<Vec3d> xyz;
@@ -642,46 +640,110 @@ std::size_t guard_passes(const Operationd& op, const std::vector<ContactPoint>& 
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
     std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
-    for (std::size_t i : colliding_moves(*model, *tool, path_machine, xyz, a, c,
-                                         contacts.empty() ? air : contacts)) {
+    for (std::size_t i :
+         colliding_moves(*model, *tool, path_machine, xyz, a, c, contacts.empty() ? air : contacts,
+                         nullptr, nullptr, &check)) {
       hit[i] = 1;
     }
-    for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts)) hit[i] = 1;
+    for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts, nullptr, &check)) {
+      hit[i] = 1;
+    }
     return hit;
   };
-  const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses);
-  const std::vector<char> out_hit =
-      out_plan.ok() ? moves_hit(out.axes, out_plan.poses) : std::vector<char>(n, 1);
-  std::size_t reverted = 0;
-  for (const IndexRange& pass : feed_passes(op)) {
-    bool input_safe = true, output_safe = true;
+  const std::vector<IndexRange> passes = feed_passes(op);
+  const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses, std::vector<char>(n, 1));
+  // The rates of a pass for poses of the whole operation (eq. 16-18).
+  const auto rates = [&](const IndexRange& pass, const std::vector<Posed>& poses) {
+    std::vector<double> a, c;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
-      input_safe = input_safe && !in_hit[i];
-      output_safe = output_safe && !out_hit[i];
+      a.push_back(rad_to_deg(poses[i].a_rad));
+      c.push_back(rad_to_deg(poses[i].c_rad));
     }
-    if (!input_safe) continue;
-    bool worse = !output_safe;
-    if (!worse) {
-      const auto before =
-          pass_peaks(op, contacts, ball_radius_mm, pass, in_plan.poses, metric_feed);
-      const auto after =
-          pass_peaks(op, contacts, ball_radius_mm, pass, out_plan.poses, metric_feed);
-      worse = (!reference && after.omega_deg_s > before.omega_deg_s * (1.0 + 1e-9)) ||
-              after.accel_deg_s2 > before.accel_deg_s2 * (1.0 + 1e-9);
+    return rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                             pass_feeds(metric_feed, pass));
+  };
+  // Peak omega and a, and the mean square of a over the interior points.
+  struct PassRates {
+    double omega_deg_s = 0.0, accel_deg_s2 = 0.0, mean_sq_accel = 0.0;
+  };
+  const auto summary = [](const RotaryKinematics& k) {
+    PassRates r;
+    for (double w : k.omega_deg_s) r.omega_deg_s = std::max(r.omega_deg_s, w);
+    for (double x : k.accel_deg_s2) r.accel_deg_s2 = std::max(r.accel_deg_s2, x);
+    for (std::size_t j = 1; j + 1 < k.accel_deg_s2.size(); ++j) {
+      r.mean_sq_accel += k.accel_deg_s2[j] * k.accel_deg_s2[j];
     }
-    if (!worse) continue;
-    std::copy(in_axes.begin() + static_cast<long>(pass.begin),
-              in_axes.begin() + static_cast<long>(pass.end),
-              out.axes.begin() + static_cast<long>(pass.begin));
-    if (!out.preferred.empty()) {
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        out.preferred[i] =
-            reference && !reference->preferred.empty() ? reference->preferred[i] : std::nullopt;
+    if (k.accel_deg_s2.size() > 2)
+      r.mean_sq_accel /= static_cast<double>(k.accel_deg_s2.size() - 2);
+    return r;
+  };
+  std::vector<char> guarded(passes.size(), 0);
+  std::vector<PassRates> before(passes.size());
+  for (std::size_t q = 0; q < passes.size(); ++q) {
+    const IndexRange& pass = passes[q];
+    bool input_safe = true;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !in_hit[i];
+    if (!input_safe || pass.size() == 0) continue;
+    guarded[q] = 1;
+    before[q] = summary(rates(pass, in_plan.poses));
+  }
+  const std::vector<std::optional<Posed>> opt_preferred = out.preferred;
+  // The preferred poses of a candidate: the optimiser's where optimised, the reference's where
+  // kept, none on a join.
+  const auto preferred_of = [&](const std::vector<KeptWhy>& why) {
+    std::vector<std::optional<Posed>> preferred = opt_preferred;
+    for (std::size_t i = 0; i < preferred.size() && i < why.size(); ++i) {
+      if (why[i] == KeptWhy::Join) preferred[i] = std::nullopt;
+      if (why[i] == KeptWhy::Collision || why[i] == KeptWhy::PeakRate) {
+        preferred[i] = in_preferred.empty() ? std::nullopt : in_preferred[i];
       }
     }
-    ++reverted;
-  }
-  return reverted;
+    return preferred;
+  };
+  const StretchEvaluation evaluate = [&](const std::vector<Vec3d>& axes,
+                                         const std::vector<KeptWhy>& why,
+                                         const std::vector<char>& check) {
+    StretchVerdicts out_verdicts{std::vector<PointVerdict>(n, PointVerdict::Good),
+                                 std::vector<char>(passes.size(), 0)};
+    std::vector<PointVerdict>& verdict = out_verdicts.points;
+    const PosePlan plan =
+        plan_poses(machine.ac, axes, rapid_into, {}, pose_options, preferred_of(why));
+    if (!plan.ok()) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (check[i]) verdict[i] = PointVerdict::Hits;
+      }
+      return out_verdicts;
+    }
+    const std::vector<char> hit = moves_hit(axes, plan.poses, check);
+    for (std::size_t q = 0; q < passes.size(); ++q) {
+      const IndexRange& pass = passes[q];
+      if (pass.size() == 0 || !check[pass.begin]) continue;
+      const RotaryKinematics k = rates(pass, plan.poses);
+      // omega_j belongs to the segment j -> j + 1, a_j to the points j - 1, j, j + 1.
+      const auto raises = [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t j = lo; j <= hi && j < pass.size(); ++j) {
+          if (verdict[pass.begin + j] == PointVerdict::Good)
+            verdict[pass.begin + j] = PointVerdict::RaisesRate;
+        }
+      };
+      constexpr double kRel = 1.0 + 1e-9;
+      for (std::size_t j = 0; j < pass.size(); ++j) {
+        if (!reference && k.omega_deg_s[j] > before[q].omega_deg_s * kRel) raises(j, j + 1);
+        if (k.accel_deg_s2[j] > before[q].accel_deg_s2 * kRel) raises(j ? j - 1 : 0, j + 1);
+      }
+      for (std::size_t i = pass.begin; i < pass.end; ++i) {
+        if (hit[i]) verdict[i] = PointVerdict::Hits;
+      }
+      const PassRates after = summary(k);
+      out_verdicts.gains[q] = after.accel_deg_s2 * kRel < before[q].accel_deg_s2 ||
+                              after.mean_sq_accel * kRel < before[q].mean_sq_accel;
+    }
+    return out_verdicts;
+  };
+  StretchGuardResult guard = guard_stretches(passes, guarded, out.axes, in_axes, evaluate);
+  out.axes = guard.axes;
+  if (!out.preferred.empty()) out.preferred = preferred_of(guard.why);
+  return guard;
 }
 
 /// --method global (global_optimiser.hpp) on every feed pass of `op`, from the paper's axes in
@@ -744,8 +806,8 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     carry_from_cut(passes[q], cut[q], carry);
   }
   carry_between_passes(op, passes, carry);
-  out.global_reverted = guard_passes(op, contacts, ball_radius_mm, model, tool, machine,
-                                     metric_feed, pose_options, out, &paper);
+  out.global_guard = guard_passes(op, contacts, ball_radius_mm, model, tool, machine, metric_feed,
+                                  pose_options, out, &paper);
 }
 
 }  // namespace
@@ -901,7 +963,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   // Contact recovery for the ball-end operations when the part is known.
   std::vector<std::vector<ContactPoint>> contacts(tp.operations.size());
   std::vector<ContactSummary> contact_summaries(tp.operations.size());
-  std::vector<double> cspace_time(tp.operations.size(), 0.0);
+  std::vector<double> contacts_time(tp.operations.size(), 0.0);
   if (options.part) {
     detail::StageProgress progress(options.progress, "contact recovery", tp.operations.size());
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
@@ -947,7 +1009,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                                " contact points where a concave radius is below the ball radius "
                                "(local gouge, eq. 19)");
       }
-      cspace_time[k] = seconds_since(t0);
+      contacts_time[k] = seconds_since(t0);
     }
   }
 
@@ -977,10 +1039,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
                                     tool ? &*tool : nullptr, machine, metric_feed,
                                     options.pose_options, options.paper, progress);
-      const std::size_t reverted = guard_passes(
-          op, contacts[k], R, collision ? &*collision : nullptr, tool ? &*tool : nullptr, machine,
-          metric_feed, options.pose_options, *optimised[k]);
-      optimised[k]->reverted_passes = reverted;
+      optimised[k]->guard = guard_passes(op, contacts[k], R, collision ? &*collision : nullptr,
+                                         tool ? &*tool : nullptr, machine, metric_feed,
+                                         options.pose_options, *optimised[k]);
       if (options.method == Method::Global) {
         GlobalOptions global = options.global;
         global.max_deviation_deg = options.paper.max_deviation_deg;
@@ -990,11 +1051,15 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                       tool ? &*tool : nullptr, machine, metric_feed, options.pose_options, global,
                       *optimised[k], progress);
       }
-      if (reverted) {
-        res.warnings.push_back("operation " + op.name + ": " + std::to_string(reverted) +
-                               " passes keep their input axes (the optimised axes raised their "
-                               "peak omega or a, or swept the tool through the part between "
-                               "points near the pole A = 0)");
+      if (const StretchGuardResult& g = optimised[k]->guard; g.whole_passes + g.stretches > 0) {
+        res.warnings.push_back(
+            "operation " + op.name + ": " + std::to_string(g.points_hit + g.points_rate) +
+            " points keep their input axes (" + std::to_string(g.whole_passes) + " whole passes, " +
+            std::to_string(g.stretches) + " stretches within passes, joined over " +
+            std::to_string(g.points_blended) + " points): there the optimised axes " +
+            (g.points_hit ? "swept the tool through the part between points" : "") +
+            (g.points_hit && g.points_rate ? " or " : "") +
+            (g.points_rate ? "raised the pass's peak omega or a" : ""));
       }
       for (std::size_t i : optimised[k]->no_free_axis) {
         res.problems.push_back(
@@ -1006,15 +1071,16 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       optimise_time[k] = seconds_since(t0);
       if (options.log) {
         const OptimisedOperation& o = *optimised[k];
-        options.log("operation " + op.name + ": " + std::to_string(o.intervals) + " intervals, " +
-                    std::to_string(o.repairs) + " repair keys, " +
-                    std::to_string(o.smoothed_joints) + " joints smoothed, " +
-                    std::to_string(o.sharp_joints) + " left sharp, " +
-                    std::to_string(o.pole_stretches) + " pole passages re-planned" +
-                    (options.method == Method::Global
-                         ? "; global: " + std::to_string(o.global_passes) + " passes refined, " +
-                               std::to_string(o.global_reverted) + " kept the paper's axes"
-                         : std::string()));
+        options.log(
+            "operation " + op.name + ": " + std::to_string(o.intervals) + " intervals, " +
+            std::to_string(o.repairs) + " repair keys, " + std::to_string(o.smoothed_joints) +
+            " joints smoothed, " + std::to_string(o.sharp_joints) + " left sharp, " +
+            std::to_string(o.pole_stretches) + " pole passages re-planned" +
+            (options.method == Method::Global
+                 ? "; global: " + std::to_string(o.global_passes) + " passes refined, " +
+                       std::to_string(o.global_guard.whole_passes) + " kept the paper's axes, " +
+                       std::to_string(o.global_guard.stretches) + " stretches kept them"
+                 : std::string()));
       }
     }
   }
@@ -1215,6 +1281,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     const Operationd& op = tp.operations[k];
+    const auto t_verify = Clock::now();
     OperationResult r;
     r.name = op.name;
     r.points = op.points.size();
@@ -1328,10 +1395,26 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                              std::to_string(ang_tol) + ")");
     }
     r.contact = contact_summaries[k];
-    r.time_cspace_s = cspace_time[k];
+    r.time_contacts_s = contacts_time[k];
     r.time_optimise_s = optimise_time[k];
     if (optimised[k]) {
       r.segments = static_cast<int>(optimised[k]->intervals);
+      // Why points kept their input axes: the paper's guard, else no free axis in the cone.
+      const OptimisedOperation& o = *optimised[k];
+      OperationResult::KeptInputPoints kept;
+      kept.passes = o.guard.whole_passes;
+      kept.stretches = o.guard.stretches;
+      std::vector<KeptWhy> why = o.guard.why;
+      why.resize(op.points.size(), KeptWhy::None);
+      for (std::size_t i : o.no_free_axis) {
+        if (why[i] == KeptWhy::None) ++kept.no_free_axis;
+      }
+      for (const KeptWhy w : why) {
+        kept.collision += w == KeptWhy::Collision;
+        kept.peak_rate += w == KeptWhy::PeakRate;
+        kept.join_points += w == KeptWhy::Join;
+      }
+      r.kept_input_points = kept;
       // The optimiser keeps every axis within the cone; this proves it on what is written.
       const double allowed = options.paper.max_deviation_deg + 1e-6;
       if (r.max_axis_change_deg > allowed) {
@@ -1341,7 +1424,6 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
     }
     if (collision && r.contact.recovered) {
-      const auto t0 = Clock::now();
       // Judged with the margins; the clearance is measured from the real bodies.
       const ToolModel real_tool = ToolModel::ball_end(op.tool, options.tool);
       const ToolModel tool = real_tool.judged(margins_of(options));
@@ -1416,7 +1498,6 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                 std::to_string(op.points[i - 1].line) + " to line " +
                 std::to_string(op.points[i].line)));
       }
-      r.time_cspace_s += seconds_since(t0);
     }
     if (!contacts[k].empty()) {
       for (std::size_t i = 0; i < op.points.size(); ++i) {
@@ -1513,6 +1594,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], moves, res,
                          tp.source, options.feed_schedule ? limits : machine.limits,
                          options.feed_schedule);
+    // The checks' own time: this operation's verification without its C-space raster.
+    r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
     res.operations.push_back(std::move(r));
   }
   res.out_cls = format_cl(tp, out_ops);

@@ -142,9 +142,24 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   CHECK(op["verification"]["within_axis_limits"] == true);
   CHECK(op["verification"]["roundtrip_max_mm"].get<double>() < 1e-4);
   CHECK(op["verification"]["collision_free"].is_null());
-  for (const char* key : {"cspace", "optimise", "post"}) CHECK(op["timings_s"].contains(key));
+  for (const char* key : {"contacts", "cspace", "optimise", "post", "verify"}) {
+    CHECK(op["timings_s"][key].get<double>() >= 0.0);
+  }
+  CHECK_FALSE(op.contains("kept_input_points"));  // no optimiser
   // Before and after agree with --method none; the paper's first axis gives its omega.
   CHECK(op["before"]["max_omega_deg_s"] == op["after"]["max_omega_deg_s"]);
+  // With an optimiser the report says how many points kept their input axes, and why.
+  REQUIRE(run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " --report " +
+                     t.path("r.json") + " --method paper -q")
+              .code == 0);
+  const auto kept =
+      nlohmann::json::parse(read_file(t.path("r.json")))["operations"].at(0)["kept_input_points"];
+  std::size_t by_reason = 0;
+  for (const char* why : {"collision", "peak_rate", "no_free_axis"}) {
+    by_reason += kept["by_reason"][why].get<std::size_t>();
+  }
+  CHECK(kept["total"].get<std::size_t>() == by_reason);
+  for (const char* key : {"join_points", "whole_passes", "stretches"}) CHECK(kept.contains(key));
   const std::string csv = read_file(t.path("p.csv"));
   CHECK_THAT(
       csv, Catch::StartsWith(
@@ -492,6 +507,12 @@ TEST_CASE("cli: --points-csv counts the free C-space cells of each contact (clos
       CHECK(std::stoi(last) == expected);
     }
     CHECK(touching == 11);
+    // The raster's time is its own, apart from the contacts' and the verification's.
+    const auto timings =
+        nlohmann::json::parse(read_file(t.path("r.json")))["operations"].at(0)["timings_s"];
+    CHECK(timings["cspace"].get<double>() > 0.0);
+    CHECK(timings["contacts"].get<double>() > 0.0);
+    CHECK(timings["verify"].get<double>() > 0.0);
   }
 }
 

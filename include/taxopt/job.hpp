@@ -197,7 +197,21 @@ struct OperationResult {
   int segments = 0;
   ContactSummary contact;
   Verification verification;
-  double time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0;
+  /// Each stage's own wall time for this operation, s: contact recovery, the C-space raster
+  /// (--points-csv free_cells, C-space maps), the optimiser with its guards, posting and
+  /// writing (the write shared evenly), the verification without the raster.
+  double time_contacts_s = 0.0, time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0,
+         time_verify_s = 0.0;
+  /// With an optimiser: the points that kept their input axes, by why. `collision`: the
+  /// optimised axes' points or moves hit the part; `peak_rate`: they raised the pass's peak
+  /// omega or a; `no_free_axis`: no acceptable axis within the cone. `join_points` were
+  /// blended between kept and optimised axes.
+  struct KeptInputPoints {
+    std::size_t collision = 0, peak_rate = 0, no_free_axis = 0, join_points = 0;
+    std::size_t passes = 0, stretches = 0;
+    std::size_t total() const { return collision + peak_rate + no_free_axis; }
+  };
+  std::optional<KeptInputPoints> kept_input_points;
   std::vector<PointRow> rows;
   /// With JobOptions::cspace_maps: the maps of the chosen points.
   std::vector<CSpaceMap> cspace_maps;

@@ -218,8 +218,22 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     }
     if (!why.empty()) v["null_reasons"] = why;
     o["verification"] = v;
-    o["timings_s"] = {
-        {"cspace", r.time_cspace_s}, {"optimise", r.time_optimise_s}, {"post", r.time_post_s}};
+    o["timings_s"] = {{"contacts", r.time_contacts_s},
+                      {"cspace", r.time_cspace_s},
+                      {"optimise", r.time_optimise_s},
+                      {"post", r.time_post_s},
+                      {"verify", r.time_verify_s}};
+    if (r.kept_input_points) {
+      const auto& kept = *r.kept_input_points;
+      o["kept_input_points"] = {{"total", kept.total()},
+                                {"by_reason",
+                                 {{"collision", kept.collision},
+                                  {"peak_rate", kept.peak_rate},
+                                  {"no_free_axis", kept.no_free_axis}}},
+                                {"join_points", kept.join_points},
+                                {"whole_passes", kept.passes},
+                                {"stretches", kept.stretches}};
+    }
     ops.push_back(o);
   }
   j["operations"] = ops;

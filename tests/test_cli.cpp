@@ -549,6 +549,12 @@ TEST_CASE("cli: -v tells each long stage's time, -q says nothing", "[cli]") {
   for (const char* stage : {"contact recovery", "optimisation", "verification"}) {
     CHECK_THAT(r.err, Catch::Contains(std::string("taxopt: ") + stage + ": "));
   }
+  // And each stage's own time, split as in the report.
+  const auto at = r.err.find("taxopt: stage times: ");
+  REQUIRE(at != std::string::npos);
+  CHECK_THAT(r.err.substr(at, r.err.find('\n', at) - at),
+             Catch::Matches("taxopt: stage times: contacts [0-9.]+ s, cspace [0-9.]+ s, optimise "
+                            "[0-9.]+ s, post [0-9.]+ s, verify [0-9.]+ s"));
   // Not a terminal: no bar.
   CHECK(r.err.find('\r') == std::string::npos);
   r = run_taxopt(args + " -q");

@@ -649,6 +649,19 @@ int main(int argc, char** argv) {
       for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
       for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
       if (a.verbose > 0) {
+        // Each stage's own time over all operations (the report's timings_s per operation).
+        double t[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+        for (const auto& r : result.operations) {
+          t[0] += r.time_contacts_s;
+          t[1] += r.time_cspace_s;
+          t[2] += r.time_optimise_s;
+          t[3] += r.time_post_s;
+          t[4] += r.time_verify_s;
+        }
+        std::fprintf(stderr,
+                     "taxopt: stage times: contacts %.2f s, cspace %.2f s, optimise %.2f s, "
+                     "post %.2f s, verify %.2f s\n",
+                     t[0], t[1], t[2], t[3], t[4]);
         for (const auto& [word, count] : toolpath.skipped_records) {
           std::cerr << "taxopt: note: " << count << " " << word
                     << " record(s) skipped (no motion), kept for --out-cls\n";

@@ -208,11 +208,11 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
   bool any_feed = false;
   for (std::size_t i = 1; i < n; ++i) {
     if (points[i].motion == Motion::Rapid) {
-      sum.cycle_time_s += rapid_time_s(joints[i - 1], joints[i], limits);
+      sum.rapid_time_s += rapid_time_s(joints[i - 1], joints[i], limits);
       continue;
     }
     if (!(out.time_s[i] > 0.0)) continue;
-    sum.cycle_time_s += out.time_s[i];
+    sum.feed_time_s += out.time_s[i];
     const double feed = points[i].feed_mm_per_min * programmed_s[i] / out.time_s[i];
     out.feed_mm_min[i] = feed;
     sum.min_feed_mm_min = any_feed ? std::min(sum.min_feed_mm_min, feed) : feed;
@@ -225,6 +225,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
       (bound[i] == FeedBound::Velocity ? by_velocity : by_accel)[j] += len;
     }
   }
+  sum.cycle_time_s = sum.feed_time_s + sum.rapid_time_s;
   sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
   sum.feed_path_mm = path_mm;
   double most = 0.0;

@@ -48,6 +48,8 @@ struct Measured {
   // the CAM system programmed it.
   double fastest_vs_programmed = 0.0;
   int feed_moves = 0;
+  /// The feed moves' time as rs274 read them, s.
+  double feed_time_s = 0.0;
 };
 
 /// Velocity and acceleration of every joint from rs274's moves: block times from the feed
@@ -83,6 +85,7 @@ Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const d
         60.0 * (input_tips_mm[i] - input_tips_mm[i - 1]).norm() / programmed_mm_min;
     out.fastest_vs_programmed = std::max(out.fastest_vs_programmed, input_t / t);
     ++out.feed_moves;
+    out.feed_time_s += t;
     const auto qa = joints(p, machine_mode, c0, a0), qb = joints(m, machine_mode, c0, a0);
     std::vector<double> w(5);
     for (int j = 0; j < 5; ++j) {
@@ -143,11 +146,17 @@ TEST_CASE(
         INFO(r.err);
         REQUIRE(r.code == 0);
         const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
+        double report_feed_s = 0.0;
         for (const auto& op : rep["operations"]) {
           const double before = op["before"]["cycle_time_s"], after = op["after"]["cycle_time_s"];
           INFO("cycle time " << before << " s -> " << after << " s");
           CHECK(after <= before * (1.0 + 1e-9));
           CHECK(op["verification"]["within_dynamic_limits"] == true);
+          for (const char* side : {"before", "after"}) {
+            CHECK(op[side]["feed_time_s"].get<double>() + op[side]["rapid_time_s"].get<double>() ==
+                  Approx(op[side]["cycle_time_s"].get<double>()).epsilon(1e-9));
+          }
+          report_feed_s += op["after"]["feed_time_s"].get<double>();
         }
         std::vector<CanonMove> moves;
         const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
@@ -160,6 +169,10 @@ TEST_CASE(
         CHECK(m.worst_ratio <= 1.0 + 1e-3);
         CHECK(m.worst_ratio > 0.5);  // the limits do bind somewhere on these parts
         CHECK(m.fastest_vs_programmed <= 1.0 + 1e-3);
+        // The report's feed time is the G-code's own, timed independently from what rs274
+        // read (rs274 prints 4 decimals: 1e-4 relative allows them).
+        INFO("feed time: report " << report_feed_s << " s, rs274 " << m.feed_time_s << " s");
+        CHECK(m.feed_time_s == Approx(report_feed_s).epsilon(1e-4));
         ++checked;
       }
     }
@@ -185,11 +198,22 @@ TEST_CASE(
                std::string("kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = "
                            "120\n[axes.C]\ncontinuous = true\n[gcode]\nfeed_reference = \"") +
                    reference + "\"\n");
-    const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --part " +
-                                   dir.path("part.stl") + " --machine " + dir.path("m.toml") +
-                                   " --gcode " + dir.path("o.ngc") + " -q --grid 4");
+    const RunResult r =
+        run_taxopt("--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") +
+                   " --machine " + dir.path("m.toml") + " --gcode " + dir.path("o.ngc") +
+                   " --report " + dir.path("r.json") + " -q --grid 4");
     INFO(r.err);
     REQUIRE(r.code == 0);
+    // No limit binds on this machine: with the cutter-path reference the feed moves take the
+    // input's time (the invariant of issue 21), with the tip reference the new tip path's.
+    for (const auto& op : nlohmann::json::parse(read_file(dir.path("r.json")))["operations"]) {
+      const double before = op["before"]["feed_time_s"], after = op["after"]["feed_time_s"];
+      INFO("feed time " << before << " s -> " << after << " s");
+      CHECK(before > 0.0);
+      if (std::string(reference) == "cutter-path") {
+        CHECK(after == Approx(before).epsilon(1e-3));
+      }
+    }
     std::vector<CanonMove> moves;
     const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
     INFO(rs.err);

@@ -97,9 +97,9 @@ std::string before_after(double before, double after, const char* format) {
 
 /// The table printed at the end of a run: per operation, before -> after.
 void print_summary(const taxopt::JobResult& result) {
-  std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %7s\n", "operation", "points",
-              "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "cycle time s",
-              "time s");
+  std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %-26s %7s\n", "operation", "points",
+              "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "feed time s",
+              "cycle time s", "time s");
   for (const auto& r : result.operations) {
     const auto count = [](long before, long after) {
       return before < 0 ? std::string("-") : std::to_string(before) + "->" + std::to_string(after);
@@ -108,10 +108,11 @@ void print_summary(const taxopt::JobResult& result) {
                                     ? count(r.colliding_before, r.colliding_after)
                                     : std::string("unchecked");
     std::printf(
-        "%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %7.2f\n", r.name.c_str(), r.points,
+        "%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %-26s %7.2f\n", r.name.c_str(), r.points,
         before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
         before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
         count(r.before.c_jumps, r.after.c_jumps).c_str(), collide.c_str(), r.max_axis_change_deg,
+        before_after(r.feed_before.feed_time_s, r.feed_after.feed_time_s, "%.1f").c_str(),
         before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
         r.time_contacts_s + r.time_cspace_s + r.time_optimise_s + r.time_post_s + r.time_verify_s);
   }

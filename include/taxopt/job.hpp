@@ -166,6 +166,10 @@ struct FeedSummary {
   /// Feed moves at their scheduled feeds plus rapids on their joints' trapezoids, s. The move
   /// into an operation's first point (from the previous one) is not counted.
   double cycle_time_s = 0.0;
+  /// Its two parts, s: the feed moves at their scheduled feeds (each block's time as the
+  /// controller runs it from the F word written), the rapids (retract, traverse, descent) on
+  /// their joints' trapezoids. cycle_time_s = feed_time_s + rapid_time_s.
+  double feed_time_s = 0.0, rapid_time_s = 0.0;
   /// Share of the feed moves' tip path length where the schedule is below the programmed feed.
   double feed_limited_fraction = 0.0;
   /// Lowest scheduled feed, mm/min (0 when there is no feed move).

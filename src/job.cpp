@@ -653,29 +653,27 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
   };
   const std::vector<IndexRange> passes = feed_passes(op);
   const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses, std::vector<char>(n, 1));
-  // The rates of a pass for poses of the whole operation (eq. 16-18).
+  // The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks and the
+  // sum of squares of a over the interior points (metrics' accumulate).
+  struct PassRates {
+    RotaryKinematics k;
+    RotarySummary summary;
+    double mean_sq_accel() const {
+      return summary.accel_samples
+                 ? summary.sum_sq_accel / static_cast<double>(summary.accel_samples)
+                 : 0.0;
+    }
+  };
   const auto rates = [&](const IndexRange& pass, const std::vector<Posed>& poses) {
     std::vector<double> a, c;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       a.push_back(rad_to_deg(poses[i].a_rad));
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
-    return rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                             pass_feeds(metric_feed, pass));
-  };
-  // Peak omega and a, and the mean square of a over the interior points.
-  struct PassRates {
-    double omega_deg_s = 0.0, accel_deg_s2 = 0.0, mean_sq_accel = 0.0;
-  };
-  const auto summary = [](const RotaryKinematics& k) {
-    PassRates r;
-    for (double w : k.omega_deg_s) r.omega_deg_s = std::max(r.omega_deg_s, w);
-    for (double x : k.accel_deg_s2) r.accel_deg_s2 = std::max(r.accel_deg_s2, x);
-    for (std::size_t j = 1; j + 1 < k.accel_deg_s2.size(); ++j) {
-      r.mean_sq_accel += k.accel_deg_s2[j] * k.accel_deg_s2[j];
-    }
-    if (k.accel_deg_s2.size() > 2)
-      r.mean_sq_accel /= static_cast<double>(k.accel_deg_s2.size() - 2);
+    PassRates r{rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                                  pass_feeds(metric_feed, pass)),
+                {}};
+    accumulate(r.summary, r.k, c);
     return r;
   };
   std::vector<char> guarded(passes.size(), 0);
@@ -686,7 +684,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
     for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !in_hit[i];
     if (!input_safe || pass.size() == 0) continue;
     guarded[q] = 1;
-    before[q] = summary(rates(pass, in_plan.poses));
+    before[q] = rates(pass, in_plan.poses);
   }
   const std::vector<std::optional<Posed>> opt_preferred = out.preferred;
   // The preferred poses of a candidate: the optimiser's where optimised, the reference's where
@@ -719,7 +717,8 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
     for (std::size_t q = 0; q < passes.size(); ++q) {
       const IndexRange& pass = passes[q];
       if (pass.size() == 0 || !check[pass.begin]) continue;
-      const RotaryKinematics k = rates(pass, plan.poses);
+      const PassRates after = rates(pass, plan.poses);
+      const RotaryKinematics& k = after.k;
       // omega_j belongs to the segment j -> j + 1, a_j to the points j - 1, j, j + 1.
       const auto raises = [&](std::size_t lo, std::size_t hi) {
         for (std::size_t j = lo; j <= hi && j < pass.size(); ++j) {
@@ -729,15 +728,19 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
       };
       constexpr double kRel = 1.0 + 1e-9;
       for (std::size_t j = 0; j < pass.size(); ++j) {
-        if (!reference && k.omega_deg_s[j] > before[q].omega_deg_s * kRel) raises(j, j + 1);
-        if (k.accel_deg_s2[j] > before[q].accel_deg_s2 * kRel) raises(j ? j - 1 : 0, j + 1);
+        if (!reference && k.omega_deg_s[j] > before[q].summary.max_omega_deg_s * kRel) {
+          raises(j, j + 1);
+        }
+        if (k.accel_deg_s2[j] > before[q].summary.max_accel_deg_s2 * kRel) {
+          raises(j ? j - 1 : 0, j + 1);
+        }
       }
       for (std::size_t i = pass.begin; i < pass.end; ++i) {
         if (hit[i]) verdict[i] = PointVerdict::Hits;
       }
-      const PassRates after = summary(k);
-      out_verdicts.gains[q] = after.accel_deg_s2 * kRel < before[q].accel_deg_s2 ||
-                              after.mean_sq_accel * kRel < before[q].mean_sq_accel;
+      out_verdicts.gains[q] =
+          after.summary.max_accel_deg_s2 * kRel < before[q].summary.max_accel_deg_s2 ||
+          after.mean_sq_accel() * kRel < before[q].mean_sq_accel();
     }
     return out_verdicts;
   };

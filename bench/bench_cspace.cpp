@@ -1,5 +1,5 @@
 // C-space rasteriser versus brute force (one FCL query per cell), side by side.
-// Run: build/release/bench/bench_cspace [points] [brute-force points]
+// Run: build/release/bench/bench_cspace [points] [brute-force points] [demo|big|all]
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const long points = argc > 1 ? std::atol(argv[1]) : 200;
   const long brute = argc > 2 ? std::atol(argv[2]) : 5;
+  const std::string which = argc > 3 ? argv[3] : "all";
   const Tool t = Tool::ball_end_mill(6.0, 15.0);
   ToolOverrides o;
   o.gauge_length_mm = 60.0;
@@ -125,7 +126,7 @@ int main(int argc, char** argv) {
   std::printf(
       "# taxopt C-space benchmark: tool R3 flutes 15, shank to 60, holder r16 x 40; window 30 "
       "deg\n");
-  std::printf("# command: bench_cspace %ld %ld\n", points, brute);
+  std::printf("# command: bench_cspace %ld %ld %s\n", points, brute, which.c_str());
   std::printf(
       "| part | triangles | cell deg | method | threads | points | time s | points/s "
       "|\n|---|---|---|---|---|---|---|---|\n");
@@ -133,8 +134,8 @@ int main(int argc, char** argv) {
   SineSurfaced demo;
   SineSurfaced big = demo;
   big.x0_mm = -12, big.x1_mm = 32, big.y0_mm = -12, big.y1_mm = 92;
-  cases.push_back({"demo sine (0.5 mm mesh)", tessellate(big, 88, 208), demo});
-  cases.push_back({"sine, 500k triangles", tessellate(big, 340, 736), demo});
+  if (which != "big") cases.push_back({"demo sine (0.5 mm mesh)", tessellate(big, 88, 208), demo});
+  if (which != "demo") cases.push_back({"sine, 500k triangles", tessellate(big, 340, 736), demo});
   for (const auto& c : cases) {
     for (double cell : {2.0, 1.0}) run(c, tool, cell, points, brute);
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "taxopt/core/error.hpp"
@@ -81,18 +82,172 @@ void store(CSpaceGrid& g, const WindowCell& c) {
 
 }  // namespace
 
-bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& origin,
-                             const Vec3d& dir, double r, double start, double end) {
-  const Vec3d e1 = dir.unitOrthogonal(), e2 = dir.cross(e1);
+namespace {
+
+constexpr double kPi = Constants<double>::pi();
+
+/// The rows of the half grid (tilt >= 0) that hold window cells, and for each cell whether it
+/// is still open (in the window and not yet blocked): one byte a cell, rows contiguous, so that
+/// a span is marked with memset and searched with memchr.
+struct OcclusionMap {
+  int n_yaw = 0, r0 = 0, r1 = 0;
+  double cell_rad = 0.0;
+  std::vector<double> tilt, cos_tilt, sin_tilt;  // per row, index i - r0
+  std::vector<unsigned char> blocked;            // 1: blocked or outside the window
+  unsigned char* row(int i) {
+    return blocked.data() + static_cast<std::size_t>(i - r0) * static_cast<std::size_t>(n_yaw);
+  }
+};
+
+/// acos within 2e-8 rad (Abramowitz and Stegun 4.4.46), several times faster than std::acos;
+/// the rasteriser rounds every span it derives from it outward or inward by far more.
+double acos_approx(double x) {
+  const double ax = std::min(std::abs(x), 1.0);
+  const double p =
+      1.5707963050 +
+      ax * (-0.2145988016 +
+            ax * (0.0889789874 +
+                  ax * (-0.0501743046 +
+                        ax * (0.0308918810 +
+                              ax * (-0.0170881256 + ax * (0.0066700901 + ax * -0.0012624911))))));
+  const double r = std::sqrt(1.0 - ax) * p;
+  return x < 0.0 ? kPi - r : r;
+}
+
+/// Where a sphere lies as seen from the ball centre: distance, and the direction u in the
+/// contact frame (u . N, and u . T, u . K as a polar pair), so that a cell's axis V of tilt a
+/// and yaw b has V . u = cos a cth + sin a sth cos(b - beta) (eq. 11).
+struct Seen {
+  double d = 0.0, cth = 1.0, sth = 0.0, beta = 0.0, th = 0.0;
+  Vec3d u = Vec3d::UnitZ();
+};
+
+Seen seen_from(const Vec3d& centre, const Vec3d& m, const ContactPoint& cp) {
+  Seen s;
+  const Vec3d w = m - centre;
+  s.d = w.norm();
+  if (s.d <= 1e-12) return s;
+  s.u = w / s.d;
+  s.cth = s.u.dot(cp.normal);
+  const double t = s.u.dot(cp.feed_dir), k = s.u.dot(cp.side);
+  s.sth = std::sqrt(t * t + k * k);
+  s.beta = std::atan2(k, t);
+  s.th = acos_approx(std::clamp(s.cth, -1.0, 1.0));  // within 2e-8 rad; rows are widened by 1e-7
+  return s;
+}
+
+/// Calls f(j0, j1) for the cells [j0, j1) of a row whose yaw centre lies in [x, y] rad, the
+/// bounds widened (eps > 0) or narrowed (eps < 0) by eps cells; wrapped into at most two
+/// spans. Stops and returns true when f does.
+template <class F>
+bool yaw_spans(const OcclusionMap& g, double x, double y, double eps, F&& f) {
+  const double lo = std::ceil((x + kPi) / g.cell_rad - 0.5 - eps);
+  const double hi = std::floor((y + kPi) / g.cell_rad - 0.5 + eps);
+  if (hi < lo) return false;
+  if (hi - lo + 1.0 >= g.n_yaw) return f(0, g.n_yaw);
+  const int len = static_cast<int>(hi - lo) + 1;
+  const int j0 = ((static_cast<int>(lo) % g.n_yaw) + g.n_yaw) % g.n_yaw;
+  if (j0 + len <= g.n_yaw) return f(j0, j0 + len);
+  return f(j0, g.n_yaw) || f(0, j0 + len - g.n_yaw);
+}
+
+/// The cells with V . u in [c1, c2] for a direction u, cells rounded outward or inward by
+/// 1e-7 rad (five times acos_approx's error), and the rows [i0, i1) that can hold them.
+struct Ring {
+  double c1 = 1.0, c2 = -1.0, eps = 0.0;
+  int i0 = 0, i1 = 0;
+};
+
+Ring ring_of(const OcclusionMap& g, const Seen& s, double c1, double c2, bool outward) {
+  Ring q;
+  const double tol = outward ? 1e-9 : -1e-9;
+  q.c1 = c1 - tol;
+  q.c2 = c2 + tol;
+  q.eps = (outward ? 1e-7 : -1e-7) / g.cell_rad;
+  if (q.c1 > q.c2 || q.c1 > 1.0 || q.c2 < -1.0) return q;
+  // Rows farther than the ring's outer angle from u hold none of its cells; row i's tilt is
+  // -pi/2 + (i + 0.5) cell.
+  const double th = s.th, th_out = acos_approx(q.c1) + 2e-7;
+  q.i0 = std::max(g.r0, static_cast<int>(std::ceil((th - th_out + kPi / 2) / g.cell_rad - 0.5)));
+  q.i1 =
+      std::min(g.r1, static_cast<int>(std::floor((th + th_out + kPi / 2) / g.cell_rad - 0.5)) + 1);
+  return q;
+}
+
+/// Calls f(j0, j1) for the spans of row i of the ring. Stops when f returns true.
+template <class F>
+bool ring_row(const OcclusionMap& g, const Seen& s, const Ring& q, int i, F&& f) {
+  const std::size_t r = static_cast<std::size_t>(i - g.r0);
+  const double A = g.cos_tilt[r] * s.cth, B = g.sin_tilt[r] * s.sth;
+  if (B < 1e-12) return A >= q.c1 && A <= q.c2 && f(0, g.n_yaw);
+  const double l = (q.c1 - A) / B, h = (q.c2 - A) / B;
+  if (l > 1.0 || h < -1.0) return false;
+  const double out = acos_approx(std::max(l, -1.0));
+  if (h >= 1.0) return yaw_spans(g, s.beta - out, s.beta + out, q.eps, f);
+  const double in = acos_approx(h);
+  return yaw_spans(g, s.beta - out, s.beta - in, q.eps, f) ||
+         yaw_spans(g, s.beta + in, s.beta + out, q.eps, f);
+}
+
+/// Calls f(i, j0, j1) for every span of the ring. Stops when f returns true.
+template <class F>
+bool ring_spans(const OcclusionMap& g, const Seen& s, const Ring& q, F&& f) {
+  for (int i = q.i0; i < q.i1; ++i) {
+    if (ring_row(g, s, q, i, [&](int j0, int j1) { return f(i, j0, j1); })) return true;
+  }
+  return false;
+}
+
+/// The axes V . u in [c1, c2] at which a body can meet something inside the sphere (centre at
+/// distance d, radius rho): the sphere must reach the body's slab and come within r + rho of
+/// its axis. Empty (c1 > c2) when it cannot meet the body at any axis.
+std::pair<double, double> possible_range(const ToolBody& b, double d, double rho) {
+  if (d <= rho + 1e-12) return {-1.0, 1.0};
+  if (d - rho > std::sqrt(b.radius_mm * b.radius_mm + b.end_mm * b.end_mm) || d + rho < b.start_mm)
+    return {1.0, -1.0};
+  // |V . u| >= q keeps u's line within r + rho of the sphere's centre; V . u <= -q is also
+  // allowed only where the slab reaches that far back.
+  double c1 = (b.start_mm - rho) / d;
+  const double s = (b.radius_mm + rho) / d;
+  if (s < 1.0) {
+    const double q = std::sqrt(1.0 - s * s);
+    if (c1 > -q) c1 = std::max(c1, q);
+  }
+  return {std::max(c1, -1.0), std::min(1.0, (b.end_mm + rho) / d)};
+}
+
+/// The axes at which a point at distance d lies inside the body: d V . u within [start, end]
+/// and d sin(angle) <= r.
+std::pair<double, double> certain_range(const ToolBody& b, double d) {
+  if (d <= 1e-12) return {1.0, -1.0};
+  double c1 = b.start_mm / d;
+  const double s = b.radius_mm / d;
+  if (s < 1.0) c1 = std::max(c1, std::sqrt(1.0 - s * s));
+  return {c1, std::min(1.0, b.end_mm / d)};
+}
+
+}  // namespace
+
+namespace {
+
+/// triangle_meets_cylinder with the vertices given relative to the axis origin and the axis
+/// in an orthonormal frame (e1, e2, dir).
+bool meets_in_frame(const std::array<Vec3d, 3>& rel, const Vec3d& dir, const Vec3d& e1,
+                    const Vec3d& e2, double r, double start, double end) {
   // Vertices in the cylinder's frame: (x, y) across, z along.
   std::array<Vec3d, 8> poly{}, next{};
   int n = 0;
-  for (const Vec3d* p : {&a, &b, &c}) {
-    const Vec3d d = *p - origin;
-    poly[static_cast<std::size_t>(n++)] = Vec3d(d.dot(e1), d.dot(e2), d.dot(dir));
+  for (const Vec3d& d : rel) poly[static_cast<std::size_t>(n++)] = Vec3d(0.0, 0.0, d.dot(dir));
+  // All three vertices on one side of the slab (the common case): no need to project.
+  const double za = poly[0].z(), zb = poly[1].z(), zc = poly[2].z();
+  if ((za < start && zb < start && zc < start) || (za > end && zb > end && zc > end)) return false;
+  for (std::size_t k = 0; k < 3; ++k) {
+    poly[k].x() = rel[k].dot(e1);
+    poly[k].y() = rel[k].dot(e2);
   }
-  // Clip to start <= z <= end (Sutherland-Hodgman, two planes).
-  for (int side = 0; side < 2; ++side) {
+  // Clip to start <= z <= end (Sutherland-Hodgman, two planes), where the face crosses them.
+  const bool within = std::min({za, zb, zc}) >= start && std::max({za, zb, zc}) <= end;
+  for (int side = within ? 2 : 0; side < 2; ++side) {
     const auto inside = [&](const Vec3d& p) { return side == 0 ? p.z() >= start : p.z() <= end; };
     const double plane = side == 0 ? start : end;
     int m = 0;
@@ -135,6 +290,14 @@ bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c, con
   return origin_inside;
 }
 
+}  // namespace
+
+bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& origin,
+                             const Vec3d& dir, double r, double start, double end) {
+  const Vec3d e1 = dir.unitOrthogonal(), e2 = dir.cross(e1);
+  return meets_in_frame({a - origin, b - origin, c - origin}, dir, e1, e2, r, start, end);
+}
+
 CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh) {
   std::vector<Vec3d> centroids;
   for (const auto& f : mesh.faces) {
@@ -169,11 +332,9 @@ int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids)
     }
   }
   nodes_[static_cast<std::size_t>(id)].sphere = s;
-  if (count <= 4) {
-    nodes_[static_cast<std::size_t>(id)].first = first;
-    nodes_[static_cast<std::size_t>(id)].count = count;
-    return id;
-  }
+  nodes_[static_cast<std::size_t>(id)].first = first;
+  nodes_[static_cast<std::size_t>(id)].count = count;
+  if (count <= 4) return id;
   Vec3d cl = Vec3d::Constant(std::numeric_limits<double>::infinity()), ch = -cl;
   for (int k = first; k < first + count; ++k) {
     cl = cl.cwiseMin(centroids[static_cast<std::size_t>(k)]);
@@ -214,132 +375,145 @@ CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint
   if (cp.local_gouge) return grid;
   const double max_dev = deg_to_rad(options.max_deviation_deg);
   const std::vector<WindowCell> cells = window(grid, cp, input_axis, max_dev);
-  if (cells.empty() || nodes_.empty()) return grid;
-  std::vector<char> blocked(cells.size(), 0);
-  const double cos_dev = std::cos(max_dev), sin_dev = std::sin(max_dev);
-  // Window index of the half-grid cell (i, j), i >= tilt_cells / 2, or -1.
-  const int n_yaw = grid.yaw_cells(), row0 = grid.tilt_cells() / 2;
-  std::vector<int> cell_at(static_cast<std::size_t>((grid.tilt_cells() - row0) * n_yaw), -1);
-  for (std::size_t k = 0; k < cells.size(); ++k) {
-    cell_at[static_cast<std::size_t>((cells[k].i - row0) * n_yaw + cells[k].j)] =
-        static_cast<int>(k);
+  if (cells.empty()) return grid;
+
+  // The map over the window's rows; cells outside the window start blocked.
+  OcclusionMap g;
+  g.n_yaw = grid.yaw_cells();
+  g.cell_rad = deg_to_rad(grid.cell_deg());
+  g.r0 = cells.front().i;
+  g.r1 = cells.back().i + 1;
+  for (int i = g.r0; i < g.r1; ++i) {
+    const double a = grid.tilt_rad(i);
+    g.tilt.push_back(a);
+    g.cos_tilt.push_back(std::cos(a));
+    g.sin_tilt.push_back(std::sin(a));
   }
-  const double cell_rad = deg_to_rad(grid.cell_deg());
+  g.blocked.assign(static_cast<std::size_t>(g.r1 - g.r0) * static_cast<std::size_t>(g.n_yaw), 1);
+  for (const WindowCell& c : cells) g.row(c.i)[c.j] = 0;
+  // Per yaw: the direction of eq. 11 in the tangent plane and the one across it.
+  std::vector<Vec3d> yaw_dir(static_cast<std::size_t>(g.n_yaw)), yaw_side(yaw_dir.size());
+  for (int j = 0; j < g.n_yaw; ++j) {
+    const double b = grid.yaw_rad(j);
+    yaw_dir[static_cast<std::size_t>(j)] = std::cos(b) * cp.feed_dir + std::sin(b) * cp.side;
+    yaw_side[static_cast<std::size_t>(j)] = std::cos(b) * cp.side - std::sin(b) * cp.feed_dir;
+  }
 
-  struct Active {
-    const ToolBody* body;
-    double cos_lo;  // cells with axis . u below this cannot meet the body
-  };
-  std::vector<Active> active(tool.bodies.size());
-  // The bodies a sphere (m, rho) can meet at some axis of the window, and their number. A
-  // body (radius r, from `start` to `end`) needs axis . u >= cos_lo, the larger of cos phi,
-  // phi = asin((r + rho) / d) (within r + rho of the axis line; where d > r + rho), and
-  // (start - rho) / d (reaching the body's slab); the window needs angle(u, input) <= max_dev
-  // + acos(cos_lo).
-  const auto reach = [&](const Sphere& sp, Vec3d& u, double& d) {
-    const Vec3d w = sp.centre - centre;
-    d = w.norm();
-    u = d > 1e-12 ? Vec3d(w / d) : Vec3d::UnitZ();
-    const double cu_in = u.dot(input_axis);
-    std::size_t n = 0;
-    for (const ToolBody& body : tool.bodies) {
-      if (d + sp.radius < body.start_mm ||
-          d - sp.radius > std::hypot(body.radius_mm, body.end_mm)) {
-        continue;
+  const double cos_dev = std::cos(max_dev), sin_dev = std::sin(max_dev);
+  const std::size_t n_bodies = tool.bodies.size();
+  std::vector<std::pair<double, double>> range(n_bodies);
+  // For a sphere seen at s with radius rho: each body's possible range of V . u, emptied
+  // where the whole range lies outside the deviation window; true when any is left.
+  const auto possible = [&](const Seen& s, double rho) {
+    bool any = false;
+    for (std::size_t b = 0; b < n_bodies; ++b) {
+      auto r = possible_range(tool.bodies[b], s.d, rho);
+      if (r.first <= r.second && s.d > rho + 1e-12) {
+        // Within psi of u (cos psi = c1) and within max_dev of the input axis.
+        const double sin_psi = std::sqrt(std::max(0.0, 1.0 - r.first * r.first));
+        if (r.first > -cos_dev + 1e-12 &&  // max_dev + psi < pi
+            s.u.dot(input_axis) < cos_dev * r.first - sin_dev * sin_psi - 1e-9) {
+          r = {1.0, -1.0};
+        }
       }
-      double lo = -1.0;
-      if (d > body.radius_mm + sp.radius) {
-        const double s = (body.radius_mm + sp.radius) / d;
-        lo = std::sqrt(std::max(0.0, 1.0 - s * s));
-      }
-      if (d > 1e-12) lo = std::max(lo, (body.start_mm - sp.radius) / d);
-      if (lo > 1.0) continue;
-      // cos(max_dev + psi) with cos psi = lo, when max_dev + psi < pi.
-      const double sin_lo = std::sqrt(std::max(0.0, 1.0 - lo * lo));
-      if (max_dev + std::acos(std::max(-1.0, lo)) < Constants<double>::pi() &&
-          cu_in < cos_dev * lo - sin_dev * sin_lo) {
-        continue;
-      }
-      active[n++] = {&body, lo};
+      range[b] = r;
+      any = any || r.first <= r.second;
     }
-    return n;
+    return any;
+  };
+  const auto has_open = [&](int i, int j0, int j1) {
+    return std::memchr(g.row(i) + j0, 0, static_cast<std::size_t>(j1 - j0)) != nullptr;
+  };
+  const auto mark = [&](int i, int j0, int j1) {
+    std::memset(g.row(i) + j0, 1, static_cast<std::size_t>(j1 - j0));
+    return false;
+  };
+  // Cells blocked for certain by a point of the part: those whose body holds the point.
+  const auto mark_certain = [&](const Seen& p) {
+    for (const ToolBody& body : tool.bodies) {
+      const auto [c1, c2] = certain_range(body, p.d);
+      ring_spans(g, p, ring_of(g, p, c1, c2, false), mark);
+    }
   };
 
+  // First pass, coarse: one point of the part per small subtree blocks its certain rings, so
+  // that the second pass finds most of the blocked region already marked.
+  constexpr int kCoarseFaces = 64;
   std::vector<int> stack = {0};
-  std::vector<int> candidates;
+  while (!nodes_.empty() && !stack.empty()) {
+    const Node& node = nodes_[static_cast<std::size_t>(stack.back())];
+    stack.pop_back();
+    if (!possible(seen_from(centre, node.sphere.centre, cp), node.sphere.radius)) continue;
+    if (node.left < 0 || node.count <= kCoarseFaces) {
+      mark_certain(
+          seen_from(centre, face_sphere_[static_cast<std::size_t>(node.first)].centre, cp));
+      continue;
+    }
+    stack.push_back(node.right);
+    stack.push_back(node.left);
+  }
+
+  // Second pass: a subtree matters only while its possible rings hold an open cell; a face
+  // blocks its certain rings, and the exact test decides the open cells of its possible ones.
+  stack.assign(nodes_.empty() ? 0 : 1, 0);
   while (!stack.empty()) {
     const Node& node = nodes_[static_cast<std::size_t>(stack.back())];
     stack.pop_back();
-    Vec3d u;
-    double d = 0.0;
-    if (reach(node.sphere, u, d) == 0) continue;
+    const Seen s = seen_from(centre, node.sphere.centre, cp);
+    if (!possible(s, node.sphere.radius)) continue;
+    bool open = false;
+    for (std::size_t b = 0; b < n_bodies && !open; ++b) {
+      open = ring_spans(g, s, ring_of(g, s, range[b].first, range[b].second, true), has_open);
+    }
+    if (!open) continue;
     if (node.left >= 0) {
       stack.push_back(node.right);
       stack.push_back(node.left);
       continue;
     }
     for (int f = node.first; f < node.first + node.count; ++f) {
-      const Sphere& fs = face_sphere_[static_cast<std::size_t>(f)];
-      const std::size_t n_active = reach(fs, u, d);
-      if (n_active == 0) continue;
-      // The window cells within psi of u (cos psi = the smallest cos_lo), row by row: on the
-      // row of tilt a, cos(angle) = cos a cos th + sin a sin th cos(b - beta) >= cos psi.
-      double cos_psi = 1.0;
-      for (std::size_t b = 0; b < n_active; ++b) cos_psi = std::min(cos_psi, active[b].cos_lo);
-      const double psi = std::acos(std::max(-1.0, cos_psi));
-      const double th = std::acos(std::clamp(u.dot(cp.normal), -1.0, 1.0));
-      const double beta = std::atan2(u.dot(cp.side), u.dot(cp.feed_dir));
-      candidates.clear();
-      for (int i = row0; i < grid.tilt_cells(); ++i) {
-        const double a = grid.tilt_rad(i);
-        if (std::abs(a - th) > psi + 1e-9) continue;
-        const double sn = std::sin(a) * std::sin(th);
-        double half = Constants<double>::pi();  // half-width of the yaw range
-        if (sn > 1e-12) {
-          const double c = (cos_psi - std::cos(a) * std::cos(th)) / sn;
-          if (c > 1.0 + 1e-9) continue;
-          half = std::acos(std::clamp(c, -1.0, 1.0)) + 1e-9;
-        }
-        if (half >= Constants<double>::pi()) {
-          for (int j = 0; j < n_yaw; ++j) {
-            const int k = cell_at[static_cast<std::size_t>((i - row0) * n_yaw + j)];
-            if (k >= 0) candidates.push_back(k);
-          }
-          continue;
-        }
-        // Yaw of cell j: -pi + (j + 0.5) cell; cells with |b - beta| <= half, wrapped.
-        const int j0 =
-            static_cast<int>(std::floor((beta - half + Constants<double>::pi()) / cell_rad - 0.5));
-        const int j1 =
-            static_cast<int>(std::ceil((beta + half + Constants<double>::pi()) / cell_rad - 0.5));
-        for (int j = j0; j <= j1 && j < j0 + n_yaw; ++j) {
-          const int jw = ((j % n_yaw) + n_yaw) % n_yaw;
-          const int k = cell_at[static_cast<std::size_t>((i - row0) * n_yaw + jw)];
-          if (k >= 0) candidates.push_back(k);
-        }
-      }
+      const Sphere& sphere = face_sphere_[static_cast<std::size_t>(f)];
+      const Seen fs = seen_from(centre, sphere.centre, cp);
+      if (!possible(fs, sphere.radius)) continue;
+      // Row by row: where the possible ring holds an open cell, the certain ring (the
+      // centroid inside the body) blocks its cells, and the exact test decides the rest.
       const auto& t = tri_[static_cast<std::size_t>(f)];
-      for (int kk : candidates) {
-        const std::size_t k = static_cast<std::size_t>(kk);
-        if (blocked[k]) continue;
-        const double cu = cells[k].axis.dot(u);
-        for (std::size_t b = 0; b < n_active; ++b) {
-          const ToolBody& body = *active[b].body;
-          if (cu < active[b].cos_lo || d * cu + fs.radius < body.start_mm ||
-              d * cu - fs.radius > body.end_mm) {
-            continue;
+      const std::array<Vec3d, 3> rel = {t[0] - centre, t[1] - centre, t[2] - centre};
+      for (std::size_t b = 0; b < n_bodies; ++b) {
+        if (range[b].first > range[b].second) continue;
+        const ToolBody& body = tool.bodies[b];
+        const Ring maybe = ring_of(g, fs, range[b].first, range[b].second, true);
+        const auto [c1, c2] = certain_range(body, fs.d);
+        const Ring sure = ring_of(g, fs, c1, c2, false);
+        for (int i = maybe.i0; i < maybe.i1; ++i) {
+          unsigned char* row = g.row(i);
+          const auto open_here = [&](int j0, int j1) { return has_open(i, j0, j1); };
+          if (!ring_row(g, fs, maybe, i, open_here)) continue;
+          if (i >= sure.i0 && i < sure.i1) {
+            ring_row(g, fs, sure, i, [&](int j0, int j1) { return mark(i, j0, j1); });
           }
-          if (triangle_meets_cylinder(t[0], t[1], t[2], centre, cells[k].axis, body.radius_mm,
-                                      body.start_mm, body.end_mm)) {
-            blocked[k] = 1;
-            break;
-          }
+          const std::size_t r = static_cast<std::size_t>(i - g.r0);
+          const double ca = g.cos_tilt[r], sa = g.sin_tilt[r];
+          ring_row(g, fs, maybe, i, [&](int j0, int j1) {
+            for (int j = j0; j < j1; ++j) {
+              if (row[j]) continue;
+              // The cell's axis and a frame across it: d/da and d/db of eq. 11, normalised.
+              const Vec3d& dj = yaw_dir[static_cast<std::size_t>(j)];
+              const Vec3d v = ca * cp.normal + sa * dj;
+              const Vec3d e1 = ca * dj - sa * cp.normal;
+              if (meets_in_frame(rel, v, e1, yaw_side[static_cast<std::size_t>(j)], body.radius_mm,
+                                 body.start_mm, body.end_mm)) {
+                row[j] = 1;
+              }
+            }
+            return false;
+          });
         }
       }
     }
   }
-  for (std::size_t k = 0; k < cells.size(); ++k) {
-    if (!blocked[k]) store(grid, cells[k]);
+  for (const WindowCell& c : cells) {
+    if (!g.row(c.i)[c.j]) store(grid, c);
   }
   return grid;
 }

@@ -168,9 +168,11 @@ TEST_CASE("cspace: the fast rasteriser matches one FCL query per cell on unseen 
     o.holder_length_mm = 30.0;
     const ToolModel tool = ToolModel::ball_end(t, o);
     CSpaceOptions opt;
-    opt.cell_deg = 5.0;
-    opt.max_deviation_deg = 45.0;
-    for (int trial = 0; trial < 3; ++trial) {
+    for (int trial = 0; trial < 4; ++trial) {
+      // Coarse cells over a wide window, and the fine cells the optimisers use (the spans of
+      // the occlusion map are rounded per cell: both must agree with FCL).
+      opt.cell_deg = trial < 3 ? 5.0 : 1.5;
+      opt.max_deviation_deg = trial < 3 ? 45.0 : 30.0;
       const std::size_t i = static_cast<std::size_t>(pick(rng)) % op.points.size();
       if (contacts[i].state != ContactState::Touching) continue;
       const Vec3d c = op.points[i].tip_mm + 3.0 * op.points[i].axis;

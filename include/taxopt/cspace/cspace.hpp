@@ -54,17 +54,21 @@ class CSpaceGrid {
 };
 
 /// Free tool axes at a contact point, exact at every cell centre, without FCL: an independent
-/// second implementation of brute_force_free_axes, and the fast one.
+/// second implementation of brute_force_free_axes, and the fast one (docs/benchmarks.md).
 ///
-/// Built once per part: a tree of bounding spheres over the faces. Per contact point the tree
-/// is walked with the test that also culls single faces: a sphere (centre m at distance d
-/// from the ball centre, direction u, radius rho) can meet a body (radius r, from `start` to
-/// `end` along the axis) only if d + rho >= start, d - rho <= hypot(r, end), and, where
-/// d > r + rho, the angle between u and some axis of the deviation window is at most
-/// asin((r + rho) / d). Faces that survive are tested per window cell with the same cone and
-/// slab bounds, and the exact triangle-versus-cylinder test decides. Cost: the faces near the
-/// swept tool, not all faces in its reach (docs/benchmarks.md).
-/// free_axes may be called from several threads at once.
+/// A spherical occlusion map (DESIGN.md section 7): one byte per cell of the window's rows,
+/// open or blocked. A point at distance d from the ball centre, direction u, lies inside a body
+/// (radius r, from `start` to `end` along the axis) exactly for the axes V with
+/// start <= d V.u <= end and d sin(angle) <= r: a ring of cells around u, row by row in tilt a
+/// yaw interval or two. Built once per part: a tree of bounding spheres over the faces. Per
+/// contact point, two walks of the tree:
+/// - coarse: one point of the part per subtree of <= 64 faces blocks its ring (for certain);
+/// - fine: a subtree or face whose possible ring (its bounding sphere, radius rho, within
+///   r + rho of the axis and reaching the slab) holds no open cell is skipped; a face that is
+///   left blocks the ring of its centroid, and the exact triangle-versus-cylinder test decides
+///   only the open cells of its possible ring (a thin band where faces are small).
+/// Spans are rounded outward for possible rings and inward for certain ones. The result does
+/// not depend on the order of the walk. free_axes may be called from several threads at once.
 class CSpaceRasteriser {
  public:
   explicit CSpaceRasteriser(const TriangleMesh& mesh);
@@ -82,7 +86,7 @@ class CSpaceRasteriser {
   };
   struct Node {
     Sphere sphere;
-    /// Children (inner node) or the range [first, first + count) of faces (leaf).
+    /// Children (inner node, else -1) and the range [first, first + count) of its faces.
     int left = -1, right = -1, first = 0, count = 0;
   };
   int build(int first, int count, std::vector<Vec3d>& centroids);

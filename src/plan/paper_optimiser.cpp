@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <map>
 #include <numeric>
 #include <optional>
 
@@ -76,9 +78,32 @@ class PassPlanner {
     return angle_between(v, p_.input_axes[i]) <= max_dev_rad_ + 1e-12 && is_free_(i, v);
   }
 
+  /// The cap grid of a key point and each candidate's pull term, made once per point (keys
+  /// are asked again on every sweep).
+  struct Cap {
+    std::vector<Vec3d> axes;
+    std::vector<double> pull;
+  };
+  const Cap& cap_at(std::size_t i) const {
+    auto it = caps_.find(i);
+    if (it == caps_.end()) {
+      Cap c;
+      c.axes = cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_);
+      for (const Vec3d& v : c.axes) c.pull.push_back(pull_term(i, v));
+      it = caps_.emplace(i, std::move(c)).first;
+    }
+    return it->second;
+  }
+
+  /// The pull of axis v at point i towards its input axis.
+  double pull_term(std::size_t i, const Vec3d& v) const {
+    const double dev = angle_between(v, p_.input_axes[i]);
+    return pull_ * dev * dev;
+  }
+
   /// The input axis if free, else the free candidate nearest to it.
   std::optional<Vec3d> nearest_free(std::size_t i) const {
-    for (const Vec3d& v : cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_)) {
+    for (const Vec3d& v : cap_at(i).axes) {
       if (acceptable(i, v)) return v;
     }
     return std::nullopt;
@@ -86,6 +111,11 @@ class PassPlanner {
 
   /// Bending energy terms of the key polygon that involve key j, plus j's pull.
   double local_cost(std::size_t j, const Vec3d& v) const {
+    return bending(j, v) + pull_term(keys_[j], v);
+  }
+
+  /// Bending energy terms of the key polygon that involve key j at axis v.
+  double bending(std::size_t j, const Vec3d& v) const {
     const std::size_t m = keys_.size();
     const auto axis = [&](std::size_t t) { return t == j ? v : key_axes_[t]; };
     const auto rate = [&](std::size_t t) {  // from key t to key t + 1
@@ -98,25 +128,32 @@ class PassPlanner {
       const double span = std::max(0.5 * (arc_[keys_[t + 1]] - arc_[keys_[t - 1]]), 1e-9);
       e += (rate(t) - rate(t - 1)).squaredNorm() / span;
     }
-    const double dev = angle_between(v, p_.input_axes[keys_[j]]);
-    return e + pull_ * dev * dev;
+    return e;
   }
 
   /// The best acceptable axis for key j with the others fixed: the cap grid by cost, then a
   /// pattern search down to grid / 8. Empty when no candidate is acceptable.
   std::optional<Vec3d> best_key_axis(std::size_t j) const {
     const std::size_t i = keys_[j];
-    const std::vector<Vec3d> cands = cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_);
+    const Cap& cap = cap_at(i);
+    const std::vector<Vec3d>& cands = cap.axes;
+    // Candidates by (cost, index), cheapest first: a heap, as the first acceptable one ends
+    // the search (usually among the first few).
     std::vector<std::pair<double, std::size_t>> order;
-    order.reserve(cands.size() + 1);
-    for (std::size_t c = 0; c < cands.size(); ++c) order.emplace_back(local_cost(j, cands[c]), c);
-    std::sort(order.begin(), order.end());
+    order.reserve(cands.size());
+    for (std::size_t c = 0; c < cands.size(); ++c) {
+      order.emplace_back(bending(j, cands[c]) + cap.pull[c], c);
+    }
+    const auto later = std::greater<std::pair<double, std::size_t>>();
+    std::make_heap(order.begin(), order.end(), later);
     std::optional<Vec3d> best;
     double best_cost = 0.0;
     // The current axis competes too: a sweep never makes a key worse.
     const double current_cost = local_cost(j, key_axes_[j]);
     const bool current_ok = acceptable(i, key_axes_[j]);
-    for (const auto& [cost, c] : order) {
+    for (auto end = order.end(); end != order.begin(); --end) {
+      std::pop_heap(order.begin(), end, later);
+      const auto [cost, c] = *(end - 1);
       if (current_ok && cost >= current_cost) break;
       if (acceptable(i, cands[c])) {
         best = cands[c];
@@ -277,6 +314,7 @@ class PassPlanner {
   std::vector<Vec3d> key_axes_;
   std::vector<Vec3d> axes_;
   std::vector<std::size_t> no_free_;
+  mutable std::map<std::size_t, Cap> caps_;
 };
 
 }  // namespace

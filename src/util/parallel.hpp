@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <exception>
 #include <vector>
 
 #ifdef TAXOPT_TSAN
@@ -17,6 +18,7 @@
 #else
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 #endif
 
@@ -75,6 +77,50 @@ T parallel_reduce(std::size_t begin, std::size_t end, const T& identity, const C
         return chunk(r.begin(), r.end(), std::move(acc));
       },
       join);
+#endif
+}
+
+/// Runs f and g side by side and returns when both have; an exception of either is rethrown
+/// (f's first) after both have ended.
+template <class F, class G>
+void parallel_invoke(const F& f, const G& g) {
+#ifdef TAXOPT_TSAN
+  std::exception_ptr g_error;
+  std::thread other([&] {
+    try {
+      g();
+    } catch (...) {
+      g_error = std::current_exception();
+    }
+  });
+  std::exception_ptr f_error;
+  try {
+    f();
+  } catch (...) {
+    f_error = std::current_exception();
+  }
+  other.join();
+  if (f_error) std::rethrow_exception(f_error);
+  if (g_error) std::rethrow_exception(g_error);
+#else
+  std::exception_ptr f_error, g_error;
+  tbb::parallel_invoke(
+      [&] {
+        try {
+          f();
+        } catch (...) {
+          f_error = std::current_exception();
+        }
+      },
+      [&] {
+        try {
+          g();
+        } catch (...) {
+          g_error = std::current_exception();
+        }
+      });
+  if (f_error) std::rethrow_exception(f_error);
+  if (g_error) std::rethrow_exception(g_error);
 #endif
 }
 

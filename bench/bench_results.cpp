@@ -2,7 +2,7 @@
 // (with their parts), and the runtime of each as the points grow. Prints the markdown tables
 // of docs/results.md.
 // Run from the source folder: build/release/bench/bench_results [data folder, default data]
-//   [largest number of points of the runtime table, default 100000]
+//   [largest number of points of the runtime table, default 100000] [runtime: that table only]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -94,6 +94,7 @@ Row run(const Case& k, Method method, GlobalObjective objective = GlobalObjectiv
 int run_bench(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "data";
   const std::size_t largest = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 100000;
+  const bool runtime_only = argc > 3 && std::string(argv[3]) == "runtime";
   std::vector<Case> cases;
   {
     Case demo;
@@ -116,11 +117,13 @@ int run_bench(int argc, char** argv) {
       sine_case("sine h4 wl30 tilt0 yaw5, F2000", 4.0, 30.0, 20.0, 60.0, 0.0, 5.0, 2000.0));
 
   std::printf("bench_results %s (one run each, all threads)\n\n", data.c_str());
-  std::printf(
-      "| case | method | points | peak ω °/s | RMS ω °/s | RMS a °/s² | peak a °/s² | C jumps | "
-      "colliding "
-      "points | max dev ° | cycle s | feed-limited | tip path mm | runtime s |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  if (!runtime_only) {
+    std::printf(
+        "| case | method | points | peak ω °/s | RMS ω °/s | RMS a °/s² | peak a °/s² | C jumps | "
+        "colliding "
+        "points | max dev ° | cycle s | feed-limited | tip path mm | runtime s |\n");
+    std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  }
   struct Variant {
     Method method;
     GlobalObjective objective;
@@ -132,6 +135,7 @@ int run_bench(int argc, char** argv) {
       {Method::Global, GlobalObjective::SumSquares, "global"},
       {Method::Global, GlobalObjective::Peak, "global --objective peak"}};
   for (const Case& k : cases) {
+    if (runtime_only) break;
     for (const Variant& var : variants) {
       const Row r = run(k, var.method, var.objective);
       for (const OperationResult& op : r.result.operations) {
@@ -154,6 +158,12 @@ int run_bench(int argc, char** argv) {
   std::printf(
       "| points | none s | paper s | global s | paper µs/point | global µs/point |\n"
       "|---:|---:|---:|---:|---:|---:|\n");
+  struct Staged {
+    std::size_t points;
+    const char* method;
+    Row row;
+  };
+  std::vector<Staged> stages;
   for (const auto& [width, length] :
        {std::pair<double, double>{18.0, 45.0}, {57.0, 143.0}, {180.0, 454.0}}) {
     const Case k = sine_case("scale", 10.0, 40.0, width, length, 15.0, 10.0);
@@ -165,6 +175,26 @@ int run_bench(int argc, char** argv) {
     std::printf("| %zu | %.2f | %.2f | %.2f | %.0f | %.0f |%s\n", n, none.seconds, paper.seconds,
                 global.seconds, per * paper.seconds, per * global.seconds,
                 paper.result.ok() && global.result.ok() ? "" : " (problems)");
+    stages.push_back({n, "paper", paper});
+    stages.push_back({n, "global", global});
+  }
+  // Where the time goes: each stage's own wall time (the report's timings_s); "other" is the
+  // rest of run_job (pose planning of the input, G-code written and read back, the schedule,
+  // the report's rows).
+  std::printf(
+      "\nStages of the same runs (s; the report's timings_s):\n\n| points | method | run_job | "
+      "contacts | optimise | post | verify | other |\n|---:|---|---:|---:|---:|---:|---:|---:|\n");
+  for (const auto& [n, method, row] : stages) {
+    double contacts = 0, optimise = 0, post = 0, verify = 0;
+    for (const OperationResult& op : row.result.operations) {
+      contacts += op.time_contacts_s;
+      optimise += op.time_optimise_s;
+      post += op.time_post_s;
+      verify += op.time_verify_s;
+    }
+    std::printf("| %zu | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n", n, method, row.seconds,
+                contacts, optimise, post, verify,
+                row.seconds - contacts - optimise - post - verify);
   }
   return 0;
 }

@@ -244,7 +244,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
 
 /// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
 /// ball centres). In parallel; the result is sorted, whatever the thread count.
-std::vector<std::size_t> colliding_points(const CollisionModel& model, const ToolModel& tool,
+std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolModel& tool,
                                           const Operationd& op, const std::vector<Vec3d>& axes,
                                           const std::vector<ContactPoint>& contacts,
                                           detail::StageProgress* progress = nullptr,
@@ -340,7 +340,7 @@ struct WayPoint {
 };
 
 std::vector<std::size_t> colliding_moves(
-    const CollisionModel& model, const ToolModel& tool, const Machine& machine,
+    const PartCheck& model, const ToolModel& tool, const Machine& machine,
     const std::vector<Vec3d>& xyz_w, const std::vector<double>& a_deg,
     const std::vector<double>& c_deg, const std::vector<ContactPoint>& contacts,
     detail::StageProgress* progress = nullptr,
@@ -424,7 +424,7 @@ struct Acceptance {
   const Operationd& op;
   const std::vector<ContactPoint>& contacts;
   double ball_radius_mm;
-  const CollisionModel* model;
+  const PartCheck* model;
   const ToolModel* tool;
   const ACMachined& machine;
   /// The deviation cone's half-angle, rad (--max-deviation).
@@ -513,7 +513,7 @@ void carry_between_passes(const Operationd& op, const std::vector<IndexRange>& p
 /// it is in the air) misses the part. Points outside the feed passes keep their axes. Then
 /// each pass's stretches near the pole get C re-planned in machine space (pole_passage.hpp).
 OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                  double ball_radius_mm, const CollisionModel* model,
+                                  double ball_radius_mm, const PartCheck* model,
                                   const ToolModel* tool, const Machine& machine,
                                   const std::vector<double>& metric_feed,
                                   const PosePlanOptions& pose_options, const PaperOptions& options,
@@ -607,7 +607,7 @@ struct GuardReference {
 };
 
 StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                double ball_radius_mm, const CollisionModel* model,
+                                double ball_radius_mm, const PartCheck* model,
                                 const ToolModel* tool, const Machine& machine,
                                 const std::vector<double>& metric_feed,
                                 const PosePlanOptions& pose_options, OptimisedOperation& out,
@@ -755,7 +755,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
 /// new pass ends; a guard gives a pass back the paper's axes where its peak a would rise or its
 /// moves would hit the part.
 void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                   double ball_radius_mm, const CollisionModel* model, const ToolModel* tool,
+                   double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
                    const Machine& machine, const std::vector<double>& metric_feed,
                    const PosePlanOptions& pose_options, const GlobalOptions& options,
                    OptimisedOperation& out, detail::StageProgress& progress) {
@@ -968,9 +968,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   std::vector<std::vector<ContactPoint>> contacts(tp.operations.size());
   std::vector<ContactSummary> contact_summaries(tp.operations.size());
   std::vector<double> contacts_time(tp.operations.size(), 0.0);
-  // The collision model (FCL's tree over the part, one thread: ~2 s at 800k triangles) is
-  // built beside contact recovery.
+  // Two collision models of the part, built beside contact recovery: the occlusion map's tree
+  // (cspace.hpp), which the optimisers and the guard ask, and FCL's (one thread: ~2 s at
+  // 800k triangles), the independent reference every output is verified with.
   std::optional<CollisionModel> collision;
+  std::optional<CSpaceRasteriser> checker;
   const auto recover_all = [&] {
     if (!options.part) return;
     detail::StageProgress progress(options.progress, "contact recovery", tp.operations.size());
@@ -1021,8 +1023,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
   };
   detail::parallel_invoke(recover_all, [&] {
-    if (options.part) collision.emplace(options.part->mesh());
+    if (!options.part) return;
+    detail::parallel_invoke([&] { collision.emplace(options.part->mesh()); },
+                            [&] { checker.emplace(options.part->mesh()); });
   });
+  const PartCheck* planner_check = checker ? &*checker : nullptr;
 
   // The paper's optimiser: new axes about the fixed ball centres.
   std::vector<std::optional<OptimisedOperation>> optimised(tp.operations.size());
@@ -1044,20 +1049,18 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       std::optional<ToolModel> tool;
       if (collision) tool = judged_tool(op, options);
       const std::vector<double> metric_feed = metric_feeds_of(op, options, fallback_feed);
-      optimised[k] = optimise_paper(op, contacts[k], R, collision ? &*collision : nullptr,
-                                    tool ? &*tool : nullptr, machine, metric_feed,
-                                    options.pose_options, options.paper, progress);
-      optimised[k]->guard = guard_passes(op, contacts[k], R, collision ? &*collision : nullptr,
-                                         tool ? &*tool : nullptr, machine, metric_feed,
-                                         options.pose_options, *optimised[k]);
+      optimised[k] =
+          optimise_paper(op, contacts[k], R, planner_check, tool ? &*tool : nullptr, machine,
+                         metric_feed, options.pose_options, options.paper, progress);
+      optimised[k]->guard = guard_passes(op, contacts[k], R, planner_check, tool ? &*tool : nullptr,
+                                         machine, metric_feed, options.pose_options, *optimised[k]);
       if (options.method == Method::Global) {
         GlobalOptions global = options.global;
         global.max_deviation_deg = options.paper.max_deviation_deg;
         global.candidate_step_deg =
             std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
-        refine_global(op, contacts[k], R, collision ? &*collision : nullptr,
-                      tool ? &*tool : nullptr, machine, metric_feed, options.pose_options, global,
-                      *optimised[k], progress);
+        refine_global(op, contacts[k], R, planner_check, tool ? &*tool : nullptr, machine,
+                      metric_feed, options.pose_options, global, *optimised[k], progress);
       }
       if (const StretchGuardResult& g = optimised[k]->guard; g.whole_passes + g.stretches > 0) {
         res.warnings.push_back(
@@ -1273,10 +1276,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   const double write_time = seconds_since(t_write);
 
   std::vector<Operationd> out_ops = tp.operations;
-  std::optional<CSpaceRasteriser> rasteriser;
-  if ((options.count_free_cells || options.cspace_maps) && options.part) {
-    rasteriser.emplace(options.part->mesh());
-  }
+  const CSpaceRasteriser* rasteriser =
+      (options.count_free_cells || options.cspace_maps) && checker ? &*checker : nullptr;
   // Progress of the checks: per point, its pose before and after and the move into it, and
   // its C-space cells.
   std::size_t check_items = 0;

@@ -518,6 +518,86 @@ CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint
   return grid;
 }
 
+namespace {
+
+/// Squared distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
+double squared_distance_to_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b,
+                                    const Vec3d& c) {
+  const Vec3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.squaredNorm();
+  const Vec3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - (d1 / (d1 - d3)) * ab).squaredNorm();
+  const Vec3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - (d2 / (d2 - d6)) * ac).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)).squaredNorm();
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return (ap - (vb * denom) * ab - (vc * denom) * ac).squaredNorm();
+}
+
+}  // namespace
+
+bool CSpaceRasteriser::collides(const ToolModel& tool, const Vec3d& centre, const Vec3d& axis,
+                                bool with_ball) const {
+  if (nodes_.empty()) return false;
+  const Vec3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  const double ball_r = tool.ball_radius_mm;
+  double reach = with_ball ? ball_r : 0.0;
+  for (const ToolBody& b : tool.bodies) {
+    reach = std::max(reach, std::sqrt(b.radius_mm * b.radius_mm + b.end_mm * b.end_mm));
+  }
+  // Whether a sphere (m, rho) can meet some body, or the ball (squared distances only).
+  const auto near = [&](const Sphere& sp) {
+    const Vec3d w = sp.centre - centre;
+    const double w2 = w.squaredNorm(), rho = sp.radius;
+    if (w2 > (reach + rho) * (reach + rho)) return false;
+    if (with_ball && w2 <= (ball_r + rho) * (ball_r + rho)) return true;
+    const double z = w.dot(axis), radial2 = w2 - z * z;
+    for (const ToolBody& b : tool.bodies) {
+      if (z + rho >= b.start_mm && z - rho <= b.end_mm &&
+          radial2 <= (b.radius_mm + rho) * (b.radius_mm + rho)) {
+        return true;
+      }
+    }
+    return false;
+  };
+  // Depth-first; the tree is balanced (median splits), so its depth is about log2(faces / 4)
+  // and a stack of 2 per level holds the walk.
+  std::array<int, 256> stack{};
+  std::size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
+    if (!near(node.sphere)) continue;
+    if (node.left >= 0) {
+      stack[top++] = node.right;
+      stack[top++] = node.left;
+      continue;
+    }
+    for (int f = node.first; f < node.first + node.count; ++f) {
+      if (!near(face_sphere_[static_cast<std::size_t>(f)])) continue;
+      const auto& t = tri_[static_cast<std::size_t>(f)];
+      if (with_ball && squared_distance_to_triangle(centre, t[0], t[1], t[2]) <= ball_r * ball_r) {
+        return true;
+      }
+      const std::array<Vec3d, 3> rel = {t[0] - centre, t[1] - centre, t[2] - centre};
+      for (const ToolBody& b : tool.bodies) {
+        if (meets_in_frame(rel, axis, e1, e2, b.radius_mm, b.start_mm, b.end_mm)) return true;
+      }
+    }
+  }
+  return false;
+}
+
 CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& cp,
                                const Vec3d& centre, const Vec3d& input_axis,
                                const CSpaceOptions& options) {

@@ -197,3 +197,47 @@ TEST_CASE("cspace: the fast rasteriser matches one FCL query per cell on unseen 
   // Blocked by the exact test but free for FCL: grazing contacts only, a tiny share.
   CHECK(only_brute <= free_fast / 200);
 }
+
+TEST_CASE("cspace: the tree's one-pose check agrees with FCL on unseen parts",
+          "[cspace][integration]") {
+  // The optimisers and the guard ask CSpaceRasteriser::collides; every output is verified with
+  // FCL. A pose the tree calls free must be free for FCL, or a run would fail its verification.
+  std::mt19937 rng(2611);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::size_t queries = 0, hits = 0, tree_free_fcl_hit = 0, tree_hit_fcl_free = 0;
+  for (const Heightfield& hf : random_heightfields(rng)) {
+    INFO(hf.name);
+    const HeightSurface s{&hf};
+    const TriangleMesh mesh = tessellate(s, 60, 60);
+    const CollisionModel fcl(mesh);
+    const CSpaceRasteriser tree(mesh);
+    const Tool t = Tool::ball_end_mill(6.0, 15.0);
+    ToolOverrides o;
+    o.gauge_length_mm = 30.0 + 20.0 * u01(rng);
+    o.shank_radius_mm = 3.0 + 2.0 * u01(rng);
+    o.holder_radius_mm = 10.0 + 6.0 * u01(rng);
+    o.holder_length_mm = 30.0;
+    const ToolModel tool = ToolModel::ball_end(t, o).judged({0.01, 0.5, 1.0});
+    for (int q = 0; q < 1500; ++q) {
+      // A ball centre at or near the surface (in the air or cutting into it), an axis within
+      // 80 deg of straight up.
+      const double x = 5.0 + 40.0 * u01(rng), y = 5.0 + 40.0 * u01(rng);
+      const Vec3d centre(x, y, hf.z(x, y) + 1.0 + 4.0 * u01(rng));
+      const double tilt = deg_to_rad(80.0) * u01(rng), yaw = deg_to_rad(360.0) * u01(rng);
+      const Vec3d axis(std::sin(tilt) * std::cos(yaw), std::sin(tilt) * std::sin(yaw),
+                       std::cos(tilt));
+      const bool with_ball = q % 2 == 0;
+      const bool f = fcl.collides(tool, centre, axis, with_ball);
+      const bool r = tree.collides(tool, centre, axis, with_ball);
+      ++queries;
+      hits += f ? 1 : 0;
+      tree_free_fcl_hit += (f && !r) ? 1 : 0;
+      tree_hit_fcl_free += (r && !f) ? 1 : 0;
+    }
+  }
+  INFO(queries << " queries, " << hits << " hits");
+  CHECK(hits > queries / 10);
+  CHECK(hits < queries - queries / 10);
+  CHECK(tree_free_fcl_hit == 0);
+  CHECK(tree_hit_fcl_free <= queries / 1000);
+}

@@ -14,8 +14,20 @@
 
 namespace taxopt {
 
+/// Whether the tool at one pose meets the part. Two implementations: CollisionModel (FCL,
+/// the reference every output is verified with) and CSpaceRasteriser (cspace.hpp: the
+/// occlusion map's tree and exact triangle tests, 5-25x faster, what the optimisers ask).
+class PartCheck {
+ public:
+  virtual ~PartCheck() = default;
+  /// True when any body of `tool` placed with ball centre `centre_mm` and unit axis `axis`
+  /// intersects the part; with `with_ball`, the ball counts too. Thread-safe.
+  virtual bool collides(const ToolModel& tool, const Vec3d& centre_mm, const Vec3d& axis,
+                        bool with_ball) const = 0;
+};
+
 /// The part for FCL (BVH of oriented bounding boxes).
-class CollisionModel {
+class CollisionModel : public PartCheck {
  public:
   explicit CollisionModel(const TriangleMesh& mesh);
   ~CollisionModel();
@@ -24,10 +36,8 @@ class CollisionModel {
   CollisionModel(const CollisionModel&) = delete;
   CollisionModel& operator=(const CollisionModel&) = delete;
 
-  /// True when any body of `tool` placed with ball centre `centre_mm` and unit axis `axis`
-  /// intersects the part; with `with_ball`, the ball counts too. Thread-safe.
   bool collides(const ToolModel& tool, const Vec3d& centre_mm, const Vec3d& axis,
-                bool with_ball = false) const;
+                bool with_ball = false) const override;
 
  private:
   struct Impl;

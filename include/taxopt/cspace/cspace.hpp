@@ -69,12 +69,18 @@ class CSpaceGrid {
 ///   only the open cells of its possible ring (a thin band where faces are small).
 /// Spans are rounded outward for possible rings and inward for certain ones. The result does
 /// not depend on the order of the walk. free_axes may be called from several threads at once.
-class CSpaceRasteriser {
+class CSpaceRasteriser : public PartCheck {
  public:
   explicit CSpaceRasteriser(const TriangleMesh& mesh);
 
   CSpaceGrid free_axes(const ToolModel& tool, const ContactPoint& contact, const Vec3d& ball_centre,
                        const Vec3d& input_axis, const CSpaceOptions& options = {}) const;
+
+  /// Whether the tool's bodies at one axis (and the ball, with `with_ball`) meet the part: the
+  /// question CollisionModel::collides answers with FCL, answered on this tree with the exact
+  /// triangle-versus-cylinder test (and the triangle's closest point to the ball centre).
+  bool collides(const ToolModel& tool, const Vec3d& ball_centre, const Vec3d& axis,
+                bool with_ball = false) const override;
 
   /// Number of faces of the part.
   std::size_t faces() const { return tri_.size(); }

@@ -11,6 +11,7 @@
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
+#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 #include "taxopt/plan/pole_passage.hpp"
@@ -183,7 +184,7 @@ struct OperationSchedule {
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
-                                     const JointLimits& limits) {
+                                     const JointLimits& limits, const ACMachined& ac) {
   OperationSchedule out;
   const std::size_t n = points.size();
   out.time_s.assign(n, 0.0);
@@ -208,7 +209,16 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
   bool any_feed = false;
   for (std::size_t i = 1; i < n; ++i) {
     if (points[i].motion == Motion::Rapid) {
-      sum.rapid_time_s += rapid_time_s(joints[i - 1], joints[i], limits);
+      const double t = rapid_time_s(joints[i - 1], joints[i], limits);
+      // The same move without the turn: the rotary joints held where the move starts, the
+      // linear ones taking the tip to its point under that pose.
+      constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+      constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+      const Posed start{deg_to_rad(joints[i - 1][kA]), deg_to_rad(joints[i - 1][kC])};
+      const Vec3d xyz = ac.to_machine_mm(points[i].tip_mm, start);
+      const JointPosition held = {xyz.x(), xyz.y(), xyz.z(), joints[i - 1][kA], joints[i - 1][kC]};
+      sum.rapid_time_s += t;
+      sum.transition_excess_s += std::max(0.0, t - rapid_time_s(joints[i - 1], held, limits));
       continue;
     }
     if (!(out.time_s[i] > 0.0)) continue;
@@ -814,6 +824,156 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
                                   pose_options, out, &paper);
 }
 
+/// The turn of the rotary axes between two passes (made in one move by carry_between_passes)
+/// spread over the rapids of the chain in the air (air_turn.hpp), where that makes the chain
+/// faster and every new pose and move is acceptable: within the cone of its point's input
+/// axis, within the machine's ranges and, with a part, free (points and swept moves). The ball
+/// centres stay where the CAM system put them.
+void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
+                         const Machine& machine, double max_deviation_rad, PostedOperation& po) {
+  const std::size_t n = op.points.size();
+  if (n < 3 || po.poses.size() != n) return;
+  const JointLimits limits = effective_limits(machine);
+  // The point as the machine's joints reach it (what the schedule times: in TCP mode too the
+  // linear joints follow the turning table), and as the G-code writes it.
+  const auto tip_at = [&](std::size_t i, const Posed& pose) {
+    return tip_for_axis(op.points[i], ball_radius_mm, machine.ac.forward(pose));
+  };
+  const auto joints_at = [&](std::size_t i, const Posed& pose) {
+    const Vec3d xyz = machine.ac.to_machine_mm(tip_at(i, pose), pose);
+    return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.a_rad), rad_to_deg(pose.c_rad)};
+  };
+  // A chain's time: its rapids on their trapezoids, its feed moves at their feed.
+  const auto chain_time = [&](std::size_t a, std::size_t b, const std::vector<Posed>& poses) {
+    double t = 0.0;
+    for (std::size_t j = a; j <= b; ++j) {
+      const JointPosition from = joints_at(j - 1, poses[j - 1]), to = joints_at(j, poses[j]);
+      if (op.points[j].motion == Motion::Rapid) {
+        t += rapid_time_s(from, to, limits);
+      } else if (po.points[j].feed_mm_per_min > 0.0) {
+        t += 60.0 * Vec3d(to[0] - from[0], to[1] - from[1], to[2] - from[2]).norm() /
+             po.points[j].feed_mm_per_min;
+      }
+    }
+    return t;
+  };
+  std::vector<char> in_pass(n, 0);
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::fill(in_pass.begin() + static_cast<long>(pass.begin),
+              in_pass.begin() + static_cast<long>(pass.end), 1);
+  }
+  std::vector<Posed> trial = po.poses;
+  std::vector<std::pair<std::size_t, std::size_t>> changed;  // chains [a, b) taken
+  for (std::size_t a = 1; a < n;) {
+    if (in_pass[a]) {
+      ++a;
+      continue;
+    }
+    std::size_t b = a;
+    while (b < n && !in_pass[b]) ++b;
+    const std::size_t first = a;
+    a = b;
+    if (b == n) break;  // after the last pass: nothing to turn to
+    // Moves first .. b; the turn from the pose before the chain to the pose after it. Only
+    // chains whose turn is made by rapids now (a feed move in the air keeps its axis).
+    const Posed from = po.poses[first - 1], to = po.poses[b];
+    bool rapid_turn = true;
+    std::vector<double> linear_s, now;  // per move: its time without the turn, its share now
+    std::vector<bool> rapid;
+    const double turn_rad = std::abs(to.a_rad - from.a_rad) + std::abs(to.c_rad - from.c_rad);
+    for (std::size_t j = first; j <= b; ++j) {
+      const double turned = std::abs(po.poses[j].a_rad - po.poses[j - 1].a_rad) +
+                            std::abs(po.poses[j].c_rad - po.poses[j - 1].c_rad);
+      rapid.push_back(op.points[j].motion == Motion::Rapid);
+      if (turned > 1e-12 && !rapid.back()) rapid_turn = false;
+      now.push_back(turn_rad > 0.0 ? turned / turn_rad : 0.0);
+      JointPosition p = joints_at(j - 1, po.poses[j - 1]), q = joints_at(j, po.poses[j]);
+      q[3] = p[3];
+      q[4] = p[4];
+      linear_s.push_back(rapid.back() ? rapid_time_s(p, q, limits) : 0.0);
+    }
+    if (!rapid_turn || turn_rad < 1e-9) continue;
+    // The chain's poses for per-move shares of the turn, and their time.
+    const auto poses_for = [&](const std::vector<double>& share) {
+      std::vector<Posed> cand = po.poses;
+      double f = 0.0;
+      for (std::size_t j = first; j < b; ++j) {
+        f += share[j - first];
+        cand[j] = Posed{from.a_rad + f * (to.a_rad - from.a_rad),
+                        from.c_rad + f * (to.c_rad - from.c_rad)};
+      }
+      return cand;
+    };
+    std::vector<std::vector<double>> starts = {now};
+    const std::vector<double> by_capacity =
+        spread_turn(linear_s, rapid, rad_to_deg(to.a_rad - from.a_rad),
+                    rad_to_deg(to.c_rad - from.c_rad), limits);
+    if (!by_capacity.empty()) starts.push_back(by_capacity);
+    const std::vector<double> share = best_turn_shares(
+        starts, rapid,
+        [&](const std::vector<double>& sh) { return chain_time(first, b, poses_for(sh)); });
+    const std::vector<Posed> cand = poses_for(share);
+    bool ok = true;
+    for (std::size_t j = first; j < b && ok; ++j) {
+      const Vec3d axis = machine.ac.forward(cand[j]);
+      ok = angle_between(axis, op.points[j].axis) <= max_deviation_rad + 1e-12 &&
+           machine.ac.a.contains(cand[j].a_rad) &&
+           (machine.ac.c.continuous || machine.ac.c.contains(cand[j].c_rad));
+    }
+    if (!ok || chain_time(first, b, cand) >= chain_time(first, b, po.poses) - 1e-6) continue;
+    std::copy(cand.begin() + static_cast<long>(first), cand.begin() + static_cast<long>(b),
+              trial.begin() + static_cast<long>(first));
+    changed.emplace_back(first, b);
+  }
+  if (changed.empty()) return;
+  // The new poses and the moves into and out of them must be free; a chain with any hit keeps
+  // its turn where it was.
+  if (model) {
+    std::vector<char> check_point(n, 0), check_move(n, 0);
+    for (const auto& [first, b] : changed) {
+      std::fill(check_point.begin() + static_cast<long>(first),
+                check_point.begin() + static_cast<long>(b), 1);
+      std::fill(check_move.begin() + static_cast<long>(first),
+                check_move.begin() + static_cast<long>(b) + 1, 1);
+    }
+    std::vector<Vec3d> axes, xyz;
+    std::vector<double> a_deg, c_deg;
+    for (std::size_t i = 0; i < n; ++i) {
+      axes.push_back(machine.ac.forward(trial[i]));
+      const Vec3d tip = tip_at(i, trial[i]);
+      xyz.push_back(
+          machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, trial[i]) : tip);
+      a_deg.push_back(rad_to_deg(trial[i].a_rad));
+      c_deg.push_back(rad_to_deg(trial[i].c_rad));
+    }
+    std::vector<ContactPoint> air(n);  // no contacts known: every point in the air
+    const std::vector<ContactPoint>& state = contacts.empty() ? air : contacts;
+    std::vector<char> hit(n, 0);
+    for (std::size_t i : colliding_points(*model, tool, op, axes, state, nullptr, &check_point)) {
+      hit[i] = 1;
+    }
+    for (std::size_t i : colliding_moves(*model, tool, machine, xyz, a_deg, c_deg, state, nullptr,
+                                         nullptr, &check_move)) {
+      hit[i] = 1;
+    }
+    for (const auto& [first, b] : changed) {
+      if (std::any_of(hit.begin() + static_cast<long>(first),
+                      hit.begin() + static_cast<long>(b) + 1, [](char h) { return h != 0; })) {
+        std::copy(po.poses.begin() + static_cast<long>(first),
+                  po.poses.begin() + static_cast<long>(b),
+                  trial.begin() + static_cast<long>(first));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (trial[i].a_rad == po.poses[i].a_rad && trial[i].c_rad == po.poses[i].c_rad) continue;
+    po.points[i].axis = machine.ac.forward(trial[i]);
+    po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, po.points[i].axis);
+  }
+  po.poses = std::move(trial);
+}
+
 }  // namespace
 
 namespace {
@@ -1152,6 +1312,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       continue;
     }
     po.poses = plan.poses;
+    if (optimised[k]) {
+      spread_turns_in_air(op, contacts[k], ball_radius_mm(op, options), planner_check,
+                          planner_check ? judged_tool(op, options) : ToolModel{}, machine,
+                          deg_to_rad(options.paper.max_deviation_deg), po);
+    }
     if (optimised[k] && machine.gcode.feed_reference == FeedReference::CutterPath) {
       // Every feed block keeps the time of the input block at its feed: the ball centre and
       // the contact point run as the CAM system programmed them, whatever the tip does.
@@ -1251,7 +1416,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                                                 po.programmed_time_s.empty()
                                                     ? programmed_block_times_s(po.points, po.poses)
                                                     : po.programmed_time_s,
-                                                limits));
+                                                limits, machine.ac));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -1263,7 +1428,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         input_poses[k].empty()
             ? schedule_after.back()
             : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses[k]),
-                                 programmed_block_times_s(in_points, input_poses[k]), limits));
+                                 programmed_block_times_s(in_points, input_poses[k]), limits,
+                                 machine.ac));
   }
   if (options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k)

@@ -50,7 +50,21 @@ struct Measured {
   int feed_moves = 0;
   /// The feed moves' time as rs274 read them, s.
   double feed_time_s = 0.0;
+  /// The rapids' time, each joint on its own trapezoid from rest to rest, s; and (tcp words)
+  /// what the rotary joints add to it: each rapid's time less that of the same move with A
+  /// and C held where it starts (the tip reached under that pose).
+  double rapid_time_s = 0.0, turn_excess_s = 0.0;
 };
+
+/// Time of a rest-to-rest move of every joint at its limits: the slowest joint's trapezoid.
+double rapid_time(const std::array<double, 5>& p, const std::array<double, 5>& q, const Limits& l) {
+  double t = 0.0;
+  for (int j = 0; j < 5; ++j) {
+    const double d = std::abs(q[j] - p[j]), v = l.v[j], a = l.a[j];
+    if (d > 0.0) t = std::max(t, d >= v * v / a ? d / v + v / a : 2.0 * std::sqrt(d / a));
+  }
+  return t;
+}
 
 /// Velocity and acceleration of every joint from rs274's moves: block times from the feed
 /// rates rs274 sets (XYZ distance / rate, or rotary distance / rate), each chain of
@@ -71,6 +85,13 @@ Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const d
   for (std::size_t i = 1; i < moves.size(); ++i) {
     const CanonMove &p = moves[i - 1], &m = moves[i];
     if (!m.feed) {
+      const auto qa = joints(p, machine_mode, c0, a0), qb = joints(m, machine_mode, c0, a0);
+      const double t = rapid_time(qa, qb, lim);
+      out.rapid_time_s += t;
+      CanonMove held = m;
+      held.a = p.a;
+      held.c = p.c;
+      out.turn_excess_s += std::max(0.0, t - rapid_time(qa, joints(held, false, c0, a0), lim));
       if (prev_t > 0.0) accel_check(std::vector<double>(5, 0.0), 0.0);  // stop before a rapid
       prev_w.assign(5, 0.0), prev_t = 0.0;
       continue;
@@ -146,7 +167,7 @@ TEST_CASE(
         INFO(r.err);
         REQUIRE(r.code == 0);
         const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
-        double report_feed_s = 0.0;
+        double report_feed_s = 0.0, report_rapid_s = 0.0, report_excess_s = 0.0;
         for (const auto& op : rep["operations"]) {
           const double before = op["before"]["cycle_time_s"], after = op["after"]["cycle_time_s"];
           INFO("cycle time " << before << " s -> " << after << " s");
@@ -157,6 +178,10 @@ TEST_CASE(
                   Approx(op[side]["cycle_time_s"].get<double>()).epsilon(1e-9));
           }
           report_feed_s += op["after"]["feed_time_s"].get<double>();
+          report_rapid_s += op["after"]["rapid_time_s"].get<double>();
+          report_excess_s += op["after"]["transition_excess_s"].get<double>();
+          CHECK(op["after"]["transition_excess_s"].get<double>() <=
+                op["after"]["rapid_time_s"].get<double>());
         }
         std::vector<CanonMove> moves;
         const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
@@ -173,6 +198,12 @@ TEST_CASE(
         // read (rs274 prints 4 decimals: 1e-4 relative allows them).
         INFO("feed time: report " << report_feed_s << " s, rs274 " << m.feed_time_s << " s");
         CHECK(m.feed_time_s == Approx(report_feed_s).epsilon(1e-4));
+        // So are the rapids' time and, with tcp words (the tip is what rs274 prints), what
+        // turning the tool adds to them (transition_excess_s).
+        INFO("rapids: report " << report_rapid_s << " s (turn " << report_excess_s << " s), rs274 "
+                               << m.rapid_time_s << " s (turn " << m.turn_excess_s << " s)");
+        CHECK(m.rapid_time_s == Approx(report_rapid_s).epsilon(1e-3));
+        if (!machine_mode) CHECK(m.turn_excess_s == Approx(report_excess_s).margin(2e-3));
         ++checked;
       }
     }

@@ -170,6 +170,10 @@ struct FeedSummary {
   /// controller runs it from the F word written), the rapids (retract, traverse, descent) on
   /// their joints' trapezoids. cycle_time_s = feed_time_s + rapid_time_s.
   double feed_time_s = 0.0, rapid_time_s = 0.0;
+  /// The part of rapid_time_s the rotary joints add: over the rapids, each one's time less the
+  /// time of its linear joints alone, s. Between passes it is what turning the tool costs
+  /// (the turn is spread over the rapids in the air where that is faster, air_turn.hpp).
+  double transition_excess_s = 0.0;
   /// Share of the feed moves' tip path length where the schedule is below the programmed feed.
   double feed_limited_fraction = 0.0;
   /// Lowest scheduled feed, mm/min (0 when there is no feed move).

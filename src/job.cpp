@@ -845,10 +845,12 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.a_rad), rad_to_deg(pose.c_rad)};
   };
   // A chain's time: its rapids on their trapezoids, its feed moves at their feed.
-  const auto chain_time = [&](std::size_t a, std::size_t b, const std::vector<Posed>& poses) {
+  // `chain[k]` is the pose of point a - 1 + k (k = 0 .. b - a + 1).
+  const auto chain_time = [&](std::size_t a, std::size_t b, const std::vector<Posed>& chain) {
     double t = 0.0;
     for (std::size_t j = a; j <= b; ++j) {
-      const JointPosition from = joints_at(j - 1, poses[j - 1]), to = joints_at(j, poses[j]);
+      const JointPosition from = joints_at(j - 1, chain[j - a]),
+                          to = joints_at(j, chain[j - a + 1]);
       if (op.points[j].motion == Motion::Rapid) {
         t += rapid_time_s(from, to, limits);
       } else if (po.points[j].feed_mm_per_min > 0.0) {
@@ -895,13 +897,15 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     }
     if (!rapid_turn || turn_rad < 1e-9) continue;
     // The chain's poses for per-move shares of the turn, and their time.
+    const std::vector<Posed> current(po.poses.begin() + static_cast<long>(first - 1),
+                                     po.poses.begin() + static_cast<long>(b + 1));
     const auto poses_for = [&](const std::vector<double>& share) {
-      std::vector<Posed> cand = po.poses;
+      std::vector<Posed> cand = current;
       double f = 0.0;
       for (std::size_t j = first; j < b; ++j) {
         f += share[j - first];
-        cand[j] = Posed{from.a_rad + f * (to.a_rad - from.a_rad),
-                        from.c_rad + f * (to.c_rad - from.c_rad)};
+        cand[j - first + 1] = Posed{from.a_rad + f * (to.a_rad - from.a_rad),
+                                    from.c_rad + f * (to.c_rad - from.c_rad)};
       }
       return cand;
     };
@@ -916,14 +920,14 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     const std::vector<Posed> cand = poses_for(share);
     bool ok = true;
     for (std::size_t j = first; j < b && ok; ++j) {
-      const Vec3d axis = machine.ac.forward(cand[j]);
-      ok = angle_between(axis, op.points[j].axis) <= max_deviation_rad + 1e-12 &&
-           machine.ac.a.contains(cand[j].a_rad) &&
-           (machine.ac.c.continuous || machine.ac.c.contains(cand[j].c_rad));
+      const Posed& pose = cand[j - first + 1];
+      ok =
+          angle_between(machine.ac.forward(pose), op.points[j].axis) <= max_deviation_rad + 1e-12 &&
+          machine.ac.a.contains(pose.a_rad) &&
+          (machine.ac.c.continuous || machine.ac.c.contains(pose.c_rad));
     }
-    if (!ok || chain_time(first, b, cand) >= chain_time(first, b, po.poses) - 1e-6) continue;
-    std::copy(cand.begin() + static_cast<long>(first), cand.begin() + static_cast<long>(b),
-              trial.begin() + static_cast<long>(first));
+    if (!ok || chain_time(first, b, cand) >= chain_time(first, b, current) - 1e-6) continue;
+    std::copy(cand.begin() + 1, cand.end() - 1, trial.begin() + static_cast<long>(first));
     changed.emplace_back(first, b);
   }
   if (changed.empty()) return;
@@ -1607,11 +1611,17 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         in_axes.push_back(op.points[i].axis);
         out_axes.push_back(po.points[i].axis);
       }
-      const auto before = colliding_points(*collision, tool, op, in_axes, contacts[k], &checking);
-      if (in_axes == out_axes) checking.advance(op.points.size());
-      const auto after = in_axes == out_axes ? before
-                                             : colliding_points(*collision, tool, op, out_axes,
-                                                                contacts[k], &checking);
+      // The input's count is information, not a check of the output: where the axes changed,
+      // the planner's check (which agrees with FCL) counts it; what is written is checked with
+      // FCL (where they did not change, the one count is that check).
+      const bool same_axes = in_axes == out_axes;
+      const PartCheck& counter =
+          checker && !same_axes ? static_cast<const PartCheck&>(*checker) : *collision;
+      const auto before = colliding_points(counter, tool, op, in_axes, contacts[k], &checking);
+      if (same_axes) checking.advance(op.points.size());
+      const auto after =
+          same_axes ? before
+                    : colliding_points(*collision, tool, op, out_axes, contacts[k], &checking);
       r.colliding_before = static_cast<long>(before.size());
       r.colliding_after = static_cast<long>(after.size());
       r.verification.collision_free = after.empty();

@@ -33,6 +33,12 @@ struct HeightSurface {
   }
 };
 
+/// A random height field's surface over [-10, 60]^2 as n x n cells of two triangles.
+TriangleMesh height_mesh(const Heightfield& hf, int n) {
+  const HeightSurface s{&hf};
+  return tessellate(s, n, n);
+}
+
 }  // namespace
 
 TEST_CASE("cspace: the exact face-cylinder test agrees with FCL", "[cspace]") {
@@ -152,8 +158,7 @@ TEST_CASE("cspace: the fast rasteriser matches one FCL query per cell on unseen 
   std::size_t cells = 0, free_fast = 0, only_brute = 0;
   for (const Heightfield& hf : random_heightfields(rng)) {
     INFO(hf.name);
-    const HeightSurface s{&hf};
-    const TriangleMesh mesh = tessellate(s, 70, 70);
+    const TriangleMesh mesh = height_mesh(hf, 70);
     const Part part(mesh);
     const CollisionModel fcl(mesh);
     const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 1, 1.0, 25.0, 25.0, 5.0, 45.0);
@@ -207,8 +212,7 @@ TEST_CASE("cspace: the tree's one-pose check agrees with FCL on unseen parts",
   std::size_t queries = 0, hits = 0, tree_free_fcl_hit = 0, tree_hit_fcl_free = 0;
   for (const Heightfield& hf : random_heightfields(rng)) {
     INFO(hf.name);
-    const HeightSurface s{&hf};
-    const TriangleMesh mesh = tessellate(s, 60, 60);
+    const TriangleMesh mesh = height_mesh(hf, 60);
     const CollisionModel fcl(mesh);
     const CSpaceRasteriser tree(mesh);
     const Tool t = Tool::ball_end_mill(6.0, 15.0);

@@ -1,5 +1,6 @@
-// Results: --method none, paper and global on the bundled demo and on generated sine surfaces
-// (with their parts), and the runtime of each as the points grow. Prints the markdown tables
+// Results: --method none, paper and global (each objective) on the bundled demo and on
+// generated sine surfaces (with their parts), at 250 and 2000 mm/min and on a machine with slow
+// rotary axes, and the runtime of each as the points grow. Prints the markdown tables
 // of docs/results.md.
 // Run from the source folder: build/release/bench/bench_results [data folder, default data]
 //   [largest number of points of the runtime table, default 100000] [runtime: that table only]
@@ -29,7 +30,21 @@ struct Case {
   TriangleMesh mesh;
   Machine machine;
   ToolOverrides tool;
+  /// --feed-schedule (a machine whose limits the programmed feed exceeds needs it).
+  bool feed_schedule = false;
 };
+
+/// The same case on a machine with slow rotary axes: A and C at 20 deg/s and 40 deg/s^2 (the
+/// linear axes the defaults'), the feed scheduled.
+Case slow_rotary(Case k) {
+  k.name += ", slow A/C";
+  k.machine.limits = default_joint_limits();
+  for (Joint j : {Joint::A, Joint::C}) {
+    k.machine.limits[static_cast<std::size_t>(j)] = {20.0, 40.0, 0.0};
+  }
+  k.feed_schedule = true;
+  return k;
+}
 
 /// A sine surface (the paper's case with other proportions), its raster passes and its part.
 Case sine_case(const std::string& name, double height_mm, double wavelength_mm, double width_mm,
@@ -82,6 +97,7 @@ Row run(const Case& k, Method method, GlobalObjective objective = GlobalObjectiv
   }
   o.part = &part;
   o.tool = k.tool;
+  o.feed_schedule = k.feed_schedule;
   const auto t0 = std::chrono::steady_clock::now();
   Row r;
   r.result = run_job(k.toolpath, k.machine, o);
@@ -115,6 +131,8 @@ int run_bench(int argc, char** argv) {
       sine_case("sine h6 tilt5 yaw30, F2000", 6.0, 40.0, 20.0, 80.0, 5.0, 30.0, 2000.0));
   cases.push_back(
       sine_case("sine h4 wl30 tilt0 yaw5, F2000", 4.0, 30.0, 20.0, 60.0, 0.0, 5.0, 2000.0));
+  // A machine with slow rotary axes, at both feeds.
+  for (std::size_t c = 1; c < 7; ++c) cases.push_back(slow_rotary(cases[c]));
 
   std::printf("bench_results %s (one run each, all threads)\n\n", data.c_str());
   if (!runtime_only) {
@@ -133,7 +151,8 @@ int run_bench(int argc, char** argv) {
       {Method::None, GlobalObjective::SumSquares, "none"},
       {Method::Paper, GlobalObjective::SumSquares, "paper"},
       {Method::Global, GlobalObjective::SumSquares, "global"},
-      {Method::Global, GlobalObjective::Peak, "global --objective peak"}};
+      {Method::Global, GlobalObjective::Peak, "global --objective peak"},
+      {Method::Global, GlobalObjective::Time, "global --objective time"}};
   for (const Case& k : cases) {
     if (runtime_only) break;
     for (const Variant& var : variants) {
@@ -156,8 +175,9 @@ int run_bench(int argc, char** argv) {
       "\nRuntime as the points grow (sine h10, tilt 15, yaw 10, with the part; the whole run: "
       "contact recovery, optimisation, posting, feed schedule and verification):\n\n");
   std::printf(
-      "| points | none s | paper s | global s | paper µs/point | global µs/point |\n"
-      "|---:|---:|---:|---:|---:|---:|\n");
+      "| points | none s | paper s | global s | global --objective time s | paper µs/point | "
+      "global µs/point | time µs/point |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   struct Staged {
     std::size_t points;
     const char* method;
@@ -170,13 +190,15 @@ int run_bench(int argc, char** argv) {
     const std::size_t n = k.toolpath.operations.front().points.size();
     if (n > largest) break;
     const Row none = run(k, Method::None), paper = run(k, Method::Paper),
-              global = run(k, Method::Global);
+              global = run(k, Method::Global), time = run(k, Method::Global, GlobalObjective::Time);
     const double per = 1e6 / static_cast<double>(n);
-    std::printf("| %zu | %.2f | %.2f | %.2f | %.0f | %.0f |%s\n", n, none.seconds, paper.seconds,
-                global.seconds, per * paper.seconds, per * global.seconds,
-                paper.result.ok() && global.result.ok() ? "" : " (problems)");
+    std::printf("| %zu | %.2f | %.2f | %.2f | %.2f | %.0f | %.0f | %.0f |%s\n", n, none.seconds,
+                paper.seconds, global.seconds, time.seconds, per * paper.seconds,
+                per * global.seconds, per * time.seconds,
+                paper.result.ok() && global.result.ok() && time.result.ok() ? "" : " (problems)");
     stages.push_back({n, "paper", paper});
     stages.push_back({n, "global", global});
+    stages.push_back({n, "global --objective time", time});
   }
   // Where the time goes: each stage's own wall time (the report's timings_s); "other" is the
   // rest of run_job (pose planning of the input, G-code written and read back, the schedule,

@@ -1,8 +1,11 @@
 #include "taxopt/job.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
+#include <limits>
 #include <sstream>
 
 #include "taxopt/core/error.hpp"
@@ -605,15 +608,53 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   return out;
 }
 
+/// Points of `op` (and the moves into them) whose tool hits the part, among those marked in
+/// `check`, for axes `axes` posed as `poses` (tips from the fixed ball centres); `machine` as
+/// the path is run (machine mode with linearisation runs the straight tip line: pass TCP).
+/// Nothing hits without a model.
+std::vector<char> points_and_moves_hit(const Operationd& op,
+                                       const std::vector<ContactPoint>& contacts,
+                                       double ball_radius_mm, const PartCheck* model,
+                                       const ToolModel* tool, const Machine& machine,
+                                       const std::vector<Vec3d>& axes,
+                                       const std::vector<Posed>& poses,
+                                       const std::vector<char>& check) {
+  const std::size_t n = op.points.size();
+  std::vector<char> hit(n, 0);
+  if (!model || !tool) return hit;
+  std::vector<Vec3d> xyz;
+  std::vector<double> a, c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
+    xyz.push_back(machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, poses[i])
+                                                           : tip);
+    a.push_back(rad_to_deg(poses[i].a_rad));
+    c.push_back(rad_to_deg(poses[i].c_rad));
+  }
+  std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
+  for (std::size_t i :
+       colliding_moves(*model, *tool, machine, xyz, a, c, contacts.empty() ? air : contacts,
+                       nullptr, nullptr, &check)) {
+    hit[i] = 1;
+  }
+  for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts, nullptr, &check)) {
+    hit[i] = 1;
+  }
+  return hit;
+}
+
 /// The guard after the optimiser (plan/stretch_guard.hpp): where the optimised axes would
 /// raise a pass's peak omega or a, or sweep the tool through the part between two CL points as
 /// the machine moves it, the pass keeps its input axes over those stretches, provided the
 /// input pass is itself safe; whole when a few rounds of joins do not make it good.
 /// With `reference` given (--method global against the paper's axes, with its preferred poses)
 /// the stretches keep those instead, when the peak a rises or the moves hit.
+/// With `rates` false (--objective time, whose objective is the schedule, not the peaks) only
+/// the moves that hit give stretches back.
 struct GuardReference {
   std::vector<Vec3d> axes;
   std::vector<std::optional<Posed>> preferred;
+  bool rates = true;
 };
 
 StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
@@ -635,31 +676,10 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
   // In machine mode with linearisation the tip runs the straight line as in TCP mode.
   Machine path_machine = machine;
   if (machine.gcode.program.linearise_tolerance_mm > 0.0) path_machine.gcode.mode = GcodeMode::Tcp;
-  // Points (and the moves into them) that hit the part, among those marked in `check`.
   const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
                              const std::vector<char>& check) {
-    std::vector<char> hit(n, 0);
-    if (!model) return hit;
-    std::vector<Vec3d> xyz;
-    std::vector<double> a, c;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
-      xyz.push_back(path_machine.gcode.mode == GcodeMode::Machine
-                        ? machine.ac.to_machine_mm(tip, poses[i])
-                        : tip);
-      a.push_back(rad_to_deg(poses[i].a_rad));
-      c.push_back(rad_to_deg(poses[i].c_rad));
-    }
-    std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
-    for (std::size_t i :
-         colliding_moves(*model, *tool, path_machine, xyz, a, c, contacts.empty() ? air : contacts,
-                         nullptr, nullptr, &check)) {
-      hit[i] = 1;
-    }
-    for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts, nullptr, &check)) {
-      hit[i] = 1;
-    }
-    return hit;
+    return points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, axes,
+                                poses, check);
   };
   const std::vector<IndexRange> passes = feed_passes(op);
   const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses, std::vector<char>(n, 1));
@@ -737,7 +757,8 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
         }
       };
       constexpr double kRel = 1.0 + 1e-9;
-      for (std::size_t j = 0; j < pass.size(); ++j) {
+      const bool rates_count = !reference || reference->rates;
+      for (std::size_t j = 0; rates_count && j < pass.size(); ++j) {
         if (!reference && k.omega_deg_s[j] > before[q].summary.max_omega_deg_s * kRel) {
           raises(j, j + 1);
         }
@@ -749,6 +770,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
         if (hit[i]) verdict[i] = PointVerdict::Hits;
       }
       out_verdicts.gains[q] =
+          !rates_count ||
           after.summary.max_accel_deg_s2 * kRel < before[q].summary.max_accel_deg_s2 ||
           after.mean_sq_accel() * kRel < before[q].mean_sq_accel();
     }
@@ -760,15 +782,26 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
   return guard;
 }
 
+/// What --objective time adds to an operation's passes: the least time of the move into every
+/// point (its programmed feed), the machine's limits, and whole-operation pose sequences each
+/// pass weighs beside the paper's (the sum-squares plan, the input's).
+struct TimeContext {
+  std::vector<double> programmed_s;
+  JointLimits limits{};
+  std::vector<std::vector<Posed>> alternatives;
+};
+
 /// --method global (global_optimiser.hpp) on every feed pass of `op`, from the paper's axes in
 /// `out` (the warm start), in parallel over passes. The points between passes then follow the
-/// new pass ends; a guard gives a pass back the paper's axes where its peak a would rise or its
-/// moves would hit the part.
+/// new pass ends; a guard gives a pass back the paper's axes (or `reference`'s) where its peak
+/// a would rise or its moves would hit the part. With `time` (--objective time) the passes get
+/// their joints, programmed times and alternatives from it.
 void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
                    double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
                    const Machine& machine, const std::vector<double>& metric_feed,
                    const PosePlanOptions& pose_options, const GlobalOptions& options,
-                   OptimisedOperation& out, detail::StageProgress& progress) {
+                   OptimisedOperation& out, detail::StageProgress& progress,
+                   const TimeContext* time = nullptr, const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
   const std::vector<IndexRange> passes = feed_passes(op);
   const PosePlan warm = plan_poses(machine.ac, out.axes, rapid_into_of(op), {}, pose_options);
@@ -804,6 +837,27 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
     };
+    if (time) {
+      // The machine's joints of a pose (the schedule's, whatever the G-code mode): the tip
+      // under the fixed ball centre, carried by the table.
+      problem.joints_at = [&op, &machine, ball_radius_mm, b = pass.begin](std::size_t j,
+                                                                          const Posed& pose) {
+        const Vec3d tip = tip_for_axis(op.points[b + j], ball_radius_mm, machine.ac.forward(pose));
+        const Vec3d xyz = machine.ac.to_machine_mm(tip, pose);
+        return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.a_rad),
+                             rad_to_deg(pose.c_rad)};
+      };
+      problem.programmed_time_s = slice(time->programmed_s, pass.begin + 1, pass.end);
+      problem.limits = time->limits;
+      for (const std::vector<Posed>& alt : time->alternatives) {
+        std::vector<Posed> poses = slice(alt, pass.begin, pass.end);
+        bool ok = true;
+        for (std::size_t j = 0; ok && j < poses.size(); ++j) {
+          ok = machine.ac.a.contains(poses[j].a_rad) && acceptable(j, machine.ac.forward(poses[j]));
+        }
+        if (ok) problem.alternatives.push_back(std::move(poses));
+      }
+    }
     plans[q] = plan_pass_global(machine.ac, problem, acceptable, options);
   });
   out.preferred.assign(n, std::nullopt);
@@ -821,7 +875,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
   }
   carry_between_passes(op, passes, carry);
   out.global_guard = guard_passes(op, contacts, ball_radius_mm, model, tool, machine, metric_feed,
-                                  pose_options, out, &paper);
+                                  pose_options, out, reference ? reference : &paper);
 }
 
 /// The turn of the rotary axes between two passes (made in one move by carry_between_passes)
@@ -976,6 +1030,126 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, po.points[i].axis);
   }
   po.poses = std::move(trial);
+}
+
+/// The feed points of `op` as posted: feed moves without a feed get `fallback_feed`.
+std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed) {
+  std::vector<CLPointd> points = op.points;
+  for (CLPointd& p : points) {
+    if (!(p.feed_mm_per_min > 0.0)) p.feed_mm_per_min = fallback_feed;
+  }
+  return points;
+}
+
+/// An operation's scheduled cycle (feed moves and rapids at the machine's effective limits)
+/// with tool axes `axes` about the fixed ball centres, posed as run_job poses them (the turns
+/// between passes in one move); `programmed_s` the least time of every move. Infinite when the
+/// axes cannot be posed.
+double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
+                         const Machine& machine, double max_deviation_rad,
+                         const std::vector<Vec3d>& axes,
+                         const std::vector<std::optional<Posed>>& preferred,
+                         const PosePlanOptions& pose_options, double fallback_feed,
+                         const std::vector<double>& programmed_s) {
+  const PosePlan plan =
+      plan_poses(machine.ac, axes, rapid_into_of(op), {}, pose_options, preferred);
+  if (!plan.ok()) return std::numeric_limits<double>::infinity();
+  PostedOperation po;
+  po.points = posted_feeds(op, fallback_feed);
+  po.poses = plan.poses;
+  for (std::size_t i = 0; i < po.points.size(); ++i) {
+    po.points[i].axis = axes[i];
+    po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
+  }
+  spread_turns_in_air(op, contacts, ball_radius_mm, model, tool ? *tool : ToolModel{}, machine,
+                      max_deviation_rad, po);
+  std::vector<Vec3d> tips;
+  for (const CLPointd& p : po.points) tips.push_back(p.tip_mm);
+  const std::vector<double> programmed = machine.gcode.feed_reference == FeedReference::CutterPath
+                                             ? programmed_s
+                                             : programmed_block_times_s(po.points, po.poses);
+  return schedule_operation(po.points, joints_of(machine.ac, tips, po.poses), programmed,
+                            effective_limits(machine), machine.ac)
+      .summary.cycle_time_s;
+}
+
+/// --method global --objective time (docs/global-method.md): the sum-squares plan first (a
+/// start and an alternative every pass weighs, and the reference of the guard, which gives it
+/// back over stretches whose moves hit), then every pass planned for its scheduled time; of
+/// the paper's, the sum-squares and the time plan the operation keeps the one with the
+/// shortest scheduled cycle (ties to the sum-squares plan, then the paper's). `out` holds the
+/// paper's plan on entry. The input's axes are kept instead where their cycle is shorter still
+/// and none of their points or moves hits the part. Returns a line for the log.
+std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
+                        const Machine& machine, const std::vector<double>& metric_feed,
+                        const PosePlanOptions& pose_options, const GlobalOptions& options,
+                        double fallback_feed, OptimisedOperation& out,
+                        detail::StageProgress& progress) {
+  const OptimisedOperation paper = out;
+  OptimisedOperation smooth = out;
+  GlobalOptions sum_squares = options;
+  sum_squares.objective = GlobalObjective::SumSquares;
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, metric_feed, pose_options,
+                sum_squares, smooth, progress);
+  const std::vector<bool> rapid_into = rapid_into_of(op);
+  std::vector<Vec3d> in_axes;
+  for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
+  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options);
+  const PosePlan smooth_plan =
+      plan_poses(machine.ac, smooth.axes, rapid_into, {}, pose_options, smooth.preferred);
+  TimeContext time;
+  time.limits = effective_limits(machine);
+  // Every feed block keeps the time the input block takes at its feed (cutter-path), as
+  // posted; with the tip-path reference that time moves with the tip (the input's here).
+  time.programmed_s = programmed_block_times_s(posted_feeds(op, fallback_feed),
+                                               in_plan.ok() ? in_plan.poses : smooth_plan.poses);
+  if (smooth_plan.ok()) time.alternatives.push_back(smooth_plan.poses);
+  if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
+  OptimisedOperation fast = out;
+  const GuardReference reference{smooth.axes, smooth.preferred, false};
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, metric_feed, pose_options,
+                options, fast, progress, &time, &reference);
+  const auto cycle = [&](const OptimisedOperation& o) {
+    return operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
+                             deg_to_rad(options.max_deviation_deg), o.axes, o.preferred,
+                             pose_options, fallback_feed, time.programmed_s);
+  };
+  const double paper_s = cycle(paper), smooth_s = cycle(smooth), fast_s = cycle(fast);
+  const char* chosen = "sum-squares";
+  double best_s = smooth_s;
+  out = smooth;
+  if (paper_s < best_s * (1.0 - 1e-9)) out = paper, best_s = paper_s, chosen = "paper";
+  if (fast_s < best_s * (1.0 - 1e-9)) out = std::move(fast), best_s = fast_s, chosen = "time";
+  // The input's axes, where they are faster still and every point and move of theirs is free.
+  const double input_s = in_plan.ok()
+                             ? operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
+                                                 deg_to_rad(options.max_deviation_deg), in_axes, {},
+                                                 pose_options, fallback_feed, time.programmed_s)
+                             : std::numeric_limits<double>::infinity();
+  if (input_s < best_s * (1.0 - 1e-9)) {
+    Machine path_machine = machine;
+    if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
+      path_machine.gcode.mode = GcodeMode::Tcp;
+    }
+    const std::vector<char> hit =
+        points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, in_axes,
+                             in_plan.poses, std::vector<char>(op.points.size(), 1));
+    if (std::find(hit.begin(), hit.end(), 1) == hit.end()) {
+      out = paper;
+      out.axes = in_axes;
+      out.preferred.clear();
+      best_s = input_s;
+      chosen = "input";
+    }
+  }
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "scheduled cycle %.3f s (paper), %.3f s (sum-squares), %.3f s (time plan), "
+                "%.3f s (input): %s axes kept",
+                paper_s, smooth_s, fast_s, input_s, chosen);
+  return line;
 }
 
 }  // namespace
@@ -1199,8 +1373,11 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   if (options.method != Method::None) {
     std::size_t all_passes = 0;
     for (const Operationd& op : tp.operations) all_passes += feed_passes(op).size();
-    detail::StageProgress progress(options.progress, "optimisation",
-                                   all_passes * (options.method == Method::Global ? 2 : 1));
+    detail::StageProgress progress(
+        options.progress, "optimisation",
+        all_passes * (options.method != Method::Global                    ? 1
+                      : options.global.objective == GlobalObjective::Time ? 3
+                                                                          : 2));
     for (std::size_t k = 0; k < tp.operations.size(); ++k) {
       const Operationd& op = tp.operations[k];
       const double R = ball_radius_mm(op, options);
@@ -1218,13 +1395,20 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                          metric_feed, options.pose_options, options.paper, progress);
       optimised[k]->guard = guard_passes(op, contacts[k], R, planner_check, tool ? &*tool : nullptr,
                                          machine, metric_feed, options.pose_options, *optimised[k]);
+      std::string time_line;
       if (options.method == Method::Global) {
         GlobalOptions global = options.global;
         global.max_deviation_deg = options.paper.max_deviation_deg;
         global.candidate_step_deg =
             std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
-        refine_global(op, contacts[k], R, planner_check, tool ? &*tool : nullptr, machine,
-                      metric_feed, options.pose_options, global, *optimised[k], progress);
+        if (global.objective == GlobalObjective::Time) {
+          time_line = refine_time(op, contacts[k], R, planner_check, tool ? &*tool : nullptr,
+                                  machine, metric_feed, options.pose_options, global, fallback_feed,
+                                  *optimised[k], progress);
+        } else {
+          refine_global(op, contacts[k], R, planner_check, tool ? &*tool : nullptr, machine,
+                        metric_feed, options.pose_options, global, *optimised[k], progress);
+        }
       }
       if (const StretchGuardResult& g = optimised[k]->guard; g.whole_passes + g.stretches > 0) {
         res.warnings.push_back(
@@ -1255,7 +1439,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
                  ? "; global: " + std::to_string(o.global_passes) + " passes refined, " +
                        std::to_string(o.global_guard.whole_passes) + " kept the paper's axes, " +
                        std::to_string(o.global_guard.stretches) + " stretches kept them"
-                 : std::string()));
+                 : std::string()) +
+            (time_line.empty() ? std::string() : "; time: " + time_line));
       }
     }
   }

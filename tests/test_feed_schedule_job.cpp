@@ -120,6 +120,40 @@ Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const d
   return out;
 }
 
+/// A machine file with these limits, pivots, G-code mode and feed mode; no linearisation (the
+/// schedule is checked block for block against the points, without the blocks linearisation
+/// writes between them: its own test is test_rs274.cpp).
+std::string machine_toml(const Limits& lim, const std::string& mode, const std::string& feed_mode,
+                         const double c0[2], const double a0[2]) {
+  std::ostringstream toml;
+  toml << "kinematics = \"ac-table-table\"\n";
+  for (int j = 0; j < 3; ++j) {
+    toml << "[axes."
+         << "XYZ"[j] << "]\nmax_velocity_mm_s = " << lim.v[j] << "\nmax_accel_mm_s2 = " << lim.a[j]
+         << "\n";
+  }
+  toml << "[axes.A]\nmin_deg = -120\nmax_deg = 120\nmax_velocity_deg_s = " << lim.v[3]
+       << "\nmax_accel_deg_s2 = " << lim.a[3] << "\n[axes.C]\ncontinuous = true\n"
+       << "max_velocity_deg_s = " << lim.v[4] << "\nmax_accel_deg_s2 = " << lim.a[4]
+       << "\n[pivot]\nc_axis_x = " << c0[0] << "\nc_axis_y = " << c0[1] << "\na_axis_y = " << a0[0]
+       << "\na_axis_z = " << a0[1] << "\n[gcode]\nmode = \"" << mode << "\"\nfeed_mode = \""
+       << feed_mode << "\"\nlinearise_tolerance_mm = 0\n";
+  return toml.str();
+}
+
+/// rs274's reading of a program (it must read all of it, one move a CL point) measured as
+/// `measure` does.
+Measured read_and_measure(const std::string& program, bool machine_mode, const double c0[2],
+                          const double a0[2], const Limits& lim,
+                          const std::vector<Vec3d>& input_tips_mm) {
+  std::vector<CanonMove> moves;
+  const RunResult rs = run_rs274(program, moves);
+  INFO(rs.err);
+  REQUIRE(rs.code == 0);
+  REQUIRE(moves.size() == input_tips_mm.size());
+  return measure(moves, machine_mode, c0, a0, lim, input_tips_mm, 250.0);
+}
+
 }  // namespace
 
 TEST_CASE(
@@ -138,24 +172,7 @@ TEST_CASE(
         const bool machine_mode = std::string(mode) == "machine";
         const double c0[2] = {machine_mode ? 7.0 : 0.0, machine_mode ? -4.0 : 0.0};
         const double a0[2] = {machine_mode ? 12.5 : 0.0, machine_mode ? -80.0 : 0.0};
-        std::ostringstream toml;
-        toml << "kinematics = \"ac-table-table\"\n";
-        for (int j = 0; j < 3; ++j) {
-          toml << "[axes."
-               << "XYZ"[j] << "]\nmax_velocity_mm_s = " << lim.v[j]
-               << "\nmax_accel_mm_s2 = " << lim.a[j] << "\n";
-        }
-        toml << "[axes.A]\nmin_deg = -120\nmax_deg = 120\nmax_velocity_deg_s = " << lim.v[3]
-             << "\nmax_accel_deg_s2 = " << lim.a[3] << "\n[axes.C]\ncontinuous = true\n"
-             << "max_velocity_deg_s = " << lim.v[4] << "\nmax_accel_deg_s2 = " << lim.a[4]
-             << "\n[pivot]\nc_axis_x = " << c0[0] << "\nc_axis_y = " << c0[1]
-             << "\na_axis_y = " << a0[0] << "\na_axis_z = " << a0[1] << "\n[gcode]\nmode = \""
-             << mode << "\"\nfeed_mode = \"" << feed_mode
-             << "\"\n"
-             // The schedule is checked block for block against the points: without the
-             // blocks linearisation writes between them (its own test: test_rs274.cpp).
-             << "linearise_tolerance_mm = 0\n";
-        write_file(dir.path("m.toml"), toml.str());
+        write_file(dir.path("m.toml"), machine_toml(lim, mode, feed_mode, c0, a0));
         const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 3, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
         write_file(dir.path("in.cls"), g.text);
         write_file(dir.path("part.stl"),
@@ -183,12 +200,8 @@ TEST_CASE(
           CHECK(op["after"]["transition_excess_s"].get<double>() <=
                 op["after"]["rapid_time_s"].get<double>());
         }
-        std::vector<CanonMove> moves;
-        const RunResult rs = run_rs274(dir.path("o.ngc"), moves);
-        INFO(rs.err);
-        REQUIRE(rs.code == 0);
-        REQUIRE(moves.size() == g.tips_mm.size());
-        const Measured m = measure(moves, machine_mode, c0, a0, lim, g.tips_mm, 250.0);
+        const Measured m =
+            read_and_measure(dir.path("o.ngc"), machine_mode, c0, a0, lim, g.tips_mm);
         CHECK(m.feed_moves > 100);
         // rs274 prints 4 decimals: the check allows their rounding.
         CHECK(m.worst_ratio <= 1.0 + 1e-3);
@@ -238,23 +251,28 @@ TEST_CASE(
                    "max_velocity_deg_s = 100000\nmax_accel_deg_s2 = 10000000\n[gcode]\n"
                    "feed_reference = \"" +
                    reference + "\"\n");
-    const RunResult r =
-        run_taxopt("--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") +
-                   " --machine " + dir.path("m.toml") + " --gcode " + dir.path("o.ngc") +
-                   " --report " + dir.path("r.json") + " -q --grid 4");
-    INFO(r.err);
-    REQUIRE(r.code == 0);
     // No limit binds on this machine: with the cutter-path reference the feed moves take the
-    // input's time (the invariant of issue 21), with the tip reference the new tip path's.
-    const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
-    for (const auto& op : rep["operations"]) {
-      const double before = op["before"]["feed_time_s"], after = op["after"]["feed_time_s"];
-      INFO("feed time " << before << " s -> " << after << " s");
-      CHECK(before > 0.0);
-      CHECK(op["before"]["feed_limited_fraction"] == 0.0);
-      CHECK(op["after"]["feed_limited_fraction"] == 0.0);
-      if (std::string(reference) == "cutter-path") {
-        CHECK(after == Approx(before).epsilon(1e-3));
+    // input's time (the invariant of issue 21), with the tip reference the new tip path's; so
+    // too with the time objective (the time plan, the others' axes or a mix).
+    // The paper method's program, written last, is the one read below.
+    for (const char* method : {"global --objective time", "paper"}) {
+      INFO("--method " << method);
+      const RunResult r =
+          run_taxopt("--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") +
+                     " --machine " + dir.path("m.toml") + " --method " + method + " --gcode " +
+                     dir.path("o.ngc") + " --report " + dir.path("r.json") + " -q --grid 4");
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      const auto rep = nlohmann::json::parse(read_file(dir.path("r.json")));
+      for (const auto& op : rep["operations"]) {
+        const double before = op["before"]["feed_time_s"], after = op["after"]["feed_time_s"];
+        INFO("feed time " << before << " s -> " << after << " s");
+        CHECK(before > 0.0);
+        CHECK(op["before"]["feed_limited_fraction"] == 0.0);
+        CHECK(op["after"]["feed_limited_fraction"] == 0.0);
+        if (std::string(reference) == "cutter-path") {
+          CHECK(after == Approx(before).epsilon(1e-3));
+        }
       }
     }
     std::vector<CanonMove> moves;
@@ -287,4 +305,62 @@ TEST_CASE(
       CHECK(worst_time_ratio > 0.02);
     }
   }
+}
+
+TEST_CASE(
+    "objective time: on unseen parts at limits that bind, the cycle is no longer than the "
+    "input's, the paper method's or the global method's, and rs274 reads it in G94 and G93 "
+    "within every limit",
+    "[feed][rs274][integration][global]") {
+  REQUIRE(have_rs274());
+  std::mt19937 rng(5151);
+  const Limits lim{{40, 40, 40, 10, 15}, {400, 400, 400, 50, 75}};
+  const double c0[2] = {0.0, 0.0}, a0[2] = {0.0, 0.0};
+  int checked = 0, shorter = 0;
+  for (const Heightfield& hf : random_heightfields(rng)) {
+    TempDir dir;
+    const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 3, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+    write_file(dir.path("in.cls"), g.text);
+    write_file(dir.path("part.stl"),
+               format_stl_binary(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0)));
+    const auto run = [&](const std::string& feed_mode, const std::string& method,
+                         const std::string& name) {
+      write_file(dir.path("m.toml"), machine_toml(lim, "tcp", feed_mode, c0, a0));
+      const RunResult r = run_taxopt(
+          "--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") + " --machine " +
+          dir.path("m.toml") + " --feed-schedule --method " + method + " --gcode " +
+          dir.path(name + ".ngc") + " --report " + dir.path(name + ".json") + " -q --grid 4");
+      INFO(hf.name << ", " << method << ", " << feed_mode << ": " << r.err);
+      REQUIRE(r.code == 0);
+      const auto rep = nlohmann::json::parse(read_file(dir.path(name + ".json")));
+      REQUIRE(rep["operations"].size() == 1);
+      return rep["operations"][0];
+    };
+    const auto paper = run("units-per-minute", "paper", "paper");
+    const auto global = run("units-per-minute", "global", "global");
+    for (const char* feed_mode : {"units-per-minute", "inverse-time"}) {
+      INFO(hf.name << ", " << feed_mode);
+      const auto time = run(feed_mode, "global --objective time", "time");
+      const double input_s = time["before"]["cycle_time_s"],
+                   paper_s = paper["after"]["cycle_time_s"],
+                   global_s = global["after"]["cycle_time_s"],
+                   time_s = time["after"]["cycle_time_s"];
+      INFO("cycle: input " << input_s << " s, paper " << paper_s << " s, global " << global_s
+                           << " s, time " << time_s << " s");
+      CHECK(time_s <= std::min({input_s, paper_s, global_s}) * (1.0 + 1e-6));
+      if (time_s < std::min({input_s, paper_s, global_s}) * (1.0 - 1e-3)) ++shorter;
+      CHECK(time["verification"]["within_dynamic_limits"] == true);
+      CHECK(time["verification"]["collision_free"] == true);
+      const Measured m = read_and_measure(dir.path("time.ngc"), false, c0, a0, lim, g.tips_mm);
+      CHECK(m.feed_moves > 100);
+      CHECK(m.worst_ratio <= 1.0 + 1e-3);  // rs274's 4 decimals allowed
+      CHECK(m.worst_ratio > 0.5);          // the limits bind
+      CHECK(m.fastest_vs_programmed <= 1.0 + 1e-3);
+      CHECK(m.feed_time_s == Approx(time["after"]["feed_time_s"].get<double>()).epsilon(1e-4));
+      ++checked;
+    }
+  }
+  CHECK(checked == 6);
+  // The objective buys time somewhere, not only ties.
+  CHECK(shorter >= 2);
 }

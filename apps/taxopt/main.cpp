@@ -266,8 +266,8 @@ int main(int argc, char** argv) {
       ->group("Method");
   app.add_option("--objective", a.objective,
                  "--method global: sum-squares (sum of squared rotary accelerations, default) | "
-                 "peak (the largest one)")
-      ->check(CLI::IsMember({"sum-squares", "peak"}))
+                 "peak (the largest one) | time (the cycle scheduled at the machine's limits)")
+      ->check(CLI::IsMember({"sum-squares", "peak", "time"}))
       ->group("Method");
   app.add_option("--jerk-weight", a.jerk_weight,
                  "--method global: weight of the squared rotary jerk against the squared "
@@ -384,7 +384,7 @@ int main(int argc, char** argv) {
                                                     {"--gcode", "FILE"},
                                                     {"--machine", "FILE"},
                                                     {"--method", "none|paper|global"},
-                                                    {"--objective", "sum-squares|peak"},
+                                                    {"--objective", "sum-squares|peak|time"},
                                                     {"--jerk-weight", "S^2"},
                                                     {"--feed", "MM/MIN"},
                                                     {"--report", "FILE"},
@@ -584,6 +584,11 @@ int main(int argc, char** argv) {
         printer(stage, done, total);
       };
     }
+    if (!a.quiet && a.verbose > 0) {
+      options.log = [](const std::string& line) {
+        std::fprintf(stderr, "taxopt: %s\n", line.c_str());
+      };
+    }
     {
       // Tool dimensions are in the CL file's units.
       const double u = taxopt::mm_per_unit(toolpath.units);
@@ -614,8 +619,9 @@ int main(int argc, char** argv) {
     options.method = a.method == "none"    ? taxopt::Method::None
                      : a.method == "paper" ? taxopt::Method::Paper
                                            : taxopt::Method::Global;
-    options.global.objective =
-        a.objective == "peak" ? taxopt::GlobalObjective::Peak : taxopt::GlobalObjective::SumSquares;
+    options.global.objective = a.objective == "peak"   ? taxopt::GlobalObjective::Peak
+                               : a.objective == "time" ? taxopt::GlobalObjective::Time
+                                                       : taxopt::GlobalObjective::SumSquares;
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     options.max_deviation_deg = a.max_deviation;

@@ -111,7 +111,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       {"method", to_string(options.method)},
       {"max_deviation_deg", options.paper.max_deviation_deg},
       {"grid_deg", options.paper.grid_deg},
-      {"objective", options.global.objective == GlobalObjective::Peak ? "peak" : "sum-squares"},
+      {"objective", to_string(options.global.objective)},
       {"jerk_weight_s2", options.global.jerk_weight_s2},
       {"feed_mm_min", options.feed_mm_per_min ? nlohmann::json(*options.feed_mm_per_min)
                                               : nlohmann::json(nullptr)},

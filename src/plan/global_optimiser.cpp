@@ -3,8 +3,10 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -17,6 +19,10 @@ constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
 
 /// Relative tolerance under which two objective values are equal (ties keep the earlier).
 constexpr double kTie = 1e-12;
+
+/// The time objective's surrogate: the share of a segment's stretch charged to each of its
+/// ends (docs/global-method.md measures the choice).
+constexpr double kStretchShare = 0.5;
 
 /// An objective value: the peak a^2 and the sum of a^2 (deg^2/s^4). Which one orders values
 /// depends on the objective; the other breaks ties.
@@ -100,6 +106,7 @@ Eigen::SparseMatrix<double> second_difference(const std::vector<double>& t,
 /// The candidate poses of point i for the programme (C in (-pi, pi] for a continuous C, else
 /// every turn within its range); the warm start's pose first.
 std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const Posed& warm,
+                                 const std::vector<Posed>& extra,
                                  const std::vector<Vec3d>& grid_axes, bool both_branches,
                                  const AxisTest& acceptable) {
   std::vector<Posed> out;
@@ -125,6 +132,7 @@ std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const
     }
   };
   add(warm);
+  for (const Posed& p : extra) add(p);
   const bool warm_positive = warm.a_rad >= 0.0;
   for (const Vec3d& axis : grid_axes) {
     if (!acceptable(i, axis)) continue;
@@ -139,16 +147,41 @@ std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const
   return out;
 }
 
+/// The sequence of a pair programme (states: pairs of consecutive candidates, index r K + s)
+/// from its best final state and back pointers: back[i][state at i - 1] is the candidate at
+/// i - 2.
+std::vector<std::size_t> backtrack(const std::vector<std::vector<Posed>>& candidates,
+                                   const std::vector<std::vector<std::uint8_t>>& back,
+                                   std::size_t best) {
+  const std::size_t n = candidates.size(), kl = candidates[n - 1].size();
+  std::vector<std::size_t> seq(n);
+  seq[n - 1] = best % kl;
+  seq[n - 2] = best / kl;
+  for (std::size_t i = n - 1; i >= 2; --i) {
+    const std::size_t kn = candidates[i].size();
+    seq[i - 2] = back[i][seq[i - 1] * kn + seq[i]];
+  }
+  return seq;
+}
+
 }  // namespace
 
 const char* to_string(GlobalObjective objective) {
-  return objective == GlobalObjective::Peak ? "peak" : "sum-squares";
+  switch (objective) {
+    case GlobalObjective::Peak: return "peak";
+    case GlobalObjective::Time: return "time";
+    case GlobalObjective::SumSquares: break;
+  }
+  return "sum-squares";
 }
 
 double rotary_objective(const std::vector<Posed>& poses, const std::vector<double>& segment_time_s,
                         GlobalObjective objective, double jerk_weight_s2) {
   if (segment_time_s.size() + 1 != poses.size() && !poses.empty()) {
     throw std::invalid_argument("rotary_objective: n poses need n - 1 segment times");
+  }
+  if (objective == GlobalObjective::Time) {
+    throw std::invalid_argument("rotary_objective: the time objective needs the joints");
   }
   return scalar(value_of(poses, segment_time_s, jerk_weight_s2), objective);
 }
@@ -220,20 +253,180 @@ std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<P
     wc0.swap(wc1);
   }
   // Best final state, then back through the pointers.
-  const std::size_t kl = candidates[n - 1].size();
   std::size_t best = 0;
   for (std::size_t st = 1; st < cost.size(); ++st) {
     if (less(cost[st], cost[best], objective)) best = st;
   }
   if (value) *value = scalar(cost[best], objective);
-  std::vector<std::size_t> seq(n);
-  seq[n - 1] = best % kl;
-  seq[n - 2] = best / kl;
-  for (std::size_t i = n - 1; i >= 2; --i) {
-    const std::size_t kn = candidates[i].size();
-    seq[i - 2] = back[i][seq[i - 1] * kn + seq[i]];
+  return backtrack(candidates, back, best);
+}
+
+std::vector<std::size_t> fastest_candidate_sequence(
+    const std::vector<std::vector<Posed>>& candidates,
+    const std::vector<std::vector<JointPosition>>& joints,
+    const std::vector<double>& programmed_time_s, const std::vector<double>& segment_time_s,
+    const JointLimits& limits, double* surrogate_s, bool wrap_c) {
+  const std::size_t n = candidates.size();
+  if (n == 0) return {};
+  if (segment_time_s.size() + 1 != n || programmed_time_s.size() + 1 != n || joints.size() != n) {
+    throw std::invalid_argument(
+        "fastest_candidate_sequence: n points need n joint sets and n - 1 segment times");
   }
-  return seq;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (candidates[i].empty() || candidates[i].size() > 255 ||
+        joints[i].size() != candidates[i].size()) {
+      throw std::invalid_argument(
+          "fastest_candidate_sequence: 1 to 255 candidates per point, each with its joints");
+    }
+  }
+  if (n <= 2) {
+    if (surrogate_s) *surrogate_s = 0.0;
+    return std::vector<std::size_t>(n, 0);
+  }
+  // Velocity limits with the schedule's margin; reciprocal acceleration limits (0: none).
+  std::array<double, kJointCount> v_max{}, inv_a{};
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    v_max[j] = limits[j].max_velocity_per_s * (1.0 - ScheduleOptions{}.margin);
+    inv_a[j] = limits[j].max_accel_per_s2 > 0.0
+                   ? 1.0 / (limits[j].max_accel_per_s2 * (1.0 - ScheduleOptions{}.margin))
+                   : 0.0;
+  }
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  const auto& t = segment_time_s;
+  // Every pair of candidates of segment i: its surrogate time, the joint velocities at that
+  // time, and the rotary rates (rad/s) at the metrics' time for the tie-breaker.
+  // `quiet`: every joint could start or stop within half the segment's time (2 |w_j| / tau <=
+  // A_j); between two quiet segments no acceleration binds (the change of velocity is at most
+  // the sum of the two, within the mean time), so a point between them adds nothing.
+  struct Pair {
+    double tau;
+    std::array<double, kJointCount> w;
+    double wa, wc;
+    bool quiet;
+  };
+  const auto pairs = [&](std::size_t i, std::vector<Pair>& out) {
+    const auto& p = candidates[i];
+    const auto& q = candidates[i + 1];
+    out.resize(p.size() * q.size());
+    for (std::size_t r = 0; r < p.size(); ++r) {
+      for (std::size_t s = 0; s < q.size(); ++s) {
+        Pair& e = out[r * q.size() + s];
+        std::array<double, kJointCount> dq{};
+        double tau = std::max(programmed_time_s[i], 1e-9);
+        for (std::size_t j = 0; j < kJointCount; ++j) {
+          dq[j] = joints[i + 1][s][j] - joints[i][r][j];
+          if (j == kC && wrap_c) dq[j] = std::remainder(dq[j], 360.0);
+          if (v_max[j] > 0.0) tau = std::max(tau, std::abs(dq[j]) / v_max[j]);
+        }
+        e.tau = tau;
+        double fastest = 0.0;  // largest |w_j| / A_j
+        for (std::size_t j = 0; j < kJointCount; ++j) {
+          e.w[j] = dq[j] / tau;
+          fastest = std::max(fastest, std::abs(e.w[j]) * inv_a[j]);
+        }
+        e.quiet = 2.0 * fastest <= tau;
+        e.wa = (q[s].a_rad - p[r].a_rad) / t[i];
+        const double step = q[s].c_rad - p[r].c_rad;
+        e.wc = (wrap_c ? wrap_pi(step) : step) / t[i];
+      }
+    }
+  };
+  // What a point adds: the least uniform stretch of its segments that meets the schedule's
+  // inner set there (feed_schedule.hpp: the change of velocity within the mean time where a
+  // joint keeps its direction; where it reverses, starts or stops, each side within half its
+  // own time), at kStretchShare of its time (each segment has two ends). `before` null: the
+  // start from rest; `after` null: the stop.
+  const auto point_extra = [&](const Pair* before, const Pair* after) {
+    double both = 0.0, side_before = 0.0, side_after = 0.0;  // largest |a_j| / A_j
+    const double h = 0.5 * ((before ? before->tau : 0.0) + (after ? after->tau : 0.0));
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      if (inv_a[j] == 0.0) continue;
+      const double wb = before ? before->w[j] : 0.0, wa = after ? after->w[j] : 0.0;
+      if (wb * wa > 0.0) {
+        both = std::max(both, std::abs(wa - wb) * inv_a[j] / h);
+      } else {
+        if (before)
+          side_before = std::max(side_before, 2.0 * std::abs(wb) * inv_a[j] / before->tau);
+        if (after) side_after = std::max(side_after, 2.0 * std::abs(wa) * inv_a[j] / after->tau);
+      }
+    }
+    double extra = 0.0;
+    if (both > 1.0) extra += (std::sqrt(both) - 1.0) * 2.0 * h;
+    if (side_before > 1.0) extra += (std::sqrt(side_before) - 1.0) * before->tau;
+    if (side_after > 1.0) extra += (std::sqrt(side_after) - 1.0) * after->tau;
+    return kStretchShare * extra;
+  };
+  struct Cost {
+    double time_s = 0.0, sum_sq = 0.0;
+  };
+  const auto better = [](const Cost& x, const Cost& y) {
+    if (x.time_s < y.time_s * (1.0 - 1e-9)) return true;
+    if (x.time_s > y.time_s * (1.0 + 1e-9)) return false;
+    return x.sum_sq < y.sum_sq * (1.0 - kTie) - 1e-300;
+  };
+  std::vector<Pair> seg0, seg1;
+  pairs(0, seg0);
+  std::vector<Cost> cost(seg0.size());
+  for (std::size_t st = 0; st < seg0.size(); ++st) {
+    cost[st].time_s = seg0[st].tau + point_extra(nullptr, &seg0[st]);
+  }
+  std::vector<std::vector<std::uint8_t>> back(n);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    pairs(i, seg1);
+    const std::size_t kp = candidates[i - 1].size(), k = candidates[i].size(),
+                      kn = candidates[i + 1].size();
+    const double c = kRadToDeg * 2.0 / (t[i - 1] + t[i]);
+    std::vector<Cost> next(k * kn);
+    back[i + 1].assign(k * kn, 0);
+    for (std::size_t s = 0; s < k; ++s) {
+      for (std::size_t u = 0; u < kn; ++u) {
+        const Pair& after = seg1[s * kn + u];
+        Cost best{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+        std::uint8_t arg = 0;
+        for (std::size_t r = 0; r < kp; ++r) {
+          const Pair& before = seg0[r * k + s];
+          const double extra = before.quiet && after.quiet ? 0.0 : point_extra(&before, &after);
+          const double da = c * (after.wa - before.wa), dc = c * (after.wc - before.wc);
+          const Cost& was = cost[r * k + s];
+          const Cost v{was.time_s + after.tau + extra, was.sum_sq + da * da + dc * dc};
+          if (better(v, best)) best = v, arg = static_cast<std::uint8_t>(r);
+        }
+        next[s * kn + u] = best;
+        back[i + 1][s * kn + u] = arg;
+      }
+    }
+    cost.swap(next);
+    seg0.swap(seg1);
+  }
+  // The stop at the end (the states are the last segment's pairs, in the same order).
+  for (std::size_t st = 0; st < cost.size(); ++st)
+    cost[st].time_s += point_extra(&seg0[st], nullptr);
+  std::size_t best = 0;
+  for (std::size_t st = 1; st < cost.size(); ++st) {
+    if (better(cost[st], cost[best])) best = st;
+  }
+  if (surrogate_s) *surrogate_s = cost[best].time_s;
+  return backtrack(candidates, back, best);
+}
+
+namespace {
+
+FeedSchedule pass_schedule(const std::vector<JointPosition>& joints,
+                           const std::vector<double>& programmed_time_s,
+                           const JointLimits& limits) {
+  FeedChain chain;
+  chain.joints = joints;
+  chain.min_time_s = programmed_time_s;
+  for (double& ti : chain.min_time_s) ti = std::max(ti, 1e-9);
+  return schedule_feed(chain, limits);
+}
+
+}  // namespace
+
+double pass_time_s(const std::vector<JointPosition>& joints,
+                   const std::vector<double>& programmed_time_s, const JointLimits& limits) {
+  if (joints.size() < 2) return 0.0;
+  return pass_schedule(joints, programmed_time_s, limits).total_time_s();
 }
 
 GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProblem& problem,
@@ -247,18 +440,42 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
       throw std::invalid_argument("plan_pass_global: segment times must be positive");
     }
   }
-  const auto& t = problem.segment_time_s;
   const GlobalObjective objective = options.objective;
+  const bool timed = objective == GlobalObjective::Time;
+  if (timed) {
+    if (!problem.joints_at || (n > 0 && problem.programmed_time_s.size() + 1 != n)) {
+      throw std::invalid_argument(
+          "plan_pass_global: the time objective needs the joints and n - 1 programmed times");
+    }
+    for (const auto& alt : problem.alternatives) {
+      if (alt.size() != n) {
+        throw std::invalid_argument("plan_pass_global: an alternative needs n poses");
+      }
+    }
+  }
+  const auto& t = problem.segment_time_s;
   const double wj = options.jerk_weight_s2;
+  // The time objective: the pass's schedule at the machine's limits.
+  const auto joints_of = [&](const std::vector<Posed>& poses) {
+    std::vector<JointPosition> q(n);
+    for (std::size_t i = 0; i < n; ++i) q[i] = problem.joints_at(i, poses[i]);
+    return q;
+  };
+  const auto time_of = [&](const std::vector<Posed>& poses) {
+    return pass_time_s(joints_of(poses), problem.programmed_time_s, problem.limits);
+  };
+  const auto objective_of = [&](const std::vector<Posed>& poses) {
+    return timed ? time_of(poses) : rotary_objective(poses, t, objective, wj);
+  };
   GlobalPassPlan plan;
   plan.poses = problem.warm_start;
   const auto finish = [&] {
     plan.axes.clear();
     for (const Posed& p : plan.poses) plan.axes.push_back(machine.forward(p));
-    plan.objective = rotary_objective(plan.poses, t, objective, wj);
+    plan.objective = objective_of(plan.poses);
     return plan;
   };
-  plan.objective_warm = plan.objective_dp = rotary_objective(plan.poses, t, objective, wj);
+  plan.objective_warm = plan.objective_dp = objective_of(plan.poses);
   if (n < 3) return finish();
 
   // (1) The programme over coarse candidates.
@@ -270,13 +487,27 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
     near_pole = near_pole || std::abs(p.a_rad) <= 2.0 * radius + step;
   }
   std::vector<std::vector<Posed>> cand(n);
+  std::vector<Posed> extra;
   for (std::size_t i = 0; i < n; ++i) {
     std::vector<Vec3d> grid = cap_grid(problem.input_axes[i], radius, step);
-    cand[i] = candidates_at(machine, i, problem.warm_start[i], grid, near_pole, acceptable);
+    extra.clear();
+    if (timed) {
+      for (const auto& alt : problem.alternatives) extra.push_back(alt[i]);
+    }
+    cand[i] = candidates_at(machine, i, problem.warm_start[i], extra, grid, near_pole, acceptable);
     plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
   }
-  const std::vector<std::size_t> seq =
-      best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous);
+  std::vector<std::size_t> seq;
+  if (timed) {
+    std::vector<std::vector<JointPosition>> joints(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (const Posed& p : cand[i]) joints[i].push_back(problem.joints_at(i, p));
+    }
+    seq = fastest_candidate_sequence(cand, joints, problem.programmed_time_s, t, problem.limits,
+                                     nullptr, machine.c.continuous);
+  } else {
+    seq = best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous);
+  }
   std::vector<Posed> dp(n);
   for (std::size_t i = 0; i < n; ++i) {
     dp[i] = cand[i][seq[i]];
@@ -290,73 +521,111 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
     const double turns = std::round(shift / Constants<double>::two_pi());
     for (Posed& p : dp) p.c_rad += turns * Constants<double>::two_pi();
   }
-  Value current = value_of(plan.poses, t, wj);
-  const Value dp_full = value_of(dp, t, wj);
-  plan.objective_dp = scalar(dp_full, objective);
-  if (less(dp_full, current, objective)) plan.poses = dp, current = dp_full;
 
-  // (2) Continuous refinement from the better start.
+  // (2) Continuous refinement from `plan.poses`, minimising `obj` at segment times `tt`; a step
+  // is taken only where `admissible` (if given) accepts it. Returns the steps taken.
   const auto feasible = [&](std::size_t i, const Posed& p) {
     if (!machine.a.contains(p.a_rad)) return false;
     if (!machine.c.continuous && !machine.c.contains(p.c_rad)) return false;
     return acceptable(i, machine.forward(p));
   };
-  std::vector<double> row_weight(n, 1.0);
-  double lambda = 1e-3;
-  int rejected = 0;
-  while (plan.iterations < options.max_iterations && rejected < 12) {
-    if (objective == GlobalObjective::Peak) {
-      std::vector<double> aa, ac;
-      accelerations(plan.poses, t, aa, ac);
-      const double peak = std::sqrt(current.peak_sq);
-      for (std::size_t i = 0; i < n; ++i) {
-        const double r = peak > 0.0 ? std::hypot(aa[i], ac[i]) / peak : 1.0;
-        row_weight[i] = std::max(std::pow(r, 6.0), 1e-6);
-      }
-    }
-    const Eigen::SparseMatrix<double> m = second_difference(t, row_weight, wj);
-    Eigen::SparseMatrix<double> h = (m.transpose() * m).pruned();
-    Eigen::VectorXd xa(static_cast<long>(n)), xc(static_cast<long>(n));
-    for (std::size_t i = 0; i < n; ++i) {
-      xa[static_cast<long>(i)] = plan.poses[i].a_rad;
-      xc[static_cast<long>(i)] = plan.poses[i].c_rad;
-    }
-    Eigen::SparseMatrix<double> lhs = h;
-    double mean_diag = 0.0;
-    for (long i = 0; i < h.rows(); ++i) mean_diag += h.coeff(i, i);
-    mean_diag /= static_cast<double>(h.rows());
-    for (long i = 0; i < h.rows(); ++i) {
-      lhs.coeffRef(i, i) += lambda * (h.coeff(i, i) + 1e-9 * mean_diag + 1e-300);
-    }
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(lhs);
-    if (ldlt.info() != Eigen::Success) break;
-    const Eigen::VectorXd da = ldlt.solve(-(h * xa)), dc = ldlt.solve(-(h * xc));
-    if (!da.allFinite() || !dc.allFinite()) break;
-    std::vector<Posed> trial = plan.poses;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double sa = da[static_cast<long>(i)], sc = dc[static_cast<long>(i)];
-      if (std::abs(sa) + std::abs(sc) < 1e-12) continue;
-      double f = 1.0;
-      for (int b = 0; b <= options.bisection_steps; ++b, f *= 0.5) {
-        const Posed p{plan.poses[i].a_rad + f * sa, plan.poses[i].c_rad + f * sc};
-        if (feasible(i, p)) {
-          trial[i] = p;
-          break;
+  const auto refine = [&](const std::vector<double>& tt, GlobalObjective obj, int budget,
+                          const std::function<bool(const std::vector<Posed>&)>& admissible) {
+    Value current = value_of(plan.poses, tt, wj);
+    std::vector<double> row_weight(n, 1.0);
+    double lambda = 1e-3;
+    int rejected = 0, taken = 0;
+    while (taken < budget && rejected < 12) {
+      if (obj == GlobalObjective::Peak) {
+        std::vector<double> aa, ac;
+        accelerations(plan.poses, tt, aa, ac);
+        const double peak = std::sqrt(current.peak_sq);
+        for (std::size_t i = 0; i < n; ++i) {
+          const double r = peak > 0.0 ? std::hypot(aa[i], ac[i]) / peak : 1.0;
+          row_weight[i] = std::max(std::pow(r, 6.0), 1e-6);
         }
       }
+      const Eigen::SparseMatrix<double> m = second_difference(tt, row_weight, wj);
+      Eigen::SparseMatrix<double> h = (m.transpose() * m).pruned();
+      Eigen::VectorXd xa(static_cast<long>(n)), xc(static_cast<long>(n));
+      for (std::size_t i = 0; i < n; ++i) {
+        xa[static_cast<long>(i)] = plan.poses[i].a_rad;
+        xc[static_cast<long>(i)] = plan.poses[i].c_rad;
+      }
+      Eigen::SparseMatrix<double> lhs = h;
+      double mean_diag = 0.0;
+      for (long i = 0; i < h.rows(); ++i) mean_diag += h.coeff(i, i);
+      mean_diag /= static_cast<double>(h.rows());
+      for (long i = 0; i < h.rows(); ++i) {
+        lhs.coeffRef(i, i) += lambda * (h.coeff(i, i) + 1e-9 * mean_diag + 1e-300);
+      }
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(lhs);
+      if (ldlt.info() != Eigen::Success) break;
+      const Eigen::VectorXd da = ldlt.solve(-(h * xa)), dc = ldlt.solve(-(h * xc));
+      if (!da.allFinite() || !dc.allFinite()) break;
+      std::vector<Posed> trial = plan.poses;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double sa = da[static_cast<long>(i)], sc = dc[static_cast<long>(i)];
+        if (std::abs(sa) + std::abs(sc) < 1e-12) continue;
+        double f = 1.0;
+        for (int b = 0; b <= options.bisection_steps; ++b, f *= 0.5) {
+          const Posed p{plan.poses[i].a_rad + f * sa, plan.poses[i].c_rad + f * sc};
+          if (feasible(i, p)) {
+            trial[i] = p;
+            break;
+          }
+        }
+      }
+      const Value v = value_of(trial, tt, wj);
+      if (less(v, current, obj) &&
+          (obj == GlobalObjective::Peak || v.sum_sq < current.sum_sq * (1.0 - 1e-9)) &&
+          (!admissible || admissible(trial))) {
+        plan.poses = std::move(trial);
+        current = v;
+        ++taken;
+        lambda = std::max(lambda * 0.3, 1e-6);
+        rejected = 0;
+      } else {
+        lambda *= 10.0;
+        ++rejected;
+      }
     }
-    const Value v = value_of(trial, t, wj);
-    if (less(v, current, objective) &&
-        (objective == GlobalObjective::Peak || v.sum_sq < current.sum_sq * (1.0 - 1e-9))) {
-      plan.poses = std::move(trial);
-      current = v;
-      ++plan.iterations;
-      lambda = std::max(lambda * 0.3, 1e-6);
-      rejected = 0;
-    } else {
-      lambda *= 10.0;
-      ++rejected;
-    }
+    return taken;
+  };
+
+  if (!timed) {
+    Value current = value_of(plan.poses, t, wj);
+    const Value dp_full = value_of(dp, t, wj);
+    plan.objective_dp = scalar(dp_full, objective);
+    if (less(dp_full, current, objective)) plan.poses = dp;
+    plan.iterations = refine(t, objective, options.max_iterations, {});
+    return finish();
+  }
+
+  // The time objective: the fastest of the starts by the schedule itself (the warm start
+  // first, so ties keep it), then the sum of squares lowered at the scheduled times, a step
+  // taken only where the schedule does not get slower; the times follow the poses (rounds).
+  double best_s = plan.objective_warm;
+  for (const auto& alt : problem.alternatives) {
+    const double alt_s = time_of(alt);
+    if (alt_s < best_s * (1.0 - 1e-9)) plan.poses = alt, best_s = alt_s;
+  }
+  plan.objective_dp = time_of(dp);
+  if (plan.objective_dp < best_s * (1.0 - 1e-9)) plan.poses = dp, best_s = plan.objective_dp;
+  for (int round = 0; round < 3 && plan.iterations < options.max_iterations; ++round) {
+    FeedSchedule schedule =
+        pass_schedule(joints_of(plan.poses), problem.programmed_time_s, problem.limits);
+    for (double& ti : schedule.time_s) ti = std::max(ti, 1e-6);
+    const int taken =
+        refine(schedule.time_s, GlobalObjective::SumSquares,
+               options.max_iterations - plan.iterations, [&](const std::vector<Posed>& trial) {
+                 const double trial_s = time_of(trial);
+                 if (trial_s > best_s * (1.0 + 1e-12)) return false;
+                 best_s = trial_s;
+                 return true;
+               });
+    plan.iterations += taken;
+    if (taken == 0) break;
   }
   return finish();
 }

@@ -30,15 +30,19 @@
 /// the better of the warm start and the programme's optimum.
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 
 namespace taxopt {
 
-enum class GlobalObjective { SumSquares, Peak };
-/// "sum-squares", "peak".
+/// Time: the pass's scheduled feed time at the machine's joint limits (feed_schedule.hpp),
+/// with the sum of squares as the tie-breaker (docs/global-method.md, "--objective time").
+enum class GlobalObjective { SumSquares, Peak, Time };
+/// "sum-squares", "peak", "time".
 const char* to_string(GlobalObjective objective);
 
 /// Options of plan_pass_global.
@@ -66,6 +70,14 @@ struct GlobalPassProblem {
   /// A feasible start (n poses, continuous C), e.g. the paper method's; its axes must be
   /// acceptable.
   std::vector<Posed> warm_start;
+  /// GlobalObjective::Time only. The machine's joints of point i at a pose (X Y Z mm, A C deg;
+  /// C as the pose has it), each segment's least time at the programmed feed, s (n - 1,
+  /// positive), the joints' limits, and other feasible pose sequences (n poses each, continuous
+  /// C; e.g. the sum-squares plan) that join the warm start as starts and candidates.
+  std::function<JointPosition(std::size_t, const Posed&)> joints_at;
+  std::vector<double> programmed_time_s;
+  JointLimits limits{};
+  std::vector<std::vector<Posed>> alternatives;
 };
 
 /// The poses of a pass and how they came about.
@@ -73,8 +85,8 @@ struct GlobalPassPlan {
   /// Poses (continuous C) and their axes, n.
   std::vector<Posed> poses;
   std::vector<Vec3d> axes;
-  /// Objective (rotary_objective) of the warm start, of the programme's best sequence, and in
-  /// the end.
+  /// Objective (rotary_objective; for GlobalObjective::Time the pass's scheduled time, s,
+  /// pass_time_s) of the warm start, of the programme's best sequence, and in the end.
   double objective_warm = 0.0, objective_dp = 0.0, objective = 0.0;
   /// Largest number of candidates of a point, and refinement steps accepted.
   std::size_t max_candidates = 0;
@@ -82,7 +94,8 @@ struct GlobalPassPlan {
 };
 
 /// The objective of poses (continuous C) over segment times: J or P of the file comment,
-/// degrees and seconds.
+/// degrees and seconds. GlobalObjective::Time needs the machine's joints: pass_time_s
+/// (std::invalid_argument here).
 double rotary_objective(const std::vector<Posed>& poses, const std::vector<double>& segment_time_s,
                         GlobalObjective objective, double jerk_weight_s2 = 0.0);
 
@@ -94,6 +107,24 @@ std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<P
                                                  const std::vector<double>& segment_time_s,
                                                  GlobalObjective objective, double* value,
                                                  bool wrap_c = true);
+
+/// The time objective's programme (docs/global-method.md): one index per point into
+/// `candidates[i]` minimising the surrogate time sum_i tau_i + sum_i e_i, where
+/// tau_i = max(T_i, max_j |dq_ij| / V_j) is segment i's least time at the velocity limits and
+/// e_i = ((tau_{i-1} + tau_i) / 2) (sqrt(max_j |a_ij| / A_j) - 1)^+ what point i's acceleration at
+/// those times adds when both segments stretch alike; ties broken by the sum of squared rotary
+/// accelerations at `segment_time_s`. `joints[i][k]` are the joints of `candidates[i][k]`;
+/// `surrogate_s` gets the sequence's surrogate time. Exact over the candidates.
+std::vector<std::size_t> fastest_candidate_sequence(
+    const std::vector<std::vector<Posed>>& candidates,
+    const std::vector<std::vector<JointPosition>>& joints,
+    const std::vector<double>& programmed_time_s, const std::vector<double>& segment_time_s,
+    const JointLimits& limits, double* surrogate_s, bool wrap_c = true);
+
+/// Scheduled time, s, of a pass run rest to rest through `joints` (n) with least segment times
+/// `programmed_time_s` (n - 1): schedule_feed's total.
+double pass_time_s(const std::vector<JointPosition>& joints,
+                   const std::vector<double>& programmed_time_s, const JointLimits& limits);
 
 /// Plans one pass. `acceptable(i, axis)` may be called from several threads at once for
 /// different passes; the result does not depend on the thread count.

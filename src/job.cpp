@@ -247,7 +247,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                       {by_accel[j], "acceleration"}}) {
       if (share > most) {
         most = share;
-        sum.limiting_axis = to_string(static_cast<Joint>(j));
+        sum.limiting_axis = joint_name(static_cast<Joint>(j), ac.tilt_letter());
         sum.limiting_kind = kind;
       }
     }
@@ -1164,7 +1164,8 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::vector<JointPosition>& joints,
                           const std::vector<const GcodeMove*>& at,
                           const std::vector<GcodeMove>& moves, JobResult& res,
-                          const std::string& source, const JointLimits& check, bool scheduled) {
+                          const std::string& source, const JointLimits& check, bool scheduled,
+                          char tilt_letter) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
   const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
@@ -1204,7 +1205,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   const char* at_feed = scheduled ? " at the scheduled feed" : " at the programmed feed";
   for (std::size_t j = 0; j < kJointCount; ++j) {
     const std::string unit = j < 3 ? "mm" : "deg";
-    const std::string axis = std::string("axis ") + to_string(static_cast<Joint>(j));
+    const std::string axis = "axis " + joint_name(static_cast<Joint>(j), tilt_letter);
     const auto describe = [&](const Worst& w, double limit, const char* what,
                               const std::string& per) {
       return format_location(source, po.points[w.point].line,
@@ -1528,8 +1529,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
   auto t_write = Clock::now();
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-  std::vector<GcodeMove> moves = read_gcode_moves(res.gcode.text, "written G-code",
-                                                  machine.gcode.dialect, res.gcode.verbatim_lines);
+  std::vector<GcodeMove> moves =
+      read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect,
+                       res.gcode.verbatim_lines, machine.ac.tilt_letter());
   // Per operation and point, the move read back that put the machine there. A chord point
   // inside a G2/G3 block gets the point of the arc read back at its angle (with the block's
   // words), so that every check sees the path the controller runs; the blocks that split an
@@ -1625,7 +1627,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       posted[k].block_time_s = schedule_after[k].time_s;
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
     moves = read_gcode_moves(res.gcode.text, "written G-code", machine.gcode.dialect,
-                             res.gcode.verbatim_lines);
+                             res.gcode.verbatim_lines, machine.ac.tilt_letter());
     point_moves = moves_of_points();
   }
   const double write_time = seconds_since(t_write);
@@ -1698,8 +1700,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         if (r.verification.within_axis_limits) {
           res.problems.push_back(format_location(
               tp.source, want.line,
-              "operation " + op.name + ": written A " + std::to_string(last->a_deg) + " / C " +
-                  std::to_string(last->c_deg) + " deg is outside the machine's axis ranges"));
+              "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
+                  std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
+                  " deg is outside the machine's axis ranges"));
         }
         r.verification.within_axis_limits = false;
       }
@@ -1963,7 +1966,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], moves, res,
                          tp.source, options.feed_schedule ? limits : machine.limits,
-                         options.feed_schedule);
+                         options.feed_schedule, machine.ac.tilt_letter());
     // The checks' own time: this operation's verification without its C-space raster.
     r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
     res.operations.push_back(std::move(r));

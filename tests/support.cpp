@@ -9,10 +9,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
+#include "taxopt/core/error.hpp"
 #include "taxopt/geometry/surface.hpp"
 #include "taxopt/io/gcode.hpp"
 
@@ -186,7 +188,13 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
   if (all_moves) *all_moves = moves;
   // The program's own positioning moves (safe retract, table turn) belong to no point.
   try {
-    const auto ours = read_gcode_moves(program, ngc_path);
+    // The tilt axis of the program: A, else (a B/C machine's program) B.
+    std::vector<GcodeMove> ours;
+    try {
+      ours = read_gcode_moves(program, ngc_path);
+    } catch (const InputError&) {
+      ours = read_gcode_moves(program, ngc_path, GcodeDialect::LinuxCNC, {}, 'B');
+    }
     if (ours.size() == moves.size()) {
       std::vector<CanonMove> kept;
       for (std::size_t i = 0; i < ours.size(); ++i) {

@@ -37,7 +37,11 @@ std::string without_keywords(const std::string& line, std::initializer_list<cons
 
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
                                         GcodeDialect dialect,
-                                        const std::vector<int>& verbatim_lines) {
+                                        const std::vector<int>& verbatim_lines, char tilt_letter) {
+  // Haas is read as Fanuc is, with G234 (tool centre point control) and G53 (machine
+  // coordinates) beside.
+  const bool haas = dialect == GcodeDialect::Haas;
+  const bool fanuc_like = dialect == GcodeDialect::Fanuc || haas;
   std::vector<GcodeMove> moves;
   // Workpiece positions known of X Y Z A C: none before the first full move, nor of an axis
   // moved in machine coordinates since.
@@ -140,8 +144,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       switch (letter) {
         case 'G': {
           const int gv = static_cast<int>(std::lround(v * 10));
-          const bool iso_units =
-              dialect == GcodeDialect::LinuxCNC || dialect == GcodeDialect::Fanuc;
+          const bool iso_units = dialect == GcodeDialect::LinuxCNC || fanuc_like;
           if (gv == 0)
             motion = 0;
           else if (gv == 10)
@@ -164,17 +167,18 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           } else if (gv == 490 && dialect != GcodeDialect::Heidenhain &&
                      dialect != GcodeDialect::Siemens) {
             length_offset = false;
-            if (dialect == GcodeDialect::Fanuc) tcp = false;
-          } else if ((dialect == GcodeDialect::Fanuc || dialect == GcodeDialect::LinuxCNC) &&
-                     gv == 430) {
+            if (fanuc_like) tcp = false;
+          } else if ((fanuc_like || dialect == GcodeDialect::LinuxCNC) && gv == 430) {
             length_offset = true;
           } else if (dialect == GcodeDialect::Fanuc && gv == 434) {
             length_offset = tcp = true;
-          } else if (dialect == GcodeDialect::LinuxCNC && gv == 530) {
+          } else if (haas && gv == 2340) {
+            length_offset = tcp = true;
+          } else if ((dialect == GcodeDialect::LinuxCNC || haas) && gv == 530) {
             machine_coordinates = true;
-          } else if (dialect == GcodeDialect::Fanuc && gv == 910) {
+          } else if (fanuc_like && gv == 910) {
             incremental = true;
-          } else if (dialect == GcodeDialect::Fanuc && gv == 280) {
+          } else if (fanuc_like && gv == 280) {
             reference_return = machine_coordinates = true;
           } else {
             throw InputError(source, line_no,
@@ -195,6 +199,12 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           has_axis = given[2] = true;
           break;
         case 'A':
+        case 'B':
+          if (letter != tilt_letter) {
+            throw InputError(source, line_no,
+                             std::string("word '") + letter + "' is not an axis of this machine (" +
+                                 tilt_letter + " and C turn its table)");
+          }
           a = v;
           has_axis = given[3] = true;
           break;
@@ -225,12 +235,12 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
         case 'S':
         case 'N': break;
         case 'H':
-          if (dialect != GcodeDialect::Fanuc && dialect != GcodeDialect::LinuxCNC) {
+          if (!fanuc_like && dialect != GcodeDialect::LinuxCNC) {
             throw InputError(source, line_no, "word 'H' is outside taxopt's subset");
           }
           break;
         case 'O':
-          if (dialect != GcodeDialect::Fanuc) {
+          if (!fanuc_like) {
             throw InputError(source, line_no,
                              std::string("word '") + letter + "' is outside taxopt's subset");
           }

@@ -58,7 +58,8 @@ class Dialect {
   std::string comment(const std::string& text) {
     switch (d_) {
       case GcodeDialect::LinuxCNC:
-      case GcodeDialect::Fanuc: return "(" + comment_text(text) + ")";
+      case GcodeDialect::Fanuc:
+      case GcodeDialect::Haas: return "(" + comment_text(text) + ")";
       case GcodeDialect::Siemens: return "; " + comment_text(text);
       case GcodeDialect::Heidenhain: return block("; " + comment_text(text));
     }
@@ -69,7 +70,9 @@ class Dialect {
   std::vector<std::string> start() const {
     switch (d_) {
       case GcodeDialect::Fanuc:
-        return {"%", "O" + four_digits(t_.number) + " (" + comment_text(name()) + ")"};
+        return {"%", "O" + digits(t_.number, 4) + " (" + comment_text(name()) + ")"};
+      case GcodeDialect::Haas:  // program numbers O00000 .. O99999
+        return {"%", "O" + digits(t_.number, 5) + " (" + comment_text(name()) + ")"};
       case GcodeDialect::Heidenhain: return {"%" + name() + (inch_ ? " G70" : " G71") + " *"};
       default: return {};
     }
@@ -80,6 +83,7 @@ class Dialect {
     switch (d_) {
       case GcodeDialect::LinuxCNC:
       case GcodeDialect::Fanuc:
+      case GcodeDialect::Haas:
         return std::string(inch_ ? "G20" : "G21") + " G90 G17 G40 G49 G80 " + feed;
       case GcodeDialect::Siemens:  // G700/G710: feeds in the program's units too
         return std::string(inch_ ? "G700" : "G710") + " G90 G17 G40 " + feed;
@@ -98,7 +102,8 @@ class Dialect {
   std::vector<std::string> retract(const std::string& z) const {
     if (t_.retract == SafeRetract::None) return {};
     switch (d_) {
-      case GcodeDialect::LinuxCNC: return {"G53 G0 Z" + z};
+      case GcodeDialect::LinuxCNC:
+      case GcodeDialect::Haas: return {"G53 G0 Z" + z};
       case GcodeDialect::Fanuc: return {"G91 G28 Z0.", "G90"};
       case GcodeDialect::Siemens: return {"G0 SUPA Z" + z + " D0"};
       case GcodeDialect::Heidenhain: return {"G00 Z" + z + " M91"};
@@ -125,21 +130,25 @@ class Dialect {
     }
   }
   /// The tool length offset switched on for an operation, as its own block (LinuxCNC G43,
-  /// Sinumerik D); Fanuc's is on the first move, a TNC's comes with the tool call.
-  std::vector<std::string> length_on(int tool) const {
+  /// Sinumerik D, Haas G43 in machine mode: its G234 carries the offset); Fanuc's is on the
+  /// first move, a TNC's comes with the tool call.
+  std::vector<std::string> length_on(bool tcp, int tool) const {
     const std::string h = std::to_string(std::max(tool, 1));
     switch (d_) {
       case GcodeDialect::LinuxCNC: return {"G43 H" + h};
       case GcodeDialect::Siemens: return {"D1"};
+      case GcodeDialect::Haas:
+        return tcp ? std::vector<std::string>{} : std::vector<std::string>{"G43 H" + h};
       default: return {};
     }
   }
   /// Tool centre point control on (tcp mode): blocks before an operation's first move.
-  std::vector<std::string> tcp_on(bool tcp) const {
+  std::vector<std::string> tcp_on(bool tcp, int tool) const {
     if (!tcp) return {};
     switch (d_) {
       case GcodeDialect::Siemens: return {"TRAORI", "ORIAXES"};  // rotary axes linear
       case GcodeDialect::Heidenhain: return {"M128"};
+      case GcodeDialect::Haas: return {"G234 H" + std::to_string(std::max(tool, 1))};
       default: return {};
     }
   }
@@ -152,7 +161,8 @@ class Dialect {
   std::vector<std::string> tcp_off(bool tcp) const {
     switch (d_) {
       case GcodeDialect::LinuxCNC:
-      case GcodeDialect::Fanuc: return {"G49"};
+      case GcodeDialect::Fanuc:
+      case GcodeDialect::Haas: return {"G49"};  // Haas: G234 is in G49's group 08
       case GcodeDialect::Siemens:
         return tcp ? std::vector<std::string>{"TRAFOOF"} : std::vector<std::string>{};
       case GcodeDialect::Heidenhain:
@@ -173,24 +183,28 @@ class Dialect {
   std::string end() const { return d_ == GcodeDialect::LinuxCNC ? "M2" : "M30"; }
   std::vector<std::string> finish() const {
     switch (d_) {
-      case GcodeDialect::Fanuc: return {"%"};
+      case GcodeDialect::Fanuc:
+      case GcodeDialect::Haas: return {"%"};
       case GcodeDialect::Heidenhain:
         return {"N99999999 %" + name() + (inch_ ? " G70" : " G71") + " *"};
       default: return {};
     }
   }
   /// Fanuc reads a number without a decimal point in least input increments: "10" is
-  /// 0.010 mm. Every coordinate gets its point.
+  /// 0.010 mm. Every coordinate gets its point (Haas too, as its posts write them).
   std::string number(double v, int decimals) const {
     std::string s = fmt(v, decimals);
-    if (d_ == GcodeDialect::Fanuc && s.find('.') == std::string::npos) s += '.';
+    if ((d_ == GcodeDialect::Fanuc || d_ == GcodeDialect::Haas) &&
+        s.find('.') == std::string::npos) {
+      s += '.';
+    }
     return s;
   }
 
  private:
-  static std::string four_digits(int n) {
+  static std::string digits(int n, int width) {
     char buf[16];
-    std::snprintf(buf, sizeof buf, "%04d", n);
+    std::snprintf(buf, sizeof buf, "%0*d", width, n);
     return buf;
   }
   GcodeDialect d_;
@@ -308,6 +322,8 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   };
   const bool tcp = g.mode == GcodeMode::Tcp;
   const std::string retract_z = dialect.number(g.program.retract_z_mm * scale, d);
+  // The tilt axis's word: A or B (ac_machine.hpp).
+  const std::string tilt_word = std::string(" ") + machine.ac.tilt_letter();
   for (const auto& s : dialect.start()) raw(s);
   if (g.dialect == GcodeDialect::LinuxCNC || g.dialect == GcodeDialect::Siemens) {
     raw(dialect.comment("program " + dialect.name()));
@@ -342,12 +358,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     const std::string coolant = dialect.coolant_on();
     if (!coolant.empty()) line(coolant);
     if (g.program.retract != SafeRetract::None && !op.points.empty()) {
-      line(dialect.rapid() + " A" + dialect.number(rad_to_deg(op.poses.front().a_rad), d) + " C" +
-           dialect.number(rad_to_deg(op.poses.front().c_rad), d));
+      line(dialect.rapid() + tilt_word + dialect.number(rad_to_deg(op.poses.front().a_rad), d) +
+           " C" + dialect.number(rad_to_deg(op.poses.front().c_rad), d));
     }
     verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
-    lines(dialect.length_on(current_tool));
-    lines(dialect.tcp_on(tcp));
+    lines(dialect.length_on(tcp, current_tool));
+    lines(dialect.tcp_on(tcp, current_tool));
     std::string prefix = dialect.first_move_prefix(tcp, current_tool);
     std::vector<int> emitted(op.points.size(), 0);
     const std::vector<double> own_times = programmed_block_times_s(op.points, op.poses);
@@ -360,7 +376,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       return g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, pose) : tip;
     };
     const auto angle_words = [&](const Posed& pose) {
-      return " A" + dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
+      return tilt_word + dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
              dialect.number(rad_to_deg(pose.c_rad), d);
     };
     const auto xyz_words = [&](const Vec3d& xyz) {

@@ -33,18 +33,23 @@ class MachineParser {
     check_keys(root, "", {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder"});
     if (auto* n = root.get("name")) m.name = string_of(*n, "name");
     const toml::node* kin = root.get("kinematics");
-    if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\")");
+    if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\" or \"bc-table-table\")");
     m.kinematics = string_of(*kin, "kinematics");
-    if (m.kinematics != "ac-table-table") {
-      fail(line_of(*kin), "kinematics '" + m.kinematics + "' is not supported (ac-table-table)");
+    if (m.kinematics == "bc-table-table") {
+      m.ac.tilt = TiltAxis::Y;
+    } else if (m.kinematics != "ac-table-table") {
+      fail(line_of(*kin),
+           "kinematics '" + m.kinematics + "' is not supported (ac-table-table, bc-table-table)");
     }
+    // The tilt axis: A about X, B about Y (ac_machine.hpp).
+    const std::string tilt(1, m.ac.tilt_letter());
     const toml::table* axes = table_of(root, "axes", true);
-    check_keys(*axes, "axes", {"X", "Y", "Z", "A", "C"});
-    const toml::table* a_table = table_of(*axes, "A", true, "axes.");
+    check_keys(*axes, "axes", {"X", "Y", "Z", tilt, "C"});
+    const toml::table* a_table = table_of(*axes, tilt, true, "axes.");
     const toml::table* c_table = table_of(*axes, "C", true, "axes.");
-    parse_axis(*a_table, "axes.A", m.ac.a, false);
+    parse_axis(*a_table, "axes." + tilt, m.ac.a, false);
     parse_axis(*c_table, "axes.C", m.ac.c, true);
-    parse_limits(*a_table, "axes.A", "deg", m.limits[static_cast<std::size_t>(Joint::A)]);
+    parse_limits(*a_table, "axes." + tilt, "deg", m.limits[static_cast<std::size_t>(Joint::A)]);
     parse_limits(*c_table, "axes.C", "deg", m.limits[static_cast<std::size_t>(Joint::C)]);
     for (Joint j : {Joint::X, Joint::Y, Joint::Z}) {
       const std::string name = to_string(j);
@@ -89,9 +94,15 @@ class MachineParser {
       if (!m.holder_radius_mm) fail(0, "[holder] needs radius_mm");
     }
     if (const toml::table* pivot = table_of(root, "pivot", false)) {
-      check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
-      m.ac.a_axis_point_mm = Vec3d(0.0, number_or(*pivot, "pivot", "a_axis_y", 0.0),
-                                   number_or(*pivot, "pivot", "a_axis_z", 0.0));
+      if (m.ac.tilt == TiltAxis::Y) {
+        check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
+        m.ac.a_axis_point_mm = Vec3d(number_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
+                                     number_or(*pivot, "pivot", "b_axis_z", 0.0));
+      } else {
+        check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
+        m.ac.a_axis_point_mm = Vec3d(0.0, number_or(*pivot, "pivot", "a_axis_y", 0.0),
+                                     number_or(*pivot, "pivot", "a_axis_z", 0.0));
+      }
       m.ac.c_axis_point_mm = Vec3d(number_or(*pivot, "pivot", "c_axis_x", 0.0),
                                    number_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
@@ -105,7 +116,8 @@ class MachineParser {
              {{"linuxcnc", GcodeDialect::LinuxCNC},
               {"fanuc", GcodeDialect::Fanuc},
               {"siemens", GcodeDialect::Siemens},
-              {"heidenhain", GcodeDialect::Heidenhain}},
+              {"heidenhain", GcodeDialect::Heidenhain},
+              {"haas", GcodeDialect::Haas}},
              m.gcode.dialect);
       choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
              m.gcode.mode);
@@ -385,6 +397,7 @@ const char* to_string(GcodeDialect dialect) {
     case GcodeDialect::Fanuc: return "fanuc";
     case GcodeDialect::Siemens: return "siemens";
     case GcodeDialect::Heidenhain: return "heidenhain";
+    case GcodeDialect::Haas: return "haas";
   }
   return "?";
 }
@@ -394,6 +407,7 @@ Machine default_machine() { return Machine{}; }
 int max_decimals(GcodeDialect dialect) {
   switch (dialect) {
     case GcodeDialect::Fanuc:
+    case GcodeDialect::Haas:
     case GcodeDialect::Heidenhain: return 4;
     default: return 8;
   }

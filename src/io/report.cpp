@@ -248,7 +248,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                         {"max_accel_" + unit + "_s2", effective[q].max_accel_per_s2}};
     if (effective[q].max_jerk_per_s3 > 0.0)
       l["max_jerk_" + unit + "_s3"] = effective[q].max_jerk_per_s3;
-    limits[to_string(static_cast<Joint>(q))] = l;
+    limits[joint_name(static_cast<Joint>(q), machine.ac.tilt_letter())] = l;
   }
   j["axis_limits"] = limits;
   tidy_numbers(j);

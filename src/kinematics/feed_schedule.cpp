@@ -51,6 +51,10 @@ const char* to_string(Joint joint) {
   return names[static_cast<std::size_t>(joint)];
 }
 
+std::string joint_name(Joint joint, char tilt_letter) {
+  return joint == Joint::A ? std::string(1, tilt_letter) : std::string(to_string(joint));
+}
+
 double FeedSchedule::total_time_s() const {
   double t = 0.0;
   for (double s : time_s) t += s;

@@ -85,7 +85,8 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       if (!m.a.contains(0.0)) {
         plan.status = PosePlan::Status::OutOfLimits;
         plan.failed_index = i;
-        plan.message = "axis on the pole needs A = 0, outside the A range";
+        const std::string t(1, m.tilt_letter());
+        plan.message = "axis on the pole needs " + t + " = 0, outside the " + t + " range";
         return plan;
       }
       continue;
@@ -116,8 +117,8 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       plan.failed_index = i;
       const auto both = m.inverse(axes[i]);
       std::ostringstream os;
-      os << "no pose within the axis ranges: A would be " << rad_to_deg(both[0].a_rad) << " or "
-         << rad_to_deg(both[1].a_rad) << " deg";
+      os << "no pose within the axis ranges: " << m.tilt_letter() << " would be "
+         << rad_to_deg(both[0].a_rad) << " or " << rad_to_deg(both[1].a_rad) << " deg";
       if (!m.c.continuous) {
         os << ", C " << rad_to_deg(both[0].c_rad) << " or " << rad_to_deg(both[1].c_rad)
            << " deg (plus turns)";

@@ -115,8 +115,9 @@ TEST_CASE("machine file: errors name the line and what was expected", "[io][mach
   expect_error(replace(kFull, "decimals = 5", "decimals = 9"), 28, "decimals");
   expect_error(replace(kFull, "\"tip\"", "\"nose\""), 27,
                "gcode.feed_reference must be \"cutter-path\" or \"tip\", got 'nose'");
-  expect_error(replace(kFull, "\"linuxcnc\"", "\"mazatrol\""), 24,
-               "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\" or \"heidenhain\"");
+  expect_error(
+      replace(kFull, "\"linuxcnc\"", "\"mazatrol\""), 24,
+      "gcode.dialect must be \"linuxcnc\", \"fanuc\", \"siemens\", \"heidenhain\" or \"haas\"");
   // Heidenhain's ISO mode has no G93: refused where the file asks for both.
   expect_error(replace(kFull, "\"linuxcnc\"", "\"heidenhain\""), 26, "no G93");
   for (const char* d : {"linuxcnc", "fanuc", "siemens"}) {

@@ -113,9 +113,12 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// Heidenhain ISO program blocks, N numbers and "*"). @throws InputError on anything outside.
 /// `verbatim_lines` (GcodeProgram::verbatim_lines) are stepped over. The safe retracts
 /// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
-/// `G00 Z M91`) are read as positioning moves.
+/// `G00 Z M91`) are read as positioning moves. Haas as Fanuc, with G234 H (tool centre point
+/// control) and `G53 G0 Z`. The tilt axis's word is `tilt_letter` (A, or B on a B/C machine;
+/// GcodeMove::a_deg holds it); the other is refused.
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
                                         GcodeDialect dialect = GcodeDialect::LinuxCNC,
-                                        const std::vector<int>& verbatim_lines = {});
+                                        const std::vector<int>& verbatim_lines = {},
+                                        char tilt_letter = 'A');
 
 }  // namespace taxopt

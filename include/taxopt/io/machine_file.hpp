@@ -17,8 +17,10 @@ namespace taxopt {
 /// Controller dialect of the G-code (docs/gcode-dialects.md): LinuxCNC (rs274-checked),
 /// Fanuc 30i/31i-B5 (G43.4), Siemens Sinumerik 840D (TRAORI), Heidenhain TNC in ISO mode
 /// (M128).
-enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain };
-/// "linuxcnc", "fanuc", "siemens", "heidenhain".
+/// Haas: the Next Generation Control of a Haas 5-axis mill (UMC series): Fanuc-like, with
+/// G234 tool centre point control (docs/gcode-dialects.md).
+enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain, Haas };
+/// "linuxcnc", "fanuc", "siemens", "heidenhain", "haas".
 const char* to_string(GcodeDialect dialect);
 /// tcp: X Y Z are the tool tip in workpiece coordinates (the controller does TCP);
 /// machine: X Y Z are the joint positions after the table rotation (CLI.md convention).

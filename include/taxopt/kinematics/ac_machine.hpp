@@ -37,22 +37,40 @@ struct RotaryAxis {
   }
 };
 
-/// Kinematics of an A/C table-table machine: the tool axis in workpiece coordinates is
-/// v = Rot(Z, s_C C) Rot(X, s_A A) [0 0 1]^T = (sin a sin c, -sin a cos c, cos a) with
-/// a = s_A A and c = s_C C (eq. 14 for s = +1).
+/// The axis the tilting table turns about: X (an A/C machine, "ac-table-table") or Y (a B/C
+/// machine, "bc-table-table": Haas UMC, Hermle, DMU eVo B/C). docs/kinematics.md.
+enum class TiltAxis { X, Y };
+
+/// Kinematics of a table-table machine whose table tilts about X (A) or Y (B) and turns about
+/// Z (C). With t = s_T T (T the tilt axis's value, A or B) and c = s_C C the tool axis in
+/// workpiece coordinates is
+///   A/C: v = Rot(Z, c) Rot(X, t) [0 0 1]^T = (sin t sin c, -sin t cos c, cos t)  (eq. 14),
+///   B/C: v = Rot(Z, c) Rot(Y, t) [0 0 1]^T = (sin t cos c,  sin t sin c, cos t)
+/// (the convention of a real NX post for the Haas UMC-750, checked against its output:
+/// tests/test_haas.cpp). The two differ only by the tilt axis (the B/C axis is the A/C axis at
+/// C + 90 deg), so every stage that works in (tilt, C) works for both: `Pose::a_rad` is the
+/// tilt axis's value (A or B), `a` its range, `a_axis_point_mm` a point on it.
 template <class S>
 struct ACMachine {
   RotaryAxis<S> a;
   RotaryAxis<S> c;
-  /// A point on the C axis (x, y, 0) and a point on the A axis (0, y, z), workpiece mm.
+  /// A point on the C axis (x, y, 0) and a point on the tilt axis: (0, y, z) for A, (x, 0, z)
+  /// for B; workpiece mm.
   Vec3<S> c_axis_point_mm = Vec3<S>::Zero();
   Vec3<S> a_axis_point_mm = Vec3<S>::Zero();
   /// Below this sin|A| the axis is on the pole A = 0, where every C gives the same axis.
   S pole_tolerance = S(1e-7);
+  TiltAxis tilt = TiltAxis::X;
 
-  /// Tool axis for machine values (A, C). @param pose radians
+  /// The tilt axis's letter in G-code and reports: 'A' or 'B'.
+  char tilt_letter() const { return tilt == TiltAxis::X ? 'A' : 'B'; }
+
+  /// Tool axis for machine values (tilt, C). @param pose radians
   Vec3<S> forward(const Pose<S>& pose) const {
     const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
+    if (tilt == TiltAxis::Y) {
+      return Vec3<S>(std::sin(ag) * std::cos(cg), std::sin(ag) * std::sin(cg), std::cos(ag));
+    }
     return Vec3<S>(std::sin(ag) * std::sin(cg), -std::sin(ag) * std::cos(cg), std::cos(ag));
   }
 
@@ -62,15 +80,16 @@ struct ACMachine {
   }
 
   /// Both inverse solutions of a unit axis, machine values, C in (-pi, pi]:
-  /// [0] the branch a >= 0 (a = acos k, c = atan2(i, -j)),
-  /// [1] the branch a <= 0 (a = -acos k, c = atan2(-i, j)) -- the corrected eq. 15.
-  /// At the pole both have A = 0 and C = 0 (any C is valid there).
+  /// [0] the branch a >= 0 (a = acos k, A/C: c = atan2(i, -j); B/C: c = atan2(j, i)),
+  /// [1] the branch a <= 0 (a = -acos k, A/C: c = atan2(-i, j); B/C: c = atan2(-j, -i)) --
+  /// for A/C the corrected eq. 15. At the pole both have A = 0 and C = 0 (any C is valid there).
   std::array<Pose<S>, 2> inverse(const Vec3<S>& axis) const {
     const S k = std::max(S(-1), std::min(S(1), axis.z()));
     // atan2 of (sin, cos) keeps accuracy near the pole where acos(k) loses it.
     const S ag = std::atan2(std::hypot(axis.x(), axis.y()), k);
-    S c_pos = std::atan2(axis.x(), -axis.y());
-    S c_neg = std::atan2(-axis.x(), axis.y());
+    const bool y = tilt == TiltAxis::Y;
+    S c_pos = y ? std::atan2(axis.y(), axis.x()) : std::atan2(axis.x(), -axis.y());
+    S c_neg = y ? std::atan2(-axis.y(), -axis.x()) : std::atan2(-axis.x(), axis.y());
     if (at_pole(axis)) c_pos = c_neg = S(0);
     const S sa = S(a.sense), sc = S(c.sense);
     return {Pose<S>{sa * ag, wrap_pi(sc * c_pos)}, Pose<S>{-sa * ag, wrap_pi(sc * c_neg)}};
@@ -89,13 +108,18 @@ struct ACMachine {
     return false;
   }
 
-  /// Machine-mode joint position of a workpiece point for a pose (CLI.md):
-  /// p_m = Rot(X, -a) (Rot(Z, -c) (p_w - c0) + c0 - a0) + a0.
+  /// The tilt axis's direction: X or Y.
+  Vec3<S> tilt_direction() const {
+    return tilt == TiltAxis::Y ? Vec3<S>::UnitY() : Vec3<S>::UnitX();
+  }
+
+  /// Machine-mode joint position of a workpiece point for a pose (CLI.md), with R_T the
+  /// rotation about the tilt axis: p_m = R_T(-t) (Rot(Z, -c) (p_w - c0) + c0 - t0) + t0.
   Vec3<S> to_machine_mm(const Vec3<S>& p_w_mm, const Pose<S>& pose) const {
     const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(-cg, Vec3<S>::UnitZ()).toRotationMatrix();
-    const Mat3<S> rx = Eigen::AngleAxis<S>(-ag, Vec3<S>::UnitX()).toRotationMatrix();
-    return rx * (rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm - a_axis_point_mm) +
+    const Mat3<S> rt = Eigen::AngleAxis<S>(-ag, tilt_direction()).toRotationMatrix();
+    return rt * (rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm - a_axis_point_mm) +
            a_axis_point_mm;
   }
 
@@ -103,8 +127,8 @@ struct ACMachine {
   Vec3<S> from_machine_mm(const Vec3<S>& p_m_mm, const Pose<S>& pose) const {
     const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(cg, Vec3<S>::UnitZ()).toRotationMatrix();
-    const Mat3<S> rx = Eigen::AngleAxis<S>(ag, Vec3<S>::UnitX()).toRotationMatrix();
-    return rz * (rx * (p_m_mm - a_axis_point_mm) + a_axis_point_mm - c_axis_point_mm) +
+    const Mat3<S> rt = Eigen::AngleAxis<S>(ag, tilt_direction()).toRotationMatrix();
+    return rz * (rt * (p_m_mm - a_axis_point_mm) + a_axis_point_mm - c_axis_point_mm) +
            c_axis_point_mm;
   }
 };

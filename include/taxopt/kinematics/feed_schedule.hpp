@@ -41,6 +41,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace taxopt {
@@ -50,6 +51,9 @@ enum class Joint : std::uint8_t { X, Y, Z, A, C };
 inline constexpr std::size_t kJointCount = 5;
 /// "X", "Y", "Z", "A", "C".
 const char* to_string(Joint joint);
+/// The joint's letter on a machine whose tilt axis is `tilt_letter` (A, or B on a B/C machine:
+/// Joint::A is the tilt axis whatever its letter).
+std::string joint_name(Joint joint, char tilt_letter);
 
 /// Joint positions of one point: X, Y, Z in mm, A, C in degrees (C unwound).
 using JointPosition = std::array<double, kJointCount>;

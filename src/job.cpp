@@ -1157,6 +1157,35 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
 namespace {
 
 /// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
+/// The severity of a kind of finding (job.hpp groups them).
+Severity severity_of(FindingCode code) {
+  switch (code) {
+    case FindingCode::NoPart:
+    case FindingCode::NoHolderModel:
+    case FindingCode::NoSafeRetract:
+    case FindingCode::NoLinearisation: return Severity::Safety;
+    case FindingCode::NotABallMill:
+    case FindingCode::LocalGouge:
+    case FindingCode::InputAxesKept:
+    case FindingCode::MissingFeed:
+    case FindingCode::JerkLimitExceeded:
+    case FindingCode::LongerCycle:
+    case FindingCode::ClFileNote: return Severity::Warning;
+    default: return Severity::Problem;
+  }
+}
+
+/// Records a finding, and its message by severity (JobResult's display lists).
+void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
+                 const std::string& message) {
+  const Severity severity = severity_of(code);
+  res.findings.push_back(Finding{code, severity, operation, line, message});
+  (severity == Severity::Problem  ? res.problems
+   : severity == Severity::Safety ? res.safety_warnings
+                                  : res.warnings)
+      .push_back(message);
+}
+
 /// (0: no limit), as the controller moves: block times from the F words read back, each
 /// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
 /// problems, jerk a warning (the schedule does not bound it).
@@ -1165,7 +1194,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::vector<const GcodeMove*>& at,
                           const std::vector<GcodeMove>& moves, JobResult& res,
                           const std::string& source, const JointLimits& check, bool scheduled,
-                          char tilt_letter) {
+                          char tilt_letter, std::size_t op_index) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
   const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
@@ -1216,25 +1245,71 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
     if (check[j].max_velocity_per_s > 0.0 &&
         velocity[j].value > check[j].max_velocity_per_s * (1.0 + 1e-9)) {
       r.verification.within_dynamic_limits = false;
-      res.problems.push_back(describe(velocity[j], check[j].max_velocity_per_s, "velocity", "/s"));
+      add_finding(res, FindingCode::DynamicLimitExceeded, op_index,
+                  po.points[velocity[j].point].line,
+                  describe(velocity[j], check[j].max_velocity_per_s, "velocity", "/s"));
     }
     if (check[j].max_accel_per_s2 > 0.0 &&
         accel[j].value > check[j].max_accel_per_s2 * (1.0 + 1e-9)) {
       r.verification.within_dynamic_limits = false;
-      res.problems.push_back(describe(accel[j], check[j].max_accel_per_s2, "acceleration", "/s^2"));
+      add_finding(res, FindingCode::DynamicLimitExceeded, op_index, po.points[accel[j].point].line,
+                  describe(accel[j], check[j].max_accel_per_s2, "acceleration", "/s^2"));
     }
     if (check[j].max_jerk_per_s3 > 0.0 && jerk[j].value > check[j].max_jerk_per_s3 * (1.0 + 1e-9)) {
-      res.warnings.push_back(describe(jerk[j], check[j].max_jerk_per_s3, "jerk", "/s^3") +
-                             " (feed schedules bound velocity and acceleration, not jerk)");
+      add_finding(res, FindingCode::JerkLimitExceeded, op_index, po.points[jerk[j].point].line,
+                  describe(jerk[j], check[j].max_jerk_per_s3, "jerk", "/s^3") +
+                      " (feed schedules bound velocity and acceleration, not jerk)");
     }
   }
   if (!r.verification.within_dynamic_limits && !scheduled) {
-    res.problems.push_back("operation " + po.name +
-                           ": --feed-schedule writes feeds within the machine's limits");
+    add_finding(
+        res, FindingCode::DynamicLimitExceeded, op_index, 0,
+        "operation " + po.name + ": --feed-schedule writes feeds within the machine's limits");
   }
 }
 
 }  // namespace
+
+const char* to_string(FindingCode code) {
+  switch (code) {
+    case FindingCode::NoPart: return "no_part";
+    case FindingCode::NoHolderModel: return "no_holder_model";
+    case FindingCode::NoSafeRetract: return "no_safe_retract";
+    case FindingCode::NoLinearisation: return "no_linearisation";
+    case FindingCode::NotABallMill: return "not_a_ball_mill";
+    case FindingCode::LocalGouge: return "local_gouge";
+    case FindingCode::InputAxesKept: return "input_axes_kept";
+    case FindingCode::MissingFeed: return "missing_feed";
+    case FindingCode::JerkLimitExceeded: return "jerk_limit_exceeded";
+    case FindingCode::LongerCycle: return "longer_cycle";
+    case FindingCode::ClFileNote: return "cl_file_note";
+    case FindingCode::NoFreeAxis: return "no_free_axis";
+    case FindingCode::UnreachablePose: return "unreachable_pose";
+    case FindingCode::AxisRangeExceeded: return "axis_range_exceeded";
+    case FindingCode::TravelExceeded: return "travel_exceeded";
+    case FindingCode::DynamicLimitExceeded: return "dynamic_limit_exceeded";
+    case FindingCode::ToolLengthOffsetOff: return "tool_length_offset_off";
+    case FindingCode::ReadBackMismatch: return "read_back_mismatch";
+    case FindingCode::DeviationExceeded: return "deviation_exceeded";
+    case FindingCode::PointCollision: return "point_collision";
+    case FindingCode::MoveCollision: return "move_collision";
+  }
+  return "?";
+}
+
+const char* to_string(Severity severity) {
+  switch (severity) {
+    case Severity::Safety: return "safety";
+    case Severity::Warning: return "warning";
+    case Severity::Problem: return "problem";
+  }
+  return "?";
+}
+
+bool JobResult::has(FindingCode code) const {
+  return std::any_of(findings.begin(), findings.end(),
+                     [code](const Finding& f) { return f.code == code; });
+}
 
 const char* to_string(Method method) {
   switch (method) {
@@ -1269,20 +1344,23 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         os << " (--max-deviation widens it, unchecked)";
       }
     }
-    res.safety_warnings.push_back(os.str());
+    add_finding(res, FindingCode::NoPart, std::nullopt, 0, os.str());
   } else if (!given.tool.holder_radius_mm) {
-    res.safety_warnings.push_back(
+    add_finding(
+        res, FindingCode::NoHolderModel, std::nullopt, 0,
         "no holder model (--holder-radius, --holder-length): the holder is not checked against "
         "the part, only the tool");
   }
   if (machine.gcode.program.retract == SafeRetract::None) {
-    res.safety_warnings.push_back(
+    add_finding(
+        res, FindingCode::NoSafeRetract, std::nullopt, 0,
         "the machine file's gcode.safe_retract is \"none\": no retract before an operation's "
         "first move nor after the last, and the table turns where the tool stands");
   }
   if (machine.gcode.mode == GcodeMode::Machine &&
       !(machine.gcode.program.linearise_tolerance_mm > 0.0)) {
-    res.safety_warnings.push_back(
+    add_finding(
+        res, FindingCode::NoLinearisation, std::nullopt, 0,
         "the machine file's gcode.linearise_tolerance_mm is 0: the tip leaves the straight line "
         "between points where the table turns (the moves are checked as the joints run)");
   }
@@ -1298,7 +1376,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
     throw InputError("--feed must be positive");
   }
-  res.warnings = tp.warnings;
+  for (const std::string& w : tp.warnings) {
+    add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
+  }
   res.gcode_units = options.units_out.value_or(tp.units);
   const int decimals = machine.gcode.decimals;
   const double fallback_feed = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
@@ -1324,7 +1404,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       } advance{progress};
       const double ball_r = options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
       if (!(ball_r > 0.0)) {
-        res.warnings.push_back(not_a_ball(op) + ", no contact recovery and no collision check");
+        add_finding(res, FindingCode::NotABallMill, k,
+                    op.points.empty() ? 0 : op.points.front().line,
+                    not_a_ball(op) + ", no contact recovery and no collision check");
         continue;
       }
       contacts[k] = recover_contacts(*options.part, op, ball_r, options.contact);
@@ -1354,9 +1436,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
             "operation " + op.name + ": no CL point touches the part (wrong part or wrong units?)");
       }
       if (cs.local_gouges) {
-        res.warnings.push_back("operation " + op.name + ": " + std::to_string(cs.local_gouges) +
-                               " contact points where a concave radius is below the ball radius "
-                               "(local gouge, eq. 19)");
+        add_finding(res, FindingCode::LocalGouge, k, 0,
+                    "operation " + op.name + ": " + std::to_string(cs.local_gouges) +
+                        " contact points where a concave radius is below the ball radius "
+                        "(local gouge, eq. 19)");
       }
       contacts_time[k] = seconds_since(t0);
     }
@@ -1383,7 +1466,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const Operationd& op = tp.operations[k];
       const double R = ball_radius_mm(op, options);
       if (!(R > 0.0)) {
-        res.warnings.push_back(not_a_ball(op) + ", the input tool axes are kept");
+        add_finding(res, FindingCode::NotABallMill, k,
+                    op.points.empty() ? 0 : op.points.front().line,
+                    not_a_ball(op) + ", the input tool axes are kept");
         continue;
       }
       if (options.part && !contact_summaries[k].recovered) continue;
@@ -1412,17 +1497,19 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         }
       }
       if (const StretchGuardResult& g = optimised[k]->guard; g.whole_passes + g.stretches > 0) {
-        res.warnings.push_back(
-            "operation " + op.name + ": " + std::to_string(g.points_hit + g.points_rate) +
-            " points keep their input axes (" + std::to_string(g.whole_passes) + " whole passes, " +
-            std::to_string(g.stretches) + " stretches within passes, joined over " +
-            std::to_string(g.points_blended) + " points): there the optimised axes " +
-            (g.points_hit ? "swept the tool through the part between points" : "") +
-            (g.points_hit && g.points_rate ? " or " : "") +
-            (g.points_rate ? "raised the pass's peak omega or a" : ""));
+        add_finding(res, FindingCode::InputAxesKept, k, 0,
+                    "operation " + op.name + ": " + std::to_string(g.points_hit + g.points_rate) +
+                        " points keep their input axes (" + std::to_string(g.whole_passes) +
+                        " whole passes, " + std::to_string(g.stretches) +
+                        " stretches within passes, joined over " +
+                        std::to_string(g.points_blended) + " points): there the optimised axes " +
+                        (g.points_hit ? "swept the tool through the part between points" : "") +
+                        (g.points_hit && g.points_rate ? " or " : "") +
+                        (g.points_rate ? "raised the pass's peak omega or a" : ""));
       }
       for (std::size_t i : optimised[k]->no_free_axis) {
-        res.problems.push_back(
+        add_finding(
+            res, FindingCode::NoFreeAxis, k, op.points[i].line,
             format_location(tp.source, op.points[i].line,
                             "operation " + op.name + ": no tool axis within " +
                                 std::to_string(options.paper.max_deviation_deg) +
@@ -1473,8 +1560,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
     }
     if (missing_feed) {
-      res.warnings.push_back("operation " + op.name + ": feed moves without FEDRAT use " +
-                             std::to_string(fallback_feed) + " mm/min");
+      add_finding(res, FindingCode::MissingFeed, k, 0,
+                  "operation " + op.name + ": feed moves without FEDRAT use " +
+                      std::to_string(fallback_feed) + " mm/min");
     }
     std::vector<Vec3d> axes, in_axes;
     const std::vector<bool> rapid_into = rapid_into_of(op);
@@ -1497,8 +1585,9 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     if (!plan.ok()) {
       posting_failed = true;
-      res.problems.push_back(format_location(tp.source, op.points[plan.failed_index].line,
-                                             "operation " + op.name + ": " + plan.message));
+      add_finding(res, FindingCode::UnreachablePose, k, op.points[plan.failed_index].line,
+                  format_location(tp.source, op.points[plan.failed_index].line,
+                                  "operation " + op.name + ": " + plan.message));
       continue;
     }
     po.poses = plan.poses;
@@ -1670,12 +1759,13 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
       if (!last->length_offset || (tcp_mode && !last->tcp)) {
         if (r.verification.tool_length_active) {
-          res.problems.push_back(
+          add_finding(
+              res, FindingCode::ToolLengthOffsetOff, k, op.points[i].line,
               "operation " + op.name + ": G-code line " + std::to_string(last->line) +
-              " moves with " +
-              (!last->length_offset ? std::string("the tool length offset off")
-                                    : std::string("tool centre point control off")) +
-              " (the written program must switch it on before the operation's first move)");
+                  " moves with " +
+                  (!last->length_offset ? std::string("the tool length offset off")
+                                        : std::string("tool centre point control off")) +
+                  " (the written program must switch it on before the operation's first move)");
         }
         r.verification.tool_length_active = false;
       }
@@ -1698,11 +1788,12 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
       if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
         if (r.verification.within_axis_limits) {
-          res.problems.push_back(format_location(
-              tp.source, want.line,
-              "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
-                  std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
-                  " deg is outside the machine's axis ranges"));
+          add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
+                      format_location(
+                          tp.source, want.line,
+                          "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
+                              std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
+                              " deg is outside the machine's axis ranges"));
         }
         r.verification.within_axis_limits = false;
       }
@@ -1719,7 +1810,8 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
              << "XYZ"[q] << " would be " << joints_mm[q]
              << " mm in machine coordinates, outside the machine's travel [" << range.min_mm << ", "
              << range.max_mm << "] mm";
-          res.problems.push_back(format_location(tp.source, want.line, os.str()));
+          add_finding(res, FindingCode::TravelExceeded, k, want.line,
+                      format_location(tp.source, want.line, os.str()));
         }
         r.verification.within_axis_limits = false;
       }
@@ -1750,16 +1842,18 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     const double pos_tol = std::sqrt(3.0) * half_unit * mm_per_unit(res.gcode_units) +
                            2.0 * lever_mm * deg_to_rad(ang_tol) + 1e-9;
     if (r.verification.roundtrip_max_mm > pos_tol) {
-      res.problems.push_back("operation " + op.name + ": G-code read back is " +
-                             std::to_string(r.verification.roundtrip_max_mm) +
-                             " mm from the intended tips (rounding allows " +
-                             std::to_string(pos_tol) + ")");
+      add_finding(res, FindingCode::ReadBackMismatch, k, 0,
+                  "operation " + op.name + ": G-code read back is " +
+                      std::to_string(r.verification.roundtrip_max_mm) +
+                      " mm from the intended tips (rounding allows " + std::to_string(pos_tol) +
+                      ")");
     }
     if (r.verification.roundtrip_max_deg > ang_tol) {
-      res.problems.push_back("operation " + op.name + ": G-code read back is " +
-                             std::to_string(r.verification.roundtrip_max_deg) +
-                             " deg from the intended axes (rounding allows " +
-                             std::to_string(ang_tol) + ")");
+      add_finding(res, FindingCode::ReadBackMismatch, k, 0,
+                  "operation " + op.name + ": G-code read back is " +
+                      std::to_string(r.verification.roundtrip_max_deg) +
+                      " deg from the intended axes (rounding allows " + std::to_string(ang_tol) +
+                      ")");
     }
     r.contact = contact_summaries[k];
     r.time_contacts_s = contacts_time[k];
@@ -1785,9 +1879,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       // The optimiser keeps every axis within the cone; this proves it on what is written.
       const double allowed = options.paper.max_deviation_deg + 1e-6;
       if (r.max_axis_change_deg > allowed) {
-        res.problems.push_back("operation " + op.name + ": an output axis is " +
-                               std::to_string(r.max_axis_change_deg) +
-                               " deg from its input axis, more than --max-deviation");
+        add_finding(res, FindingCode::DeviationExceeded, k, 0,
+                    "operation " + op.name + ": an output axis is " +
+                        std::to_string(r.max_axis_change_deg) +
+                        " deg from its input axis, more than --max-deviation");
       }
     }
     if (collision && r.contact.recovered) {
@@ -1836,10 +1931,10 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
             lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
           }
           if (at.size() > 10) lines += ", ...";
-          res.problems.push_back(format_location(tp.source, op.points[at.front()].line,
-                                                 "operation " + op.name + ": " +
-                                                     std::to_string(at.size()) + " CL points " +
-                                                     what + ", at lines " + lines));
+          add_finding(res, FindingCode::PointCollision, k, op.points[at.front()].line,
+                      format_location(tp.source, op.points[at.front()].line,
+                                      "operation " + op.name + ": " + std::to_string(at.size()) +
+                                          " CL points " + what + ", at lines " + lines));
         };
         report(hits,
                "where the tool hits the part (the shank or holder within its clearance, or a "
@@ -1863,13 +1958,15 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       if (!moves_hit.empty()) {
         r.verification.collision_free = false;
         const std::size_t i = moves_hit.front();
-        res.problems.push_back(format_location(
-            tp.source, op.points[i].line,
-            "operation " + op.name + ": " + std::to_string(moves_hit.size()) +
-                " moves where the tool hits the part between CL points as the machine moves it, "
-                "first from line " +
-                std::to_string(op.points[i - 1].line) + " to line " +
-                std::to_string(op.points[i].line)));
+        add_finding(
+            res, FindingCode::MoveCollision, k, op.points[i].line,
+            format_location(tp.source, op.points[i].line,
+                            "operation " + op.name + ": " + std::to_string(moves_hit.size()) +
+                                " moves where the tool hits the part between CL points as the "
+                                "machine moves it, "
+                                "first from line " +
+                                std::to_string(op.points[i - 1].line) + " to line " +
+                                std::to_string(op.points[i].line)));
       }
     }
     if (!contacts[k].empty()) {
@@ -1948,17 +2045,20 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     r.feed_after = schedule_after[k].summary;
     r.feed_before = schedule_before[k].summary;
     if (optimised[k] && r.feed_after.cycle_time_s > r.feed_before.cycle_time_s * (1.0 + 1e-9)) {
-      res.warnings.push_back(
+      add_finding(
+          res, FindingCode::LongerCycle, k, 0,
           "operation " + op.name + ": at the machine's limits the new axes take " +
-          std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
-          std::to_string(r.feed_before.cycle_time_s) + " s (" +
-          (machine.gcode.feed_reference == FeedReference::Tip
-               ? "tip path of the feed moves " + std::to_string(r.feed_after.feed_path_mm) +
-                     " mm against " + std::to_string(r.feed_before.feed_path_mm) +
-                     " mm: with feed_reference \"tip\" the programmed feed applies to it)"
-               : std::string("the machine's limits hold the new axes back more; limiting axis ") +
-                     (r.feed_after.limiting_axis.empty() ? "none" : r.feed_after.limiting_axis) +
-                     ")"));
+              std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
+              std::to_string(r.feed_before.cycle_time_s) + " s (" +
+              (machine.gcode.feed_reference == FeedReference::Tip
+                   ? "tip path of the feed moves " + std::to_string(r.feed_after.feed_path_mm) +
+                         " mm against " + std::to_string(r.feed_before.feed_path_mm) +
+                         " mm: with feed_reference \"tip\" the programmed feed applies to it)"
+                   : std::string(
+                         "the machine's limits hold the new axes back more; limiting axis ") +
+                         (r.feed_after.limiting_axis.empty() ? "none"
+                                                             : r.feed_after.limiting_axis) +
+                         ")"));
     }
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       r.rows[i].feed_mm_min = schedule_after[k].feed_mm_min[i];
@@ -1966,7 +2066,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     }
     check_dynamic_limits(r, po, written_joints(point_moves[k]), point_moves[k], moves, res,
                          tp.source, options.feed_schedule ? limits : machine.limits,
-                         options.feed_schedule, machine.ac.tilt_letter());
+                         options.feed_schedule, machine.ac.tilt_letter(), k);
     // The checks' own time: this operation's verification without its C-space raster.
     r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
     res.operations.push_back(std::move(r));

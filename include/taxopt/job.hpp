@@ -225,14 +225,63 @@ struct OperationResult {
   std::vector<CSpaceMap> cspace_maps;
 };
 
+/// What a run found, by kind: programs test the code, people read the message.
+enum class FindingCode {
+  // Safety: what was not checked, or checked less, and could hurt a machine.
+  NoPart,           ///< no part model: no collision check, a narrow deviation cone
+  NoHolderModel,    ///< the holder is not checked against the part
+  NoSafeRetract,    ///< gcode.safe_retract = "none"
+  NoLinearisation,  ///< machine mode without linearisation
+  // Warnings: the output is sound; something the user should know.
+  NotABallMill,       ///< an operation's tool is no ball-end mill: its input axes are kept
+  LocalGouge,         ///< a concave radius below the ball radius at contact points (eq. 19)
+  InputAxesKept,      ///< the guard kept the input axes over passes or stretches
+  MissingFeed,        ///< feed moves without a feed: the fallback feed is used
+  JerkLimitExceeded,  ///< a joint's jerk above its limit (velocity and acceleration hold)
+  LongerCycle,        ///< at the machine's limits the new axes take longer than the input's
+  ClFileNote,         ///< what the CL reader noted (a record skipped, a frame applied, ...)
+  // Problems: the output is not to be used (JobResult::ok() is false).
+  NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
+  UnreachablePose,       ///< no pose within the machine's axis ranges
+  AxisRangeExceeded,     ///< a written rotary value outside its range
+  TravelExceeded,        ///< a written linear joint outside its travel
+  DynamicLimitExceeded,  ///< a joint's velocity or acceleration above its limit
+  ToolLengthOffsetOff,   ///< a move written without the tool length offset (or TCP) in force
+  ReadBackMismatch,      ///< the G-code read back is not what was meant
+  DeviationExceeded,     ///< an output axis outside the deviation cone
+  PointCollision,        ///< CL points whose tool hits the part
+  MoveCollision,         ///< moves where the tool hits the part between CL points
+};
+/// "no_part", "no_free_axis", ...: the report's `findings[].code`.
+const char* to_string(FindingCode code);
+
+enum class Severity { Safety, Warning, Problem };
+/// "safety", "warning", "problem".
+const char* to_string(Severity severity);
+
+/// One finding: its kind, its severity, where (an operation's index into the toolpath and a
+/// CL line, when known) and a message for display.
+struct Finding {
+  FindingCode code;
+  Severity severity;
+  std::optional<std::size_t> operation;
+  int line = 0;
+  std::string message;
+};
+
 /// Result of run_job. `ok()` is false when the output could not be made safe: `problems`
 /// says why (one line each, with the CL line); the G-code is then not to be used.
 struct JobResult {
   std::vector<OperationResult> operations;
+  /// Everything below as structured findings, in the order found.
+  std::vector<Finding> findings;
+  /// The findings' messages by severity (display; the same order).
   std::vector<std::string> problems;
   /// What was not checked and could hurt a machine (no part, no holder model), shown first.
   std::vector<std::string> safety_warnings;
   std::vector<std::string> warnings;
+  /// True when some finding has this code.
+  bool has(FindingCode code) const;
   /// The tool axes were checked against a part (collision_free and colliding_* mean something).
   bool collision_checked = false;
   GcodeProgram gcode;

@@ -132,6 +132,17 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
         {"linearise_tolerance_mm", machine.gcode.program.linearise_tolerance_mm}}}};
   j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
   j["ok"] = result.ok();
+  nlohmann::json findings = nlohmann::json::array();
+  for (const Finding& f : result.findings) {
+    nlohmann::json one = {
+        {"code", to_string(f.code)}, {"severity", to_string(f.severity)}, {"message", f.message}};
+    one["operation"] = f.operation && *f.operation < toolpath.operations.size()
+                           ? nlohmann::json(toolpath.operations[*f.operation].name)
+                           : nlohmann::json();
+    one["line"] = f.line > 0 ? nlohmann::json(f.line) : nlohmann::json();
+    findings.push_back(one);
+  }
+  j["findings"] = findings;
   j["problems"] = result.problems;
   j["warnings"] = result.warnings;
   j["safety_warnings"] = result.safety_warnings;

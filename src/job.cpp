@@ -1270,6 +1270,45 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
 
 }  // namespace
 
+TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units) {
+  const double scale = mm_per_unit(mesh_units);
+  for (Vec3d& v : mesh.vertices) {
+    if (!v.allFinite()) throw InputError("the part mesh has a vertex that is not a number");
+    v *= scale;
+  }
+  if (toolpath.frames.empty()) return mesh;
+  const ClFrame& f = toolpath.frames.front();
+  for (const ClFrame& g : toolpath.frames) {
+    if ((g.rotation - f.rotation).cwiseAbs().maxCoeff() > 1e-9 ||
+        (g.origin_mm - f.origin_mm).norm() > 1e-9) {
+      throw InputError(toolpath.source + ": its MSYS records name different frames (lines " +
+                       std::to_string(f.line) + " and " + std::to_string(g.line) +
+                       "): one part cannot be in all of them; use --msys ignore or split the "
+                       "file");
+    }
+  }
+  for (Vec3d& v : mesh.vertices) v = f.rotation.transpose() * (v - f.origin_mm);
+  return mesh;
+}
+
+ToolOverrides tool_overrides(const ToolDimensions& given) {
+  const double u = mm_per_unit(given.units);
+  const auto mm = [u](const std::optional<double>& v) -> std::optional<double> {
+    if (v && !(*v > 0.0 && std::isfinite(*v))) {
+      throw InputError("tool dimensions must be positive");
+    }
+    return v ? std::optional<double>(*v * u) : std::nullopt;
+  };
+  ToolOverrides o;
+  o.ball_radius_mm = mm(given.ball_radius);
+  o.shank_radius_mm = mm(given.shank_radius);
+  o.flute_length_mm = mm(given.flute_length);
+  o.holder_radius_mm = mm(given.holder_radius);
+  o.holder_length_mm = mm(given.holder_length);
+  o.gauge_length_mm = mm(given.gauge_length);
+  return o;
+}
+
 const char* to_string(FindingCode code) {
   switch (code) {
     case FindingCode::NoPart: return "no_part";

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "support.hpp"
+#include "taxopt/core/error.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/machine_file.hpp"
@@ -89,4 +90,55 @@ TEST_CASE(
     CHECK(f["line"].get<int>() > 0);
   }
   CHECK(seen);
+}
+
+TEST_CASE(
+    "units: the library puts an inch or mm part mesh and inch tool dimensions in mm, and "
+    "moves the part into the MSYS frame the points were moved into",
+    "[units][msys][io]") {
+  TriangleMesh inch_mesh;
+  inch_mesh.vertices = {Vec3d(1.0, 2.0, 0.5), Vec3d(2.0, 2.0, 0.5), Vec3d(1.0, 3.0, 0.5)};
+  inch_mesh.faces = {{0, 1, 2}};
+  TriangleMesh mm_mesh = inch_mesh;
+  for (Vec3d& v : mm_mesh.vertices) v *= 25.4;
+  Toolpath tp;
+  tp.source = "u.cls";
+  tp.units = LengthUnit::Inch;
+  // No frame: the mesh in either unit lands in the same place, in mm.
+  const TriangleMesh a = part_mesh_for(tp, inch_mesh, LengthUnit::Inch);
+  const TriangleMesh b = part_mesh_for(tp, mm_mesh, LengthUnit::Millimetre);
+  for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+    CHECK((a.vertices[i] - b.vertices[i]).norm() < 1e-12);
+    CHECK((a.vertices[i] - 25.4 * inch_mesh.vertices[i]).norm() < 1e-12);
+  }
+  // An applied MSYS frame (origin (3, 3, 0) in, turned a quarter about z): the mesh moves into
+  // it as the points did, p' = R^T (p - o).
+  ClFrame f;
+  f.rotation << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  f.origin_mm = Vec3d(3.0, 3.0, 0.0) * 25.4;
+  f.line = 3;
+  tp.frames = {f};
+  const TriangleMesh moved = part_mesh_for(tp, inch_mesh, LengthUnit::Inch);
+  for (std::size_t i = 0; i < moved.vertices.size(); ++i) {
+    const Vec3d want = f.rotation.transpose() * (25.4 * inch_mesh.vertices[i] - f.origin_mm);
+    CHECK((moved.vertices[i] - want).norm() < 1e-9);
+  }
+  // Two frames: no one mesh fits both.
+  ClFrame g = f;
+  g.origin_mm.x() += 1.0;
+  g.line = 40;
+  tp.frames = {f, g};
+  CHECK_THROWS_WITH(part_mesh_for(tp, inch_mesh, LengthUnit::Inch),
+                    Catch::Contains("lines 3 and 40"));
+  // Tool dimensions in the CL file's inches.
+  ToolDimensions d;
+  d.units = LengthUnit::Inch;
+  d.ball_radius = 0.125;
+  d.holder_radius = 0.75;
+  const ToolOverrides o = tool_overrides(d);
+  CHECK(*o.ball_radius_mm == Approx(3.175));
+  CHECK(*o.holder_radius_mm == Approx(19.05));
+  CHECK_FALSE(o.shank_radius_mm);
+  d.gauge_length = -1.0;
+  CHECK_THROWS_AS(tool_overrides(d), InputError);
 }

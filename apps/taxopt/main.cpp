@@ -539,39 +539,13 @@ int main(int argc, char** argv) {
     read_options.apply_msys = a.msys == "apply";
     taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
 
-    if (a.tool_radius) {
-      if (!(*a.tool_radius > 0.0)) return error("--tool-radius must be positive", 2);
-      const double r_mm = *a.tool_radius * taxopt::mm_per_unit(toolpath.units);
-      for (auto& op : toolpath.operations) {
-        op.tool.diameter_mm = 2.0 * r_mm;
-        op.tool.corner_radius_mm = r_mm;
-      }
+    if (a.tool_radius && !(*a.tool_radius > 0.0)) {
+      return error("--tool-radius must be positive", 2);
     }
-
+    // The part is in the CL file's units and coordinates (docs/cli.md).
     std::optional<taxopt::Part> part;
     if (!a.part.empty()) {
-      taxopt::TriangleMesh mesh = taxopt::read_mesh_file(a.part);
-      if (toolpath.units == taxopt::LengthUnit::Inch) {
-        for (auto& v : mesh.vertices)
-          v *= taxopt::kMmPerInch;  // the part is in the CL file's units
-      }
-      // The part is in the CL file's coordinates: where MSYS moved them into the MCS, it moves
-      // with them.
-      if (!toolpath.frames.empty()) {
-        const taxopt::ClFrame& f = toolpath.frames.front();
-        for (const auto& g : toolpath.frames) {
-          if ((g.rotation - f.rotation).cwiseAbs().maxCoeff() > 1e-9 ||
-              (g.origin_mm - f.origin_mm).norm() > 1e-9) {
-            return error(a.in + ": its MSYS records name different frames (lines " +
-                             std::to_string(f.line) + " and " + std::to_string(g.line) +
-                             "): one --part cannot be in all of them; use --msys ignore or "
-                             "split the file",
-                         2);
-          }
-        }
-        for (auto& v : mesh.vertices) v = f.rotation.transpose() * (v - f.origin_mm);
-      }
-      part.emplace(std::move(mesh));
+      part.emplace(taxopt::part_mesh_for(toolpath, taxopt::read_mesh_file(a.part), toolpath.units));
     }
     taxopt::JobOptions options;
     if (part) options.part = &*part;
@@ -591,17 +565,9 @@ int main(int argc, char** argv) {
     }
     {
       // Tool dimensions are in the CL file's units.
-      const double u = taxopt::mm_per_unit(toolpath.units);
-      const auto mm = [u](const std::optional<double>& v) -> std::optional<double> {
-        if (v && !(*v > 0.0)) throw taxopt::InputError("tool dimensions must be positive");
-        return v ? std::optional<double>(*v * u) : std::nullopt;
-      };
-      options.tool.ball_radius_mm = mm(a.tool_radius);
-      options.tool.shank_radius_mm = mm(a.shank_radius);
-      options.tool.flute_length_mm = mm(a.flute_length);
-      options.tool.holder_radius_mm = mm(a.holder_radius);
-      options.tool.holder_length_mm = mm(a.holder_length);
-      options.tool.gauge_length_mm = mm(a.gauge_length);
+      options.tool =
+          taxopt::tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
+                                  a.holder_radius, a.holder_length, a.gauge_length});
       // The machine's usual holder where the command line names none (machine file, mm).
       if (!options.tool.holder_radius_mm && machine.holder_radius_mm) {
         options.tool.holder_radius_mm = machine.holder_radius_mm;

@@ -290,6 +290,24 @@ struct JobResult {
   bool ok() const { return problems.empty(); }
 };
 
+/// A part mesh as run_job takes it (JobOptions::part): in mm and in the frame the CL reader
+/// posts the points in. `mesh` is in `mesh_units` and in the CL file's own coordinates: an
+/// inch CL file's part may be in inches (the CLI's convention: the CL file's units) or in mm;
+/// where the reader moved the points into an MSYS frame (ClReadOptions::apply_msys), the mesh
+/// moves with them. @throws InputError when the file's applied MSYS records name different
+/// frames (one mesh cannot be in all of them) or a vertex is not finite.
+TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units);
+
+/// Tool dimensions as a user gives them, in one length unit (the CLI: the CL file's).
+struct ToolDimensions {
+  LengthUnit units = LengthUnit::Millimetre;
+  std::optional<double> ball_radius, shank_radius, flute_length, holder_radius, holder_length,
+      gauge_length;
+};
+/// The same in mm, as JobOptions::tool takes them. @throws InputError for one that is not a
+/// positive number.
+ToolOverrides tool_overrides(const ToolDimensions& given);
+
 /// Runs the job. @throws InputError for options that cannot apply (a method this build
 /// lacks) and for a part that does not fit the CL file (no point touches it, or a ball cuts
 /// into it: the CL line is named). Outcomes (out of limits, failed verification) are in

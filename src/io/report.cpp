@@ -59,11 +59,13 @@ void tidy_numbers(nlohmann::json& j) {
 /// The bodies of an operation's tool as the checks model them (mm from the ball centre along
 /// the axis), or null with the reason.
 nlohmann::json tool_json(const Tool& tool, const JobOptions& options) {
+  // A ball radius given overrides the file's diameter and corner radius.
+  const std::optional<double>& ball = options.tool.ball_radius_mm;
   nlohmann::json t = {{"number", tool.number},
                       {"name", tool.name},
                       {"from_file", tool.from_file},
-                      {"diameter_mm", tool.diameter_mm},
-                      {"corner_radius_mm", tool.corner_radius_mm},
+                      {"diameter_mm", ball ? 2.0 * *ball : tool.diameter_mm},
+                      {"corner_radius_mm", ball ? *ball : tool.corner_radius_mm},
                       {"flute_length_mm", tool.flute_length_mm}};
   try {
     const ToolModel m = ToolModel::ball_end(tool, options.tool);

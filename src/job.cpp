@@ -386,8 +386,7 @@ std::vector<std::size_t> colliding_moves(
         const double t = static_cast<double>(s) / steps;
         const Posed pose{deg_to_rad(p0.a_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
         const Vec3d xyz = p0.xyz + t * (p1.xyz - p0.xyz);
-        const Vec3d tip =
-            machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz, pose) : xyz;
+        const Vec3d tip = tip_of_written_mm(machine, xyz, pose);
         const Vec3d axis = machine.ac.forward(pose);
         if (model.collides(tool, tip + R * axis, axis, in_air)) {
           return true;
@@ -626,8 +625,7 @@ std::vector<char> points_and_moves_hit(const Operationd& op,
   std::vector<double> a, c;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
-    xyz.push_back(machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, poses[i])
-                                                           : tip);
+    xyz.push_back(written_xyz_mm(machine, tip, poses[i]));
     a.push_back(rad_to_deg(poses[i].a_rad));
     c.push_back(rad_to_deg(poses[i].c_rad));
   }
@@ -1000,8 +998,7 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     for (std::size_t i = 0; i < n; ++i) {
       axes.push_back(machine.ac.forward(trial[i]));
       const Vec3d tip = tip_at(i, trial[i]);
-      xyz.push_back(
-          machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, trial[i]) : tip);
+      xyz.push_back(written_xyz_mm(machine, tip, trial[i]));
       a_deg.push_back(rad_to_deg(trial[i].a_rad));
       c_deg.push_back(rad_to_deg(trial[i].c_rad));
     }
@@ -1697,9 +1694,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
           const GcodeMove& arc = moves[next];
           if (!arc.arc || !last) mismatch();
           const PostedOperation& po = posted[k];
-          const Vec3d want = machine.gcode.mode == GcodeMode::Machine
-                                 ? machine.ac.to_machine_mm(po.points[i].tip_mm, po.poses[i])
-                                 : po.points[i].tip_mm;
+          const Vec3d want = written_xyz_mm(machine, po.points[i].tip_mm, po.poses[i]);
           GcodeMove at = arc;
           at.xyz_mm = point_on_arc(last->xyz_mm, arc, want);
           on_arcs.push_back(at);
@@ -1716,9 +1711,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
     std::vector<JointPosition> q;
     for (const GcodeMove* m : at) {
       const Posed pose{deg_to_rad(m->a_deg), deg_to_rad(m->c_deg)};
-      const Vec3d xyz = machine.gcode.mode == GcodeMode::Machine
-                            ? m->xyz_mm
-                            : machine.ac.to_machine_mm(m->xyz_mm, pose);
+      const Vec3d xyz = joints_of_written_mm(machine, m->xyz_mm, pose);
       q.push_back({xyz.x(), xyz.y(), xyz.z(), m->a_deg, m->c_deg});
     }
     return q;
@@ -1817,9 +1810,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
       }
       const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
       const Vec3d axis = machine.ac.forward(written);
-      const Vec3d tip = machine.gcode.mode == GcodeMode::Machine
-                            ? machine.ac.from_machine_mm(last->xyz_mm, written)
-                            : last->xyz_mm;
+      const Vec3d tip = tip_of_written_mm(machine, last->xyz_mm, written);
       const CLPointd& want = po.points[i];
       r.verification.roundtrip_max_mm =
           std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
@@ -1837,9 +1828,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
         r.verification.within_axis_limits = false;
       }
       // The linear travel, in machine coordinates, where the machine file gives it.
-      const Vec3d joints_mm = machine.gcode.mode == GcodeMode::Machine
-                                  ? last->xyz_mm
-                                  : machine.ac.to_machine_mm(last->xyz_mm, written);
+      const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written);
       for (int q = 0; q < 3; ++q) {
         const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
         if (range.contains(joints_mm[q])) continue;

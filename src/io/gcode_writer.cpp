@@ -373,7 +373,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     Vec3d prev_tip = Vec3d::Zero();
     bool have_prev = false;
     const auto out_xyz = [&](const Vec3d& tip, const Posed& pose) {
-      return g.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip, pose) : tip;
+      return written_xyz_mm(machine, tip, pose);
     };
     const auto angle_words = [&](const Posed& pose) {
       return tilt_word + dialect.number(rad_to_deg(pose.a_rad), d) + " C" +

@@ -120,6 +120,21 @@ struct Machine {
   GcodeSettings gcode;
 };
 
+/// X Y Z as the G-code writes the tip `tip_mm` at `pose`: the tip itself (tcp mode) or the
+/// machine's joints (machine mode, the convention of cli.md).
+inline Vec3d written_xyz_mm(const Machine& machine, const Vec3d& tip_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip_mm, pose) : tip_mm;
+}
+/// The tip that written X Y Z `xyz_mm` mean at `pose` (the inverse of written_xyz_mm).
+inline Vec3d tip_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz_mm, pose)
+                                                  : xyz_mm;
+}
+/// The machine's linear joints for written X Y Z at `pose`, whatever the mode.
+inline Vec3d joints_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? xyz_mm : machine.ac.to_machine_mm(xyz_mm, pose);
+}
+
 /// Limits of a typical mid-size A/C trunnion machine, used where the machine file gives
 /// none: X Y Z 500 mm/s (30 m/min) and 3000 mm/s^2; A 150 deg/s (25 rpm) and 1000 deg/s^2;
 /// C 240 deg/s (40 rpm) and 1500 deg/s^2; no jerk limit.

@@ -314,6 +314,26 @@ ToolOverrides tool_overrides(const ToolDimensions& given);
 /// JobResult::problems.
 JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
 
+/// The tool axes and machine poses of a run without G-code, for a post-processor that writes
+/// its own program: the stages of run_job up to posting (the options checked, the contacts, the
+/// method's axes with their guards, the machine's poses with the turns between passes), the
+/// same axes and poses run_job writes. Nothing here is verified as written (no read-back, no
+/// FCL check of the output, no dynamic limits): run_job does that.
+struct AxisPlan {
+  /// Per operation: the points with the planned axes and tips (the ball centres where the CL
+  /// file put them; feeds as posted) and per point the machine's pose; empty when a pose is
+  /// unreachable (a finding with FindingCode::UnreachablePose names the line).
+  std::vector<PostedOperation> operations;
+  /// Per operation and point, the contacts (empty without a part or for a tool not a ball).
+  std::vector<std::vector<ContactPoint>> contacts;
+  /// What the stages found (as JobResult::findings).
+  std::vector<Finding> findings;
+  /// No finding of severity Problem.
+  bool ok() const;
+};
+/// @throws InputError as run_job.
+AxisPlan plan_axes(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
+
 /// What a report records of the run itself, so that it can be reproduced (given by the
 /// caller: the library does not know its command line or clock).
 struct RunInfo {

@@ -1,0 +1,301 @@
+// Helpers shared by the stages of a run (stages.hpp).
+#include <algorithm>
+#include <cmath>
+
+#include "pipeline/stages.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt::pipeline {
+namespace {
+
+/// The severity of a kind of finding (job.hpp groups them).
+Severity severity_of(FindingCode code) {
+  switch (code) {
+    case FindingCode::NoPart:
+    case FindingCode::NoHolderModel:
+    case FindingCode::NoSafeRetract:
+    case FindingCode::NoLinearisation: return Severity::Safety;
+    case FindingCode::NotABallMill:
+    case FindingCode::LocalGouge:
+    case FindingCode::InputAxesKept:
+    case FindingCode::MissingFeed:
+    case FindingCode::JerkLimitExceeded:
+    case FindingCode::LongerCycle:
+    case FindingCode::ClFileNote: return Severity::Warning;
+    default: return Severity::Problem;
+  }
+}
+
+}  // namespace
+
+/// Records a finding, and its message by severity (JobResult's display lists).
+void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
+                 const std::string& message) {
+  const Severity severity = severity_of(code);
+  res.findings.push_back(Finding{code, severity, operation, line, message});
+  (severity == Severity::Problem  ? res.problems
+   : severity == Severity::Safety ? res.safety_warnings
+                                  : res.warnings)
+      .push_back(message);
+}
+
+/// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
+double ball_radius_mm(const Operationd& op, const JobOptions& options) {
+  return options.tool.ball_radius_mm.value_or(op.tool.ball_radius_mm());
+}
+
+/// Why an operation with no ball radius is left alone: no tool at all in the file, or another
+/// kind of tool.
+std::string not_a_ball(const Operationd& op) {
+  if (!op.tool.from_file) {
+    return "operation " + op.name +
+           ": the CL file defines no tool (no TLDATA or CUTTER record); give the ball radius "
+           "with --tool-radius";
+  }
+  return "operation " + op.name + ": not a ball-end mill";
+}
+
+/// The margins the collision checks judge the tool's bodies by (ToolMargins).
+ToolMargins margins_of(const JobOptions& options) {
+  ToolMargins m;
+  m.shank_clearance_mm = options.shank_clearance_mm;
+  m.holder_clearance_mm = options.holder_clearance_mm;
+  if (options.part) {
+    m.flute_tolerance_mm =
+        options.part_tolerance_mm.value_or(contact_tolerance_mm(*options.part, options.contact));
+  }
+  return m;
+}
+
+/// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
+/// not move when the axis turns, so before and after share one arc length), else the tip.
+Vec3d reference_point(const CLPointd& p, double ball_radius_mm) {
+  return p.tip_mm + ball_radius_mm * p.axis;
+}
+
+/// The tip that keeps the ball centre of `p` where it is with the tool along `axis`:
+/// P' = C - R V' (the contact point does not move when the axis turns).
+Vec3d tip_for_axis(const CLPointd& p, double ball_radius_mm, const Vec3d& axis) {
+  return reference_point(p, ball_radius_mm) - ball_radius_mm * axis;
+}
+
+/// The feed of each point that the kinematic metrics use: --feed, else the file's, else
+/// `fallback_mm_min`.
+std::vector<double> metric_feeds_of(const Operationd& op, const JobOptions& options,
+                                    double fallback_mm_min) {
+  std::vector<double> feed;
+  for (const CLPointd& p : op.points) {
+    feed.push_back(options.feed_mm_per_min.value_or(p.feed_mm_per_min > 0.0 ? p.feed_mm_per_min
+                                                                            : fallback_mm_min));
+  }
+  return feed;
+}
+
+/// The metric feeds of a pass's moves: the move from point i to i + 1 runs at point i + 1's.
+std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const IndexRange& pass) {
+  return std::vector<double>(metric_feed.begin() + static_cast<long>(pass.begin) + 1,
+                             metric_feed.begin() + static_cast<long>(pass.end));
+}
+
+/// The paper's L_i of a pass, from point i to i + 1: between contact points where both ends
+/// touch the part, else between reference points. The metrics and the optimiser share them.
+std::vector<double> segment_lengths_mm(const Operationd& op,
+                                       const std::vector<ContactPoint>& contacts,
+                                       double ball_radius_mm, const IndexRange& pass) {
+  std::vector<double> len;
+  for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
+    const bool cc = !contacts.empty() && contacts[i].state == ContactState::Touching &&
+                    contacts[i + 1].state == ContactState::Touching;
+    len.push_back(cc ? (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm()
+                     : (reference_point(op.points[i + 1], ball_radius_mm) -
+                        reference_point(op.points[i], ball_radius_mm))
+                           .norm());
+  }
+  return len;
+}
+
+/// Joint positions (X Y Z mm, A C deg) of tips and poses: the machine-mode convention of
+/// CLI.md, which is where the joints are whatever the G-code mode.
+std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
+                                     const std::vector<Posed>& poses) {
+  std::vector<JointPosition> q(tips_mm.size());
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const Vec3d m = ac.to_machine_mm(tips_mm[i], poses[i]);
+    q[i] = {m.x(), m.y(), m.z(), rad_to_deg(poses[i].a_rad), rad_to_deg(poses[i].c_rad)};
+  }
+  return q;
+}
+
+/// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
+/// feed move; a chain's joints are those of points begin - 1 .. end - 1.
+std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
+  std::vector<IndexRange> chains;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].motion != Motion::Feed) continue;
+    if (chains.empty() || chains.back().end != i) chains.push_back(IndexRange{i, i});
+    chains.back().end = i + 1;
+  }
+  return chains;
+}
+
+OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
+                                     const std::vector<JointPosition>& joints,
+                                     const std::vector<double>& programmed_s,
+                                     const JointLimits& limits, const ACMachined& ac) {
+  OperationSchedule out;
+  const std::size_t n = points.size();
+  out.time_s.assign(n, 0.0);
+  out.feed_mm_min.assign(n, std::nullopt);
+  std::vector<FeedBound> bound(n, FeedBound::Programmed);
+  std::vector<Joint> bound_joint(n, Joint::X);
+  for (const IndexRange& c : feed_chains(points)) {
+    FeedChain chain;
+    chain.joints = slice(joints, c.begin - 1, c.end);
+    chain.min_time_s = slice(programmed_s, c.begin, c.end);
+    const FeedSchedule s = schedule_feed(chain, limits);
+    out.summary.sweeps = std::max(out.summary.sweeps, s.sweeps);
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      out.time_s[i] = s.time_s[i - c.begin];
+      bound[i] = s.bound[i - c.begin];
+      bound_joint[i] = s.bound_joint[i - c.begin];
+    }
+  }
+  FeedSummary& sum = out.summary;
+  double path_mm = 0.0, limited_mm = 0.0;
+  std::array<double, kJointCount> by_velocity{}, by_accel{};
+  bool any_feed = false;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (points[i].motion == Motion::Rapid) {
+      const double t = rapid_time_s(joints[i - 1], joints[i], limits);
+      // The same move without the turn: the rotary joints held where the move starts, the
+      // linear ones taking the tip to its point under that pose.
+      constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+      constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+      const Posed start{deg_to_rad(joints[i - 1][kA]), deg_to_rad(joints[i - 1][kC])};
+      const Vec3d xyz = ac.to_machine_mm(points[i].tip_mm, start);
+      const JointPosition held = {xyz.x(), xyz.y(), xyz.z(), joints[i - 1][kA], joints[i - 1][kC]};
+      sum.rapid_time_s += t;
+      sum.transition_excess_s += std::max(0.0, t - rapid_time_s(joints[i - 1], held, limits));
+      continue;
+    }
+    if (!(out.time_s[i] > 0.0)) continue;
+    sum.feed_time_s += out.time_s[i];
+    const double feed = points[i].feed_mm_per_min * programmed_s[i] / out.time_s[i];
+    out.feed_mm_min[i] = feed;
+    sum.min_feed_mm_min = any_feed ? std::min(sum.min_feed_mm_min, feed) : feed;
+    any_feed = true;
+    const double len = (points[i].tip_mm - points[i - 1].tip_mm).norm();
+    path_mm += len;
+    if (out.time_s[i] > programmed_s[i] * (1.0 + 1e-9)) {
+      limited_mm += len;
+      const std::size_t j = static_cast<std::size_t>(bound_joint[i]);
+      (bound[i] == FeedBound::Velocity ? by_velocity : by_accel)[j] += len;
+    }
+  }
+  sum.cycle_time_s = sum.feed_time_s + sum.rapid_time_s;
+  sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
+  sum.feed_path_mm = path_mm;
+  double most = 0.0;
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    for (const auto& [share, kind] : {std::pair<double, const char*>{by_velocity[j], "velocity"},
+                                      {by_accel[j], "acceleration"}}) {
+      if (share > most) {
+        most = share;
+        sum.limiting_axis = joint_name(static_cast<Joint>(j), ac.tilt_letter());
+        sum.limiting_kind = kind;
+      }
+    }
+  }
+  return out;
+}
+
+/// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed
+/// ball centres). In parallel; the result is sorted, whatever the thread count.
+std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolModel& tool,
+                                          const Operationd& op, const std::vector<Vec3d>& axes,
+                                          const std::vector<ContactPoint>& contacts,
+                                          detail::StageProgress* progress,
+                                          const std::vector<char>* only) {
+  const double R = tool.ball_radius_mm;
+  return detail::parallel_select(0, op.points.size(), [&](std::size_t i) {
+    if (only && !(*only)[i]) return false;
+    const Vec3d centre = op.points[i].tip_mm + R * op.points[i].axis;
+    const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
+    const bool hit = model.collides(tool, centre, axes[i], in_air);
+    if (progress) progress->advance();
+    return hit;
+  });
+}
+
+/// Index i of every move from point i-1 to point i during which the tool hits the part, with
+/// the machine moving linearly in its joints between the values written (`xyz_w` as written,
+/// `a_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
+/// only the bodies above the ball are checked (the ball's path between contacts is the CAM
+/// system's chord tolerance); where either end is in the air, the ball too.
+
+std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel& tool,
+                                         const Machine& machine, const std::vector<Vec3d>& xyz_w,
+                                         const std::vector<double>& a_deg,
+                                         const std::vector<double>& c_deg,
+                                         const std::vector<ContactPoint>& contacts,
+                                         detail::StageProgress* progress,
+                                         const std::vector<std::vector<WayPoint>>* between,
+                                         const std::vector<char>* only) {
+  const double R = tool.ball_radius_mm;
+  return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
+    if (only && !(*only)[i]) return false;
+    struct Advance {  // on every return of this move's check
+      detail::StageProgress* p;
+      ~Advance() {
+        if (p) p->advance();
+      }
+    } advance{progress};
+    const bool in_air = contacts[i - 1].state != ContactState::Touching ||
+                        contacts[i].state != ContactState::Touching;
+    // The move as the machine runs it: joint-linear between the written blocks.
+    std::vector<WayPoint> chain = {{xyz_w[i - 1], a_deg[i - 1], c_deg[i - 1]}};
+    if (between && i < between->size()) {
+      chain.insert(chain.end(), (*between)[i].begin(), (*between)[i].end());
+    }
+    chain.push_back({xyz_w[i], a_deg[i], c_deg[i]});
+    for (std::size_t k = 1; k < chain.size(); ++k) {
+      const WayPoint &p0 = chain[k - 1], &p1 = chain[k];
+      const double da = p1.a_deg - p0.a_deg, dc = p1.c_deg - p0.c_deg;
+      const double dx = (p1.xyz - p0.xyz).norm();
+      const int steps = static_cast<int>(
+          std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
+      for (int s = (k == 1 ? 1 : 0); s < steps; ++s) {
+        const double t = static_cast<double>(s) / steps;
+        const Posed pose{deg_to_rad(p0.a_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
+        const Vec3d xyz = p0.xyz + t * (p1.xyz - p0.xyz);
+        const Vec3d tip = tip_of_written_mm(machine, xyz, pose);
+        const Vec3d axis = machine.ac.forward(pose);
+        if (model.collides(tool, tip + R * axis, axis, in_air)) {
+          return true;
+        }
+      }
+    }
+    return false;
+  });
+}
+
+/// Per point, whether the move into it is a rapid (the first point counts as one).
+std::vector<bool> rapid_into_of(const Operationd& op) {
+  std::vector<bool> rapid_into;
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    rapid_into.push_back(i == 0 || op.points[i].motion == Motion::Rapid);
+  }
+  return rapid_into;
+}
+
+/// The feed points of `op` as posted: feed moves without a feed get `fallback_feed`.
+std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed) {
+  std::vector<CLPointd> points = op.points;
+  for (CLPointd& p : points) {
+    if (!(p.feed_mm_per_min > 0.0)) p.feed_mm_per_min = fallback_feed;
+  }
+  return points;
+}
+
+}  // namespace taxopt::pipeline

@@ -1,0 +1,93 @@
+// The post stage: the machine's poses of the planned axes, and of the input axes for the
+// "before" (stages.hpp).
+#include "pipeline/stages.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/kinematics/pose_planner.hpp"
+
+namespace taxopt::pipeline {
+
+std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
+                                                            std::vector<OperationContext>& ops,
+                                                            JobResult& res) {
+  const Machine& machine = run.machine;
+  const JobOptions& options = run.options;
+  std::vector<PostedOperation> posted;
+  std::optional<Posed> start, input_start;
+  bool failed = false;
+  for (OperationContext& o : ops) {
+    const Operationd& op = *o.op;
+    const std::size_t k = o.index;
+    const auto t0 = Clock::now();
+    PostedOperation po{op.name,
+                       op.tool,
+                       op.spindle_rpm,
+                       op.spindle_clockwise,
+                       posted_feeds(op, run.fallback_feed_mm_per_min),
+                       {},
+                       {},
+                       {},
+                       op.arcs};
+    if (o.optimised) {
+      for (std::size_t i = 0; i < po.points.size(); ++i) {
+        po.points[i].axis = o.optimised->axes[i];
+        po.points[i].tip_mm = tip_for_axis(op.points[i], o.ball_radius_mm, po.points[i].axis);
+      }
+    }
+    bool missing_feed = false;
+    for (const CLPointd& p : op.points) {
+      missing_feed = missing_feed || (p.motion == Motion::Feed && !(p.feed_mm_per_min > 0.0));
+    }
+    if (missing_feed) {
+      add_finding(res, FindingCode::MissingFeed, k, 0,
+                  "operation " + op.name + ": feed moves without FEDRAT use " +
+                      std::to_string(run.fallback_feed_mm_per_min) + " mm/min");
+    }
+    std::vector<Vec3d> axes, in_axes;
+    const std::vector<bool> rapid_into = rapid_into_of(op);
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      axes.push_back(po.points[i].axis);
+      in_axes.push_back(op.points[i].axis);
+    }
+    const PosePlan plan =
+        plan_poses(machine.ac, axes, rapid_into, start, options.pose_options,
+                   o.optimised ? o.optimised->preferred : std::vector<std::optional<Posed>>{});
+    // The input axes as the machine would have run them, for the "before" metrics.
+    if (o.optimised) {
+      const PosePlan before =
+          plan_poses(machine.ac, in_axes, rapid_into, input_start, options.pose_options);
+      if (before.ok()) input_start = before.poses.back();
+      o.input_poses = before.ok() ? before.poses : std::vector<Posed>{};
+    } else {
+      o.input_poses = plan.ok() ? plan.poses : std::vector<Posed>{};
+      if (plan.ok()) input_start = plan.poses.back();
+    }
+    if (!plan.ok()) {
+      failed = true;
+      add_finding(res, FindingCode::UnreachablePose, k, op.points[plan.failed_index].line,
+                  format_location(run.tp.source, op.points[plan.failed_index].line,
+                                  "operation " + op.name + ": " + plan.message));
+      continue;
+    }
+    po.poses = plan.poses;
+    if (o.optimised) {
+      spread_turns_in_air(op, o.contacts, o.ball_radius_mm, run.planner_check(),
+                          o.tool ? *o.tool : ToolModel{}, machine,
+                          deg_to_rad(options.paper.max_deviation_deg), po);
+    }
+    if (o.optimised && machine.gcode.feed_reference == FeedReference::CutterPath) {
+      // Every feed block keeps the time of the input block at its feed: the ball centre and
+      // the contact point run as the CAM system programmed them, whatever the tip does.
+      std::vector<CLPointd> in_points = po.points;
+      for (std::size_t i = 0; i < in_points.size(); ++i) in_points[i].tip_mm = op.points[i].tip_mm;
+      po.programmed_time_s =
+          programmed_block_times_s(in_points, o.input_poses.empty() ? po.poses : o.input_poses);
+    }
+    start = po.poses.back();
+    posted.push_back(std::move(po));
+    o.post_s = seconds_since(t0);
+  }
+  if (failed) return std::nullopt;
+  return posted;
+}
+
+}  // namespace taxopt::pipeline

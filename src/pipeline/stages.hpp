@@ -1,0 +1,234 @@
+#pragma once
+// The stages of a run (run_job, plan_axes in job.hpp), each a function with values in and out:
+//
+//   validate -> operation contexts -> contacts (and the part's collision models)
+//            -> plan (the method's axes per operation) -> post (the machine's poses)
+//            -> write (G-code, read back, feed schedules) -> verify (per operation)
+//
+// Each stage reads the Run (input, machine, validated options, collision models) and the
+// OperationContexts, adds what it works out to them, and records its findings in the
+// JobResult. The helpers here are shared by more than one stage; a stage's own live in its
+// source file (src/pipeline/*.cpp).
+
+#include <chrono>
+#include <cstddef>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "taxopt/cspace/collision.hpp"
+#include "taxopt/cspace/cspace.hpp"
+#include "taxopt/io/gcode.hpp"
+#include "taxopt/job.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
+#include "taxopt/plan/stretch_guard.hpp"
+#include "util/progress.hpp"
+
+namespace taxopt::pipeline {
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+template <class T>
+std::vector<T> slice(const std::vector<T>& v, std::size_t begin, std::size_t end) {
+  return std::vector<T>(v.begin() + static_cast<long>(begin), v.begin() + static_cast<long>(end));
+}
+
+// ---- What every stage reads ---------------------------------------------------------------
+
+/// One run: the input, the machine, the options as validated, and the part's two collision
+/// models, built once per run beside contact recovery: the occlusion map's tree (cspace.hpp),
+/// which the optimisers and the guard ask, and FCL's, the independent reference every output
+/// is verified with. Both empty without a part.
+struct Run {
+  const Toolpath& tp;
+  const Machine& machine;
+  JobOptions options;
+  /// The feed of feed moves without one: --feed, else the default, mm/min.
+  double fallback_feed_mm_per_min = 0.0;
+  std::optional<CollisionModel> collision;
+  std::optional<CSpaceRasteriser> checker;
+  const PartCheck* planner_check() const { return checker ? &*checker : nullptr; }
+};
+
+/// The axes of one operation after the paper's optimiser, and what it did.
+struct OptimisedOperation {
+  std::vector<Vec3d> axes;
+  std::size_t intervals = 0, repairs = 0, smoothed_joints = 0, sharp_joints = 0;
+  /// Stretches near the pole A = 0 whose C was re-planned (pole_passage.hpp).
+  std::size_t pole_stretches = 0;
+  /// Key points (ends of the optimiser's intervals), indices into the operation, ascending.
+  std::vector<std::size_t> keys;
+  /// What the guard after the paper's optimiser gave back their input axes.
+  StretchGuardResult guard;
+  /// Points with no acceptable axis within the cone (they keep their input axis).
+  std::vector<std::size_t> no_free_axis;
+  /// --method global: per point the pose it chose (branch, C on the pole), for plan_poses;
+  /// empty otherwise. Passes refined by it, and given back the paper's axes by its guard.
+  std::vector<std::optional<Posed>> preferred;
+  std::size_t global_passes = 0;
+  /// What the guard after --method global gave back the paper's axes.
+  StretchGuardResult global_guard;
+};
+
+/// One operation through the stages: what is worked out once (ball radius, tool model, feeds)
+/// and what each stage adds to it.
+struct OperationContext {
+  std::size_t index = 0;
+  const Operationd* op = nullptr;
+  /// The override, else the file's; 0: not a ball-end mill (no contacts, no new axes).
+  double ball_radius_mm = 0.0;
+  /// The feed of each point the kinematic metrics use: --feed, else the file's, else the
+  /// fallback, mm/min.
+  std::vector<double> metric_feed_mm_per_min;
+  // contacts: per point (empty without a part or a ball), and what they came to.
+  std::vector<ContactPoint> contacts;
+  ContactSummary contact;
+  /// The tool as built from the file and the overrides, and as the checks judge it (with the
+  /// margins); built once, where the contacts were recovered.
+  std::optional<ToolModel> real_tool, tool;
+  // plan: the method's axes (none: empty).
+  std::optional<OptimisedOperation> optimised;
+  // post: the input axes as the machine would have run them (the "before"; empty where they
+  // cannot be posed).
+  std::vector<Posed> input_poses;
+  double contacts_s = 0.0, optimise_s = 0.0, post_s = 0.0;
+  const ToolModel* judged_tool() const { return tool ? &*tool : nullptr; }
+};
+
+/// An operation's feed schedule: per point the scheduled time of the move into it (0 for
+/// rapids and the first point), the feed it reaches, and the summary.
+struct OperationSchedule {
+  std::vector<double> time_s;
+  std::vector<std::optional<double>> feed_mm_min;
+  FeedSummary summary;
+};
+
+/// One written position on the way between two points (a linearisation block): X Y Z as
+/// written (machine or tip by the mode), A and C in degrees.
+struct WayPoint {
+  Vec3d xyz = Vec3d::Zero();
+  double a_deg = 0.0, c_deg = 0.0;
+};
+
+/// What the write stage gives the checks: the program read back, per operation and point the
+/// move that put the machine there (a chord point inside a G2/G3 block: the point of the arc
+/// at its angle) and the linearisation blocks on the way into it, and the feed schedules of
+/// the written path and of the input axes. Not copyable: point_moves point into moves and
+/// on_arcs (a move keeps them where they are).
+struct Written {
+  Written() = default;
+  Written(const Written&) = delete;
+  Written& operator=(const Written&) = delete;
+  Written(Written&&) = default;
+  Written& operator=(Written&&) = default;
+  std::vector<GcodeMove> moves;
+  std::deque<GcodeMove> on_arcs;
+  std::vector<std::vector<const GcodeMove*>> point_moves;
+  std::vector<std::vector<std::vector<WayPoint>>> way_points;
+  std::vector<OperationSchedule> schedule_after, schedule_before;
+  double write_s = 0.0;
+};
+
+// ---- The stages -----------------------------------------------------------------------------
+
+/// Checks the options (InputError in the library's words) and records what will not be
+/// checked (no part, no holder, no safe retract, no linearisation) and the CL file's notes.
+Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res);
+
+/// One context per operation: ball radius and metric feeds.
+std::vector<OperationContext> operation_contexts(const Run& run);
+
+/// With a part: the contacts of every ball-end operation (a gouging CL point or an operation
+/// that never touches the part: InputError naming the line), the judged tools, and the part's
+/// collision models, built beside them.
+void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& res);
+
+/// The method's axes for every ball-end operation (--method paper/global), guarded.
+void plan_operations(const Run& run, std::vector<OperationContext>& ops, JobResult& res);
+
+/// The machine's poses of the planned axes (and of the input axes, for the "before"); the
+/// turns between passes spread over the rapids in the air. Empty when a pose is unreachable
+/// (a problem finding names the line).
+std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
+                                                            std::vector<OperationContext>& ops,
+                                                            JobResult& res);
+
+/// Writes the program, reads it back, schedules the written and the input path at the
+/// machine's limits; with --feed-schedule writes it again at the scheduled feeds.
+Written write_program(const Run& run, const std::vector<OperationContext>& ops,
+                      std::vector<PostedOperation>& posted, JobResult& res);
+
+/// Verifies every operation as written (read back, axis ranges, deviation, collisions of the
+/// points and moves, clearances, dynamic limits), fills the report rows and the CL output.
+void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& written,
+                       JobResult& res);
+
+// ---- Shared by the stages -----------------------------------------------------------------
+
+/// Records a finding, and its message by severity (JobResult's display lists).
+void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
+                 const std::string& message);
+
+/// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
+double ball_radius_mm(const Operationd& op, const JobOptions& options);
+/// Why an operation with no ball radius is left alone.
+std::string not_a_ball(const Operationd& op);
+/// The margins the collision checks judge the tool's bodies by (ToolMargins).
+ToolMargins margins_of(const JobOptions& options);
+/// Point whose path length the metrics measure: the ball centre for a ball-end mill.
+Vec3d reference_point(const CLPointd& p, double ball_radius_mm);
+/// The tip that keeps the ball centre of `p` where it is with the tool along `axis`.
+Vec3d tip_for_axis(const CLPointd& p, double ball_radius_mm, const Vec3d& axis);
+/// The feed of each point that the kinematic metrics use: --feed, else the file's, else
+/// `fallback_mm_min`.
+std::vector<double> metric_feeds_of(const Operationd& op, const JobOptions& options,
+                                    double fallback_mm_min);
+/// The metric feeds of a pass's moves: the move from point i to i + 1 runs at point i + 1's.
+std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const IndexRange& pass);
+/// The paper's L_i of a pass (contact points where both ends touch, else reference points).
+std::vector<double> segment_lengths_mm(const Operationd& op,
+                                       const std::vector<ContactPoint>& contacts,
+                                       double ball_radius_mm, const IndexRange& pass);
+/// Joint positions (X Y Z mm, A C deg) of tips and poses, in machine coordinates.
+std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
+                                     const std::vector<Posed>& poses);
+/// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
+/// feed move; a chain's joints are those of points begin - 1 .. end - 1.
+std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points);
+/// The feed schedule of one operation's points at `limits`.
+OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
+                                     const std::vector<JointPosition>& joints,
+                                     const std::vector<double>& programmed_s,
+                                     const JointLimits& limits, const ACMachined& ac);
+/// The points with every feed move's feed set (`fallback_feed` where the file gives none).
+std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed);
+/// Per point, whether the move into it is a rapid (the first point counts as one).
+std::vector<bool> rapid_into_of(const Operationd& op);
+/// Indices of the points of `op` whose tool collides, for axes `axes`, sorted.
+std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolModel& tool,
+                                          const Operationd& op, const std::vector<Vec3d>& axes,
+                                          const std::vector<ContactPoint>& contacts,
+                                          detail::StageProgress* progress = nullptr,
+                                          const std::vector<char>* only = nullptr);
+/// Index i of every move from point i-1 to point i during which the tool hits the part.
+std::vector<std::size_t> colliding_moves(
+    const PartCheck& model, const ToolModel& tool, const Machine& machine,
+    const std::vector<Vec3d>& xyz_w, const std::vector<double>& a_deg,
+    const std::vector<double>& c_deg, const std::vector<ContactPoint>& contacts,
+    detail::StageProgress* progress = nullptr,
+    const std::vector<std::vector<WayPoint>>* between = nullptr,
+    const std::vector<char>* only = nullptr);
+/// Joint positions as written: the words read back (in tcp mode mapped to the joints).
+std::vector<JointPosition> written_joints(const Machine& machine,
+                                          const std::vector<const GcodeMove*>& at);
+/// The turn between two passes spread over the rapids of the chain in the air (plan.cpp).
+void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
+                         const Machine& machine, double max_deviation_rad, PostedOperation& po);
+
+}  // namespace taxopt::pipeline

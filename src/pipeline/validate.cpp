@@ -1,0 +1,162 @@
+// The first stages: the options checked, the contexts of the operations, their contacts and
+// the part's collision models (stages.hpp).
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "pipeline/stages.hpp"
+#include "taxopt/core/error.hpp"
+#include "util/parallel.hpp"
+
+namespace taxopt::pipeline {
+
+Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+  // The deviation cone: as given; without a part to check the axes against, no wider than a
+  // controller's own orientation tolerance unless asked for.
+  JobOptions options = given;
+  if (given.max_deviation_deg) {
+    options.paper.max_deviation_deg = *given.max_deviation_deg;
+  } else if (!given.part) {
+    options.paper.max_deviation_deg =
+        std::min(options.paper.max_deviation_deg, kNoPartMaxDeviationDeg);
+  }
+  res.collision_checked = given.part != nullptr;
+  if (!given.part) {
+    std::ostringstream os;
+    os << "no part (--part): the tool and holder are not checked against the part";
+    if (given.method != Method::None) {
+      os << "; each tool axis stays within " << options.paper.max_deviation_deg
+         << " deg of its input";
+      if (given.max_deviation_deg && *given.max_deviation_deg > kNoPartMaxDeviationDeg) {
+        os << " as --max-deviation asks, unchecked: give --part to check it";
+      } else {
+        os << " (--max-deviation widens it, unchecked)";
+      }
+    }
+    add_finding(res, FindingCode::NoPart, std::nullopt, 0, os.str());
+  } else if (!given.tool.holder_radius_mm) {
+    add_finding(
+        res, FindingCode::NoHolderModel, std::nullopt, 0,
+        "no holder model (--holder-radius, --holder-length): the holder is not checked against "
+        "the part, only the tool");
+  }
+  if (machine.gcode.program.retract == SafeRetract::None) {
+    add_finding(
+        res, FindingCode::NoSafeRetract, std::nullopt, 0,
+        "the machine file's gcode.safe_retract is \"none\": no retract before an operation's "
+        "first move nor after the last, and the table turns where the tool stands");
+  }
+  if (machine.gcode.mode == GcodeMode::Machine &&
+      !(machine.gcode.program.linearise_tolerance_mm > 0.0)) {
+    add_finding(
+        res, FindingCode::NoLinearisation, std::nullopt, 0,
+        "the machine file's gcode.linearise_tolerance_mm is 0: the tip leaves the straight line "
+        "between points where the table turns (the moves are checked as the joints run)");
+  }
+  if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
+    throw InputError("--jerk-weight must be a number >= 0 (s^2)");
+  }
+  if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
+    throw InputError("--max-deviation must be within [0, 90] deg");
+  }
+  if (!(options.paper.grid_deg > 0.0 && options.paper.grid_deg <= 10.0)) {
+    throw InputError("--grid must be within (0, 10] deg");
+  }
+  if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
+    throw InputError("--feed must be positive");
+  }
+  for (const std::string& w : tp.warnings) {
+    add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
+  }
+  res.gcode_units = options.units_out.value_or(tp.units);
+  const double fallback = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
+  return Run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
+}
+
+std::vector<OperationContext> operation_contexts(const Run& run) {
+  std::vector<OperationContext> ops(run.tp.operations.size());
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    OperationContext& o = ops[k];
+    o.index = k;
+    o.op = &run.tp.operations[k];
+    o.ball_radius_mm = ball_radius_mm(*o.op, run.options);
+    o.metric_feed_mm_per_min = metric_feeds_of(*o.op, run.options, run.fallback_feed_mm_per_min);
+  }
+  return ops;
+}
+
+namespace {
+
+/// The contacts of one ball-end operation and their summary.
+void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const auto t0 = Clock::now();
+  if (!(o.ball_radius_mm > 0.0)) {
+    add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
+                not_a_ball(op) + ", no contact recovery and no collision check");
+    return;
+  }
+  const Part& part = *run.options.part;
+  o.contacts = recover_contacts(part, op, o.ball_radius_mm, run.options.contact);
+  ContactSummary& cs = o.contact;
+  cs.recovered = true;
+  cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact);
+  bool any_feed = false;
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    const ContactPoint& c = o.contacts[i];
+    any_feed = any_feed || op.points[i].motion == Motion::Feed;
+    if (c.state == ContactState::Gouging) {
+      throw InputError(run.tp.source, op.points[i].line,
+                       "operation " + op.name + ": the ball cuts " + std::to_string(-c.gap_mm) +
+                           " mm into the part here (wrong part, wrong tool or wrong units?)");
+    }
+    if (c.state == ContactState::Touching) {
+      ++cs.touching;
+      cs.max_abs_gap_mm = std::max(cs.max_abs_gap_mm, std::abs(c.gap_mm));
+      if (c.local_gouge) ++cs.local_gouges;
+    } else {
+      ++cs.in_air;
+    }
+  }
+  if (any_feed && cs.touching == 0) {
+    throw InputError(
+        run.tp.source, op.points.front().line,
+        "operation " + op.name + ": no CL point touches the part (wrong part or wrong units?)");
+  }
+  if (cs.local_gouges) {
+    add_finding(res, FindingCode::LocalGouge, k, 0,
+                "operation " + op.name + ": " + std::to_string(cs.local_gouges) +
+                    " contact points where a concave radius is below the ball radius "
+                    "(local gouge, eq. 19)");
+  }
+  o.contacts_s = seconds_since(t0);
+}
+
+}  // namespace
+
+void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& res) {
+  if (!run.options.part) return;
+  const auto recover_all = [&] {
+    detail::StageProgress progress(run.options.progress, "contact recovery", ops.size());
+    for (OperationContext& o : ops) {
+      struct Advance {  // on every way out of this operation
+        detail::StageProgress& p;
+        ~Advance() { p.advance(); }
+      } advance{progress};
+      recover_operation(run, o, res);
+    }
+  };
+  // FCL's model takes ~2 s at 800k triangles on one thread: built beside the contacts.
+  detail::parallel_invoke(recover_all, [&] {
+    detail::parallel_invoke([&] { run.collision.emplace(run.options.part->mesh()); },
+                            [&] { run.checker.emplace(run.options.part->mesh()); });
+  });
+  for (OperationContext& o : ops) {
+    if (!o.contact.recovered) continue;
+    o.real_tool = ToolModel::ball_end(o.op->tool, run.options.tool);
+    o.tool = o.real_tool->judged(margins_of(run.options));
+  }
+}
+
+}  // namespace taxopt::pipeline

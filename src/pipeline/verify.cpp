@@ -1,0 +1,590 @@
+// The verify stage: every operation checked as written -- read back, axis ranges and travel,
+// the deviation cone, collisions of the points and of the moves between them, clearances,
+// the machine's dynamic limits -- and the report's rows (stages.hpp).
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "pipeline/stages.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/metrics.hpp"
+#include "util/parallel.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt::pipeline {
+namespace {
+
+double round_to(double v, int decimals) {
+  const double s = std::pow(10.0, decimals);
+  return std::round(v * s) / s;
+}
+
+/// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
+/// Segment lengths are the paper's L_i between contact points where both ends touch the
+/// part, else between reference points.
+RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        double ball_radius_mm, const std::vector<double>& a_deg,
+                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
+                        std::vector<PointRow>* rows, bool rows_before = false) {
+  RotarySummary summary;
+  double arc = 0.0;
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::vector<double> a(a_deg.begin() + static_cast<long>(pass.begin),
+                          a_deg.begin() + static_cast<long>(pass.end));
+    std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
+                          c_deg.begin() + static_cast<long>(pass.end));
+    const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
+    const RotaryKinematics k = rotary_kinematics(a, c, len, pass_feeds(metric_feed, pass));
+    accumulate(summary, k, c);
+    if (rows) {
+      for (std::size_t j = 0; j < pass.size(); ++j) {
+        PointRow& r = (*rows)[pass.begin + j];
+        if (j > 0) arc += len[j - 1];
+        r.arc_mm = arc;
+        (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
+        (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
+      }
+    }
+  }
+  return summary;
+}
+
+/// A guaranteed lower bound of the least distance between the part and the tool's bodies that
+/// do not cut (shank and holder, past the flutes; the flutes touch the part at a contact by
+/// design) over the CL points with axes `axes`, and the point where it occurs; empty when the
+/// tool has no such bodies. The bodies grown by d in radius and at both ends hold every point
+/// within d of them, so where the grown bodies miss the part the clearance is at least d (and
+/// at most d sqrt 2). d comes from bisecting FCL collision queries (exact distances cost 5 ms to
+/// 0.3 s a query on flat parts): at 32 spread points first, then only at the points whose
+/// bodies, grown by that bound, touch the part. Capped at 10 mm, 5 um steps; the same result
+/// whatever the thread count.
+std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionModel& model,
+                                                              const ToolModel& tool,
+                                                              const Operationd& op,
+                                                              const std::vector<Vec3d>& axes,
+                                                              detail::StageProgress* progress) {
+  constexpr double kCapMm = 10.0, kStepMm = 0.005;
+  const std::size_t n = op.points.size();
+  ToolModel above = tool;
+  if (!above.bodies.empty()) above.bodies.erase(above.bodies.begin());
+  if (above.bodies.empty() || n == 0) {
+    if (progress) progress->advance(n);
+    return std::nullopt;
+  }
+  const auto free_at = [&](std::size_t i, double d_mm) {
+    ToolModel grown = above;
+    for (ToolBody& b : grown.bodies) {
+      b.radius_mm += d_mm;
+      b.start_mm -= d_mm;
+      b.end_mm += d_mm;
+    }
+    return !model.collides(grown, reference_point(op.points[i], tool.ball_radius_mm), axes[i]);
+  };
+  // The largest d in [0, hi] (to kStepMm) with the grown bodies free at point i.
+  const auto bisect = [&](std::size_t i, double hi) {
+    if (!free_at(i, 0.0)) return 0.0;
+    if (free_at(i, hi)) return hi;
+    double lo = 0.0;
+    while (hi - lo > kStepMm) {
+      const double mid = 0.5 * (lo + hi);
+      (free_at(i, mid) ? lo : hi) = mid;
+    }
+    return lo;
+  };
+  using Least = std::pair<double, std::size_t>;
+  const auto least_over = [&](const std::vector<std::size_t>& at, double hi) {
+    return detail::parallel_reduce(
+        0, at.size(), Least{hi, n},
+        [&](std::size_t lo, std::size_t end, Least acc) {
+          for (std::size_t j = lo; j != end; ++j)
+            acc = std::min(acc, Least{bisect(at[j], hi), at[j]});
+          return acc;
+        },
+        [](const Least& a, const Least& b) { return std::min(a, b); });
+  };
+  std::vector<std::size_t> sample;
+  for (std::size_t k = 0; k < 32; ++k) sample.push_back(k * (n - 1) / 31);
+  sample.erase(std::unique(sample.begin(), sample.end()), sample.end());
+  Least bound = least_over(sample, kCapMm);
+  if (bound.second == n) bound.second = sample.front();  // every sample at the cap
+  const std::vector<std::size_t> closer = detail::parallel_select(0, n, [&](std::size_t i) {
+    const bool near = bound.first > 0.0 && !free_at(i, bound.first);
+    if (progress) progress->advance();
+    return near;
+  });
+  const Least found = least_over(closer, bound.first);
+  return found.second == n ? bound : std::min(bound, found);
+}
+
+/// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
+/// (0: no limit), as the controller moves: block times from the F words read back, each
+/// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
+/// problems, jerk a warning (the schedule does not bound it).
+void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
+                          const std::vector<JointPosition>& joints,
+                          const std::vector<const GcodeMove*>& at,
+                          const std::vector<GcodeMove>& moves, JobResult& res,
+                          const std::string& source, const JointLimits& check, bool scheduled,
+                          char tilt_letter, std::size_t op_index) {
+  const std::size_t n = po.points.size();
+  std::vector<double> written_s(n, 0.0);
+  const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
+    if (moves.empty() || m < moves.data() || m >= moves.data() + moves.size()) return -1;
+    return m - moves.data();
+  };
+  for (std::size_t i = 1; i < n; ++i) {
+    if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
+    // A linearised move: the blocks between the points, each at its own F.
+    const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
+    if (from >= 0 && to > from + 1) {
+      for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+        written_s[i] += block_time_s(moves[static_cast<std::size_t>(j - 1)],
+                                     moves[static_cast<std::size_t>(j)], res.gcode_units);
+      }
+    } else {
+      written_s[i] = block_time_s(*at[i - 1], *at[i], res.gcode_units);
+    }
+  }
+  struct Worst {
+    double value = 0.0;
+    std::size_t point = 0;
+  };
+  std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
+  for (const IndexRange& c : feed_chains(po.points)) {
+    const JointRates jr =
+        joint_rates(slice(joints, c.begin - 1, c.end), slice(written_s, c.begin, c.end));
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      const auto keep = [](Worst& w, double v, std::size_t point) {
+        if (v > w.value) w = Worst{v, point};
+      };
+      keep(velocity[j], jr.max_velocity_per_s[j], c.begin + jr.velocity_at[j]);
+      keep(accel[j], jr.max_accel_per_s2[j], std::min(n - 1, c.begin - 1 + jr.accel_at[j]));
+      keep(jerk[j], jr.max_jerk_per_s3[j], std::min(n - 1, c.begin - 1 + jr.jerk_at[j]));
+    }
+  }
+  const char* at_feed = scheduled ? " at the scheduled feed" : " at the programmed feed";
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    const std::string unit = j < 3 ? "mm" : "deg";
+    const std::string axis = "axis " + joint_name(static_cast<Joint>(j), tilt_letter);
+    const auto describe = [&](const Worst& w, double limit, const char* what,
+                              const std::string& per) {
+      return format_location(source, po.points[w.point].line,
+                             "operation " + po.name + ": " + axis + " " + what + " " +
+                                 std::to_string(w.value) + " " + unit + per + at_feed +
+                                 ", the machine allows " + std::to_string(limit));
+    };
+    if (check[j].max_velocity_per_s > 0.0 &&
+        velocity[j].value > check[j].max_velocity_per_s * (1.0 + 1e-9)) {
+      r.verification.within_dynamic_limits = false;
+      add_finding(res, FindingCode::DynamicLimitExceeded, op_index,
+                  po.points[velocity[j].point].line,
+                  describe(velocity[j], check[j].max_velocity_per_s, "velocity", "/s"));
+    }
+    if (check[j].max_accel_per_s2 > 0.0 &&
+        accel[j].value > check[j].max_accel_per_s2 * (1.0 + 1e-9)) {
+      r.verification.within_dynamic_limits = false;
+      add_finding(res, FindingCode::DynamicLimitExceeded, op_index, po.points[accel[j].point].line,
+                  describe(accel[j], check[j].max_accel_per_s2, "acceleration", "/s^2"));
+    }
+    if (check[j].max_jerk_per_s3 > 0.0 && jerk[j].value > check[j].max_jerk_per_s3 * (1.0 + 1e-9)) {
+      add_finding(res, FindingCode::JerkLimitExceeded, op_index, po.points[jerk[j].point].line,
+                  describe(jerk[j], check[j].max_jerk_per_s3, "jerk", "/s^3") +
+                      " (feed schedules bound velocity and acceleration, not jerk)");
+    }
+  }
+  if (!r.verification.within_dynamic_limits && !scheduled) {
+    add_finding(
+        res, FindingCode::DynamicLimitExceeded, op_index, 0,
+        "operation " + po.name + ": --feed-schedule writes feeds within the machine's limits");
+  }
+}
+
+/// The collisions of an operation's points and moves as written (FCL, the reference), told
+/// apart by body, and the clearance of the bodies that do not cut.
+void check_collisions(const Run& run, const OperationContext& o, const PostedOperation& po,
+                      const Written& w, const std::vector<Vec3d>& xyz_w,
+                      const std::vector<double>& a_w, const std::vector<double>& c_w,
+                      detail::StageProgress& checking, OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const Machine& machine = run.machine;
+  // Judged with the margins; the clearance is measured from the real bodies.
+  const ToolModel& real_tool = *o.real_tool;
+  const ToolModel& tool = *o.tool;
+  std::vector<Vec3d> in_axes, out_axes;
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    in_axes.push_back(op.points[i].axis);
+    out_axes.push_back(po.points[i].axis);
+  }
+  // The input's count is information, not a check of the output: where the axes changed,
+  // the planner's check (which agrees with FCL) counts it; what is written is checked with
+  // FCL (where they did not change, the one count is that check).
+  const bool same_axes = in_axes == out_axes;
+  const PartCheck& counter =
+      run.checker && !same_axes ? static_cast<const PartCheck&>(*run.checker) : *run.collision;
+  const auto before = colliding_points(counter, tool, op, in_axes, o.contacts, &checking);
+  if (same_axes) checking.advance(op.points.size());
+  const auto after =
+      same_axes ? before
+                : colliding_points(*run.collision, tool, op, out_axes, o.contacts, &checking);
+  r.colliding_before = static_cast<long>(before.size());
+  r.colliding_after = static_cast<long>(after.size());
+  r.verification.collision_free = after.empty();
+  if (!after.empty()) {
+    // Told apart: the flutes reaching deeper than the part tolerance (a gouge of the cutter)
+    // and the bodies that never cut (shank, holder, a ball in the air) within their margins.
+    ToolModel flutes = tool, rest = tool;
+    flutes.bodies.resize(static_cast<std::size_t>(tool.flute_bodies));
+    rest.bodies.erase(rest.bodies.begin(), rest.bodies.begin() + tool.flute_bodies);
+    std::vector<std::size_t> gouges, hits;
+    for (std::size_t i : after) {
+      const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * out_axes[i];
+      const bool in_air = o.contacts.empty() || o.contacts[i].state != ContactState::Touching;
+      if (!flutes.bodies.empty() && run.collision->collides(flutes, centre, out_axes[i], false)) {
+        gouges.push_back(i);
+      }
+      if (run.collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
+    }
+    r.verification.flute_gouge_points = static_cast<long>(gouges.size());
+    const auto report = [&](const std::vector<std::size_t>& at, const std::string& what) {
+      if (at.empty()) return;
+      std::string lines;
+      for (std::size_t j = 0; j < at.size() && j < 10; ++j) {
+        lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
+      }
+      if (at.size() > 10) lines += ", ...";
+      add_finding(res, FindingCode::PointCollision, k, op.points[at.front()].line,
+                  format_location(run.tp.source, op.points[at.front()].line,
+                                  "operation " + op.name + ": " + std::to_string(at.size()) +
+                                      " CL points " + what + ", at lines " + lines));
+    };
+    report(hits,
+           "where the tool hits the part (the shank or holder within its clearance, or a "
+           "ball in the air)");
+    report(gouges,
+           "where the flutes reach into the part deeper than the part tolerance "
+           "(a gouge; --part-tolerance)");
+    if (hits.empty() && gouges.empty()) {
+      report(after, "where the tool hits the part");  // never: the bodies are the same
+    }
+  } else {
+    r.verification.flute_gouge_points = 0;
+  }
+  const auto moves_hit = colliding_moves(*run.collision, tool, machine, xyz_w, a_w, c_w, o.contacts,
+                                         &checking, &w.way_points[k]);
+  r.verification.colliding_moves = static_cast<long>(moves_hit.size());
+  if (const auto least = clearance_bound(*run.collision, real_tool, op, out_axes, &checking)) {
+    r.verification.min_clearance_mm = least->first;
+    r.verification.min_clearance_index = least->second;
+  }
+  if (!moves_hit.empty()) {
+    r.verification.collision_free = false;
+    const std::size_t i = moves_hit.front();
+    add_finding(res, FindingCode::MoveCollision, k, op.points[i].line,
+                format_location(run.tp.source, op.points[i].line,
+                                "operation " + op.name + ": " + std::to_string(moves_hit.size()) +
+                                    " moves where the tool hits the part between CL points as the "
+                                    "machine moves it, "
+                                    "first from line " +
+                                    std::to_string(op.points[i - 1].line) + " to line " +
+                                    std::to_string(op.points[i].line)));
+  }
+}
+
+/// The free cells of every contact's C-space (--count-free-cells) and the maps of the most
+/// constrained contact and the most turned one (--cspace-maps).
+void cspace_rows(const Run& run, const OperationContext& o, detail::StageProgress& checking,
+                 OperationResult& r) {
+  const Operationd& op = *o.op;
+  const JobOptions& options = run.options;
+  const CSpaceRasteriser* rasteriser = &*run.checker;
+  const auto t0 = Clock::now();
+  const double R = o.ball_radius_mm;
+  const ToolModel& tool = *o.tool;
+  CSpaceOptions cs;
+  // The grid's cell must divide 180 deg: the nearest such to --grid.
+  cs.cell_deg = 180.0 / std::max(1.0, std::round(180.0 / options.paper.grid_deg));
+  cs.max_deviation_deg = options.paper.max_deviation_deg;
+  detail::parallel_for(std::size_t(0), op.points.size(), [&](std::size_t i) {
+    const ContactPoint& c = o.contacts[i];
+    checking.advance();
+    if (c.state != ContactState::Touching) return;
+    const CSpaceGrid g =
+        rasteriser->free_axes(tool, c, reference_point(op.points[i], R), op.points[i].axis, cs);
+    r.rows[i].free_cells = g.free_count() / 2;  // the grid holds every axis twice
+  });
+  if (options.cspace_maps) {
+    // The most constrained contact, and the one whose axis the optimiser turned most.
+    std::optional<std::size_t> fewest, turned;
+    double most_deg = -1.0;
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      if (!r.rows[i].free_cells) continue;
+      if (!fewest || *r.rows[i].free_cells < *r.rows[*fewest].free_cells) fewest = i;
+      const double dev = rad_to_deg(angle_between(op.points[i].axis, r.rows[i].axis));
+      if (dev > most_deg) most_deg = dev, turned = i;
+    }
+    const auto tilt_yaw = [](const ContactPoint& c, const Vec3d& v) {
+      return std::pair<double, double>(rad_to_deg(angle_between(c.normal, v)),
+                                       rad_to_deg(std::atan2(v.dot(c.side), v.dot(c.feed_dir))));
+    };
+    for (const auto& [at, why] :
+         {std::pair<std::optional<std::size_t>, const char*>{fewest, "fewest free cells"},
+          {turned, "largest axis change"}}) {
+      if (!at) continue;
+      if (!r.cspace_maps.empty() && r.cspace_maps.back().index == *at) continue;
+      const ContactPoint& c = o.contacts[*at];
+      CSpaceMap map;
+      map.index = *at;
+      map.why = why;
+      map.max_deviation_deg = cs.max_deviation_deg;
+      map.grid = rasteriser->free_axes(tool, c, reference_point(op.points[*at], R),
+                                       op.points[*at].axis, cs);
+      std::tie(map.input_tilt_deg, map.input_yaw_deg) = tilt_yaw(c, op.points[*at].axis);
+      std::tie(map.output_tilt_deg, map.output_yaw_deg) = tilt_yaw(c, r.rows[*at].axis);
+      r.cspace_maps.push_back(std::move(map));
+    }
+  }
+  r.time_cspace_s += seconds_since(t0);
+}
+
+/// One operation verified as written.
+OperationResult verify_operation(const Run& run, const OperationContext& o,
+                                 const PostedOperation& po, const Written& w, std::size_t n_posted,
+                                 detail::StageProgress& checking, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const Machine& machine = run.machine;
+  const JobOptions& options = run.options;
+  const int decimals = machine.gcode.decimals;
+  const auto t_verify = Clock::now();
+  OperationResult r;
+  r.name = op.name;
+  r.points = op.points.size();
+  r.time_post_s = o.post_s + w.write_s / static_cast<double>(n_posted);
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    if (op.points[i].motion == Motion::Feed) {
+      r.feed_mm_min = o.metric_feed_mm_per_min[i];
+      break;
+    }
+  }
+  // Read back: the A/C values actually written, and what they mean in the workpiece.
+  std::vector<double> a_w(op.points.size()), c_w(op.points.size());
+  std::vector<Vec3d> xyz_w(op.points.size());
+  std::vector<double> a_in(op.points.size()), c_in(op.points.size());
+  r.rows.resize(op.points.size());
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    const GcodeMove* last = w.point_moves[k][i];
+    // Where TCP is asked for, the controller's must be on, with the tool length offset
+    // (LinuxCNC's kinematics steer the spindle nose without it); in machine mode the offset.
+    const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
+    if (!last->length_offset || (tcp_mode && !last->tcp)) {
+      if (r.verification.tool_length_active) {
+        add_finding(
+            res, FindingCode::ToolLengthOffsetOff, k, op.points[i].line,
+            "operation " + op.name + ": G-code line " + std::to_string(last->line) +
+                " moves with " +
+                (!last->length_offset ? std::string("the tool length offset off")
+                                      : std::string("tool centre point control off")) +
+                " (the written program must switch it on before the operation's first move)");
+      }
+      r.verification.tool_length_active = false;
+    }
+    a_w[i] = last->a_deg;
+    xyz_w[i] = last->xyz_mm;
+    c_w[i] = last->c_deg;
+    if (!o.input_poses.empty()) {
+      a_in[i] = round_to(rad_to_deg(o.input_poses[i].a_rad), decimals);
+      c_in[i] = round_to(rad_to_deg(o.input_poses[i].c_rad), decimals);
+    }
+    const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
+    const Vec3d axis = machine.ac.forward(written);
+    const Vec3d tip = tip_of_written_mm(machine, last->xyz_mm, written);
+    const CLPointd& want = po.points[i];
+    r.verification.roundtrip_max_mm =
+        std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
+    r.verification.roundtrip_max_deg =
+        std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
+    if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
+      if (r.verification.within_axis_limits) {
+        add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
+                    format_location(
+                        run.tp.source, want.line,
+                        "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
+                            std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
+                            " deg is outside the machine's axis ranges"));
+      }
+      r.verification.within_axis_limits = false;
+    }
+    // The linear travel, in machine coordinates, where the machine file gives it.
+    const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written);
+    for (int q = 0; q < 3; ++q) {
+      const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
+      if (range.contains(joints_mm[q])) continue;
+      if (r.verification.within_axis_limits) {
+        std::ostringstream os;
+        os << "operation " << op.name << ": "
+           << "XYZ"[q] << " would be " << joints_mm[q]
+           << " mm in machine coordinates, outside the machine's travel [" << range.min_mm << ", "
+           << range.max_mm << "] mm";
+        add_finding(res, FindingCode::TravelExceeded, k, want.line,
+                    format_location(run.tp.source, want.line, os.str()));
+      }
+      r.verification.within_axis_limits = false;
+    }
+    r.max_axis_change_deg =
+        std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
+    PointRow& row = r.rows[i];
+    row.index = i;
+    row.tip_mm = want.tip_mm;
+    row.axis = want.axis;
+    row.a_deg = a_w[i];
+    row.c_deg = c_w[i];
+  }
+  // The round trip may differ from the intent only by the rounding of the written
+  // decimals: half a unit of the last decimal per word, mapped to mm and to the axis angle;
+  // in machine mode the angle rounding also moves the mapped point by its lever arm.
+  const double half_unit = 0.5 * std::pow(10.0, -decimals);
+  const double ang_tol = std::sqrt(2.0) * half_unit + 1e-9;
+  double lever_mm = 0.0;
+  if (machine.gcode.mode == GcodeMode::Machine) {
+    for (const auto& p : po.points) {
+      lever_mm =
+          std::max(lever_mm, (p.tip_mm - machine.ac.c_axis_point_mm).norm() +
+                                 (machine.ac.c_axis_point_mm - machine.ac.a_axis_point_mm).norm());
+    }
+  }
+  const double pos_tol = std::sqrt(3.0) * half_unit * mm_per_unit(res.gcode_units) +
+                         2.0 * lever_mm * deg_to_rad(ang_tol) + 1e-9;
+  if (r.verification.roundtrip_max_mm > pos_tol) {
+    add_finding(res, FindingCode::ReadBackMismatch, k, 0,
+                "operation " + op.name + ": G-code read back is " +
+                    std::to_string(r.verification.roundtrip_max_mm) +
+                    " mm from the intended tips (rounding allows " + std::to_string(pos_tol) + ")");
+  }
+  if (r.verification.roundtrip_max_deg > ang_tol) {
+    add_finding(res, FindingCode::ReadBackMismatch, k, 0,
+                "operation " + op.name + ": G-code read back is " +
+                    std::to_string(r.verification.roundtrip_max_deg) +
+                    " deg from the intended axes (rounding allows " + std::to_string(ang_tol) +
+                    ")");
+  }
+  r.contact = o.contact;
+  r.time_contacts_s = o.contacts_s;
+  r.time_optimise_s = o.optimise_s;
+  if (o.optimised) {
+    r.segments = static_cast<int>(o.optimised->intervals);
+    // Why points kept their input axes: the paper's guard, else no free axis in the cone.
+    const OptimisedOperation& opt = *o.optimised;
+    OperationResult::KeptInputPoints kept;
+    kept.passes = opt.guard.whole_passes;
+    kept.stretches = opt.guard.stretches;
+    std::vector<KeptWhy> why = opt.guard.why;
+    why.resize(op.points.size(), KeptWhy::None);
+    for (std::size_t i : opt.no_free_axis) {
+      if (why[i] == KeptWhy::None) ++kept.no_free_axis;
+    }
+    for (const KeptWhy kw : why) {
+      kept.collision += kw == KeptWhy::Collision;
+      kept.peak_rate += kw == KeptWhy::PeakRate;
+      kept.join_points += kw == KeptWhy::Join;
+    }
+    r.kept_input_points = kept;
+    // The optimiser keeps every axis within the cone; this proves it on what is written.
+    const double allowed = options.paper.max_deviation_deg + 1e-6;
+    if (r.max_axis_change_deg > allowed) {
+      add_finding(res, FindingCode::DeviationExceeded, k, 0,
+                  "operation " + op.name + ": an output axis is " +
+                      std::to_string(r.max_axis_change_deg) +
+                      " deg from its input axis, more than --max-deviation");
+    }
+  }
+  if (run.collision && r.contact.recovered) {
+    check_collisions(run, o, po, w, xyz_w, a_w, c_w, checking, r, res);
+  }
+  if (!o.contacts.empty()) {
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      const ContactPoint& c = o.contacts[i];
+      if (c.state != ContactState::Touching) continue;
+      PointRow& row = r.rows[i];
+      row.has_contact = true;
+      row.cc_mm = c.cc_mm;
+      row.normal = c.normal;
+      row.tilt_deg = rad_to_deg(c.tilt_rad);
+      row.yaw_deg = rad_to_deg(c.yaw_rad);
+    }
+    if ((options.count_free_cells || options.cspace_maps) && run.checker &&
+        o.ball_radius_mm > 0.0) {
+      cspace_rows(run, o, checking, r);
+    }
+  }
+  r.before = summarise(op, o.contacts, o.ball_radius_mm, a_in, c_in, o.metric_feed_mm_per_min,
+                       &r.rows, true);
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    r.rows[i].a_before_deg = a_in[i];
+    r.rows[i].c_before_deg = c_in[i];
+  }
+  if (o.optimised) {
+    for (std::size_t i : o.optimised->keys) r.rows[i].key = true;
+  }
+  r.after =
+      summarise(op, o.contacts, o.ball_radius_mm, a_w, c_w, o.metric_feed_mm_per_min, &r.rows);
+  r.feed_after = w.schedule_after[k].summary;
+  r.feed_before = w.schedule_before[k].summary;
+  if (o.optimised && r.feed_after.cycle_time_s > r.feed_before.cycle_time_s * (1.0 + 1e-9)) {
+    add_finding(
+        res, FindingCode::LongerCycle, k, 0,
+        "operation " + op.name + ": at the machine's limits the new axes take " +
+            std::to_string(r.feed_after.cycle_time_s) + " s, the input's " +
+            std::to_string(r.feed_before.cycle_time_s) + " s (" +
+            (machine.gcode.feed_reference == FeedReference::Tip
+                 ? "tip path of the feed moves " + std::to_string(r.feed_after.feed_path_mm) +
+                       " mm against " + std::to_string(r.feed_before.feed_path_mm) +
+                       " mm: with feed_reference \"tip\" the programmed feed applies to it)"
+                 : std::string("the machine's limits hold the new axes back more; limiting axis ") +
+                       (r.feed_after.limiting_axis.empty() ? "none" : r.feed_after.limiting_axis) +
+                       ")"));
+  }
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    r.rows[i].feed_mm_min = w.schedule_after[k].feed_mm_min[i];
+    r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];
+  }
+  check_dynamic_limits(r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves,
+                       res, run.tp.source,
+                       options.feed_schedule ? effective_limits(machine) : machine.limits,
+                       options.feed_schedule, machine.ac.tilt_letter(), k);
+  // The checks' own time: this operation's verification without its C-space raster.
+  r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
+  return r;
+}
+
+}  // namespace
+
+void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& written,
+                       JobResult& res) {
+  const JobOptions& options = run.options;
+  // Progress of the checks: per point, its pose before and after and the move into it, and
+  // its C-space cells.
+  const bool rasters = (options.count_free_cells || options.cspace_maps) && run.checker;
+  std::size_t check_items = 0;
+  for (const OperationContext& o : ops) {
+    const std::size_t n = o.op->points.size();
+    if (run.collision && o.contact.recovered) check_items += 4 * n;
+    if (rasters && !o.contacts.empty()) check_items += n;
+  }
+  detail::StageProgress checking(options.progress, "verification", check_items);
+  std::vector<Operationd> out_ops = run.tp.operations;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    res.operations.push_back(
+        verify_operation(run, ops[k], posted[k], written, posted.size(), checking, res));
+    for (std::size_t i = 0; i < posted[k].points.size(); ++i) {
+      out_ops[k].points[i].axis = posted[k].points[i].axis;
+      out_ops[k].points[i].tip_mm = posted[k].points[i].tip_mm;
+    }
+  }
+  res.out_cls = format_cl(run.tp, out_ops);
+}
+
+}  // namespace taxopt::pipeline

@@ -1,0 +1,125 @@
+// The write stage: the program written, read back as a controller reads it, and scheduled at
+// the machine's limits (stages.hpp).
+#include <cstdlib>
+#include <stdexcept>
+
+#include "pipeline/stages.hpp"
+#include "taxopt/core/version.hpp"
+#include "taxopt/io/machine_file.hpp"
+
+namespace taxopt::pipeline {
+namespace {
+
+/// Reads `program` back and finds, per operation and point, the move that put the machine
+/// there. A chord point inside a G2/G3 block gets the point of the arc read back at its angle
+/// (with the block's words), so that every check sees the path the controller runs; the blocks
+/// that split an arc at 180 deg belong to no point and are stepped over.
+void read_back(const Machine& machine, const std::vector<PostedOperation>& posted,
+               const GcodeProgram& program, Written& w) {
+  w.moves = read_gcode_moves(program.text, "written G-code", machine.gcode.dialect,
+                             program.verbatim_lines, machine.ac.tilt_letter());
+  w.on_arcs.clear();
+  w.way_points.assign(posted.size(), {});
+  w.point_moves.assign(posted.size(), {});
+  const std::vector<GcodeMove>& moves = w.moves;
+  std::size_t next = 0;
+  const auto mismatch = [] {
+    throw std::logic_error("run_job: G-code read back does not match what was written");
+  };
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const GcodeMove* last = nullptr;
+    w.way_points[k].resize(posted[k].points.size());
+    for (std::size_t i = 0; i < posted[k].points.size(); ++i) {
+      const int line = program.emitted[k][i];
+      if (line != 0) {
+        while (next < moves.size() && moves[next].line < std::abs(line)) {
+          const GcodeMove& m = moves[next++];
+          if (i > 0 && !m.arc && !m.positioning) {
+            w.way_points[k][i].push_back({m.xyz_mm, m.a_deg, m.c_deg});
+          }
+          last = &m;
+        }
+        if (next >= moves.size() || moves[next].line != std::abs(line)) mismatch();
+      }
+      if (line > 0) {
+        if (moves[next].positioning) mismatch();
+        last = &moves[next++];
+      } else if (line < 0) {
+        const GcodeMove& arc = moves[next];
+        if (!arc.arc || !last) mismatch();
+        const PostedOperation& po = posted[k];
+        const Vec3d want = written_xyz_mm(machine, po.points[i].tip_mm, po.poses[i]);
+        GcodeMove at = arc;
+        at.xyz_mm = point_on_arc(last->xyz_mm, arc, want);
+        w.on_arcs.push_back(at);
+        last = &w.on_arcs.back();
+      }
+      if (!last) throw std::logic_error("run_job: first point of an operation not written");
+      w.point_moves[k].push_back(last);
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<JointPosition> written_joints(const Machine& machine,
+                                          const std::vector<const GcodeMove*>& at) {
+  std::vector<JointPosition> q;
+  for (const GcodeMove* m : at) {
+    const Posed pose{deg_to_rad(m->a_deg), deg_to_rad(m->c_deg)};
+    const Vec3d xyz = joints_of_written_mm(machine, m->xyz_mm, pose);
+    q.push_back({xyz.x(), xyz.y(), xyz.z(), m->a_deg, m->c_deg});
+  }
+  return q;
+}
+
+Written write_program(const Run& run, const std::vector<OperationContext>& ops,
+                      std::vector<PostedOperation>& posted, JobResult& res) {
+  const Machine& machine = run.machine;
+  const std::vector<std::string> comments = {
+      std::string("taxopt ") + kVersion + ", method " + to_string(run.options.method),
+      "source " + run.tp.source,
+      "machine " + machine.name + ", " +
+          (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
+  const auto t0 = Clock::now();
+  Written w;
+  res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+  read_back(machine, posted, res.gcode, w);
+
+  // Feed schedules at the machine's limits: the written path (from the words read back) and
+  // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
+  const JointLimits limits = effective_limits(machine);
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    const Operationd& op = *ops[k].op;
+    const std::vector<Posed>& input_poses = ops[k].input_poses;
+    w.schedule_after.push_back(schedule_operation(
+        po.points, written_joints(machine, w.point_moves[k]),
+        po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)
+                                     : po.programmed_time_s,
+        limits, machine.ac));
+    std::vector<CLPointd> in_points = po.points;
+    std::vector<Vec3d> in_tips;
+    for (std::size_t i = 0; i < in_points.size(); ++i) {
+      in_points[i].tip_mm = op.points[i].tip_mm;
+      in_points[i].axis = op.points[i].axis;
+      in_tips.push_back(in_points[i].tip_mm);
+    }
+    w.schedule_before.push_back(
+        input_poses.empty()
+            ? w.schedule_after.back()
+            : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses),
+                                 programmed_block_times_s(in_points, input_poses), limits,
+                                 machine.ac));
+  }
+  if (run.options.feed_schedule) {
+    for (std::size_t k = 0; k < posted.size(); ++k)
+      posted[k].block_time_s = w.schedule_after[k].time_s;
+    res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+    read_back(machine, posted, res.gcode, w);
+  }
+  w.write_s = seconds_since(t0);
+  return w;
+}
+
+}  // namespace taxopt::pipeline

@@ -1,0 +1,188 @@
+// The stages of a run called one by one (src/pipeline/stages.hpp, issue 19), and plan_axes:
+// the axes a post-processor gets without G-code are the ones run_job writes. On seeded random
+// heightfield parts no test was tuned on; every stage's output is checked for the property it
+// promises, not for numbers.
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "pipeline/stages.hpp"
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/machine_file.hpp"
+#include "taxopt/job.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+TEST_CASE(
+    "pipeline: each stage called on its own keeps its promise -- contacts touch, planned axes "
+    "stay in the cone and miss the part, poses give the axes, the program read back is what "
+    "was posted, and verification finds it collision-free",
+    "[pipeline][stages]") {
+  std::mt19937 rng(4242);
+  for (const Heightfield& hf : random_heightfields(rng)) {
+    INFO(hf.name);
+    const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+    const Toolpath tp = parse_cl(g.text, "p.cls");
+    const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+    const Machine machine = default_machine();
+    JobOptions given;
+    given.part = &part;
+    given.method = Method::Global;
+    given.paper.grid_deg = 4.0;
+    given.max_deviation_deg = 12.0;
+
+    JobResult res;
+    pipeline::Run run = pipeline::validate(tp, machine, given, res);
+    CHECK(res.has(FindingCode::NoHolderModel));
+    CHECK(run.options.paper.max_deviation_deg == 12.0);
+    std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
+    REQUIRE(ops.size() == tp.operations.size());
+    for (const pipeline::OperationContext& o : ops) CHECK(o.ball_radius_mm == Approx(3.0));
+
+    // Contacts: every feed point touches the part where the generator put the contact.
+    pipeline::recover_contacts(run, ops, res);
+    REQUIRE(run.collision);
+    REQUIRE(run.checker);
+    std::size_t goto_index = 0;
+    for (const pipeline::OperationContext& o : ops) {
+      REQUIRE(o.contact.recovered);
+      REQUIRE(o.tool);
+      REQUIRE(o.real_tool);
+      CHECK(o.contact.touching > 0);
+      for (std::size_t i = 0; i < o.op->points.size(); ++i, ++goto_index) {
+        if (o.op->points[i].motion != Motion::Feed) continue;
+        REQUIRE(o.contacts[i].state == ContactState::Touching);
+        CHECK((o.contacts[i].cc_mm - g.cc_mm[goto_index]).norm() < 0.05);
+      }
+    }
+
+    // Plan: within the cone, and the tool above the ball misses the part at every point
+    // (judged by FCL, not by the planner's own check).
+    pipeline::plan_operations(run, ops, res);
+    for (const pipeline::OperationContext& o : ops) {
+      REQUIRE(o.optimised);
+      const Operationd& op = *o.op;
+      REQUIRE(o.optimised->axes.size() == op.points.size());
+      for (std::size_t i = 0; i < op.points.size(); ++i) {
+        const Vec3d& v = o.optimised->axes[i];
+        CHECK(rad_to_deg(angle_between(v, op.points[i].axis)) <= 12.0 + 1e-6);
+        const bool in_air = o.contacts[i].state != ContactState::Touching;
+        CHECK_FALSE(run.collision->collides(*o.tool, op.points[i].tip_mm + 3.0 * op.points[i].axis,
+                                            v, in_air));
+      }
+    }
+
+    // Post: the poses give the planned axes, within the machine's ranges; the ball centres
+    // stay where the CL file put them.
+    std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, res);
+    REQUIRE(posted);
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      const PostedOperation& po = (*posted)[k];
+      const Operationd& op = *ops[k].op;
+      for (std::size_t i = 0; i < po.points.size(); ++i) {
+        CHECK(angle_between(machine.ac.forward(po.poses[i]), po.points[i].axis) < 1e-9);
+        CHECK(machine.ac.a.contains(po.poses[i].a_rad));
+        const Vec3d centre_in = op.points[i].tip_mm + 3.0 * op.points[i].axis;
+        const Vec3d centre_out = po.points[i].tip_mm + 3.0 * po.points[i].axis;
+        CHECK((centre_in - centre_out).norm() < 1e-9);
+      }
+    }
+
+    // Write: every point's move read back is the posted pose and tip, to the written decimals.
+    const pipeline::Written w = pipeline::write_program(run, ops, *posted, res);
+    const double half_unit = 0.5 * std::pow(10.0, -machine.gcode.decimals);
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      const PostedOperation& po = (*posted)[k];
+      REQUIRE(w.point_moves[k].size() == po.points.size());
+      for (std::size_t i = 0; i < po.points.size(); ++i) {
+        const GcodeMove& m = *w.point_moves[k][i];
+        CHECK(std::abs(m.a_deg - rad_to_deg(po.poses[i].a_rad)) <= half_unit + 1e-9);
+        CHECK(std::abs(m.c_deg - rad_to_deg(po.poses[i].c_rad)) <= half_unit + 1e-9);
+        CHECK((m.xyz_mm - po.points[i].tip_mm).norm() <= std::sqrt(3.0) * half_unit + 1e-9);
+      }
+      CHECK(w.schedule_after[k].summary.cycle_time_s > 0.0);
+    }
+
+    // Verify: the written program is collision-free by FCL, within the cone and the ranges.
+    pipeline::verify_operations(run, ops, *posted, w, res);
+    REQUIRE(res.operations.size() == ops.size());
+    for (const OperationResult& r : res.operations) {
+      CHECK(r.verification.collision_free);
+      CHECK(r.verification.within_axis_limits);
+      CHECK(r.max_axis_change_deg <= 12.0 + 1e-6);
+    }
+    CHECK_FALSE(res.out_cls.empty());
+  }
+}
+
+TEST_CASE(
+    "plan_axes: a post-processor gets, without G-code, the axes and poses run_job writes, and "
+    "the same findings up to posting",
+    "[pipeline][plan_axes]") {
+  std::mt19937 rng(777);
+  const std::vector<Heightfield> parts = random_heightfields(rng);
+  const Machine machine = default_machine();
+  for (std::size_t h = 0; h < 2 && h < parts.size(); ++h) {
+    const Heightfield& hf = parts[h];
+    const GeneratedCl g = raster_cl(hf, 3.0, 15.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+    const Toolpath tp = parse_cl(g.text, "p.cls");
+    const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+    for (const Method method : {Method::Paper, Method::Global}) {
+      INFO(hf.name << ", " << to_string(method));
+      JobOptions options;
+      options.part = &part;
+      options.method = method;
+      options.paper.grid_deg = 4.0;
+      const AxisPlan plan = plan_axes(tp, machine, options);
+      const JobResult job = run_job(tp, machine, options);
+      REQUIRE(plan.ok());
+      REQUIRE(plan.operations.size() == job.operations.size());
+      REQUIRE(plan.contacts.size() == tp.operations.size());
+      const double half_unit = 0.5 * std::pow(10.0, -machine.gcode.decimals);
+      bool turned = false;
+      for (std::size_t k = 0; k < plan.operations.size(); ++k) {
+        const PostedOperation& po = plan.operations[k];
+        const OperationResult& r = job.operations[k];
+        REQUIRE(po.points.size() == r.rows.size());
+        CHECK(plan.contacts[k].size() == po.points.size());
+        for (std::size_t i = 0; i < po.points.size(); ++i) {
+          CHECK((po.points[i].axis - r.rows[i].axis).norm() == 0.0);
+          CHECK((po.points[i].tip_mm - r.rows[i].tip_mm).norm() == 0.0);
+          CHECK(std::abs(rad_to_deg(po.poses[i].a_rad) - r.rows[i].a_deg) <= half_unit + 1e-9);
+          CHECK(std::abs(rad_to_deg(po.poses[i].c_rad) - r.rows[i].c_deg) <= half_unit + 1e-9);
+          turned = turned || angle_between(po.points[i].axis, tp.operations[k].points[i].axis) >
+                                 deg_to_rad(0.5);
+        }
+      }
+      CHECK(turned);  // the method did change axes: the comparison is not of the input's
+      // The findings up to posting are run_job's first ones, in order.
+      REQUIRE(plan.findings.size() <= job.findings.size());
+      for (std::size_t f = 0; f < plan.findings.size(); ++f) {
+        CHECK(plan.findings[f].code == job.findings[f].code);
+        CHECK(plan.findings[f].message == job.findings[f].message);
+      }
+    }
+  }
+
+  // An unreachable pose: no operations, a problem naming the line.
+  const GeneratedCl g = raster_cl(parts.front(), 3.0, 20.0, 1, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+  const Toolpath tp = parse_cl(g.text, "p.cls");
+  Machine narrow = machine;
+  narrow.ac.a.min_rad = deg_to_rad(-5.0);
+  narrow.ac.a.max_rad = deg_to_rad(5.0);
+  JobOptions options;
+  options.method = Method::None;
+  const AxisPlan bad = plan_axes(tp, narrow, options);
+  CHECK_FALSE(bad.ok());
+  CHECK(bad.operations.empty());
+  bool named = false;
+  for (const Finding& f : bad.findings) {
+    named = named || (f.code == FindingCode::UnreachablePose && f.line > 0);
+  }
+  CHECK(named);
+  // Options the library cannot apply are refused before any work.
+  options.paper.grid_deg = 0.0;
+  CHECK_THROWS_AS(plan_axes(tp, machine, options), InputError);
+}

@@ -3,6 +3,7 @@
 // heightfield parts no test was tuned on; every stage's output is checked for the property it
 // promises, not for numbers.
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "pipeline/stages.hpp"
@@ -185,4 +186,83 @@ TEST_CASE(
   // Options the library cannot apply are refused before any work.
   options.paper.grid_deg = 0.0;
   CHECK_THROWS_AS(plan_axes(tp, machine, options), InputError);
+}
+
+TEST_CASE(
+    "resolved options: a library caller gets the machine file's holder and clearances without "
+    "the CLI, options override them, and the report records the cone and clearances the run "
+    "applied",
+    "[pipeline][options][report]") {
+  std::mt19937 rng(9191);
+  const Heightfield hf = random_heightfields(rng).front();
+  const GeneratedCl g = raster_cl(hf, 3.0, 15.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+  const Toolpath tp = parse_cl(g.text, "p.cls");
+  const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+
+  Machine shop = default_machine();
+  shop.holder_radius_mm = 12.0;
+  shop.holder_length_mm = 40.0;
+  shop.holder_gauge_length_mm = 35.0;
+  shop.shank_clearance_mm = 0.8;
+  shop.holder_clearance_mm = 2.5;
+
+  JobOptions given;
+  given.part = &part;
+  given.method = Method::Paper;
+  given.paper.grid_deg = 4.0;
+  const JobOptions applied = resolved_options(given, shop);
+  REQUIRE(applied.tool.holder_radius_mm);
+  CHECK(*applied.tool.holder_radius_mm == 12.0);
+  CHECK(*applied.tool.holder_length_mm == 40.0);
+  CHECK(*applied.tool.gauge_length_mm == 35.0);
+  CHECK(*applied.shank_clearance_mm == 0.8);
+  CHECK(*applied.holder_clearance_mm == 2.5);
+  // The options win over the machine file; without either, the library's defaults.
+  JobOptions own = given;
+  own.shank_clearance_mm = 0.1;
+  own.tool.holder_radius_mm = 9.0;
+  const JobOptions mine = resolved_options(own, shop);
+  CHECK(*mine.shank_clearance_mm == 0.1);
+  CHECK(*mine.holder_clearance_mm == 2.5);
+  CHECK(*mine.tool.holder_radius_mm == 9.0);
+  CHECK_FALSE(mine.tool.holder_length_mm);  // a holder named by the options is theirs alone
+  const JobOptions bare = resolved_options(given, default_machine());
+  CHECK(*bare.shank_clearance_mm == kDefaultShankClearanceMm);
+  CHECK(*bare.holder_clearance_mm == kDefaultHolderClearanceMm);
+  CHECK_FALSE(bare.tool.holder_radius_mm);
+
+  // A run on the shop machine checks the holder (no "no holder model" warning) and gives the
+  // same axes as the same holder and clearances given as options on a bare machine.
+  const JobResult on_shop = run_job(tp, shop, given);
+  const JobResult as_options = run_job(tp, default_machine(), applied);
+  CHECK_FALSE(on_shop.has(FindingCode::NoHolderModel));
+  CHECK(run_job(tp, default_machine(), given).has(FindingCode::NoHolderModel));
+  REQUIRE(on_shop.operations.size() == as_options.operations.size());
+  for (std::size_t k = 0; k < on_shop.operations.size(); ++k) {
+    REQUIRE(on_shop.operations[k].rows.size() == as_options.operations[k].rows.size());
+    for (std::size_t i = 0; i < on_shop.operations[k].rows.size(); ++i) {
+      CHECK((on_shop.operations[k].rows[i].axis - as_options.operations[k].rows[i].axis).norm() ==
+            0.0);
+    }
+  }
+  const auto rep = nlohmann::json::parse(report_json(on_shop, tp, shop, given));
+  CHECK(rep["clearances_mm"]["shank"] == 0.8);
+  CHECK(rep["clearances_mm"]["holder"] == 2.5);
+  CHECK(rep["clearances_mm"]["holder_modelled"] == true);
+
+  // Without a part the run keeps to the narrow cone, and the report says so: every written axis
+  // is within the reported deviation of the CL file's.
+  JobOptions no_part;
+  no_part.method = Method::Paper;
+  no_part.paper.grid_deg = 0.5;
+  const JobResult blind = run_job(tp, default_machine(), no_part);
+  const auto blind_rep = nlohmann::json::parse(report_json(blind, tp, default_machine(), no_part));
+  const double reported_deg = blind_rep["options"]["max_deviation_deg"].get<double>();
+  CHECK(reported_deg == kNoPartMaxDeviationDeg);
+  for (std::size_t k = 0; k < blind.operations.size(); ++k) {
+    for (std::size_t i = 0; i < blind.operations[k].rows.size(); ++i) {
+      CHECK(rad_to_deg(angle_between(blind.operations[k].rows[i].axis,
+                                     tp.operations[k].points[i].axis)) <= reported_deg + 1e-6);
+    }
+  }
 }

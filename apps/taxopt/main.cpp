@@ -568,15 +568,8 @@ int main(int argc, char** argv) {
       options.tool =
           taxopt::tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
                                   a.holder_radius, a.holder_length, a.gauge_length});
-      // The machine's usual holder where the command line names none (machine file, mm).
-      if (!options.tool.holder_radius_mm && machine.holder_radius_mm) {
-        options.tool.holder_radius_mm = machine.holder_radius_mm;
-        if (!options.tool.holder_length_mm)
-          options.tool.holder_length_mm = machine.holder_length_mm;
-        if (!options.tool.gauge_length_mm) {
-          options.tool.gauge_length_mm = machine.holder_gauge_length_mm;
-        }
-      }
+      // The machine file's holder and clearances apply where these name none (the library's
+      // resolved_options).
     }
     if (a.contact_tolerance) {
       if (!(*a.contact_tolerance > 0.0)) return error("--contact-tolerance must be positive", 2);
@@ -596,10 +589,8 @@ int main(int argc, char** argv) {
         return error("--shank-clearance, --holder-clearance and --part-tolerance must be >= 0", 2);
       }
     }
-    options.shank_clearance_mm = a.shank_clearance_mm.value_or(
-        machine.shank_clearance_mm.value_or(options.shank_clearance_mm));
-    options.holder_clearance_mm = a.holder_clearance_mm.value_or(
-        machine.holder_clearance_mm.value_or(options.holder_clearance_mm));
+    options.shank_clearance_mm = a.shank_clearance_mm;
+    options.holder_clearance_mm = a.holder_clearance_mm;
     options.part_tolerance_mm = a.part_tolerance;
     options.feed_mm_per_min = a.feed_mm_per_min;
     options.units_out = parse_unit(a.units_out, "--units-out");

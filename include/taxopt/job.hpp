@@ -26,6 +26,11 @@ enum class Method { None, Paper, Global };
 /// "none", "paper", "global".
 const char* to_string(Method method);
 
+/// Clearances the shank (past the flutes) and the holder keep from the part when neither the
+/// options nor the machine file give them, mm.
+constexpr double kDefaultShankClearanceMm = 0.5;
+constexpr double kDefaultHolderClearanceMm = 1.0;
+
 /// Largest change of a tool axis without a part to check it against, deg: what a controller
 /// smooths orientations by on its own, with no part model (Sinumerik's CYCLE832 examples
 /// program OTOL = 1 deg for 5-axis finishing; docs/cli.md).
@@ -60,8 +65,8 @@ struct JobOptions {
   /// Clearances the shank (past the flutes) and the holder keep from the part in every check
   /// (--shank-clearance, --holder-clearance), mm: the optimisers accept, and the verification
   /// passes, only axes where the grown bodies are free (docs/cli.md).
-  double shank_clearance_mm = 0.5;
-  double holder_clearance_mm = 1.0;
+  /// Empty: the machine file's [checks], else kDefaultShankClearanceMm / ...HolderClearanceMm.
+  std::optional<double> shank_clearance_mm, holder_clearance_mm;
   /// How far the flutes may reach into the part mesh without a collision: its chordal error
   /// (--part-tolerance), mm; empty: the contact tolerance (max(0.05, 0.1 x mean edge)).
   std::optional<double> part_tolerance_mm;
@@ -314,6 +319,13 @@ ToolOverrides tool_overrides(const ToolDimensions& given);
 /// JobResult::problems.
 JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
 
+/// The options a run applies, all defaults made explicit: the deviation cone (as given, else
+/// the paper's default with a part and at most kNoPartMaxDeviationDeg without one), the
+/// machine file's holder where the options name none (its radius, length and gauge length),
+/// and the clearances (as given, else the machine file's [checks], else the defaults). run_job
+/// runs with these; the report records them.
+JobOptions resolved_options(const JobOptions& given, const Machine& machine);
+
 /// The tool axes and machine poses of a run without G-code, for a post-processor that writes
 /// its own program: the stages of run_job up to posting (the options checked, the contacts, the
 /// method's axes with their guards, the machine's poses with the turns between passes), the
@@ -347,8 +359,9 @@ struct RunInfo {
   std::string part_file;
 };
 
-/// JSON report (CLI.md): the input, the machine, the run (RunInfo), the options and every
-/// operation's tool model are recorded too; a null value comes with its reason
+/// JSON report (CLI.md): the input, the machine, the run (RunInfo), the options the run applied
+/// (resolved_options of the ones given) and every operation's tool model are recorded too; a null
+/// value comes with its reason
 /// (`null_reasons`); numbers are written with 12 significant digits at most, never -0.
 std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
                         const JobOptions& options, const RunInfo& run = {});

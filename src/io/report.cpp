@@ -92,7 +92,10 @@ nlohmann::json tool_json(const Tool& tool, const JobOptions& options) {
 }  // namespace
 
 std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                        const JobOptions& options, const RunInfo& run) {
+                        const JobOptions& given, const RunInfo& run) {
+  // What the run applied: every default made explicit (the cone without a part, the machine
+  // file's holder and clearances).
+  const JobOptions options = resolved_options(given, machine);
   nlohmann::json j;
   j["taxopt_version"] = kVersion;
   j["method"] = to_string(options.method);
@@ -118,8 +121,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       {"feed_mm_min", options.feed_mm_per_min ? nlohmann::json(*options.feed_mm_per_min)
                                               : nlohmann::json(nullptr)},
       {"feed_schedule", options.feed_schedule},
-      {"shank_clearance_mm", options.shank_clearance_mm},
-      {"holder_clearance_mm", options.holder_clearance_mm},
+      {"shank_clearance_mm", *options.shank_clearance_mm},
+      {"holder_clearance_mm", *options.holder_clearance_mm},
       {"part_tolerance_mm", options.part_tolerance_mm ? nlohmann::json(*options.part_tolerance_mm)
                                                       : nlohmann::json(nullptr)},
       {"gcode",
@@ -150,8 +153,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["safety_warnings"] = result.safety_warnings;
   j["collision_checked"] = result.collision_checked;
   // How the bodies are judged (docs/cli.md "What is checked").
-  j["clearances_mm"] = {{"shank", options.shank_clearance_mm},
-                        {"holder", options.holder_clearance_mm},
+  j["clearances_mm"] = {{"shank", *options.shank_clearance_mm},
+                        {"holder", *options.holder_clearance_mm},
                         {"holder_modelled", options.tool.holder_radius_mm.has_value()}};
   // How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
   // and the motion that splines, drilling cycles and MSYS frames contributed.

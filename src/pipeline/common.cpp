@@ -59,8 +59,8 @@ std::string not_a_ball(const Operationd& op) {
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
 ToolMargins margins_of(const JobOptions& options) {
   ToolMargins m;
-  m.shank_clearance_mm = options.shank_clearance_mm;
-  m.holder_clearance_mm = options.holder_clearance_mm;
+  m.shank_clearance_mm = options.shank_clearance_mm.value_or(kDefaultShankClearanceMm);
+  m.holder_clearance_mm = options.holder_clearance_mm.value_or(kDefaultHolderClearanceMm);
   if (options.part) {
     m.flute_tolerance_mm =
         options.part_tolerance_mm.value_or(contact_tolerance_mm(*options.part, options.contact));

@@ -8,18 +8,38 @@
 #include "taxopt/core/error.hpp"
 #include "util/parallel.hpp"
 
-namespace taxopt::pipeline {
+namespace taxopt {
 
-Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
+  JobOptions options = given;
   // The deviation cone: as given; without a part to check the axes against, no wider than a
   // controller's own orientation tolerance unless asked for.
-  JobOptions options = given;
   if (given.max_deviation_deg) {
     options.paper.max_deviation_deg = *given.max_deviation_deg;
   } else if (!given.part) {
     options.paper.max_deviation_deg =
         std::min(options.paper.max_deviation_deg, kNoPartMaxDeviationDeg);
   }
+  // The machine's usual holder where the options name none.
+  ToolOverrides& tool = options.tool;
+  if (!tool.holder_radius_mm && machine.holder_radius_mm) {
+    tool.holder_radius_mm = machine.holder_radius_mm;
+    if (!tool.holder_length_mm) tool.holder_length_mm = machine.holder_length_mm;
+    if (!tool.gauge_length_mm) tool.gauge_length_mm = machine.holder_gauge_length_mm;
+  }
+  options.shank_clearance_mm = given.shank_clearance_mm.value_or(
+      machine.shank_clearance_mm.value_or(kDefaultShankClearanceMm));
+  options.holder_clearance_mm = given.holder_clearance_mm.value_or(
+      machine.holder_clearance_mm.value_or(kDefaultHolderClearanceMm));
+  return options;
+}
+
+}  // namespace taxopt
+
+namespace taxopt::pipeline {
+
+Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+  JobOptions options = resolved_options(given, machine);
   res.collision_checked = given.part != nullptr;
   if (!given.part) {
     std::ostringstream os;
@@ -34,7 +54,7 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
       }
     }
     add_finding(res, FindingCode::NoPart, std::nullopt, 0, os.str());
-  } else if (!given.tool.holder_radius_mm) {
+  } else if (!options.tool.holder_radius_mm) {
     add_finding(
         res, FindingCode::NoHolderModel, std::nullopt, 0,
         "no holder model (--holder-radius, --holder-length): the holder is not checked against "

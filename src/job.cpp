@@ -22,8 +22,9 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
         (g.origin_mm - f.origin_mm).norm() > 1e-9) {
       throw InputError(toolpath.source + ": its MSYS records name different frames (lines " +
                        std::to_string(f.line) + " and " + std::to_string(g.line) +
-                       "): one part cannot be in all of them; use --msys ignore or split the "
-                       "file");
+                       "): one part cannot be in all of them; read the file with its MSYS "
+                       "records ignored (ClReadOptions::apply_msys = false; --msys ignore) or "
+                       "split it");
     }
   }
   for (Vec3d& v : mesh.vertices) v = f.rotation.transpose() * (v - f.origin_mm);

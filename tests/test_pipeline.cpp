@@ -183,9 +183,16 @@ TEST_CASE(
     named = named || (f.code == FindingCode::UnreachablePose && f.line > 0);
   }
   CHECK(named);
-  // Options the library cannot apply are refused before any work.
+  // Options the library cannot apply are refused before any work, in the library's words
+  // (the JobOptions field), not the CLI's.
   options.paper.grid_deg = 0.0;
   CHECK_THROWS_AS(plan_axes(tp, machine, options), InputError);
+  CHECK_THROWS_WITH(plan_axes(tp, machine, options),
+                    Catch::Contains("JobOptions::paper.grid_deg") && !Catch::Contains("--"));
+  options.paper.grid_deg = 2.0;
+  options.max_deviation_deg = 95.0;
+  CHECK_THROWS_WITH(plan_axes(tp, machine, options),
+                    Catch::Contains("JobOptions::max_deviation_deg") && Catch::Contains("95"));
 }
 
 TEST_CASE(

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -529,6 +530,19 @@ int main(int argc, char** argv) {
     tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(threads));
 
+    // The method's numbers, before any file is read (the library refuses them too, naming the
+    // JobOptions field).
+    if (a.jerk_weight && !(*a.jerk_weight >= 0.0 && std::isfinite(*a.jerk_weight))) {
+      return error("--jerk-weight must be a number >= 0 (s^2)", 2);
+    }
+    if (a.max_deviation && !(*a.max_deviation >= 0.0 && *a.max_deviation <= 90.0)) {
+      return error("--max-deviation must be within [0, 90] deg", 2);
+    }
+    if (a.grid && !(*a.grid > 0.0 && *a.grid <= 10.0)) {
+      return error("--grid must be within (0, 10] deg", 2);
+    }
+    if (a.feed_mm_per_min && !(*a.feed_mm_per_min > 0.0))
+      return error("--feed must be positive", 2);
     const taxopt::Machine machine =
         a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
     taxopt::ClReadOptions read_options;

@@ -35,7 +35,9 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
     m.holder_body = static_cast<int>(m.bodies.size());
     m.bodies.push_back({hr, gauge - R, gauge - R + hl});
   } else if (o.holder_length_mm) {
-    throw InputError("--holder-length needs --holder-radius");
+    throw InputError(
+        "a holder length needs a holder radius (ToolOverrides::holder_radius_mm, or the machine "
+        "file's [holder] radius_mm)");
   }
   return m;
 }

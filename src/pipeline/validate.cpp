@@ -37,6 +37,15 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
 }  // namespace taxopt
 
 namespace taxopt::pipeline {
+namespace {
+
+std::string shown(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
 
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
   JobOptions options = resolved_options(given, machine);
@@ -74,16 +83,20 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
         "between points where the table turns (the moves are checked as the joints run)");
   }
   if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
-    throw InputError("--jerk-weight must be a number >= 0 (s^2)");
+    throw InputError("JobOptions::global.jerk_weight_s2 must be a number >= 0 (s^2), got " +
+                     shown(options.global.jerk_weight_s2));
   }
   if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
-    throw InputError("--max-deviation must be within [0, 90] deg");
+    throw InputError("JobOptions::max_deviation_deg must be within [0, 90] deg, got " +
+                     shown(options.paper.max_deviation_deg));
   }
   if (!(options.paper.grid_deg > 0.0 && options.paper.grid_deg <= 10.0)) {
-    throw InputError("--grid must be within (0, 10] deg");
+    throw InputError("JobOptions::paper.grid_deg must be within (0, 10] deg, got " +
+                     shown(options.paper.grid_deg));
   }
   if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
-    throw InputError("--feed must be positive");
+    throw InputError("JobOptions::feed_mm_per_min must be positive, got " +
+                     shown(*options.feed_mm_per_min));
   }
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);

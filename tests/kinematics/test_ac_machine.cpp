@@ -16,12 +16,18 @@ Vec3d random_axis(std::mt19937& rng, double min_z = -1.0) {
   }
 }
 
-ACMachined machine_with_sense(int sa, int sc) {
+ACMachined machine_with_sense(int sa, int sc, TiltAxis tilt = TiltAxis::X) {
   ACMachined m = default_ac_machine();
   m.a.sense = sa;
   m.c.sense = sc;
+  m.tilt = tilt;
   return m;
 }
+
+// The kinematics every property below holds for: the A/C and the B/C table-table (one
+// template per kinematics: forward after inverse on both branches, the pole, the machine-mode
+// round trip; the planner's winding in test_pose_planner.cpp).
+constexpr TiltAxis kTilts[] = {TiltAxis::X, TiltAxis::Y};
 
 }  // namespace
 
@@ -38,18 +44,27 @@ TEST_CASE("kinematics: inverse undoes forward on both branches and every sense",
   std::mt19937 rng(20201);
   for (int sa : {1, -1}) {
     for (int sc : {1, -1}) {
-      const ACMachined m = machine_with_sense(sa, sc);
-      for (int k = 0; k < 2000; ++k) {
-        const Vec3d v = random_axis(rng);
-        const auto both = m.inverse(v);
-        for (const Posed& p : both) {
-          REQUIRE((m.forward(p) - v).norm() < 1e-12);
-          REQUIRE(p.c_rad > -Constants<double>::pi() - 1e-12);
-          REQUIRE(p.c_rad <= Constants<double>::pi() + 1e-12);
+      for (TiltAxis tilt : kTilts) {
+        const ACMachined m = machine_with_sense(sa, sc, tilt);
+        INFO("tilt " << m.tilt_letter() << ", senses " << sa << ", " << sc);
+        for (int k = 0; k < 2000; ++k) {
+          const Vec3d v = random_axis(rng);
+          const auto both = m.inverse(v);
+          for (const Posed& p : both) {
+            REQUIRE((m.forward(p) - v).norm() < 1e-12);
+            REQUIRE(p.c_rad > -Constants<double>::pi() - 1e-12);
+            REQUIRE(p.c_rad <= Constants<double>::pi() + 1e-12);
+          }
+          // Branch [0] has s_A A >= 0, branch [1] s_A A <= 0.
+          REQUIRE(sa * both[0].a_rad >= 0.0);
+          REQUIRE(sa * both[1].a_rad <= 0.0);
         }
-        // Branch [0] has s_A A >= 0, branch [1] s_A A <= 0.
-        REQUIRE(sa * both[0].a_rad >= 0.0);
-        REQUIRE(sa * both[1].a_rad <= 0.0);
+        // The pole: A = 0 on both branches, and every C gives the same axis.
+        const auto pole = m.inverse(Vec3d::UnitZ());
+        CHECK(pole[0].a_rad == 0.0);
+        CHECK(pole[1].a_rad == 0.0);
+        for (double c : {-3.0, -1.0, 0.5, 2.9}) CHECK(m.at_pole(m.forward(Posed{0.0, c})));
+        CHECK_FALSE(m.at_pole(m.forward(Posed{1e-5, 0.3})));
       }
     }
   }
@@ -58,18 +73,21 @@ TEST_CASE("kinematics: inverse undoes forward on both branches and every sense",
 TEST_CASE("kinematics: forward of any pose comes back through the inverse", "[kinematics]") {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> ua(-2.0, 2.0), uc(-10.0, 10.0);
-  const ACMachined m = default_ac_machine();
-  for (int k = 0; k < 2000; ++k) {
-    const Posed p{ua(rng), uc(rng)};
-    const Vec3d v = m.forward(p);
-    bool matched = false;
-    for (const Posed& q : m.inverse(v)) {
-      const bool same_a = std::abs(q.a_rad - p.a_rad) < 1e-9;
-      const bool same_c =
-          std::abs(wrap_pi(q.c_rad - p.c_rad)) < 1e-9 || std::abs(std::sin(p.a_rad)) < 1e-9;
-      matched = matched || (same_a && same_c);
+  for (TiltAxis tilt : kTilts) {
+    const ACMachined m = machine_with_sense(1, 1, tilt);
+    INFO("tilt " << m.tilt_letter());
+    for (int k = 0; k < 2000; ++k) {
+      const Posed p{ua(rng), uc(rng)};
+      const Vec3d v = m.forward(p);
+      bool matched = false;
+      for (const Posed& q : m.inverse(v)) {
+        const bool same_a = std::abs(q.a_rad - p.a_rad) < 1e-9;
+        const bool same_c =
+            std::abs(wrap_pi(q.c_rad - p.c_rad)) < 1e-9 || std::abs(std::sin(p.a_rad)) < 1e-9;
+        matched = matched || (same_a && same_c);
+      }
+      REQUIRE(matched);
     }
-    REQUIRE(matched);
   }
 }
 
@@ -106,22 +124,28 @@ TEST_CASE("kinematics: machine mode puts the tool axis on the machine's +Z", "[k
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   for (int sa : {1, -1}) {
-    ACMachined m = machine_with_sense(sa, sa);
-    m.c_axis_point_mm = Vec3d(u(rng), u(rng), 0.0);
-    m.a_axis_point_mm = Vec3d(0.0, u(rng), u(rng));
-    for (int k = 0; k < 300; ++k) {
-      const Vec3d v = random_axis(rng, 0.0);
-      const Posed pose = m.inverse(v)[static_cast<std::size_t>(k % 2)];
-      const Vec3d p(u(rng), u(rng), u(rng));
-      const Vec3d pm = m.to_machine_mm(p, pose);
-      // The joint move from the tip to a point along the axis is along +Z.
-      const Vec3d up = m.to_machine_mm(p + 10.0 * v, pose) - pm;
-      REQUIRE((up - Vec3d(0, 0, 10.0)).norm() < 1e-9);
-      REQUIRE((m.from_machine_mm(pm, pose) - p).norm() < 1e-9);
-      // A point on both rotary axes does not move.
-      const Vec3d fixed(m.c_axis_point_mm.x(), m.a_axis_point_mm.y(), m.a_axis_point_mm.z());
-      if (std::abs(pose.c_rad) < 1e-12)
-        REQUIRE((m.to_machine_mm(fixed, pose) - fixed).norm() < 1e-9);
+    for (TiltAxis tilt : kTilts) {
+      ACMachined m = machine_with_sense(sa, sa, tilt);
+      INFO("tilt " << m.tilt_letter() << ", sense " << sa);
+      const bool b = tilt == TiltAxis::Y;
+      m.c_axis_point_mm = Vec3d(u(rng), u(rng), 0.0);
+      m.a_axis_point_mm = b ? Vec3d(u(rng), 0.0, u(rng)) : Vec3d(0.0, u(rng), u(rng));
+      for (int k = 0; k < 300; ++k) {
+        const Vec3d v = random_axis(rng, 0.0);
+        const Posed pose = m.inverse(v)[static_cast<std::size_t>(k % 2)];
+        const Vec3d p(u(rng), u(rng), u(rng));
+        const Vec3d pm = m.to_machine_mm(p, pose);
+        // The joint move from the tip to a point along the axis is along +Z.
+        const Vec3d up = m.to_machine_mm(p + 10.0 * v, pose) - pm;
+        REQUIRE((up - Vec3d(0, 0, 10.0)).norm() < 1e-9);
+        REQUIRE((m.from_machine_mm(pm, pose) - p).norm() < 1e-9);
+        // A point on both rotary axes does not move.
+        const Vec3d fixed =
+            b ? Vec3d(m.a_axis_point_mm.x(), m.c_axis_point_mm.y(), m.a_axis_point_mm.z())
+              : Vec3d(m.c_axis_point_mm.x(), m.a_axis_point_mm.y(), m.a_axis_point_mm.z());
+        if (std::abs(pose.c_rad) < 1e-12)
+          REQUIRE((m.to_machine_mm(fixed, pose) - fixed).norm() < 1e-9);
+      }
     }
   }
 }

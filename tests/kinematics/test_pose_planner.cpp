@@ -30,6 +30,23 @@ void require_axes(const ACMachined& m, const std::vector<Posed>& poses,
   }
 }
 
+// The kinematics every planner property holds for: the A/C table-table and the B/C one. B/C at
+// (t, c) gives the axis A/C gives at (t, c + 90 deg), so a path written for A/C, turned a
+// quarter about Z, asks the B/C machine for the same poses: the tests below check the same
+// poses of both.
+std::vector<ACMachined> both_kinematics(const ACMachined& ac) {
+  ACMachined bc = ac;
+  bc.tilt = TiltAxis::Y;
+  return {ac, bc};
+}
+
+std::vector<Vec3d> for_machine(const ACMachined& m, std::vector<Vec3d> axes) {
+  if (m.tilt == TiltAxis::Y) {
+    for (Vec3d& v : axes) v = Eigen::AngleAxisd(Constants<double>::pi() / 2, Vec3d::UnitZ()) * v;
+  }
+  return axes;
+}
+
 }  // namespace
 
 TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A from -110 to 30 deg",
@@ -52,95 +69,120 @@ TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A from -11
   }
 }
 
-TEST_CASE("planner: crossing the pole A = 0 flips A's sign, C does not jump", "[kinematics]") {
-  const ACMachined m = default_ac_machine();
-  std::vector<Vec3d> axes;
-  for (int i = -10; i <= 10; ++i) {
-    axes.push_back(Eigen::AngleAxisd(deg_to_rad(3.0 * i), Vec3d::UnitY()) * Vec3d::UnitZ());
-  }
-  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
-  REQUIRE(plan.ok());
-  require_axes(m, plan.poses, axes);
-  CHECK(max_c_step_deg(plan.poses) < 1e-9);
-  CHECK(plan.poses.front().a_rad * plan.poses.back().a_rad < 0.0);
-  CHECK(plan.poses[10].a_rad == 0.0);
-}
-
-TEST_CASE("planner: passing close to the pole does not swing C", "[kinematics]") {
-  const ACMachined m = default_ac_machine();
-  for (double offset_deg : {0.001, 0.05, 0.5}) {
+TEST_CASE("planner: crossing the pole A = 0 flips A's sign, C does not jump, A/C and B/C",
+          "[kinematics][bc]") {
+  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+    INFO("tilt " << m.tilt_letter());
     std::vector<Vec3d> axes;
-    for (int i = -20; i <= 20; ++i) {
-      const Vec3d v = Eigen::AngleAxisd(deg_to_rad(2.0 * i), Vec3d::UnitY()) *
-                      (Eigen::AngleAxisd(deg_to_rad(offset_deg), Vec3d::UnitX()) * Vec3d::UnitZ());
-      axes.push_back(v);
+    for (int i = -10; i <= 10; ++i) {
+      axes.push_back(Eigen::AngleAxisd(deg_to_rad(3.0 * i), Vec3d::UnitY()) * Vec3d::UnitZ());
     }
+    axes = for_machine(m, axes);
     const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
     REQUIRE(plan.ok());
     require_axes(m, plan.poses, axes);
-    CHECK(max_c_step_deg(plan.poses) < 90.0);
+    CHECK(max_c_step_deg(plan.poses) < 1e-9);
+    CHECK(plan.poses.front().a_rad * plan.poses.back().a_rad < 0.0);
+    CHECK(plan.poses[10].a_rad == 0.0);
   }
 }
 
-TEST_CASE("planner: C unwinds past +-180 deg on a continuous axis", "[kinematics]") {
-  const ACMachined m = default_ac_machine();
-  std::vector<Vec3d> axes;
-  for (int i = 0; i <= 3 * 72; ++i) {  // three full turns of the azimuth, 5 deg a step
-    const double phi = deg_to_rad(5.0 * i);
-    axes.push_back(
-        Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+TEST_CASE("planner: passing close to the pole does not swing C, A/C and B/C", "[kinematics][bc]") {
+  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+    INFO("tilt " << m.tilt_letter());
+    for (double offset_deg : {0.001, 0.05, 0.5}) {
+      std::vector<Vec3d> axes;
+      for (int i = -20; i <= 20; ++i) {
+        const Vec3d v =
+            Eigen::AngleAxisd(deg_to_rad(2.0 * i), Vec3d::UnitY()) *
+            (Eigen::AngleAxisd(deg_to_rad(offset_deg), Vec3d::UnitX()) * Vec3d::UnitZ());
+        axes.push_back(v);
+      }
+      axes = for_machine(m, axes);
+      const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+      REQUIRE(plan.ok());
+      require_axes(m, plan.poses, axes);
+      CHECK(max_c_step_deg(plan.poses) < 90.0);
+    }
   }
-  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
-  REQUIRE(plan.ok());
-  require_axes(m, plan.poses, axes);
-  CHECK(max_c_step_deg(plan.poses) == Approx(5.0).margin(1e-9));
-  CHECK(std::abs(rad_to_deg(plan.poses.back().c_rad - plan.poses.front().c_rad)) ==
-        Approx(1080.0).margin(1e-6));
 }
 
-TEST_CASE("planner: a bounded C stays in range and turns back where it must", "[kinematics]") {
-  ACMachined m = default_ac_machine();
-  m.c.continuous = false;
-  m.c.min_rad = deg_to_rad(-200.0);
-  m.c.max_rad = deg_to_rad(200.0);
-  std::vector<Vec3d> axes;
-  for (int i = 0; i <= 144; ++i) {  // two turns
-    const double phi = deg_to_rad(5.0 * i);
-    axes.push_back(
-        Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+TEST_CASE("planner: C unwinds past +-180 deg on a continuous axis, A/C and B/C",
+          "[kinematics][bc]") {
+  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+    INFO("tilt " << m.tilt_letter());
+    std::vector<Vec3d> axes;
+    for (int i = 0; i <= 3 * 72; ++i) {  // three full turns of the azimuth, 5 deg a step
+      const double phi = deg_to_rad(5.0 * i);
+      axes.push_back(
+          Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+    }
+    axes = for_machine(m, axes);
+    const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+    REQUIRE(plan.ok());
+    require_axes(m, plan.poses, axes);
+    CHECK(max_c_step_deg(plan.poses) == Approx(5.0).margin(1e-9));
+    CHECK(std::abs(rad_to_deg(plan.poses.back().c_rad - plan.poses.front().c_rad)) ==
+          Approx(1080.0).margin(1e-6));
   }
-  const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
-  REQUIRE(plan.ok());
-  require_axes(m, plan.poses, axes);
 }
 
-TEST_CASE("planner: an axis out of the A range is reported at its index", "[kinematics]") {
-  ACMachined m = default_ac_machine();
-  m.a.min_rad = deg_to_rad(-30.0);
-  m.a.max_rad = deg_to_rad(30.0);
-  std::vector<Vec3d> axes = {Vec3d::UnitZ(), Vec3d(0, -std::sin(0.3), std::cos(0.3)),
-                             Vec3d(0, -std::sin(0.9), std::cos(0.9))};
-  const PosePlan plan = plan_poses(m, axes, feeds(3));
-  CHECK_FALSE(plan.ok());
-  CHECK(plan.failed_index == 2);
-  CHECK_THAT(plan.message, Catch::Contains("A would be"));
+TEST_CASE("planner: a bounded C stays in range and turns back where it must, A/C and B/C",
+          "[kinematics][bc]") {
+  ACMachined bounded = default_ac_machine();
+  bounded.c.continuous = false;
+  bounded.c.min_rad = deg_to_rad(-200.0);
+  bounded.c.max_rad = deg_to_rad(200.0);
+  for (const ACMachined& m : both_kinematics(bounded)) {
+    INFO("tilt " << m.tilt_letter());
+    std::vector<Vec3d> axes;
+    for (int i = 0; i <= 144; ++i) {  // two turns
+      const double phi = deg_to_rad(5.0 * i);
+      axes.push_back(
+          Vec3d(std::sin(0.5) * std::cos(phi), std::sin(0.5) * std::sin(phi), std::cos(0.5)));
+    }
+    axes = for_machine(m, axes);
+    const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+    REQUIRE(plan.ok());
+    require_axes(m, plan.poses, axes);
+  }
 }
 
-TEST_CASE("planner: a branch change goes where the move is a rapid", "[kinematics]") {
+TEST_CASE("planner: an axis out of the tilt range is reported at its index, by its letter",
+          "[kinematics][bc]") {
+  ACMachined narrow = default_ac_machine();
+  narrow.a.min_rad = deg_to_rad(-30.0);
+  narrow.a.max_rad = deg_to_rad(30.0);
+  for (const ACMachined& m : both_kinematics(narrow)) {
+    const std::vector<Vec3d> axes =
+        for_machine(m, {Vec3d::UnitZ(), Vec3d(0, -std::sin(0.3), std::cos(0.3)),
+                        Vec3d(0, -std::sin(0.9), std::cos(0.9))});
+    const PosePlan plan = plan_poses(m, axes, feeds(3));
+    CHECK_FALSE(plan.ok());
+    CHECK(plan.failed_index == 2);
+    CHECK_THAT(plan.message, Catch::Contains(std::string(1, m.tilt_letter()) + " would be"));
+  }
+}
+
+TEST_CASE("planner: a branch change goes where the move is a rapid, A/C and B/C",
+          "[kinematics][bc]") {
   // Pass 1 reachable only with A > 0, pass 2 only with A < 0 (A range [-100, 100], tilts of
   // 60 deg towards opposite sides with C limited to [-10, 10]).
-  ACMachined m = default_ac_machine();
-  m.c.continuous = false;
-  m.c.min_rad = deg_to_rad(-10.0);
-  m.c.max_rad = deg_to_rad(10.0);
-  const Vec3d left(0, -std::sin(1.0), std::cos(1.0)), right(0, std::sin(1.0), std::cos(1.0));
-  std::vector<Vec3d> axes = {left, left, left, right, right, right};
-  std::vector<bool> rapid = {true, false, false, true, false, false};
-  const PosePlan plan = plan_poses(m, axes, rapid);
-  REQUIRE(plan.ok());
-  require_axes(m, plan.poses, axes);
-  CHECK(plan.poses[0].a_rad > 0.0);
-  CHECK(plan.poses[5].a_rad < 0.0);
+  ACMachined bounded = default_ac_machine();
+  bounded.c.continuous = false;
+  bounded.c.min_rad = deg_to_rad(-10.0);
+  bounded.c.max_rad = deg_to_rad(10.0);
+  for (const ACMachined& m : both_kinematics(bounded)) {
+    INFO("tilt " << m.tilt_letter());
+    const Vec3d left(0, -std::sin(1.0), std::cos(1.0)), right(0, std::sin(1.0), std::cos(1.0));
+    const std::vector<Vec3d> axes = for_machine(m, {left, left, left, right, right, right});
+    std::vector<bool> rapid = {true, false, false, true, false, false};
+    const PosePlan plan = plan_poses(m, axes, rapid);
+    REQUIRE(plan.ok());
+    require_axes(m, plan.poses, axes);
+    CHECK(plan.poses[0].a_rad > 0.0);
+    CHECK(plan.poses[5].a_rad < 0.0);
+  }
 }
 
 TEST_CASE("planner: a 3-axis path stays at A = 0 with C held", "[kinematics]") {
@@ -153,25 +195,26 @@ TEST_CASE("planner: a 3-axis path stays at A = 0 with C held", "[kinematics]") {
   }
 }
 
-TEST_CASE("planner: random smooth paths never jump C by 90 deg on the default machine",
-          "[kinematics]") {
+TEST_CASE("planner: random smooth paths never jump C by 90 deg, A/C and B/C", "[kinematics][bc]") {
   std::mt19937 rng(4242);
   std::normal_distribution<double> n(0.0, 1.0);
-  const ACMachined m = default_ac_machine();
-  for (int trial = 0; trial < 200; ++trial) {
-    std::vector<Vec3d> axes;
-    Vec3d v = Vec3d(0.3 * n(rng), 0.3 * n(rng), 1.0).normalized();
-    for (int i = 0; i < 100; ++i) {
-      // Steps of at most ~3 deg, staying in the upper hemisphere.
-      Vec3d w = (v + 0.05 * Vec3d(n(rng), n(rng), n(rng))).normalized();
-      if (w.z() < 0.2) w = (w + Vec3d(0, 0, 0.5)).normalized();
-      if (angle_between(v, w) > deg_to_rad(8.0)) w = v;
-      v = w;
-      axes.push_back(v);
+  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+    INFO("tilt " << m.tilt_letter());
+    for (int trial = 0; trial < 200; ++trial) {
+      std::vector<Vec3d> axes;
+      Vec3d v = Vec3d(0.3 * n(rng), 0.3 * n(rng), 1.0).normalized();
+      for (int i = 0; i < 100; ++i) {
+        // Steps of at most ~3 deg, staying in the upper hemisphere.
+        Vec3d w = (v + 0.05 * Vec3d(n(rng), n(rng), n(rng))).normalized();
+        if (w.z() < 0.2) w = (w + Vec3d(0, 0, 0.5)).normalized();
+        if (angle_between(v, w) > deg_to_rad(8.0)) w = v;
+        v = w;
+        axes.push_back(v);
+      }
+      const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
+      REQUIRE(plan.ok());
+      require_axes(m, plan.poses, axes);
+      REQUIRE(max_c_step_deg(plan.poses) <= 90.0);
     }
-    const PosePlan plan = plan_poses(m, axes, feeds(axes.size()));
-    REQUIRE(plan.ok());
-    require_axes(m, plan.poses, axes);
-    REQUIRE(max_c_step_deg(plan.poses) <= 90.0);
   }
 }

@@ -228,5 +228,6 @@ TEST_CASE(
     CHECK(m.code == 0);
     const std::string report = read_file(dir.path("m.json"));
     CHECK(report.find("\"B\"") != std::string::npos);  // the axis limits name B
+    CHECK(report.find("\"kinematics\": \"bc-table-table\"") != std::string::npos);
   }
 }

@@ -292,6 +292,9 @@ struct JobResult {
   GcodeProgram gcode;
   std::string out_cls;
   LengthUnit gcode_units = LengthUnit::Millimetre;
+  /// The machine's tilt axis letter, 'A' (A/C) or 'B' (B/C): the plots' titles name it (the rows
+  /// keep its value in a_deg, the CSV in A_deg: docs/kinematics.md).
+  char tilt_letter = 'A';
   bool ok() const { return problems.empty(); }
 };
 

@@ -314,7 +314,8 @@ std::vector<std::pair<std::string, std::string>> job_plots(const JobResult& resu
       return svg_line_plot(p);
     };
     out.emplace_back(stem + "angles-a.svg",
-                     make("A angle", "deg", &PointRow::a_before_deg, &PointRow::a_deg, false));
+                     make(std::string(1, result.tilt_letter) + " angle", "deg",
+                          &PointRow::a_before_deg, &PointRow::a_deg, false));
     out.emplace_back(stem + "angles-c.svg",
                      make("C angle", "deg", &PointRow::c_before_deg, &PointRow::c_deg, false));
     out.emplace_back(stem + "omega.svg",

@@ -101,6 +101,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["method"] = to_string(options.method);
   j["input"] = toolpath.source;
   j["machine"] = machine.name;
+  j["kinematics"] = machine.kinematics;
   // The run, to reproduce it: command line, time, the machine file by digest, the options.
   j["run"] = {
       {"command_line", run.command_line},

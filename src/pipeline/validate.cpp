@@ -50,6 +50,7 @@ std::string shown(double v) {
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
   JobOptions options = resolved_options(given, machine);
   res.collision_checked = given.part != nullptr;
+  res.tilt_letter = machine.ac.tilt_letter();
   if (!given.part) {
     std::ostringstream os;
     os << "no part (--part): the tool and holder are not checked against the part";

@@ -26,6 +26,7 @@
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/linuxcnc_ini.hpp"
+#include "taxopt/io/machine_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
 #include "taxopt/io/plots.hpp"
 #include "taxopt/job.hpp"

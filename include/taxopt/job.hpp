@@ -13,7 +13,7 @@
 #include "taxopt/geometry/contact.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/gcode.hpp"
-#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/machine.hpp"
 #include "taxopt/kinematics/metrics.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
 #include "taxopt/plan/global_optimiser.hpp"

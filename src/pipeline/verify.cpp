@@ -8,7 +8,7 @@
 #include "pipeline/stages.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/cl_file.hpp"
-#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/machine.hpp"
 #include "taxopt/kinematics/metrics.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"

@@ -5,7 +5,7 @@
 
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
-#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/machine.hpp"
 
 namespace taxopt::pipeline {
 namespace {

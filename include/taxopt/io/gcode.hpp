@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "taxopt/core/toolpath.hpp"
-#include "taxopt/io/machine_file.hpp"
+#include "taxopt/kinematics/machine.hpp"
 
 namespace taxopt {
 

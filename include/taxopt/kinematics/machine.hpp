@@ -1,0 +1,150 @@
+#pragma once
+/// @file The machine a run is for (CLI.md "Machine file"): its kinematics, axis ranges and
+/// senses, pivot, dynamic limits, G-code settings, the holder and clearances it usually runs
+/// with. Read from a machine file by io/machine_file.hpp; the stages use it from here.
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
+
+namespace taxopt {
+
+/// Controller dialect of the G-code (docs/gcode-dialects.md): LinuxCNC (rs274-checked),
+/// Fanuc 30i/31i-B5 (G43.4), Siemens Sinumerik 840D (TRAORI), Heidenhain TNC in ISO mode
+/// (M128).
+/// Haas: the Next Generation Control of a Haas 5-axis mill (UMC series): Fanuc-like, with
+/// G234 tool centre point control (docs/gcode-dialects.md).
+enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain, Haas };
+/// "linuxcnc", "fanuc", "siemens", "heidenhain", "haas".
+const char* to_string(GcodeDialect dialect);
+/// tcp: X Y Z are the tool tip in workpiece coordinates (the controller does TCP);
+/// machine: X Y Z are the joint positions after the table rotation (CLI.md convention).
+enum class GcodeMode { Tcp, Machine };
+/// G94 units per minute, or G93 inverse time.
+enum class FeedMode { UnitsPerMinute, InverseTime };
+/// What the programmed feed is the speed of, once taxopt has turned the tool axes.
+/// cutter-path: of the cut, as the CAM system programmed it: every feed block takes the time
+/// the input block takes at its feed (its tip distance over the feed), so the ball centre and
+/// the contact point, which do not move when the axis turns, run at the programmed speed and
+/// the chip load is unchanged; the F word follows the new tip (or joint) distance.
+/// tip: of the new tool tip: F is the programmed feed, and a longer tip path takes longer.
+enum class FeedReference { CutterPath, Tip };
+
+/// Coolant switched on for every operation (off after it): none, flood (M8) or mist (M7).
+enum class Coolant { None, Flood, Mist };
+
+/// The retract before an operation's first move and after the program's last: to a Z height
+/// in machine coordinates in the dialect's own way (LinuxCNC G53, Fanuc G28 reference return,
+/// Sinumerik SUPA, Heidenhain M91), or none (the user takes care of it; a warning says so).
+enum class SafeRetract { MachineZ, None };
+
+/// What a program holds besides its moves; empty strings and lists take the dialect's
+/// defaults (docs/gcode-dialects.md "Program template").
+struct ProgramTemplate {
+  /// Program name (Heidenhain %NAME, a comment elsewhere); "" -> "TAXOPT".
+  std::string name;
+  /// Fanuc program number O1..O9999.
+  int number = 1000;
+  /// Work offset block after the set-up ("G54"); "" -> the dialect's (G54; none on a TNC,
+  /// whose active preset is used); "none" -> none.
+  std::string work_offset;
+  Coolant coolant = Coolant::None;
+  /// Blocks written as they are: after the set-up, before the program end.
+  std::vector<std::string> header, footer;
+  /// The tool change; "{tool}" is replaced by the tool number; empty -> the dialect's.
+  std::vector<std::string> tool_change;
+  /// Blocks before TCP is switched on and after it is off (a kinematics switch such as
+  /// LinuxCNC's M428 / M429 of its switchkins configurations).
+  std::vector<std::string> tcp_on, tcp_off;
+  SafeRetract retract = SafeRetract::MachineZ;
+  /// The machine Z of the retract, mm (LinuxCNC, Sinumerik, Heidenhain; Fanuc's G28 goes to
+  /// its reference point).
+  double retract_z_mm = 0.0;
+  /// Machine mode: the largest distance the tip may leave the straight line between two
+  /// points while the joints move linearly; longer moves are split (linearisation), mm.
+  double linearise_tolerance_mm = 0.01;
+};
+
+/// How G-code is written for a machine.
+struct GcodeSettings {
+  GcodeDialect dialect = GcodeDialect::LinuxCNC;
+  GcodeMode mode = GcodeMode::Tcp;
+  FeedMode feed_mode = FeedMode::UnitsPerMinute;
+  FeedReference feed_reference = FeedReference::CutterPath;
+  /// Decimals of every coordinate and angle (0 to max_decimals(dialect)).
+  int decimals = 4;
+  /// Decimals of a units-per-minute F word; -1: the dialect's (feed_decimals()).
+  int feed_decimals = -1;
+  /// The program template (docs/gcode-dialects.md "Program template").
+  ProgramTemplate program;
+};
+
+/// The most decimals a controller takes for positions and angles: LinuxCNC 8, Fanuc 4
+/// (IS-C, 0.0001 mm), Siemens 6, Heidenhain TNC ISO 4 (0.0001 mm).
+int max_decimals(GcodeDialect dialect);
+/// Decimals of an F word the controller takes: Heidenhain TNC ISO 3; the others 15 (no
+/// limit of theirs is known to taxopt; a feed schedule writes 8 significant digits).
+int max_feed_decimals(GcodeDialect dialect);
+/// The F decimals written: settings.feed_decimals, else the least of max(decimals, 3) and the
+/// dialect's.
+int feed_decimals(const GcodeSettings& settings);
+
+/// A machine: name, kinematics and how to write its G-code.
+struct Machine {
+  std::string name = "generic-ac-trt";
+  std::string kinematics = "ac-table-table";
+  ACMachined ac = default_ac_machine();
+  /// Velocity, acceleration and jerk limits of X Y Z (mm) and A C (deg) as the machine file
+  /// gives them; 0: not given (effective_limits fills in the defaults).
+  JointLimits limits{};
+  /// Travel of X, Y, Z in machine coordinates (the machine-mode convention of CLI.md), mm:
+  /// [axes.X] min_mm/max_mm; unbounded where the file gives none.
+  struct LinearRange {
+    double min_mm = -std::numeric_limits<double>::infinity();
+    double max_mm = std::numeric_limits<double>::infinity();
+    bool contains(double v_mm) const { return v_mm >= min_mm && v_mm <= max_mm; }
+    bool bounded() const { return std::isfinite(min_mm) || std::isfinite(max_mm); }
+  };
+  std::array<LinearRange, 3> linear_range;
+  /// [checks]: the clearances the shank and holder keep from the part (mm), where the command
+  /// line gives none; empty: taxopt's defaults (JobOptions).
+  std::optional<double> shank_clearance_mm, holder_clearance_mm;
+  /// [holder]: the machine's usual holder (mm), used where the command line names none:
+  /// radius_mm, length_mm and the tool's gauge_length_mm (tip to holder face).
+  std::optional<double> holder_radius_mm, holder_length_mm, holder_gauge_length_mm;
+  GcodeSettings gcode;
+};
+
+/// X Y Z as the G-code writes the tip `tip_mm` at `pose`: the tip itself (tcp mode) or the
+/// machine's joints (machine mode, the convention of cli.md).
+inline Vec3d written_xyz_mm(const Machine& machine, const Vec3d& tip_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip_mm, pose) : tip_mm;
+}
+/// The tip that written X Y Z `xyz_mm` mean at `pose` (the inverse of written_xyz_mm).
+inline Vec3d tip_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz_mm, pose)
+                                                  : xyz_mm;
+}
+/// The machine's linear joints for written X Y Z at `pose`, whatever the mode.
+inline Vec3d joints_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
+  return machine.gcode.mode == GcodeMode::Machine ? xyz_mm : machine.ac.to_machine_mm(xyz_mm, pose);
+}
+
+/// Limits of a typical mid-size A/C trunnion machine, used where the machine file gives
+/// none: X Y Z 500 mm/s (30 m/min) and 3000 mm/s^2; A 150 deg/s (25 rpm) and 1000 deg/s^2;
+/// C 240 deg/s (40 rpm) and 1500 deg/s^2; no jerk limit.
+JointLimits default_joint_limits();
+
+/// The machine's limits where its file gives them, else default_joint_limits().
+JointLimits effective_limits(const Machine& machine);
+
+/// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
+Machine default_machine();
+
+}  // namespace taxopt

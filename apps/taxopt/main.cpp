@@ -342,7 +342,9 @@ int main(int argc, char** argv) {
   app.add_option("--gauge-length", a.gauge_length,
                  "tip to holder face, CL file units (default: max(flute length, 10 diameters))")
       ->group("Tool");
-  app.add_option("--grid", a.grid, "C-space cell size, deg: spacing of the key-axis candidates (2)")
+  app.add_option("--grid", a.grid,
+                 "C-space cell size, deg: spacing of the key-axis candidates and the global "
+                 "method's finest (2)")
       ->group("Method");
   app.add_option("--max-deviation", a.max_deviation,
                  "largest angle between an output axis and its input axis, deg (30)")

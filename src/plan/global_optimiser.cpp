@@ -508,18 +508,42 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
   } else {
     seq = best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous);
   }
-  std::vector<Posed> dp(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    dp[i] = cand[i][seq[i]];
-    if (i > 0 && machine.c.continuous) {
-      dp[i].c_rad = dp[i - 1].c_rad + wrap_pi(dp[i].c_rad - dp[i - 1].c_rad);
+  // The programme's sequence as poses with a continuous C, on the warm start's turn of C at
+  // the first point (the programme works modulo a turn).
+  const auto poses_of = [&](const std::vector<std::size_t>& chosen) {
+    std::vector<Posed> out(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      out[i] = cand[i][chosen[i]];
+      if (i > 0 && machine.c.continuous) {
+        out[i].c_rad = out[i - 1].c_rad + wrap_pi(out[i].c_rad - out[i - 1].c_rad);
+      }
     }
-  }
-  if (machine.c.continuous) {
-    // Keep the warm start's turn of C at the first point (the programme works modulo a turn).
-    const double shift = problem.warm_start[0].c_rad - dp[0].c_rad;
-    const double turns = std::round(shift / Constants<double>::two_pi());
-    for (Posed& p : dp) p.c_rad += turns * Constants<double>::two_pi();
+    if (machine.c.continuous) {
+      const double shift = problem.warm_start[0].c_rad - out[0].c_rad;
+      const double turns = std::round(shift / Constants<double>::two_pi());
+      for (Posed& p : out) p.c_rad += turns * Constants<double>::two_pi();
+    }
+    return out;
+  };
+  std::vector<Posed> dp = poses_of(seq);
+  plan.objective_pyramid = objective_of(dp);
+  if (!timed) plan.objective_dp = plan.objective_pyramid;
+  // (1b) The pyramid: caps around the answer at half the spacing, on its branch; a level is
+  // kept only when it lowers the objective.
+  if (!timed && options.fine_step_deg > 0.0) {
+    const double fine = deg_to_rad(std::max(options.fine_step_deg, 0.25));
+    for (double s = step / 2.0; s >= fine * (1.0 - 1e-9); s /= 2.0) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::vector<Vec3d> grid = cap_grid(machine.forward(dp[i]), 2.0 * s, s);
+        cand[i] = candidates_at(machine, i, dp[i], {}, grid, false, acceptable);
+        plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
+      }
+      std::vector<Posed> finer =
+          poses_of(best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous));
+      const double value = objective_of(finer);
+      ++plan.pyramid_levels;
+      if (value < plan.objective_pyramid) dp = std::move(finer), plan.objective_pyramid = value;
+    }
   }
 
   // (2) Continuous refinement from `plan.poses`, minimising `obj` at segment times `tt`; a step
@@ -596,7 +620,6 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
   if (!timed) {
     Value current = value_of(plan.poses, t, wj);
     const Value dp_full = value_of(dp, t, wj);
-    plan.objective_dp = scalar(dp_full, objective);
     if (less(dp_full, current, objective)) plan.poses = dp;
     plan.iterations = refine(t, objective, options.max_iterations, {});
     return finish();

@@ -199,6 +199,61 @@ TEST_CASE("global: warm-started from its own result it stays where it is or impr
   }
 }
 
+TEST_CASE(
+    "global: the pyramid's finer caps never make the programme's answer worse, stay in the "
+    "free space, and beside obstacles lower it",
+    "[plan][global][pyramid]") {
+  // Passes grazing the pole with a forbidden cone placed at random beside them: the coarse
+  // caps (15 deg) see the free space only in big steps.
+  const ACMachined m = default_ac_machine();
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int lowered = 0, trials = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    const std::vector<Vec3d> input = grazing_axes(3.0 + 4.0 * u(rng), 12.0, 1.5);
+    const Vec3d obstacle = Vec3d(0.3 * u(rng), 0.3 * u(rng), 1.0).normalized();
+    const double obstacle_rad = deg_to_rad(8.0 + 4.0 * u(rng));
+    const AxisTest free = [&](std::size_t i, const Vec3d& axis) {
+      return angle_between(axis, input[i]) <= deg_to_rad(30.0) + 1e-12 &&
+             angle_between(axis, obstacle) > obstacle_rad;
+    };
+    const std::size_t n = input.size();
+    std::vector<Vec3d> start = input;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (free(i, start[i])) continue;
+      const Vec3d away = (start[i] - obstacle).normalized();
+      start[i] = (obstacle + std::tan(obstacle_rad + deg_to_rad(1.0)) * away).normalized();
+    }
+    bool feasible = true;
+    for (std::size_t i = 0; i < n; ++i) feasible = feasible && free(i, start[i]);
+    if (!feasible) continue;
+    std::vector<bool> rapid_into(n, false);
+    rapid_into[0] = true;
+    GlobalPassProblem problem;
+    problem.input_axes = input;
+    problem.warm_start = plan_poses(m, start, rapid_into).poses;
+    problem.segment_time_s.assign(n - 1, 0.05);
+    GlobalOptions coarse;
+    coarse.fine_step_deg = 0.0;
+    GlobalOptions fine;
+    fine.fine_step_deg = 2.0;
+    const GlobalPassPlan a = plan_pass_global(m, problem, free, coarse);
+    const GlobalPassPlan b = plan_pass_global(m, problem, free, fine);
+    INFO("trial " << trial << ": coarse programme " << b.objective_dp << ", pyramid "
+                  << b.objective_pyramid << ", after refinement " << a.objective << " / "
+                  << b.objective);
+    CHECK(a.pyramid_levels == 0);
+    CHECK(b.pyramid_levels == 2);  // 7.5 and 3.75 deg; 1.875 is below the 2 deg asked
+    CHECK(b.objective_dp == Approx(a.objective_dp));
+    CHECK(b.objective_pyramid <= b.objective_dp);
+    for (std::size_t i = 0; i < n; ++i) REQUIRE(free(i, b.axes[i]));
+    ++trials;
+    lowered += b.objective_pyramid < 0.9 * b.objective_dp;
+  }
+  CHECK(trials >= 6);
+  CHECK(lowered >= 2);  // beside some obstacles the finer caps find a much smoother way
+}
+
 namespace {
 
 /// The time objective's surrogate written out on its own (docs/global-method.md): per segment

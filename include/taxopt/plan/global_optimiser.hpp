@@ -20,8 +20,11 @@
 /// branch). Since a_i couples three points, the states are pairs of consecutive candidates:
 /// O(n K^3), exact over the candidates (ties to the earlier candidate, so deterministic).
 /// This settles the basin: branch, passing through the pole (A changes sign, C holds) or
-/// around it (C turns), where the pass turns. (2) Continuous refinement in (A, C): J is a
-/// convex quadratic, J = x^T H x with H = M^T W M pentadiagonal (M the second difference of
+/// around it (C turns), where the pass turns. (1b) The pyramid: the programme again over caps
+/// around its own answer at half the spacing, level after level down to `fine_step_deg` (the
+/// C-space cell size), each level exact over its candidates and never worse than the last
+/// (the previous answer is every point's first candidate). (2) Continuous refinement in (A, C): J
+/// is a convex quadratic, J = x^T H x with H = M^T W M pentadiagonal (M the second difference of
 /// the times above); each step solves (H + lambda diag(H)) dx = -H x (Eigen sparse LDLT, O(n))
 /// and moves every point as far along dx as its constraint allows (halving, at most
 /// `bisection_steps` times, else it stays); the step is kept only when the objective falls,
@@ -56,6 +59,12 @@ struct GlobalOptions {
   double max_deviation_deg = 30.0;
   /// Spacing of the programme's candidate axes, deg.
   double candidate_step_deg = 15.0;
+  /// The pyramid (sum-squares and peak objectives): the programme runs again over caps around
+  /// its own answer at half the spacing each time (a cap of radius twice the spacing, so it
+  /// covers the gap between the coarser candidates), down to this spacing, deg (run_job: the
+  /// C-space cell size, --grid); 0: the coarse programme alone. Each level keeps the previous
+  /// answer when it finds nothing better, so it never makes the pass worse.
+  double fine_step_deg = 2.0;
   /// Refinement: largest number of accepted steps, and of halvings of a point's step.
   int max_iterations = 40;
   int bisection_steps = 4;
@@ -90,6 +99,9 @@ struct GlobalPassPlan {
   double objective_warm = 0.0, objective_dp = 0.0, objective = 0.0;
   /// Largest number of candidates of a point, and refinement steps accepted.
   std::size_t max_candidates = 0;
+  /// Levels of the pyramid run, and the objective after them (before the refinement).
+  int pyramid_levels = 0;
+  double objective_pyramid = 0.0;
   int iterations = 0;
 };
 

@@ -74,6 +74,19 @@ BesideObstacle beside_obstacle(double offset_deg, double half_mm) {
   return c;
 }
 
+/// A pass problem: the input axes, the machine's poses of `start` as the warm start (the pass
+/// entered by a rapid), every segment `segment_s` long.
+GlobalPassProblem pass_problem(const ACMachined& m, const std::vector<Vec3d>& input,
+                               const std::vector<Vec3d>& start, double segment_s) {
+  std::vector<bool> rapid_into(input.size(), false);
+  rapid_into[0] = true;
+  GlobalPassProblem problem;
+  problem.input_axes = input;
+  problem.warm_start = plan_poses(m, start, rapid_into).poses;
+  problem.segment_time_s.assign(input.size() - 1, segment_s);
+  return problem;
+}
+
 }  // namespace
 
 TEST_CASE("global: the programme finds the best sequence of candidates, as enumeration does",
@@ -178,12 +191,7 @@ TEST_CASE("global: warm-started from its own result it stays where it is or impr
   const AxisTest cone = [&](std::size_t i, const Vec3d& axis) {
     return angle_between(axis, input[i]) <= deg_to_rad(20.0) + 1e-12;
   };
-  std::vector<bool> rapid_into(n, false);
-  rapid_into[0] = true;
-  GlobalPassProblem problem;
-  problem.input_axes = input;
-  problem.warm_start = plan_poses(m, input, rapid_into).poses;
-  problem.segment_time_s.assign(n - 1, 0.03);
+  GlobalPassProblem problem = pass_problem(m, input, input, 0.03);
   GlobalOptions options;
   options.max_deviation_deg = 20.0;
   const GlobalPassPlan first = plan_pass_global(m, problem, cone, options);
@@ -227,12 +235,7 @@ TEST_CASE(
     bool feasible = true;
     for (std::size_t i = 0; i < n; ++i) feasible = feasible && free(i, start[i]);
     if (!feasible) continue;
-    std::vector<bool> rapid_into(n, false);
-    rapid_into[0] = true;
-    GlobalPassProblem problem;
-    problem.input_axes = input;
-    problem.warm_start = plan_poses(m, start, rapid_into).poses;
-    problem.segment_time_s.assign(n - 1, 0.05);
+    const GlobalPassProblem problem = pass_problem(m, input, start, 0.05);
     GlobalOptions coarse;
     coarse.fine_step_deg = 0.0;
     GlobalOptions fine;
@@ -452,12 +455,7 @@ TEST_CASE(
     const std::vector<Vec3d>& start = c.start;
     const AxisTest& free = c.free;
     const std::size_t n = input.size();
-    std::vector<bool> rapid_into(n, false);
-    rapid_into[0] = true;
-    GlobalPassProblem problem;
-    problem.input_axes = input;
-    problem.warm_start = plan_poses(m, start, rapid_into).poses;
-    problem.segment_time_s.assign(n - 1, 0.5 / (1000.0 / 60.0));
+    GlobalPassProblem problem = pass_problem(m, input, start, 0.5 / (1000.0 / 60.0));
     problem.programmed_time_s = problem.segment_time_s;
     problem.joints_at = made_up_joints;
     problem.limits = lim;

@@ -16,6 +16,7 @@
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/job.hpp"
+#include "taxopt/plan/slerp.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -280,16 +281,6 @@ TEST_CASE(
 
 namespace {
 
-/// Unit vector of `v`.
-Vec3d unit(const Vec3d& v) { return v.normalized(); }
-
-/// Axes turned from a to b by the fraction t on their great circle.
-Vec3d great_circle(const Vec3d& a, const Vec3d& b, double t) {
-  const double th = std::acos(std::clamp(a.dot(b), -1.0, 1.0));
-  if (th < 1e-12) return a;
-  return unit((std::sin((1.0 - t) * th) * a + std::sin(t * th) * b) / std::sin(th));
-}
-
 /// One pass of a real 5-axis finish's two troubles (the NX program of issue 20): the tool
 /// nearly horizontal (tilt `tilt_deg`) turning by 90 deg round a tight fillet over `fillet_mm`
 /// -- C turning fast, which no axis in a 1 deg cone can slow much -- then the axis brought up
@@ -305,10 +296,10 @@ std::string fillet_and_flips_cl(double tilt_deg, double fillet_mm, double offset
         {s, Vec3d(std::sin(tilt) * std::cos(phi), std::sin(tilt) * std::sin(phi), std::cos(tilt))});
   }
   const auto graze = [&](double tilt_y_deg, double off_deg) {
-    return unit(Vec3d(std::tan(deg_to_rad(tilt_y_deg)), std::tan(deg_to_rad(off_deg)), 1.0));
+    return Vec3d(std::tan(deg_to_rad(tilt_y_deg)), std::tan(deg_to_rad(off_deg)), 1.0).normalized();
   };
   const Vec3d from = pts.back().second, to = graze(-10.0, offset_deg);
-  for (int k = 1; k <= 20; ++k) pts.push_back({10.0 + k * step, great_circle(from, to, k / 20.0)});
+  for (int k = 1; k <= 20; ++k) pts.push_back({10.0 + k * step, slerp(from, to, k / 20.0)});
   for (int k = 1; k <= 40; ++k)
     pts.push_back({20.0 + k * step, graze(-10.0 + k * step, offset_deg)});
   for (int k = 1; k <= 40; ++k)

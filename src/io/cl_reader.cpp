@@ -585,8 +585,17 @@ class Reader {
   /// Decides the sense of every arc (the file's convention, checked against the tangents of
   /// the straight moves beside each arc) and inserts their chords.
   void expand_arcs() {
-    if (arcs_.empty()) return;
     auto& rd = tp_.reading;
+    if (arcs_.empty()) {
+      // No arc to decide: the report still names the sense the file's arcs would have had.
+      if (options_.arc_direction != ArcDirection::Auto) {
+        rd.arc_convention = options_.arc_direction;
+        rd.arc_convention_source = "option";
+      } else if (documented_arc_direction(rd.dialect) != ArcDirection::Auto) {
+        rd.arc_convention = documented_arc_direction(rd.dialect);
+      }
+      return;
+    }
     rd.arcs = static_cast<int>(arcs_.size());
     // Which points end or start an arc: the moves into / out of them are not straight.
     std::vector<std::set<std::size_t>> ends(tp_.operations.size()), starts(ends.size());

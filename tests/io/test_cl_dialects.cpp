@@ -143,13 +143,18 @@ TEST_CASE("cl arcs: the real files' arcs read in their CAM system's sense", "[io
                           Expect{"creopost-profilfraesen.ncl", ClDialect::Creo,
                                  ArcDirection::CounterClockwise, 20, 0},
                           Expect{"peening-catia-multax.aptsource", ClDialect::Catia,
+                                 ArcDirection::CounterClockwise, 0, 0},
+                          // No arc: the report still names the CAM system's sense.
+                          Expect{"mech491-variable-axis-ballmill.cls", ClDialect::SiemensNx,
+                                 ArcDirection::Clockwise, 0, 0},
+                          Expect{"amorim-tilt-support1.apt", ClDialect::SolidworksCam,
                                  ArcDirection::CounterClockwise, 0, 0}}) {
     INFO(e.file);
     const Toolpath tp = read_cl_file(real_data(e.file));
     CHECK(tp.reading.dialect == e.dialect);
     CHECK(tp.reading.arcs == e.arcs);
     CHECK(tp.reading.arcs_reversed == e.reversed);
-    if (e.arcs > 0) CHECK(tp.reading.arc_convention == e.sense);
+    CHECK(tp.reading.arc_convention == e.sense);
     CHECK(tp.reading.arcs_contradicting == e.reversed);
   }
 }

@@ -3,19 +3,92 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "pipeline/stages.hpp"
 #include "taxopt/core/error.hpp"
+#include "taxopt/geometry/part.hpp"
 
 namespace taxopt {
 
-TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units) {
+namespace {
+
+/// The CL points posted as written lie in the MCS their MSYS names (NX's convention). A mesh
+/// exported in the same MCS fits them as it is; one exported in absolute coordinates must be
+/// moved into the MCS. The evidence is where the ball touches the mesh: the share of sampled
+/// feed points whose ball centre lies one radius from the mesh, in either frame.
+TriangleMesh mesh_in_declared_frame(const Toolpath& toolpath, TriangleMesh mesh, std::string* note,
+                                    std::optional<double> ball_radius_mm) {
+  const ClFrame& f = toolpath.declared_frames.front();
+  bool one_frame = true;
+  for (const ClFrame& g : toolpath.declared_frames) {
+    one_frame = one_frame && (g.rotation - f.rotation).cwiseAbs().maxCoeff() <= 1e-9 &&
+                (g.origin_mm - f.origin_mm).norm() <= 1e-9;
+  }
+  double radius = ball_radius_mm.value_or(0.0);
+  std::vector<const CLPointd*> feed;
+  for (const Operationd& op : toolpath.operations) {
+    if (!(radius > 0.0) && op.tool.is_ball()) radius = op.tool.ball_radius_mm();
+    for (const CLPointd& p : op.points) {
+      if (p.motion == Motion::Feed) feed.push_back(&p);
+    }
+  }
+  if (!(radius > 0.0) || feed.empty() || !one_frame) {
+    if (note) {
+      *note =
+          "the part mesh is taken in the coordinates the CL points are posted in (the MCS "
+          "the file's MSYS names); " +
+          std::string(!one_frame ? "its MSYS records name different frames"
+                                 : "no ball radius or feed move to judge the frame by");
+    }
+    return mesh;
+  }
+  TriangleMesh moved = mesh;
+  for (Vec3d& v : moved.vertices) v = f.rotation.transpose() * (v - f.origin_mm);
+  const std::size_t samples = std::min<std::size_t>(feed.size(), 400);
+  const double tolerance_mm = std::max(0.05, 0.01 * radius);
+  const auto touching = [&](const TriangleMesh& m) {
+    const Part part(m);
+    int n = 0;
+    for (std::size_t k = 0; k < samples; ++k) {
+      const CLPointd& p = *feed[k * feed.size() / samples];
+      const Vec3d centre = p.tip_mm + radius * p.axis;
+      n += std::abs(part.closest(centre).distance_mm - radius) <= tolerance_mm;
+    }
+    return static_cast<double>(n) / static_cast<double>(samples);
+  };
+  const double as_is = touching(mesh), in_mcs = touching(moved);
+  std::ostringstream os;
+  os.precision(3);
+  os << "the ball touches the part mesh at " << 100.0 * as_is << " % of " << samples
+     << " sampled feed points as the mesh is, and at " << 100.0 * in_mcs
+     << " % moved into the MCS of the MSYS at line " << f.line;
+  if (std::max(as_is, in_mcs) < 0.25) {
+    throw InputError(toolpath.source + ": " + os.str() +
+                     ": the mesh fits the CL points in neither frame (is it the part of this "
+                     "file, in its units?)");
+  }
+  if (note) {
+    *note = os.str() + (in_mcs > as_is ? ": the mesh is taken as absolute and moved into the MCS"
+                                       : ": the mesh is taken as it is, in the MCS");
+  }
+  return in_mcs > as_is ? moved : mesh;
+}
+
+}  // namespace
+
+TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units,
+                           std::string* note, std::optional<double> ball_radius_mm) {
   const double scale = mm_per_unit(mesh_units);
   for (Vec3d& v : mesh.vertices) {
     if (!v.allFinite()) throw InputError("the part mesh has a vertex that is not a number");
     v *= scale;
   }
-  if (toolpath.frames.empty()) return mesh;
+  if (toolpath.frames.empty()) {
+    return toolpath.declared_frames.empty()
+               ? mesh
+               : mesh_in_declared_frame(toolpath, std::move(mesh), note, ball_radius_mm);
+  }
   const ClFrame& f = toolpath.frames.front();
   for (const ClFrame& g : toolpath.frames) {
     if ((g.rotation - f.rotation).cwiseAbs().maxCoeff() > 1e-9 ||

@@ -51,6 +51,49 @@ std::string real_data(const std::string& name) {
   return std::string(TAXOPT_TEST_DATA) + "/real/" + name;
 }
 
+std::vector<std::string> real_skips(const std::string& name) {
+  if (name.rfind("amorim-", 0) == 0) return {"INSERT", "CUTCOM"};
+  if (name.rfind("peening-", 0) == 0) {
+    return {"TOOLNO", "SATUTEST", "RECIPE",  "AIR",     "GLASS",   "FEEDOVER",
+            "SAVERE", "STANDOFF", "SUBPROG", "SURFACE", "INITIAL", "REWIND"};
+  }
+  return {};
+}
+
+std::string real_flags(const std::string& name) {
+  std::string out;
+  for (const auto& w : real_skips(name)) out += " --skip-record " + w;
+  return out;
+}
+
+std::string real_text(const std::string& name) {
+  std::string text = read_file(real_data(name));
+  if (name.rfind("peening-", 0) != 0) return text;
+  std::string out;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    end = end == std::string::npos ? text.size() : end + 1;
+    const std::string line = text.substr(start, end - start);
+    // Line numbers stay: the record becomes a comment.
+    out += line.rfind("SPINDLE/", 0) == 0 ? "$$ " + line : line;
+    start = end;
+  }
+  return out;
+}
+
+std::string real_path(const std::string& name, const std::string& dir) {
+  if (name.rfind("peening-", 0) != 0) return real_data(name);
+  const std::string path = dir + "/" + name;
+  write_file(path, real_text(name));
+  return path;
+}
+
+Toolpath read_real(const std::string& name, ClReadOptions options) {
+  for (const auto& w : real_skips(name)) options.skip_records.insert(w);
+  return parse_cl(real_text(name), real_data(name), options);
+}
+
 RunResult run(const std::string& command) {
   TempDir tmp;
   const std::string out = tmp.path("out"), err = tmp.path("err");

@@ -10,6 +10,7 @@
 
 #include "taxopt/core/types.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
+#include "taxopt/io/cl_file.hpp"
 
 namespace taxopt::test {
 
@@ -31,6 +32,21 @@ std::string read_file(const std::string& path);
 void write_file(const std::string& path, const std::string& content);
 bool file_exists(const std::string& path);
 std::string real_data(const std::string& name);
+
+/// The records a user must skip by name to post a real file (docs/cl-files.md, "The real
+/// files"): the SOLIDWORKS CAM files' INSERT (tool-holder text) and CUTCOM/LEFT; the words of
+/// the shot-peening machine in the CATIA file.
+std::vector<std::string> real_skips(const std::string& name);
+/// The same as CLI flags (" --skip-record W ...").
+std::string real_flags(const std::string& name);
+/// The real file's text; in the peening file its SPINDLE/CLW20 records made comments (a state
+/// taxopt refuses by name: the file as it is cannot be posted), so that its CATIA traps can be
+/// read.
+std::string real_text(const std::string& name);
+/// The path of a copy of real_text in `dir` (the file itself where nothing was taken out).
+std::string real_path(const std::string& name, const std::string& dir);
+/// A real file read as a user who decided its real_skips reads it (real_text).
+Toolpath read_real(const std::string& name, ClReadOptions options = {});
 
 /// Result of a command: exit code, stdout and stderr.
 struct RunResult {

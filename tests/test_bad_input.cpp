@@ -262,7 +262,8 @@ TEST_CASE(
       INFO(f << " --method " << method);
       // mech491-project2-multiop.cls turns its tool over within a pass: the paper method threw
       // "slerp: opposite axes" on it before.
-      const auto r = run_taxopt("--in " + real_data(f) + " --gcode " + t.path("o.nc") +
+      const auto r = run_taxopt("--in " + taxopt::test::real_path(f, t.dir()) +
+                                taxopt::test::real_flags(f) + " --gcode " + t.path("o.nc") +
                                 " --report " + t.path("r.json") + " --method " + method);
       REQUIRE(r.code == 0);
       CHECK_THAT(r.err, Catch::StartsWith("taxopt: warning: NOT CHECKED: no part (--part)"));

@@ -190,12 +190,13 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
     fields >> f >> motion_records >> circles >> path_mm;
     INFO(f);
     ++files;
-    const Toolpath tp = read_cl_file(real_data(f));
+    const Toolpath tp = taxopt::test::read_real(f);
     CHECK(tp.reading.motion_records == motion_records);
     CHECK(tp.reading.arcs == circles);
     TempDir dir;
     const RunResult r =
-        run_taxopt("--in " + real_data(f) + " --gcode " + dir.path("o.ngc") + " --method none -q");
+        run_taxopt("--in " + taxopt::test::real_path(f, dir.dir()) + taxopt::test::real_flags(f) +
+                   " --gcode " + dir.path("o.ngc") + " --method none -q");
     INFO(r.err);
     REQUIRE(r.code == 0);
     std::vector<CanonMove> moves;

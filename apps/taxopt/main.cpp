@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -37,7 +38,8 @@ struct Args {
   std::string objective = "sum-squares";
   std::optional<double> jerk_weight;
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
-  std::string arc_direction = "auto", msys = "apply";
+  std::string arc_direction = "auto", msys = "ignore";
+  std::vector<std::string> skip_records;
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   std::optional<double> shank_clearance_mm, holder_clearance_mm, part_tolerance;
   int threads = 0;
@@ -292,9 +294,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "cw", "ccw"}))
       ->group("Input");
   app.add_option("--msys", a.msys,
-                 "NX MSYS frames: apply (post in the MCS) | ignore (post the coordinates as "
-                 "written)")
+                 "NX MSYS frames: ignore (default: post the coordinates as written, as NX's "
+                 "own posts do) | apply (the coordinates are absolute: move them into the MCS)")
       ->check(CLI::IsMember({"apply", "ignore"}))
+      ->group("Input");
+  app.add_option("--skip-record", a.skip_records,
+                 "skip every CL record with this major word (repeatable): a word taxopt does "
+                 "not know, or one docs/cl-files.md marks skippable")
       ->group("Input");
   app.add_option("--tool-radius", a.tool_radius,
                  "ball radius, CL file units (default: TLDATA/CUTTER)")
@@ -397,7 +403,8 @@ int main(int argc, char** argv) {
                                                     {"--units", "in|mm"},
                                                     {"--units-out", "in|mm"},
                                                     {"--arc-direction", "auto|cw|ccw"},
-                                                    {"--msys", "apply|ignore"},
+                                                    {"--msys", "ignore|apply"},
+                                                    {"--skip-record", "WORD"},
                                                     {"--tool-radius", "LENGTH"},
                                                     {"--part", "FILE"},
                                                     {"--contact-tolerance", "MM"},
@@ -554,6 +561,10 @@ int main(int argc, char** argv) {
                                  : a.arc_direction == "ccw" ? taxopt::ArcDirection::CounterClockwise
                                                             : taxopt::ArcDirection::Auto;
     read_options.apply_msys = a.msys == "apply";
+    for (std::string w : a.skip_records) {
+      for (auto& ch : w) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      read_options.skip_records.insert(w);
+    }
     taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
 
     if (a.tool_radius && !(*a.tool_radius > 0.0)) {
@@ -562,7 +573,12 @@ int main(int argc, char** argv) {
     // The part is in the CL file's units and coordinates (docs/cli.md).
     std::optional<taxopt::Part> part;
     if (!a.part.empty()) {
-      part.emplace(taxopt::part_mesh_for(toolpath, taxopt::read_mesh_file(a.part), toolpath.units));
+      std::string frame_note;
+      std::optional<double> radius_mm;
+      if (a.tool_radius) radius_mm = *a.tool_radius * taxopt::mm_per_unit(toolpath.units);
+      part.emplace(taxopt::part_mesh_for(toolpath, taxopt::read_mesh_file(a.part), toolpath.units,
+                                         &frame_note, radius_mm));
+      if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
     }
     taxopt::JobOptions options;
     if (part) options.part = &*part;
@@ -647,6 +663,12 @@ int main(int argc, char** argv) {
           std::cerr << "taxopt: note: " << count << " " << word
                     << " record(s) skipped (no motion), kept for --out-cls\n";
         }
+      }
+      // Records skipped by --skip-record are said even with -q: the user decided, the
+      // program lacks them.
+      for (const auto& [word, count] : toolpath.skipped_by_option) {
+        std::cerr << "taxopt: note: " << count << " " << word
+                  << " record(s) skipped as asked (--skip-record " << word << ")\n";
       }
     }
     if (!result.ok() && !a.force) {

@@ -302,9 +302,15 @@ struct JobResult {
 /// posts the points in. `mesh` is in `mesh_units` and in the CL file's own coordinates: an
 /// inch CL file's part may be in inches (the CLI's convention: the CL file's units) or in mm;
 /// where the reader moved the points into an MSYS frame (ClReadOptions::apply_msys), the mesh
-/// moves with them. @throws InputError when the file's applied MSYS records name different
-/// frames (one mesh cannot be in all of them) or a vertex is not finite.
-TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units);
+/// moves with them. Where the points are posted as written in the MCS an MSYS names (the
+/// default), the mesh may be in that MCS or in absolute coordinates: the frame in which the
+/// ball (of `ball_radius_mm`, else the file's ball-end tool) touches the mesh at more of the
+/// sampled feed points is taken, and `note` says which and why. @throws InputError when the
+/// file's applied MSYS records name different frames (one mesh cannot be in all of them), when
+/// the mesh fits the points in neither frame, or when a vertex is not finite.
+TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units,
+                           std::string* note = nullptr,
+                           std::optional<double> ball_radius_mm = std::nullopt);
 
 /// Tool dimensions as a user gives them, in one length unit (the CLI: the CL file's).
 struct ToolDimensions {

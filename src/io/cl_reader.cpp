@@ -12,6 +12,7 @@
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/cl_words.hpp"
 #include "util/text.hpp"
 
 namespace taxopt {
@@ -83,16 +84,6 @@ struct LogicalLine {
   RecordKind kind = RecordKind::Record;
 };
 
-const std::set<std::string>& known_words() {
-  static const std::set<std::string> words = {
-      "GOTO",   "FROM",   "RAPID",   "FEDRAT",    "TLDATA",      "CUTTER", "LOADTL", "LOAD",
-      "MULTAX", "SPINDL", "SPINDLE", "TOOL PATH", "END-OF-PATH", "PAINT",  "MSYS",   "FINI",
-      "NURBS",  "KNOT",   "CNTRL",   "GODLTA",    "GOHOME",      "UNITS",  "UNIT",   "CIRCLE",
-      "PARTNO", "SELECT", "END",     "COOLNT",    "CUTCOM",      "INSERT", "PPRINT", "CSYS",
-      "TRNTYP", "CYCLE",  "STOP",    "MACHIN",    "TPRINT"};
-  return words;
-}
-
 /// Major word of a record line, or "" when the line is no record.
 std::string major_word(const std::string& code, std::string& args) {
   const std::size_t slash = code.find('/');
@@ -127,7 +118,7 @@ std::string major_word(const std::string& code, std::string& args) {
   const std::string up = upper(folded);
   // APT words are upper case; a mixed-case head is only accepted for words we know
   // (listing headers such as "Tool Path Listing has 388 lines." are no records).
-  if (folded != up && !known_words().count(up)) return "";
+  if (folded != up && !find_cl_word(up)) return "";
   if (slash == std::string::npos && up.find(' ') != std::string::npos) return "";
   return up;
 }
@@ -138,28 +129,30 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
   line_end = "\n";
   bool saw_crlf = false;
   std::size_t start = 0;
+  bool saw_lf = false, saw_cr = false;
+  // Any of CR, LF and CRLF ends a line (a file may mix them).
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (text[i] == '\0') {
       const int line = static_cast<int>(physical.size()) + 1;
       throw InputError(source, line, "binary data (NUL byte): not a CL text file");
     }
-    if (text[i] == '\n') {
-      std::size_t e = i;
-      if (e > start && text[e - 1] == '\r') {
-        --e;
+    if (text[i] == '\n' || text[i] == '\r') {
+      physical.push_back(text.substr(start, i - start));
+      if (text[i] == '\r' && i + 1 < text.size() && text[i + 1] == '\n') {
+        ++i;
         saw_crlf = true;
+      } else if (text[i] == '\r') {
+        saw_cr = true;
+      } else {
+        saw_lf = true;
       }
-      physical.push_back(text.substr(start, e - start));
       start = i + 1;
     }
   }
   final_line_end = start == text.size();
-  if (start < text.size()) {
-    std::string last = text.substr(start);
-    if (!last.empty() && last.back() == '\r') last.pop_back();
-    physical.push_back(last);
-  }
-  if (saw_crlf) line_end = "\r\n";
+  if (start < text.size()) physical.push_back(text.substr(start));
+  if (saw_crlf && !saw_lf) line_end = "\r\n";
+  if (saw_cr && !saw_lf && !saw_crlf) line_end = "\r";
 
   std::vector<LogicalLine> out;
   std::size_t i = 0;
@@ -215,17 +208,6 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
     ++i;
   }
   return out;
-}
-
-/// Words that bear motion but that taxopt does not interpret: a file with one stops (exit 2),
-/// since skipping it would post a program that does not move as the CAM system meant.
-const std::set<std::string>& uninterpreted_motion_words() {
-  static const std::set<std::string> words = {
-      "DEFSUB", "ENDSUB", "CALL",   "COPY",   "INDEX",  "ROTATE", "ROTABL", "TLAXIS",
-      "TRANS",  "ORIGIN", "REFSYS", "MIRROR", "GOFWD",  "GOLFT",  "GORGT",  "GOBACK",
-      "GOUP",   "GODOWN", "GO",     "INDIRV", "INDIRP", "PSIS",   "TLON",   "TLLFT",
-      "TLRGT",  "TLOFPS", "AUTOPS", "THICK",  "ARC",    "SPLINE", "BSPLIN", "POLYLN"};
-  return words;
 }
 
 /// The lines NX's listing window puts around a CLSF: "Information listing created by<TAB>...",
@@ -311,6 +293,10 @@ struct PendingArc {
   int evidence = 0;
   bool strong = false;
   bool clockwise = false;
+  /// MOVARC (Fusion / HSM): counter-clockwise about `axis` through `declared_sweep_rad`, as
+  /// written; it takes no part in deciding the CIRCLE sense.
+  bool movarc = false;
+  double declared_sweep_rad = 0.0;
 };
 
 struct CircleRecord {
@@ -319,6 +305,8 @@ struct CircleRecord {
   int turns = 1;
   int record = -1;
   int line = 0;
+  bool movarc = false;
+  double declared_sweep_rad = 0.0;
 };
 
 /// NX NURBS/ + KNOT/ + CNTRL/ records being collected.
@@ -361,6 +349,16 @@ class Reader {
 
   Toolpath run(const std::string& input) {
     tp_.source = source_;
+    for (const std::string& w : options_.skip_records) {
+      const ClWord* word = find_cl_word(w);
+      if (w.empty() || w != upper(w)) {
+        throw InputError("--skip-record '" + w + "': a record word in upper case");
+      }
+      if (word && !word->skippable) {
+        throw InputError("--skip-record " + w + ": a " + to_string(word->meaning) + " word (" +
+                         word->what + "); skipping it would change the motion");
+      }
+    }
     std::string text = input;
     if (text.rfind("\xEF\xBB\xBF", 0) == 0) {
       text.erase(0, 3);
@@ -384,6 +382,13 @@ class Reader {
     // Drop operations that received no point (a TOOL PATH block with no motion).
     std::vector<Operationd> kept;
     for (auto& op : tp_.operations) {
+      for (const ProgramEvent& e : op.events) {
+        if (op.points.empty() &&
+            (e.kind == ProgramEvent::Kind::Stop || e.kind == ProgramEvent::Kind::OptionalStop ||
+             e.kind == ProgramEvent::Kind::Dwell)) {
+          fail(e.line, "a stop or dwell in an operation without motion: not posted");
+        }
+      }
       if (!op.points.empty()) kept.push_back(std::move(op));
     }
     tp_.operations = std::move(kept);
@@ -403,35 +408,77 @@ class Reader {
     tp_.notices.push_back(format_location(source_, line, what));
   }
 
+  /// The file's length unit (docs/cl-files.md, "Units"): --units, else the first UNITS/UNIT
+  /// record, else inches when a feed is IPM/IPR, else mm. A change of unit is refused; feed
+  /// words and --units that contradict the file's unit are said (not behind -v).
   void determine_units(const std::vector<LogicalLine>& lines) {
-    if (options_.units) {
-      tp_.units = *options_.units;
-      return;
-    }
-    bool inch_feed = false;
+    std::optional<LengthUnit> declared;
+    int declared_line = 0, motion_line = 0, inch_feed_line = 0, mm_feed_line = 0;
     for (const auto& ll : lines) {
       if (ll.kind != RecordKind::Record) continue;
       std::string args;
       const std::string major = major_word(ll.code, args);
+      const ClWord* w = find_cl_word(major);
+      if (w && w->meaning == ClWordMeaning::Motion && motion_line == 0) motion_line = ll.line;
       if (major == "UNITS" || major == "UNIT") {
-        const std::string a = upper(trim(split_args(args).empty() ? "" : split_args(args)[0]));
-        if (a == "INCHES" || a == "INCH" || a == "IN") {
-          tp_.units = LengthUnit::Inch;
-        } else if (a == "MM" || a == "MILLIMETERS" || a == "MILLIMETRES" || a == "METRIC") {
-          tp_.units = LengthUnit::Millimetre;
-        } else {
+        const auto fields = split_args(args);
+        const std::string a = upper(fields.empty() ? std::string() : fields[0]);
+        LengthUnit u = LengthUnit::Millimetre;
+        if (fields.size() == 1 && (a == "INCHES" || a == "INCH" || a == "IN")) {
+          u = LengthUnit::Inch;
+        } else if (fields.size() != 1 ||
+                   !(a == "MM" || a == "MILLIMETERS" || a == "MILLIMETRES" || a == "METRIC")) {
           fail(ll.line, major + " expects INCHES or MM, got '" + trim(args) + "'");
         }
-        return;
-      }
-      if (major == "FEDRAT") {
-        for (const auto& a : split_args(args)) {
-          const std::string u = upper(a);
-          if (u == "IPM" || u == "IPR") inch_feed = true;
+        if (declared && *declared != u) {
+          fail(ll.line, major + "/" + a + " contradicts the " + to_string(*declared) + " of line " +
+                            std::to_string(declared_line) +
+                            (motion_line && motion_line < ll.line
+                                 ? " after motion (line " + std::to_string(motion_line) + ")"
+                                 : std::string()) +
+                            ": a change of units inside a file is not interpreted");
+        }
+        if (!declared) {
+          declared = u;
+          declared_line = ll.line;
         }
       }
+      if (major == "FEDRAT") {
+        int inch = 0, mm = 0;
+        for (const auto& a : split_args(args)) {
+          const std::string u = upper(a);
+          inch += u == "IPM" || u == "IPR";
+          mm += u == "MMPM" || u == "MMPR";
+        }
+        if (inch && mm) {
+          fail(ll.line, "FEDRAT/" + trim(args) + ": both an inch and a millimetre feed word");
+        }
+        if (inch && !inch_feed_line) inch_feed_line = ll.line;
+        if (mm && !mm_feed_line) mm_feed_line = ll.line;
+      }
     }
-    tp_.units = inch_feed ? LengthUnit::Inch : LengthUnit::Millimetre;
+    const LengthUnit from_file =
+        declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
+    tp_.units = options_.units ? *options_.units : from_file;
+    const char* name = to_string(tp_.units);
+    if (options_.units && declared && *declared != *options_.units) {
+      notice(declared_line, std::string("--units ") + name + " read the file in " + name +
+                                " though it says " + to_string(*declared) + " here");
+    } else if (options_.units && !declared && inch_feed_line &&
+               *options_.units != LengthUnit::Inch) {
+      notice(inch_feed_line, std::string("--units ") + name + " read the file in " + name +
+                                 " though its feeds are in inches (IPM/IPR) from here");
+    }
+    if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
+      notice(inch_feed_line,
+             "a feed in inches (IPM/IPR) in a file read in millimetres: the "
+             "feed is taken as its word says, the coordinates in mm");
+    }
+    if (tp_.units == LengthUnit::Inch && mm_feed_line) {
+      notice(mm_feed_line,
+             "a feed in millimetres (MMPM/MMPR) in a file read in inches: the feed "
+             "is taken as its word says, the coordinates in inches");
+    }
   }
 
   std::vector<double> numbers(const std::vector<std::string>& args, std::size_t from,
@@ -455,6 +502,7 @@ class Reader {
       op.tool = tool_;
       op.spindle_rpm = spindle_rpm_;
       op.spindle_clockwise = spindle_cw_;
+      op.coolant = coolant_;
       tp_.operations.push_back(op);
       op_ = static_cast<int>(tp_.operations.size()) - 1;
       pending_name_.clear();
@@ -586,24 +634,13 @@ class Reader {
   /// the straight moves beside each arc) and inserts their chords.
   void expand_arcs() {
     auto& rd = tp_.reading;
-    if (arcs_.empty()) {
-      // No arc to decide: the report still names the sense the file's arcs would have had.
-      if (options_.arc_direction != ArcDirection::Auto) {
-        rd.arc_convention = options_.arc_direction;
-        rd.arc_convention_source = "option";
-      } else if (documented_arc_direction(rd.dialect) != ArcDirection::Auto) {
-        rd.arc_convention = documented_arc_direction(rd.dialect);
-      }
-      return;
-    }
-    rd.arcs = static_cast<int>(arcs_.size());
     // Which points end or start an arc: the moves into / out of them are not straight.
     std::vector<std::set<std::size_t>> ends(tp_.operations.size()), starts(ends.size());
     for (const auto& a : arcs_) {
       starts[static_cast<std::size_t>(a.op)].insert(a.start);
       ends[static_cast<std::size_t>(a.op)].insert(a.start + 1);
     }
-    int ccw_votes = 0, cw_votes = 0;
+    int ccw_votes = 0, cw_votes = 0, circles = 0;
     for (auto& a : arcs_) {
       const auto& pts = tp_.operations[static_cast<std::size_t>(a.op)].points;
       const auto o = static_cast<std::size_t>(a.op);
@@ -618,15 +655,30 @@ class Reader {
       }
       a.evidence = (in != 0 && out != 0 && in != out) ? 0 : (in != 0 ? in : out);
       a.strong = strong && a.evidence != 0;
+      if (a.movarc) continue;  // its sense is written: it does not vote on the CIRCLEs'
+      ++circles;
       if (a.evidence > 0) ++ccw_votes;
       if (a.evidence < 0) ++cw_votes;
     }
+    if (circles == 0) {
+      // No CIRCLE to decide: the report still names the sense the file's arcs would have had.
+      if (options_.arc_direction != ArcDirection::Auto) {
+        rd.arc_convention = options_.arc_direction;
+        rd.arc_convention_source = "option";
+      } else if (documented_arc_direction(rd.dialect) != ArcDirection::Auto) {
+        rd.arc_convention = documented_arc_direction(rd.dialect);
+      }
+      check_movarcs();
+      insert_chords();
+      return;
+    }
+    rd.arcs = circles;
     rd.arcs_decidable = ccw_votes + cw_votes;
     const auto lines_of = [this](int sign) {
       std::string out;
       int n = 0;
       for (const auto& a : arcs_) {
-        if (a.evidence != sign) continue;
+        if (a.evidence != sign || a.movarc) continue;
         if (n++ == 5) {
           out += ", ...";
           break;
@@ -693,6 +745,7 @@ class Reader {
                                      "); applied as asked");
     }
     for (auto& a : arcs_) {
+      if (a.movarc) continue;
       a.clockwise = convention == ArcDirection::Clockwise;
       // An arc whose neighbours all clearly contradict the convention is run their way.
       if (rd.arc_convention_source != "option" && a.evidence == -convention_sign && a.strong) {
@@ -710,16 +763,52 @@ class Reader {
                  " files use: the moves before and after each of them run the other way "
                  "(--arc-direction cw|ccw applies one sense to every arc)");
     }
-    // Insert the chords, arc by arc, operation by operation.
+    check_movarcs();
+    insert_chords();
+  }
+
+  /// MOVARC's sense and sweep are written: the GOTO must end the arc ANGLE deg on, and the
+  /// moves beside it must not clearly run the other way.
+  void check_movarcs() {
+    for (auto& a : arcs_) {
+      if (!a.movarc) continue;
+      a.clockwise = false;
+      const auto& pts = tp_.operations[static_cast<std::size_t>(a.op)].points;
+      const Vec3d s = pts[a.start].tip_mm, e = pts[a.start + 1].tip_mm;
+      const double sweep = arc_sweep_rad(a, s, e);
+      const Vec3d sr = s - a.centre;
+      const double r = (sr - sr.dot(a.axis) * a.axis).norm();
+      // The written ANGLE has a few decimals: within 0.01 deg, or 0.002 mm along the arc.
+      const double allowed = std::max(deg_to_rad(0.01), 0.002 / std::max(r, 1e-9));
+      if (std::abs(sweep - a.declared_sweep_rad) > allowed) {
+        std::ostringstream os;
+        os << "MOVARC: ANGLE " << rad_to_deg(a.declared_sweep_rad) << " deg, but its end GOTO lies "
+           << rad_to_deg(sweep) << " deg counter-clockwise about (i,j,k) from its start";
+        fail(a.line, os.str());
+      }
+      if (a.evidence < 0 && a.strong) {
+        fail(a.line,
+             "MOVARC: the moves before and after it run clockwise about its axis, "
+             "against the counter-clockwise sweep it writes");
+      }
+      ++tp_.reading.arcs;
+    }
+  }
+
+  /// Inserts the chords of every arc, operation by operation; events keep their place (an
+  /// event before an arc's end GOTO stands before the arc).
+  void insert_chords() {
     std::vector<std::vector<const PendingArc*>> by_op(tp_.operations.size());
     for (const auto& a : arcs_) by_op[static_cast<std::size_t>(a.op)].push_back(&a);
     for (std::size_t o = 0; o < by_op.size(); ++o) {
       if (by_op[o].empty()) continue;
       auto& pts = tp_.operations[o].points;
       std::vector<CLPointd> out;
+      std::vector<std::size_t> after(pts.size(), 0);  // out's size after point i's own entry
       std::size_t next = 0;
       for (std::size_t i = 0; i < pts.size(); ++i) {
         out.push_back(pts[i]);
+        after[i] = out.size();
         while (next < by_op[o].size() && by_op[o][next]->start == i) {
           PendingArc a = *by_op[o][next++];
           if (a.clockwise) a.axis = -a.axis;
@@ -746,6 +835,9 @@ class Reader {
             out.push_back(p);
           }
         }
+      }
+      for (ProgramEvent& e : tp_.operations[o].events) {
+        if (e.before_point > 0) e.before_point = after[e.before_point - 1];
       }
       pts = std::move(out);
     }
@@ -1053,14 +1145,30 @@ class Reader {
     }
     if (major == "KNOT" || major == "CNTRL") fail(line, major + " outside a NURBS record");
     if (pending_circle_ && major != "GOTO" && major != "PAINT" && major != "FEDRAT") {
-      fail(line, "CIRCLE at line " + std::to_string(pending_circle_->line) +
+      fail(line, std::string(pending_circle_->movarc ? "MOVARC" : "CIRCLE") + " at line " +
+                     std::to_string(pending_circle_->line) +
                      " must be followed by its end GOTO, got " + major);
     }
-    if (uninterpreted_motion_words().count(major)) {
+    const ClWord* word = find_cl_word(major);
+    if (options_.skip_records.count(major)) {
+      skipped(major);
+      ++tp_.skipped_by_option[major];
+      return;
+    }
+    if (!word) {
       fail(line, major +
-                     ": a record that moves the tool or its frame, which taxopt does not "
-                     "interpret; it cannot be skipped (post the file without it, or expand "
-                     "it in the CAM system)");
+                     ": not a record word taxopt knows (docs/cl-files.md lists them); if it "
+                     "neither moves the tool nor changes what the moves mean, --skip-record " +
+                     major + " skips it");
+    }
+    if (finished_line_ > 0 && word->meaning == ClWordMeaning::Motion) {
+      fail(line, major + " after the end of the program (line " + std::to_string(finished_line_) +
+                     "): motion after FINI or END is not posted");
+    }
+    if (word->meaning == ClWordMeaning::Refused) {
+      fail(line, major + ": " + word->what +
+                     "; taxopt does not interpret it and cannot skip it (post the file "
+                     "without it, or expand it in the CAM system)");
     }
     if (major == "GOTO" || major == "FROM") {
       if (args.size() != 3 && args.size() != 6) {
@@ -1084,6 +1192,8 @@ class Reader {
         a.turns = c.turns;
         a.record = c.record;
         a.line = c.line;
+        a.movarc = c.movarc;
+        a.declared_sweep_rad = c.declared_sweep_rad;
         arcs_.push_back(a);
       }
       if (major == "FROM") {
@@ -1143,6 +1253,35 @@ class Reader {
       c.line = line;
       tp_.records[static_cast<std::size_t>(index)].frame = frame_;
       pending_circle_ = c;
+    } else if (major == "MOVARC") {
+      // Fusion / HSM: MOVARC/xc,yc,zc,i,j,k,r,ANGLE,a -- the arc to the next GOTO sweeps a deg
+      // counter-clockwise about (i,j,k).
+      if (args.size() != 9 || upper(args[7]) != "ANGLE") {
+        fail(line, "MOVARC expects xc,yc,zc,i,j,k,r,ANGLE,degrees (Fusion's form), got " +
+                       std::to_string(args.size()) + " fields");
+      }
+      auto v = numbers(args, 0, 7, major, line);
+      const double angle_deg = numbers(args, 8, 9, major, line)[0];
+      if (!(v[6] > 0.0)) fail(line, "MOVARC radius must be positive");
+      if (!(angle_deg > 0.0 && angle_deg <= 360.0 * 1000)) {
+        fail(line, "MOVARC ANGLE must be within (0, 360000] deg");
+      }
+      CircleRecord c;
+      c.centre = to_mcs_point(Vec3d(v[0], v[1], v[2]));
+      c.axis = to_mcs_vector(parse_axis(v, 3, major, line));
+      c.radius_mm = v[6] * scale_;
+      c.movarc = true;
+      c.declared_sweep_rad = deg_to_rad(angle_deg);
+      c.turns = 1 + static_cast<int>(std::floor((angle_deg - 1e-6) / 360.0));
+      c.record = index;
+      c.line = line;
+      tp_.records[static_cast<std::size_t>(index)].frame = frame_;
+      pending_circle_ = c;
+    } else if (major == "TLAXIS") {
+      if (args.size() != 3) {
+        fail(line, "TLAXIS expects i,j,k (the tool axis); other forms are not interpreted");
+      }
+      axis_ = to_mcs_vector(parse_axis(numbers(args, 0, 3, major, line), 0, major, line));
     } else if (major == "NURBS") {
       if (!args.empty()) {
         fail(line, "NURBS/" + args_text +
@@ -1179,16 +1318,18 @@ class Reader {
       os << "MSYS: MCS at (" << v[0] << ", " << v[1] << ", " << v[2] << "), its z axis ("
          << f.rotation(0, 2) << ", " << f.rotation(1, 2) << ", " << f.rotation(2, 2) << ")";
       if (!options_.apply_msys) {
-        skipped(major);
-        notice(line, os.str() + ": --msys ignore, the coordinates are posted as written");
+        tp_.declared_frames.push_back(f);
+        notice(line, os.str() +
+                         ": the coordinates are posted as written (NX writes them in this MCS; "
+                         "--msys apply takes them as absolute and moves them into it)");
         return;
       }
       tp_.frames.push_back(f);
       frame_ = static_cast<int>(tp_.frames.size()) - 1;
       ++tp_.reading.msys_applied;
       notice(line, os.str() +
-                       ": the coordinates that follow are moved into it and posted there "
-                       "(--msys ignore posts them as written)");
+                       ": --msys apply, the coordinates that follow are moved into it and "
+                       "posted there");
     } else if (major == "MULTAX") {
       if (!args.empty() && upper(args[0]) == "OFF") axis_ = Vec3d::UnitZ();  // 3-axis: +Z
     } else if (major == "CYCLE") {
@@ -1223,24 +1364,64 @@ class Reader {
       tool_.number = static_cast<int>(v[0]);
       tool_changed();
     } else if (major == "SPINDL" || major == "SPINDLE") {
+      spindle(args, line);
+    } else if (major == "COOLNT") {
+      if (args.size() != 1) fail(line, "COOLNT expects one of ON, FLOOD, MIST, OFF");
+      const std::string a = upper(args[0]);
+      ClCoolant c = ClCoolant::Off;
+      if (a == "ON" || a == "FLOOD") {
+        c = ClCoolant::Flood;
+      } else if (a == "MIST") {
+        c = ClCoolant::Mist;
+      } else if (a != "OFF") {
+        fail(line, "COOLNT/" + args[0] +
+                       ": a coolant taxopt does not write (ON, FLOOD, MIST and OFF are: M8, M7, "
+                       "M9); --skip-record COOLNT drops every COOLNT record");
+      }
+      coolant_ = c;
+      ProgramEvent e;
+      e.kind = ProgramEvent::Kind::Coolant;
+      e.coolant = c;
+      state_change(e, line);
+    } else if (major == "CUTCOM") {
+      if (args.empty() || upper(args[0]) != "OFF") {
+        fail(line, "CUTCOM/" + args_text +
+                       ": cutter compensation in the control is not posted (taxopt writes the "
+                       "tool centre path the file gives, without G41/G42); --skip-record CUTCOM "
+                       "posts that path as it is, without the control's wear compensation");
+      }
+      skipped(major);
+    } else if (major == "MACHIN") {
       for (const auto& a : args) {
         const std::string u = upper(a);
-        double v;
-        if (parse_number(a, v)) {
-          if (v < 0.0) fail(line, major + ": spindle speed must not be negative");
-          spindle_rpm_ = v;
-        } else if (u == "CLW") {
-          spindle_cw_ = true;
-        } else if (u == "CCLW") {
-          spindle_cw_ = false;
-        } else if (u == "OFF") {
-          spindle_rpm_ = 0.0;
+        if (u == "TURN" || u == "LATHE" || u == "MILLTURN") {
+          fail(line, "MACHIN/" + args_text + ": a turning file; taxopt posts milling only");
         }
       }
-      if (op_ >= 0 && tp_.operations[static_cast<std::size_t>(op_)].points.empty()) {
-        tp_.operations[static_cast<std::size_t>(op_)].spindle_rpm = spindle_rpm_;
-        tp_.operations[static_cast<std::size_t>(op_)].spindle_clockwise = spindle_cw_;
+      skipped(major);
+    } else if (major == "STOP" || major == "OPSTOP") {
+      ProgramEvent e;
+      e.kind = major == "STOP" ? ProgramEvent::Kind::Stop : ProgramEvent::Kind::OptionalStop;
+      add_event(e, line);
+    } else if (major == "DELAY") {
+      double sec = 0.0;
+      if (args.size() != 1 || !parse_number(args[0], sec) || !(sec > 0.0 && sec <= 3600.0)) {
+        fail(line,
+             "DELAY expects a dwell in seconds within (0, 3600] (DELAY/REV,n is not "
+             "interpreted)");
       }
+      ProgramEvent e;
+      e.kind = ProgramEvent::Kind::Dwell;
+      e.dwell_s = sec;
+      add_event(e, line);
+    } else if (major == "INSERT") {
+      fail(line, "INSERT/" + args_text.substr(0, 60) +
+                     ": text for the controller, which taxopt does not pass unchecked into a "
+                     "program; --skip-record INSERT drops it");
+    } else if (major == "FINI" || major == "END") {
+      finished_line_ = line;
+    } else if (major == "LOAD" && (args.empty() || upper(args[0]) != "TOOL")) {
+      fail(line, "LOAD/" + args_text + ": only LOAD/TOOL,n is interpreted");
     } else if (major == "TOOL PATH") {
       op_ = -1;
       in_block_ = true;
@@ -1254,6 +1435,91 @@ class Reader {
     } else if (major != "UNITS" && major != "UNIT") {
       skipped(major);
     }
+  }
+
+  /// SPINDL/[speed][,RPM|SFM|SMM][,CLW|CCLW] or /OFF or /ON: the spindle from here on.
+  void spindle(const std::vector<std::string>& args, int line) {
+    std::optional<double> value;
+    std::string unit = "RPM";
+    bool off = false, on = false, cw = spindle_cw_;
+    for (const auto& a : args) {
+      const std::string u = upper(a);
+      double v = 0.0;
+      if (parse_number(a, v)) {
+        if (value) fail(line, "SPINDL: two speeds in one record");
+        value = v;
+      } else if (u == "RPM" || u == "SFM" || u == "SMM") {
+        unit = u;
+      } else if (u == "CLW" || u == "CCLW") {
+        cw = u == "CLW";
+      } else if (u == "OFF") {
+        off = true;
+      } else if (u == "ON") {
+        on = true;
+      } else {
+        fail(line, "SPINDL: '" + a +
+                       "' not interpreted (a speed, RPM, SFM, SMM, CLW, CCLW, ON and OFF are)");
+      }
+    }
+    double rpm = spindle_rpm_;
+    if (off) {
+      rpm = 0.0;
+    } else if (value) {
+      if (!(*value >= 0.0 && *value <= 1e6)) {
+        fail(line, "SPINDL: speed must be within [0, 1e6]");
+      }
+      rpm = *value;
+      if (unit != "RPM") {
+        // A surface speed: rpm through the cutter's diameter (ft/min or m/min).
+        if (!(tool_.diameter_mm > 0.0)) {
+          fail(line, "SPINDL/" + unit +
+                         ": a surface speed needs the cutter's diameter, and no "
+                         "CUTTER or TLDATA came before it");
+        }
+        const double mm_per_min = *value * (unit == "SFM" ? 304.8 : 1000.0);
+        rpm = mm_per_min / (Constants<double>::pi() * tool_.diameter_mm);
+        std::ostringstream os;
+        os << "SPINDL: " << *value << " " << unit << " at the cutter's diameter "
+           << tool_.diameter_mm << " mm is " << std::lround(rpm) << " rpm";
+        notice(line, os.str());
+      }
+      if (rpm > 0.0) last_rpm_ = rpm;
+    } else if (on) {
+      if (!(last_rpm_ > 0.0)) fail(line, "SPINDL/ON with no speed given before it");
+      rpm = last_rpm_;
+    }
+    spindle_rpm_ = rpm;
+    spindle_cw_ = cw;
+    ProgramEvent e;
+    e.kind = ProgramEvent::Kind::Spindle;
+    e.spindle_rpm = rpm;
+    e.spindle_clockwise = cw;
+    state_change(e, line);
+  }
+
+  /// A spindle or coolant change: the operation's own setting before its first point, an
+  /// event where it stands after (none before any operation: current_op copies the state).
+  void state_change(const ProgramEvent& e, int line) {
+    if (op_ < 0) return;
+    auto& op = tp_.operations[static_cast<std::size_t>(op_)];
+    if (!op.points.empty()) {
+      add_event(e, line);
+      return;
+    }
+    if (e.kind == ProgramEvent::Kind::Spindle) {
+      op.spindle_rpm = e.spindle_rpm;
+      op.spindle_clockwise = e.spindle_clockwise;
+    } else {
+      op.coolant = e.coolant;
+    }
+  }
+
+  /// An event before the operation's next point.
+  void add_event(ProgramEvent e, int line) {
+    auto& op = current_op();
+    e.before_point = op.points.size();
+    e.line = line;
+    op.events.push_back(e);
   }
 
   void set_tool(double d, double r, double length, int line) {
@@ -1287,6 +1553,9 @@ class Reader {
   std::optional<DrillCycle> cycle_;
   std::optional<std::pair<Vec3d, Vec3d>> home_;
   std::size_t points_ = 0;
+  double last_rpm_ = 0.0;
+  std::optional<ClCoolant> coolant_;
+  int finished_line_ = 0;  // line of FINI / END
 };
 
 }  // namespace

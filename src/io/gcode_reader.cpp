@@ -118,6 +118,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     bool has_axis = false;
     bool given[5] = {false, false, false, false, false};
     bool reference_return = false;
+    bool dwell = false;
     const Vec3d start = xyz;
     const Vec3d xyz_before = xyz;
     Vec3d offset = Vec3d::Zero();
@@ -163,7 +164,10 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
             inverse_time = false;
           else if (gv == 900)
             incremental = false;
-          else if (gv == 400 || gv == 800 || gv == 540) {
+          else if (gv == 40 &&
+                   (dialect == GcodeDialect::LinuxCNC || dialect == GcodeDialect::Fanuc)) {
+            dwell = true;  // the CL file's DELAY: P is its time
+          } else if (gv == 400 || gv == 800 || gv == 540) {
           } else if (gv == 490 && dialect != GcodeDialect::Heidenhain &&
                      dialect != GcodeDialect::Siemens) {
             length_offset = false;
@@ -234,6 +238,11 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           break;
         case 'S':
         case 'N': break;
+        case 'P':
+          if (!dwell || !(v >= 0.0)) {
+            throw InputError(source, line_no, "word 'P' is outside taxopt's subset (G4 P only)");
+          }
+          break;
         case 'H':
           if (!fanuc_like && dialect != GcodeDialect::LinuxCNC) {
             throw InputError(source, line_no, "word 'H' is outside taxopt's subset");
@@ -256,6 +265,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
                            std::string("word '") + letter + "' is outside taxopt's subset");
       }
     }
+    if (dwell && has_axis) throw InputError(source, line_no, "G4 with an axis word");
     if (has_axis && (machine_coordinates || incremental)) {
       // The safe retract: in machine coordinates (or Fanuc's reference return); where the
       // axes it moves are in the workpiece is not known until they are written again.

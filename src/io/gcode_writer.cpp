@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 
 namespace taxopt {
@@ -355,8 +356,57 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     if (op.spindle_rpm > 0.0) {
       line("S" + fmt(op.spindle_rpm, 0) + (op.spindle_clockwise ? " M3" : " M4"));
     }
-    const std::string coolant = dialect.coolant_on();
-    if (!coolant.empty()) line(coolant);
+    // Coolant as the CL file asks (COOLNT), else as the machine file's default.
+    const auto coolant_code = [](ClCoolant c) {
+      return c == ClCoolant::Flood  ? std::string("M8")
+             : c == ClCoolant::Mist ? std::string("M7")
+                                    : std::string();
+    };
+    bool coolant_on = false;
+    {
+      const std::string coolant = op.coolant ? coolant_code(*op.coolant) : dialect.coolant_on();
+      if (!coolant.empty()) line(coolant);
+      coolant_on = !coolant.empty();
+    }
+    bool spindle_on = op.spindle_rpm > 0.0;
+    // The file's stops, dwells, spindle and coolant changes before point i.
+    std::size_t next_event = 0;
+    const auto events_before = [&](std::size_t i) {
+      for (; next_event < op.events.size() && op.events[next_event].before_point <= i;
+           ++next_event) {
+        const ProgramEvent& e = op.events[next_event];
+        switch (e.kind) {
+          case ProgramEvent::Kind::Stop: line("M0"); break;
+          case ProgramEvent::Kind::OptionalStop: line("M1"); break;
+          case ProgramEvent::Kind::Dwell:
+            if (g.dialect == GcodeDialect::LinuxCNC) {
+              line("G4 P" + fmt(e.dwell_s, 3));  // LinuxCNC: P in seconds
+            } else if (g.dialect == GcodeDialect::Fanuc) {
+              line("G04 P" + std::to_string(std::lround(e.dwell_s * 1000.0)));  // P in ms
+            } else {
+              throw InputError("CL line " + std::to_string(e.line) +
+                               ": DELAY: taxopt writes a dwell for LinuxCNC (G4 P seconds) and "
+                               "Fanuc (G04 P milliseconds) only, not for the " +
+                               std::string(to_string(g.dialect)) + " dialect");
+            }
+            break;
+          case ProgramEvent::Kind::Spindle:
+            if (e.spindle_rpm > 0.0) {
+              line("S" + fmt(e.spindle_rpm, 0) + (e.spindle_clockwise ? " M3" : " M4"));
+            } else {
+              line("M5");
+            }
+            spindle_on = e.spindle_rpm > 0.0;
+            break;
+          case ProgramEvent::Kind::Coolant: {
+            const std::string c = coolant_code(e.coolant);
+            line(c.empty() ? "M9" : c);
+            coolant_on = !c.empty();
+            break;
+          }
+        }
+      }
+    };
     if (g.program.retract != SafeRetract::None && !op.points.empty()) {
       line(dialect.rapid() + tilt_word + dialect.number(rad_to_deg(op.poses.front().a_rad), d) +
            " C" + dialect.number(rad_to_deg(op.poses.front().c_rad), d));
@@ -472,10 +522,19 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       return true;
     };
     std::size_t arc_cursor = 0;
+    // An arc with an event inside it is left to its chords, so that the event stands where
+    // the file put it.
+    const auto event_inside = [&](const ArcRun& run) {
+      for (const ProgramEvent& e : op.events) {
+        if (e.before_point > run.start + 1 && e.before_point <= run.end) return true;
+      }
+      return false;
+    };
     for (std::size_t i = 0; i < op.points.size(); ++i) {
+      events_before(i);
       while (arc_cursor < op.arcs.size() && op.arcs[arc_cursor].start + 1 < i) ++arc_cursor;
       if (arc_cursor < op.arcs.size() && op.arcs[arc_cursor].start + 1 == i) {
-        if (write_arc(op.arcs[arc_cursor])) {
+        if (!event_inside(op.arcs[arc_cursor]) && write_arc(op.arcs[arc_cursor])) {
           ++prog.arcs_kept;
           i = op.arcs[arc_cursor].end;
           continue;
@@ -607,11 +666,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       prev_tip = p.tip_mm;
       have_prev = true;
     }
+    events_before(op.points.size());
     prog.emitted.push_back(std::move(emitted));
     lines(dialect.tcp_off(tcp));
     verbatim(tcp ? g.program.tcp_off : std::vector<std::string>{});
-    if (!coolant.empty()) line("M9");
-    if (op.spindle_rpm > 0.0) line("M5");
+    if (coolant_on) line("M9");
+    if (spindle_on) line("M5");
     last_words.clear();
   }
   lines(dialect.retract(retract_z));

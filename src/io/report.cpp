@@ -174,6 +174,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   cl["drill_cycle_holes"] = rd.cycle_holes;
   cl["msys_applied"] = rd.msys_applied;
   cl["skipped_records"] = toolpath.skipped_records;
+  cl["skipped_by_option"] = toolpath.skipped_by_option;
   cl["notices"] = toolpath.notices;
   j["cl_input"] = cl;
   j["gcode"] = {{"arcs_kept", result.gcode.arcs_kept},

@@ -26,7 +26,9 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
                        {},
                        {},
                        {},
-                       op.arcs};
+                       op.arcs,
+                       op.coolant,
+                       op.events};
     if (o.optimised) {
       for (std::size_t i = 0; i < po.points.size(); ++i) {
         po.points[i].axis = o.optimised->axes[i];

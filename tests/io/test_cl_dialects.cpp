@@ -150,7 +150,7 @@ TEST_CASE("cl arcs: the real files' arcs read in their CAM system's sense", "[io
                           Expect{"amorim-tilt-support1.apt", ClDialect::SolidworksCam,
                                  ArcDirection::CounterClockwise, 0, 0}}) {
     INFO(e.file);
-    const Toolpath tp = read_cl_file(real_data(e.file));
+    const Toolpath tp = taxopt::test::read_real(e.file);
     CHECK(tp.reading.dialect == e.dialect);
     CHECK(tp.reading.arcs == e.arcs);
     CHECK(tp.reading.arcs_reversed == e.reversed);
@@ -316,8 +316,11 @@ TEST_CASE("cl MSYS: a real file moved by a known MSYS reads as the original", "[
       out << line << "\n";
     }
   }
-  const Toolpath original = parse_cl(text, "o.cls");
-  const Toolpath moved = parse_cl(out.str(), "m.cls");
+  // --msys apply: both files' coordinates are taken as absolute and moved into their MCS.
+  ClReadOptions apply;
+  apply.apply_msys = true;
+  const Toolpath original = parse_cl(text, "o.cls", apply);
+  const Toolpath moved = parse_cl(out.str(), "m.cls", apply);
   // In the file's own frame every tool axis now points down (k < 0)...
   CHECK(moved.reading.msys_applied == 1);
   REQUIRE(moved.operations.size() == 1);
@@ -332,7 +335,7 @@ TEST_CASE("cl MSYS: a real file moved by a known MSYS reads as the original", "[
   // --out-cls writes a changed point back in the file's frame.
   auto ops = moved.operations;
   ops[0].points[5].tip_mm += Vec3d(0.0, 0.0, 2.54);
-  const Toolpath again = parse_cl(format_cl(moved, ops), "again.cls");
+  const Toolpath again = parse_cl(format_cl(moved, ops), "again.cls", apply);
   CHECK((again.operations[0].points[5].tip_mm - ops[0].points[5].tip_mm).norm() < 1e-5);
 }
 
@@ -385,7 +388,7 @@ TEST_CASE("cl motion words: GODLTA and GOHOME move; words taxopt cannot interpre
   CHECK((pts[4].tip_mm - Vec3d(0, 0, 100)).norm() < 1e-12);
   CHECK(pts[4].motion == Motion::Rapid);
   CHECK(tp.reading.motion_records == 5);
-  for (const char* word : {"DEFSUB/1", "CALL/1", "COPY/1,INDEX,2", "TLAXIS/0,0,1",
+  for (const char* word : {"DEFSUB/1", "CALL/1", "COPY/1,INDEX,2", "LOOP/START,15",
                            "ROTATE/ZAXIS,90", "INDEX/3", "ROTABL/90"}) {
     INFO(word);
     CHECK(throws_with(

@@ -69,7 +69,7 @@ TEST_CASE("cl reader: every real file reads with the counts of SOURCES.md", "[io
   };
   for (const auto& e : expects) {
     INFO(e.file);
-    const Toolpath tp = read_cl_file(real_data(e.file));
+    const Toolpath tp = taxopt::test::read_real(e.file);
     const Counts c = count_records(tp);
     CHECK(c.gotos == e.gotos);
     CHECK(c.with_axis == e.with_axis);
@@ -85,10 +85,10 @@ TEST_CASE("cl reader: every real file reads with the counts of SOURCES.md", "[io
 }
 
 TEST_CASE("cl reader: distinct axes of the 5-axis files match SOURCES.md", "[io][cl]") {
-  CHECK(count_records(read_cl_file(real_data("mech491-variable-axis-ballmill.cls"))).axes.size() ==
+  CHECK(count_records(taxopt::test::read_real("mech491-variable-axis-ballmill.cls")).axes.size() ==
         329);
   // 23 distinct axes on GOTOs (SOURCES.md counts them after rounding to 1e-4).
-  CHECK(count_records(read_cl_file(real_data("peening-catia-multax.aptsource"))).axes.size() == 23);
+  CHECK(count_records(taxopt::test::read_real("peening-catia-multax.aptsource")).axes.size() == 23);
 }
 
 TEST_CASE("cl reader: a real file written back unchanged is byte-identical", "[io][cl]") {
@@ -97,14 +97,16 @@ TEST_CASE("cl reader: a real file written back unchanged is byte-identical", "[i
         "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
         "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
     INFO(f);
-    const std::string text = read_file(real_data(f));
-    const Toolpath tp = parse_cl(text, f);
+    const std::string text = taxopt::test::real_text(f);
+    ClReadOptions o;
+    for (const auto& w : taxopt::test::real_skips(f)) o.skip_records.insert(w);
+    const Toolpath tp = parse_cl(text, f, o);
     CHECK(format_cl(tp, tp.operations) == text);
   }
 }
 
 TEST_CASE("cl reader: NX traps: modal axis, IPM feed, inch ball mill, listing lines", "[io][cl]") {
-  const Toolpath tp = read_cl_file(real_data("mech491-variable-axis-ballmill.cls"));
+  const Toolpath tp = taxopt::test::read_real("mech491-variable-axis-ballmill.cls");
   const auto& op = tp.operations.at(0);
   CHECK(op.name == "NORM_PART");
   CHECK(op.tool.is_ball());
@@ -115,17 +117,22 @@ TEST_CASE("cl reader: NX traps: modal axis, IPM feed, inch ball mill, listing li
     if (q.line == 16) p = &q;
   }
   REQUIRE(p);
-  // MSYS/3,3,0,... puts the MCS at (3, 3, 0): the point is posted in it.
-  CHECK(p->tip_mm.x() == Approx((-3.5411 - 3.0) * 25.4));
-  CHECK(p->tip_mm.y() == Approx((-3.0016 - 3.0) * 25.4));
-  CHECK(tp.reading.msys_applied == 1);
+  // MSYS/3,3,0,... says the MCS lies at (3, 3, 0); NX writes the GOTOs in it already (its
+  // Haas post writes them unchanged: tests/data/real-post), so they are posted as written.
+  CHECK(p->tip_mm.x() == Approx(-3.5411 * 25.4));
+  CHECK(p->tip_mm.y() == Approx(-3.0016 * 25.4));
+  CHECK(tp.reading.msys_applied == 0);
+  REQUIRE(tp.declared_frames.size() == 1);
+  CHECK(tp.declared_frames[0].origin_mm.x() == Approx(3.0 * 25.4));
   CHECK(tp.notices.size() == 1);
-  const Toolpath as_written = [] {
+  // --msys apply takes them as absolute and moves them into the MCS.
+  const Toolpath applied = [] {
     ClReadOptions o;
-    o.apply_msys = false;
-    return read_cl_file(real_data("mech491-variable-axis-ballmill.cls"), o);
+    o.apply_msys = true;
+    return taxopt::test::read_real("mech491-variable-axis-ballmill.cls", o);
   }();
-  CHECK(as_written.operations.at(0).points.at(2).tip_mm.x() == Approx(-3.5411 * 25.4));
+  CHECK(applied.operations.at(0).points.at(2).tip_mm.x() == Approx((-3.5411 - 3.0) * 25.4));
+  CHECK(applied.reading.msys_applied == 1);
   CHECK(p->axis.x() == Approx(-0.3778015).margin(1e-6));
   CHECK(p->feed_mm_per_min == Approx(10.0 * 25.4));
   CHECK(p->motion == Motion::Feed);
@@ -139,7 +146,7 @@ TEST_CASE("cl reader: NX traps: modal axis, IPM feed, inch ball mill, listing li
 }
 
 TEST_CASE("cl reader: CATIA traps: CRLF, a number split by '$', FROM with an axis", "[io][cl]") {
-  const Toolpath tp = read_cl_file(real_data("peening-catia-multax.aptsource"));
+  const Toolpath tp = taxopt::test::read_real("peening-catia-multax.aptsource");
   CHECK(tp.line_end == "\r\n");
   // CUTTER/ 1.700000, 0.000000, 0.850000, 0, 0,$ + 0.000000, 1.968504: APT d, r, e, f, a, b,
   // h -- a 1.7 mm end mill (r = 0) of height 1.968504, the 7th number on the next line.
@@ -174,24 +181,24 @@ TEST_CASE("cl reader: '$' joins without a separator, also inside numbers", "[io]
 }
 
 TEST_CASE("cl reader: Creo comments continue over '$' and are no records", "[io][cl]") {
-  const Toolpath tp = read_cl_file(real_data("creopost-profilfraesen.ncl"));
+  const Toolpath tp = taxopt::test::read_real("creopost-profilfraesen.ncl");
   CHECK(tp.warnings.empty());
   // The `$$->` records are comments: only the file's own non-motion words are skipped.
   std::set<std::string> skipped;
   for (const auto& [word, count] : tp.skipped_records) skipped.insert(word);
-  CHECK(skipped == std::set<std::string>{"FINI", "MACHIN", "PARTNO"});
+  CHECK(skipped == std::set<std::string>{"MACHIN", "PARTNO"});
   CHECK(tp.reading.dialect == ClDialect::Creo);
   CHECK(tp.units == LengthUnit::Millimetre);
 }
 
 TEST_CASE("cl reader: SOLIDWORKS numbers, units, tools and operations", "[io][cl]") {
-  const Toolpath tp = read_cl_file(real_data("amorim-tilt-support1.apt"));
+  const Toolpath tp = taxopt::test::read_real("amorim-tilt-support1.apt");
   const auto& p = tp.operations.at(0).points.at(0);
   CHECK(p.axis.x() == Approx(-0.173648).margin(1e-6));
   CHECK(tp.operations[0].tool.diameter_mm == Approx(16.0));
   CHECK_FALSE(tp.operations[0].tool.is_ball());
   CHECK(tp.operations[0].tool.number == 4);
-  const Toolpath glue = read_cl_file(real_data("amorim-interface-glue.apt"));
+  const Toolpath glue = taxopt::test::read_real("amorim-interface-glue.apt");
   bool ball14 = false;
   for (const auto& op : glue.operations)
     ball14 = ball14 || (op.tool.is_ball() && op.tool.diameter_mm == Approx(14.0));

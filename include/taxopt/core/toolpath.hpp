@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -124,6 +125,25 @@ struct ArcRun {
   Vec3d start_tip_mm = Vec3d::Zero();
 };
 
+/// Coolant as a CL file asks for it (COOLNT/ON|FLOOD, MIST, OFF).
+enum class ClCoolant { Off, Flood, Mist };
+
+/// What a CL file asks of the program between two moves (docs/cl-files.md): written where it
+/// stands, before the block of point `before_point` of its operation (after the last point
+/// when it equals the point count).
+struct ProgramEvent {
+  enum class Kind { Stop, OptionalStop, Dwell, Spindle, Coolant };
+  Kind kind = Kind::Stop;
+  std::size_t before_point = 0;
+  double dwell_s = 0.0;
+  /// Spindle: the speed from here on, rpm; 0 stops it.
+  double spindle_rpm = 0.0;
+  bool spindle_clockwise = true;
+  ClCoolant coolant = ClCoolant::Off;
+  /// 1-based line of the record in the CL file.
+  int line = 0;
+};
+
 /// One machining operation (an NX `TOOL PATH` block, or the moves of one tool).
 template <class S>
 struct Operation {
@@ -134,6 +154,11 @@ struct Operation {
   std::vector<CLPoint<S>> points;
   /// The CIRCLE arcs among the points, in order (ArcRun).
   std::vector<ArcRun> arcs;
+  /// Coolant the CL file asks for at the operation's start; empty: the file says nothing (the
+  /// machine file's default applies).
+  std::optional<ClCoolant> coolant;
+  /// Stops, dwells, spindle and coolant changes inside the operation, in order.
+  std::vector<ProgramEvent> events;
 };
 using Operationd = Operation<double>;
 
@@ -209,9 +234,15 @@ struct Toolpath {
   /// Major words of records the reader kept but did not interpret (display, comments,
   /// machine words: none bears motion), with their counts.
   std::map<std::string, int> skipped_records;
+  /// The part of skipped_records that the user skipped by name (ClReadOptions::skip_records).
+  std::map<std::string, int> skipped_by_option;
   ClReadSummary reading;
   /// Frames of MSYS records that were applied (ClRecord::frame).
   std::vector<ClFrame> frames;
+  /// Non-identity MSYS frames the file names but whose coordinates were posted as written
+  /// (the default: NX writes CLSF coordinates in the MCS already). part_mesh_for decides from
+  /// them in which frame a part mesh lies.
+  std::vector<ClFrame> declared_frames;
 };
 
 /// Number of CL points over all operations.

@@ -2,6 +2,7 @@
 /// @file Reading and writing APT / NX CLSF cutter-location files.
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,15 @@ struct ClReadOptions {
   /// (a notice says which); when most decidable arcs contradict it, reading stops (exit 2).
   /// An explicit sense is applied to every arc as given.
   ArcDirection arc_direction = ArcDirection::Auto;
-  /// Apply NX MSYS frames (--msys apply|ignore): the coordinates after an MSYS record are
-  /// given in the frame it names and are moved into its MCS, in which the G-code is posted.
-  bool apply_msys = true;
+  /// Apply NX MSYS frames (--msys apply|ignore). Off by default: NX writes CLSF coordinates
+  /// in the MCS already and MSYS only says where that MCS lies (the production NX post for
+  /// the Haas UMC-750 writes them unchanged: tests/data/real-post). On: the coordinates after
+  /// an MSYS record are taken as absolute and moved into its MCS, in which the G-code is posted.
+  bool apply_msys = false;
+  /// Record words to skip (--skip-record WORD, upper case): words the reader does not know, or
+  /// knows as information, a program event or a refused word that leaves the motion as it is
+  /// (cl_words.hpp, ClWord::skippable). Skipping a motion, state or frame word is refused.
+  std::set<std::string> skip_records;
 };
 
 /// Parses CL text. `source` names the file in errors and warnings.

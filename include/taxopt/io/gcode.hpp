@@ -2,6 +2,7 @@
 /// @file G-code for an A/C machine (LinuxCNC dialect), and a reader of that subset used to
 /// verify every written file by reading it back.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,10 @@ struct PostedOperation {
   /// not scheduled, the arc is written as G2/G3 blocks of at most 180 deg each (not in the
   /// Heidenhain dialect); else as its chords.
   std::vector<ArcRun> arcs;
+  /// Coolant the CL file asks for at the start (Operation::coolant); empty: the machine file's.
+  std::optional<ClCoolant> coolant;
+  /// Stops, dwells, spindle and coolant changes where they stand (Operation::events).
+  std::vector<ProgramEvent> events;
 };
 
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it

@@ -1,0 +1,307 @@
+// The CL reader knows its words (issue 32): one table, documented; unknown words, words it
+// refuses and misspelt motion words stop it by name; stops, dwells, spindle and coolant reach
+// the program where they stand; MSYS as NX's own post reads it; Fusion's MOVARC; TLAXIS; units.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+#include <sstream>
+
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/cl_words.hpp"
+#include "taxopt/io/gcode.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string error_of_text(const std::string& text, const ClReadOptions& o = {}) {
+  return error_of([&] { parse_cl(text, "w.cls", o); });
+}
+
+/// Index of the first line of `text` that contains `what`, from line `from` on; npos if none.
+std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
+                    std::size_t from = 0) {
+  for (std::size_t i = from; i < lines.size(); ++i) {
+    if (lines[i].find(what) != std::string::npos) return i;
+  }
+  return std::string::npos;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("cl words: docs/cl-files.md shows the reader's word table as it is", "[io][cl][words]") {
+  const std::string doc = read_file(std::string(TAXOPT_SOURCE_DIR) + "/docs/cl-files.md");
+  const std::string begin = "<!-- cl-words:begin -->\n", end = "<!-- cl-words:end -->";
+  const std::size_t b = doc.find(begin), e = doc.find(end);
+  REQUIRE(b != std::string::npos);
+  REQUIRE(e != std::string::npos);
+  const std::string shown = doc.substr(b + begin.size(), e - b - begin.size());
+  INFO("the table as the code has it:\n" << cl_words_markdown());
+  CHECK(shown == cl_words_markdown());
+  // One entry per word; motion, state and frame words cannot be skipped.
+  std::set<std::string> seen;
+  for (const ClWord& w : cl_words()) {
+    CHECK(seen.insert(w.word).second);
+    if (w.meaning == ClWordMeaning::Motion || w.meaning == ClWordMeaning::Frame) {
+      CHECK_FALSE(w.skippable);
+    }
+    CHECK(std::string(w.evidence).size() > 0);
+  }
+}
+
+TEST_CASE(
+    "cl words: every word of the real files is in the table or refused by name, and no file "
+    "posts with a record skipped that the table does not call information",
+    "[io][cl][words][real]") {
+  for (const char* f :
+       {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
+        "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
+        "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
+    INFO(f);
+    const std::string as_is = error_of([&] { read_cl_file(real_data(f)); });
+    if (real_skips(f).empty()) {
+      CHECK(as_is.empty());
+    } else {
+      // Refused by name: file, line and the word.
+      CHECK_THAT(as_is, Catch::StartsWith(real_data(f) + ":"));
+      bool named = false;
+      for (const auto& w : real_skips(f)) named = named || as_is.find(w) != std::string::npos;
+      CHECK(named);
+    }
+    const Toolpath tp = read_real(f);
+    for (const auto& [word, count] : tp.skipped_records) {
+      INFO(word);
+      const ClWord* w = find_cl_word(word);
+      const bool by_option = tp.skipped_by_option.count(word) > 0;
+      // Skipped without the user's word only where the table says it changes nothing.
+      CHECK((by_option || (w && (w->meaning == ClWordMeaning::Information ||
+                                 std::string(w->word) == "CUTCOM"))));
+      CHECK(count > 0);
+    }
+  }
+  // The peening file's SPINDLE/CLW20 is no spindle speed taxopt knows: refused by name even
+  // with the machine's words skipped.
+  ClReadOptions o;
+  for (const auto& w : real_skips("peening-catia-multax.aptsource")) o.skip_records.insert(w);
+  CHECK_THAT(error_of([&] { read_cl_file(real_data("peening-catia-multax.aptsource"), o); }),
+             Catch::Contains("SPINDL: 'CLW20' not interpreted"));
+}
+
+TEST_CASE("cl words: unknown and misspelt words stop the reader; --skip-record skips by name",
+          "[io][cl][words]") {
+  for (const char* word : {"GOTO1/1,0,0", "GOTOX/1,0,0", "GOT0/1,0,0", "GO TO/1,0,0",
+                           "FROBNICATE/3", "RETRCT", "POSTN/1", "CLAMP/ON"}) {
+    INFO(word);
+    const std::string e = error_of_text(std::string("GOTO/0,0,0\n") + word + "\nGOTO/2,0,0\n");
+    CHECK_THAT(e, Catch::StartsWith("w.cls:2: "));
+  }
+  CHECK_THAT(error_of_text("GOTO/0,0,0\nFROBNICATE/3\n"),
+             Catch::Contains("--skip-record FROBNICATE"));
+  ClReadOptions o;
+  o.skip_records = {"FROBNICATE"};
+  const Toolpath tp = parse_cl("GOTO/0,0,0\nFROBNICATE/3\nFROBNICATE/4\nGOTO/2,0,0\n", "w", o);
+  CHECK(tp.skipped_by_option.at("FROBNICATE") == 2);
+  CHECK(tp.operations.at(0).points.size() == 2);
+  // Motion, state and frame words cannot be skipped.
+  for (const char* w : {"GOTO", "FEDRAT", "MSYS", "CIRCLE", "UNITS"}) {
+    INFO(w);
+    ClReadOptions bad;
+    bad.skip_records = {w};
+    CHECK_THAT(error_of_text("GOTO/0,0,0\n", bad), Catch::Contains("--skip-record"));
+  }
+  // Refused by name: what the post would do with them is not what taxopt would write.
+  for (const char* word : {"LOOP/START,15", "INVERSE/ON", "OP/THREAD,1", "CUTCOM/LEFT",
+                           "MACHIN/PPLATHE,TURN", "MODE/TURN", "TURRET/1", "INSERT/M00",
+                           "COOLNT/THRU", "SPINDL/1000,MAXRPM,3000", "DELAY/REV,2"}) {
+    INFO(word);
+    const std::string e = error_of_text(std::string("GOTO/0,0,0\n") + word + "\nGOTO/2,0,0\n");
+    CHECK_THAT(e, Catch::StartsWith("w.cls:2: "));
+  }
+  // Motion after FINI / END.
+  CHECK_THAT(error_of_text("GOTO/0,0,0\nFINI\nGOTO/2,0,0\n"),
+             Catch::Contains("w.cls:3: GOTO after the end of the program (line 2)"));
+  CHECK(error_of_text("GOTO/0,0,0\nEND\nPPRINT/X\n").empty());
+}
+
+TEST_CASE("cl words: CR, LF and CRLF all end a line, mixed too", "[io][cl][words]") {
+  const std::string body[] = {"UNITS/MM",        "LOADTL/3",   "SPINDL/2000,RPM,CLW",
+                              "FEDRAT/500,MMPM", "GOTO/0,0,0", "GOTO/10,0,0"};
+  for (const char* e : {"\r", "\n", "\r\n", "mixed"}) {
+    const std::string ends = e;
+    std::string text;
+    for (std::size_t i = 0; i < 6; ++i) {
+      text += body[i] + (ends != "mixed" ? ends : (i % 3 == 0 ? "\r" : i % 3 == 1 ? "\n" : "\r\n"));
+    }
+    INFO(ends.size());
+    const Toolpath tp = parse_cl(text, "e.cls");
+    REQUIRE(tp.operations.size() == 1);
+    CHECK(tp.operations[0].tool.number == 3);
+    CHECK(tp.operations[0].spindle_rpm == 2000.0);
+    CHECK(tp.operations[0].points.size() == 2);
+    CHECK(tp.operations[0].points[1].line == 6);
+  }
+}
+
+TEST_CASE("cl words: units that contradict are refused or said", "[io][cl][words][units]") {
+  // A change of units after motion, or two UNITS that disagree.
+  CHECK_THAT(error_of_text("UNITS/MM\nGOTO/0,0,0\nUNITS/INCHES\nGOTO/1,0,0\n"),
+             Catch::Contains("w.cls:3: UNITS/INCHES contradicts the mm of line 1 after motion"));
+  CHECK(error_of_text("UNITS/MM\nGOTO/0,0,0\nUNITS/MM\nGOTO/1,0,0\n").empty());
+  // One feed with both an inch and a millimetre word.
+  CHECK_THAT(error_of_text("FEDRAT/MMPM,250,IPM\nGOTO/0,0,0\n"),
+             Catch::Contains("w.cls:1: FEDRAT/MMPM,250,IPM: both an inch and a millimetre"));
+  // A millimetre feed in an inch file: taken as its word says, and said.
+  const Toolpath tp = parse_cl("UNITS/INCHES\nFEDRAT/35,MMPM\nGOTO/0,0,0\nGOTO/1,0,0\n", "u.cls");
+  CHECK(tp.operations[0].points[1].feed_mm_per_min == Approx(35.0));
+  REQUIRE(tp.notices.size() == 1);
+  CHECK_THAT(tp.notices[0], Catch::Contains("u.cls:2: a feed in millimetres"));
+  // --units against the file's word: read as asked, and said.
+  ClReadOptions o;
+  o.units = LengthUnit::Millimetre;
+  const Toolpath forced = parse_cl("UNITS/INCHES\nGOTO/1,0,0\n", "u.cls", o);
+  CHECK(forced.operations[0].points[0].tip_mm.x() == 1.0);
+  REQUIRE(forced.notices.size() == 1);
+  CHECK_THAT(forced.notices[0], Catch::Contains("though it says in"));
+}
+
+TEST_CASE("cl words: TLAXIS sets the axis of the 3-number GOTOs after it", "[io][cl][words]") {
+  const Toolpath tp =
+      parse_cl("GOTO/0,0,0\nTLAXIS/0,0.6,0.8\nGOTO/1,0,0\nGOTO/2,0,0,0,0,1\nGOTO/3,0,0\n", "t");
+  const auto& p = tp.operations.at(0).points;
+  CHECK((p[0].axis - Vec3d::UnitZ()).norm() < 1e-12);
+  CHECK((p[1].axis - Vec3d(0, 0.6, 0.8)).norm() < 1e-12);
+  CHECK((p[3].axis - Vec3d::UnitZ()).norm() < 1e-12);
+  CHECK_THAT(error_of_text("TLAXIS/NORMPS\nGOTO/0,0,0\n"), Catch::Contains("TLAXIS expects"));
+}
+
+TEST_CASE(
+    "cl words: Fusion's MOVARC sweeps ANGLE deg counter-clockwise about its axis; rs274 moves "
+    "its path within 0.5 % of what it means",
+    "[io][cl][words][movarc][rs274]") {
+  // A Fusion-style pass: lead-in, three arcs of different sweeps and senses (the axis flipped
+  // for clockwise), a helix, straight moves between.
+  const double r = 8.0;
+  std::ostringstream os;
+  os.precision(10);
+  os << "UNITS/MM\nLOADTL/1\nSPINDL/8000,RPM,CLW\nFEDRAT/1200,MMPM\nRAPID\nGOTO/-20,0,5\n"
+        "GOTO/-20,0,0\n"
+     // a quarter counter-clockwise about +Z from (0,0), heading +X, to (r, r)
+     << "GOTO/0,0,0\n"
+     << "MOVARC/0," << r << ",0,0,0,1," << r << ",ANGLE,90\nGOTO/" << r << "," << r << ",0\n"
+     << "GOTO/" << r << "," << 3 * r
+     << ",0\n"
+     // 270 deg clockwise (written about -Z) about (2r, 3r), heading +Y, to (2r, 2r)
+     << "MOVARC/" << 2 * r << "," << 3 * r << ",0,0,0,-1," << r << ",ANGLE,270\nGOTO/" << 2 * r
+     << "," << 2 * r << ",0\n"
+     << "GOTO/-20," << 2 * r
+     << ",0\n"
+     // a full helical turn down 2 mm about (-20, r), heading -X
+     << "MOVARC/-20," << r << ",0,0,0,1," << r << ",ANGLE,360\nGOTO/-20," << 2 * r << ",-2\n"
+     << "GOTO/-40," << 2 * r << ",-2\nRAPID\nGOTO/-40," << 2 * r << ",20\nFINI\n";
+  const double expect = 5.0 + 20.0 + (0.5 * M_PI * r) + 2 * r + (1.5 * M_PI * r) + (2 * r + 20.0) +
+                        std::hypot(2 * M_PI * r, 2.0) + 20.0;
+  const Toolpath tp = parse_cl(os.str(), "fusion.apt");
+  CHECK(tp.reading.arcs == 3);
+  double feed_mm = 0.0;
+  const auto& pts = tp.operations.at(0).points;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (pts[i].motion == Motion::Feed) feed_mm += (pts[i].tip_mm - pts[i - 1].tip_mm).norm();
+  }
+  CHECK(feed_mm == Approx(expect).epsilon(1e-4));
+  // Through the CLI and rs274: the feed path as the interpreter moves it.
+  REQUIRE(have_rs274());
+  TempDir dir;
+  write_file(dir.path("f.apt"), os.str());
+  const RunResult run = run_taxopt("--in " + dir.path("f.apt") + " --method none --gcode " +
+                                   dir.path("o.ngc") + " -q");
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  std::vector<CanonMove> moves;
+  REQUIRE(run_rs274(dir.path("o.ngc"), moves).code == 0);
+  double rs_feed = 0.0;
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    if (!moves[i].feed) continue;
+    rs_feed += moves[i].arc ? moves[i].arc_length
+                            : std::sqrt(std::pow(moves[i].x - moves[i - 1].x, 2) +
+                                        std::pow(moves[i].y - moves[i - 1].y, 2) +
+                                        std::pow(moves[i].z - moves[i - 1].z, 2));
+  }
+  CHECK(rs_feed == Approx(expect).epsilon(0.005));
+  // An ANGLE its end GOTO does not match, and an arc whose neighbours run the other way.
+  CHECK_THAT(error_of_text("GOTO/-10,0,0\nGOTO/0,0,0\nMOVARC/0,5,0,0,0,1,5,ANGLE,80\nGOTO/5,5,0\n"
+                           "GOTO/5,20,0\n"),
+             Catch::Contains("w.cls:3: MOVARC: ANGLE 80 deg"));
+  CHECK_THAT(error_of_text("GOTO/10,0,0\nGOTO/0,0,0\nMOVARC/0,5,0,0,0,1,5,ANGLE,180\nGOTO/0,10,0\n"
+                           "GOTO/10,10,0\n"),
+             Catch::Contains("w.cls:3: MOVARC: the moves before and after it run clockwise"));
+}
+
+TEST_CASE(
+    "cl words: stops, dwells, spindle and coolant changes reach the program where they stand; "
+    "a surface speed becomes rpm through the cutter's diameter",
+    "[io][cl][words][program][rs274]") {
+  const std::string text =
+      "UNITS/MM\nCUTTER/10,5\nLOADTL/2\nSPINDL/150,SMM,CLW\nCOOLNT/MIST\nFEDRAT/600,MMPM\n"
+      "GOTO/0,0,10\nGOTO/0,0,0\nGOTO/10,0,0\nSTOP\nGOTO/20,0,0\nOPSTOP\nGOTO/30,0,0\n"
+      "DELAY/1.5\nGOTO/40,0,0\nSPINDL/OFF\nGOTO/50,0,0\nSPINDL/3000,RPM,CCLW\nCOOLNT/FLOOD\n"
+      "GOTO/60,0,0\nCOOLNT/OFF\nGOTO/70,0,0\nFINI\n";
+  const Toolpath tp = parse_cl(text, "p.apt");
+  const auto& op = tp.operations.at(0);
+  // 150 m/min at 10 mm: 4775 rpm.
+  CHECK(op.spindle_rpm == Approx(150000.0 / (M_PI * 10.0)));
+  REQUIRE(op.coolant);
+  CHECK(*op.coolant == ClCoolant::Mist);
+  CHECK(op.events.size() == 7);
+  REQUIRE(have_rs274());
+  TempDir dir;
+  write_file(dir.path("p.apt"), text);
+  const RunResult run = run_taxopt("--in " + dir.path("p.apt") + " --method none --gcode " +
+                                   dir.path("o.ngc") + " -q");
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  const std::string g = read_file(dir.path("o.ngc"));
+  std::vector<CanonMove> moves;
+  REQUIRE(run_rs274(dir.path("o.ngc"), moves).code == 0);
+  const auto lines = lines_of(g);
+  // Each event stands between the blocks of the points before and after it.
+  const std::size_t x10 = line_of(lines, "X10."), x20 = line_of(lines, "X20."),
+                    x30 = line_of(lines, "X30."), x40 = line_of(lines, "X40."),
+                    x50 = line_of(lines, "X50."), x60 = line_of(lines, "X60."),
+                    x70 = line_of(lines, "X70.");
+  REQUIRE(x70 != std::string::npos);
+  const std::size_t spindle = line_of(lines, "S4775 M3");
+  const std::size_t mist = line_of(lines, "M7");
+  CHECK(spindle < line_of(lines, "X0. Y0. Z0."));
+  CHECK(mist < line_of(lines, "X0. Y0. Z0."));
+  CHECK(line_of(lines, "M0", x10) < x20);
+  CHECK(line_of(lines, "M1", x20) < x30);
+  CHECK(line_of(lines, "G4 P1.5", x30) < x40);
+  CHECK(line_of(lines, "M5", x40) < x50);
+  CHECK(line_of(lines, "S3000 M4", x50) < x60);
+  CHECK(line_of(lines, "M8", x50) < x60);
+  CHECK(line_of(lines, "M9", x60) < x70);
+  // After the program: the spindle is stopped once more only if it turns.
+  CHECK(line_of(lines, "M5", x70) != std::string::npos);
+  // A surface speed without a cutter is refused; DELAY for a dialect without a known dwell.
+  CHECK_THAT(error_of_text("SPINDL/500,SFM\nGOTO/0,0,0\n"),
+             Catch::Contains("w.cls:1: SPINDL/SFM: a surface speed needs the cutter's diameter"));
+}

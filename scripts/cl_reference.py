@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Independent reading of the real CL files, for the test that no motion is dropped.
 
-For each file it counts the motion records (GOTO, FROM, GODLTA, GOHOME), the CIRCLE records,
+For each file it counts the motion records (GOTO, FROM, GODLTA, GOHOME), the arc records
+(CIRCLE, and Fusion's MOVARC, whose sweep is written: ANGLE deg counter-clockwise about its axis),
 and measures the length of the path the file means, in mm: straight moves between points,
 arcs by their own geometry with each arc's sense taken from the straight moves before and
 after it (tangent continuity) and, where those do not decide, from the CAM system's
@@ -156,6 +157,13 @@ def reference(path):
                 turns = int(number(a[[x.upper() for x in a].index("TIMES") + 1]))
             n = norm(v[3:6])
             pending = ("arc", mul(v[:3], units), [x / n for x in v[3:6]], turns)
+        elif h == "MOVARC":
+            # Fusion / HSM: xc,yc,zc,i,j,k,r,ANGLE,deg -- ANGLE deg counter-clockwise about (i,j,k).
+            circles += 1
+            v = [number(x) for x in a[:7]]
+            n = norm(v[3:6])
+            pending = ("arc", mul(v[:3], units), [x / n for x in v[3:6]], 1,
+                       math.radians(number(a[8])))
         elif h == "CYCLE":
             kind = a[0].upper()
             if kind == "OFF":
@@ -184,7 +192,8 @@ def reference(path):
         if it[0] != "p":
             continue
         if prev is not None and items[i - 1][0] == "arc":
-            _, c, n, turns = items[i - 1]
+            c, n, turns = items[i - 1][1:4]
+            given = items[i - 1][4] if len(items[i - 1]) > 4 else None
             s, e = prev, it[1]
             sp, ep = sub(s, c), sub(e, c)
             hs, he = dot(sp, n), dot(ep, n)
@@ -213,6 +222,8 @@ def reference(path):
                 clockwise = default_cw
             sweep = (2 * math.pi - ccw if ccw < 2 * math.pi - 1e-12 else ccw) if clockwise else ccw
             sweep += 2 * math.pi * (turns - 1)
+            if given is not None:
+                sweep = given  # MOVARC writes its sweep
             r = 0.5 * (norm(sp) + norm(ep))
             length += math.hypot(sweep * r, he - hs)
         elif prev is not None:

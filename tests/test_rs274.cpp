@@ -221,7 +221,7 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
     INFO("G2/G3 blocks: " << arcs << " for " << circles << " CIRCLE records");
     CHECK(rs274_mm == Approx(path_mm).epsilon(0.002));
   }
-  CHECK(files == 7);
+  CHECK(files == 8);
 }
 
 TEST_CASE("rs274: inch output of a millimetre file", "[rs274][integration]") {

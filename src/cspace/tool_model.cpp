@@ -1,6 +1,7 @@
 #include "taxopt/cspace/tool_model.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "taxopt/core/error.hpp"
 
@@ -25,8 +26,28 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
   if (!(shank > 0.0)) throw InputError("shank radius must be positive");
   ToolModel m;
   m.ball_radius_mm = R;
-  m.bodies.push_back({R, 0.0, flute - R});
-  if (gauge > flute) m.bodies.push_back({shank, flute - R, gauge - R});
+  if (tool.taper_rad > 0.0) {
+    // A tapered ball: the cone tangent to the ball has the radius R / cos(b) + s tan(b) at s
+    // above the ball centre. Steps of cylinders each enclose the cone over their span (the
+    // radius at its top), at most 0.02 mm over it, 64 at the most (then a 64th of its rise).
+    const double t = std::tan(tool.taper_rad);
+    const double length = flute - R;
+    const int steps = std::clamp(static_cast<int>(std::ceil(length * t / 0.02)), 1, 64);
+    for (int k = 0; k < steps; ++k) {
+      const double s0 = length * k / steps, s1 = length * (k + 1) / steps;
+      m.bodies.push_back({R / std::cos(tool.taper_rad) + s1 * t, s0, s1});
+    }
+    m.flute_bodies = steps;
+    const double top = R / std::cos(tool.taper_rad) + length * t;
+    if (!o.shank_radius_mm && gauge > flute) m.bodies.push_back({top, flute - R, gauge - R});
+    if (o.shank_radius_mm && gauge > flute) m.bodies.push_back({shank, flute - R, gauge - R});
+    if (o.holder_radius_mm && !(*o.holder_radius_mm >= m.bodies.back().radius_mm)) {
+      throw InputError("holder radius must be at least the tapered flutes' top radius");
+    }
+  } else {
+    m.bodies.push_back({R, 0.0, flute - R});
+    if (gauge > flute) m.bodies.push_back({shank, flute - R, gauge - R});
+  }
   if (o.holder_radius_mm) {
     const double hr = *o.holder_radius_mm;
     const double hl = o.holder_length_mm.value_or(40.0);

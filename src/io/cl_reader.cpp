@@ -1352,6 +1352,10 @@ class Reader {
     } else if (major == "CUTTER") {
       if (args.empty()) fail(line, "CUTTER expects a diameter");
       const auto v = numbers(args, 0, std::min<std::size_t>(args.size(), 7), major, line);
+      if (v.size() == 7 && v[0] > 0.0 && v[1] > 0.5 * v[0] + 1e-9) {
+        tapered_ball(v, line);
+        return;
+      }
       set_tool(v[0], v.size() > 1 ? v[1] : 0.0, v.size() > 6 ? v[6] : 0.0, line);
     } else if (major == "LOADTL" ||
                (major == "LOAD" && !args.empty() && upper(args[0]) == "TOOL")) {
@@ -1522,6 +1526,32 @@ class Reader {
     op.events.push_back(e);
   }
 
+  /// APT's CUTTER/d,r,e,f,a,b,h with r > d/2: a tapered ball-end mill of ball radius r whose
+  /// flanks, at b from the axis, are tangent to the ball (e = 0, f = r, a = 0); d is the
+  /// diameter where the flank line meets the tip plane, 2 r (1 - sin b) / cos b.
+  void tapered_ball(const std::vector<double>& v, int line) {
+    const double d = v[0], r = v[1], e = v[2], f = v[3], a = v[4], b = v[5], h = v[6];
+    const double b_rad = deg_to_rad(b);
+    const double d_expected = 2.0 * r * (1.0 - std::sin(b_rad)) / std::cos(b_rad);
+    if (!(b > 0.0 && b < 45.0) || std::abs(e) > 1e-6 * r + 1e-9 ||
+        std::abs(f - r) > 1e-6 * r + 1e-9 || std::abs(a) > 1e-9 ||
+        std::abs(d - d_expected) > 1e-3 * d_expected + 1e-6) {
+      std::ostringstream os;
+      os << "CUTTER: corner radius " << r << " > diameter/2 (" << 0.5 * d
+         << ") is a tapered ball only with e = 0, f = r, a = 0, a taper b within (0, 45) deg and "
+            "d = 2 r (1 - sin b) / cos b ("
+         << d_expected << " for b = " << b << ")";
+      fail(line, os.str());
+    }
+    set_tool(2.0 * r, r, h, line);
+    tool_.taper_rad = b_rad;
+    tool_changed();
+    std::ostringstream os;
+    os << "CUTTER: a tapered ball-end mill, ball radius " << r * scale_ << " mm, taper " << b
+       << " deg; its flanks are checked as steps of cylinders that enclose the cone";
+    notice(line, os.str());
+  }
+
   void set_tool(double d, double r, double length, int line) {
     if (!(d > 0.0)) fail(line, "tool diameter must be positive");
     if (r < 0.0 || r > 0.5 * d + 1e-9) fail(line, "tool corner radius must be in [0, diameter/2]");
@@ -1529,6 +1559,7 @@ class Reader {
     tool_.diameter_mm = d * scale_;
     tool_.corner_radius_mm = r * scale_;
     tool_.flute_length_mm = length * scale_;
+    tool_.taper_rad = 0.0;
     tool_.from_file = true;
     tool_changed();
   }

@@ -61,8 +61,8 @@ const std::vector<ClWord>& cl_words() {
       {"TLDATA", M::State, "TLDATA/MILL,d,r,l: the tool's diameter, corner radius, flute length",
        "NX", kNx, false},
       {"CUTTER", M::State,
-       "the tool: APT's d,r,e,f,a,b,h (diameter, corner radius, height); a tapered ball mill "
-       "is refused",
+       "the tool: APT's d,r,e,f,a,b,h (diameter, corner radius, height); r > d/2 is a tapered "
+       "ball mill of taper b where d = 2 r (1 - sin b) / cos b, else refused",
        "CATIA, SOLIDWORKS CAM, generic APT", kApt, false},
       {"LOADTL", M::State, "the tool number", "CATIA, Creo", kApt, false},
       {"LOAD", M::State, "LOAD/TOOL,n: the tool number", "NX, SOLIDWORKS CAM", kNx, false},

@@ -66,7 +66,8 @@ nlohmann::json tool_json(const Tool& tool, const JobOptions& options) {
                       {"from_file", tool.from_file},
                       {"diameter_mm", ball ? 2.0 * *ball : tool.diameter_mm},
                       {"corner_radius_mm", ball ? *ball : tool.corner_radius_mm},
-                      {"flute_length_mm", tool.flute_length_mm}};
+                      {"flute_length_mm", tool.flute_length_mm},
+                      {"taper_deg", rad_to_deg(tool.taper_rad)}};
   try {
     const ToolModel m = ToolModel::ball_end(tool, options.tool);
     nlohmann::json bodies = nlohmann::json::array();

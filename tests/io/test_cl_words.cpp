@@ -8,9 +8,11 @@
 
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
+#include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/cl_words.hpp"
 #include "taxopt/io/gcode.hpp"
+#include "taxopt/job.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -304,4 +306,86 @@ TEST_CASE(
   // A surface speed without a cutter is refused; DELAY for a dialect without a known dwell.
   CHECK_THAT(error_of_text("SPINDL/500,SFM\nGOTO/0,0,0\n"),
              Catch::Contains("w.cls:1: SPINDL/SFM: a surface speed needs the cutter's diameter"));
+}
+
+TEST_CASE(
+    "cl words: a tapered ball CUTTER is read as its ball and taper; its flanks are checked as "
+    "cylinders that enclose the cone",
+    "[io][cl][words][tool]") {
+  const double r = 3.0, b = 5.0, h = 30.0;
+  const double b_rad = deg_to_rad(b);
+  const double d = 2.0 * r * (1.0 - std::sin(b_rad)) / std::cos(b_rad);
+  std::ostringstream os;
+  os.precision(12);
+  os << "UNITS/MM\nCUTTER/" << d << "," << r << ",0," << r << ",0," << b << "," << h
+     << "\nGOTO/0,0,0\nGOTO/1,0,0\n";
+  const Toolpath tp = parse_cl(os.str(), "t.apt");
+  const Tool& tool = tp.operations.at(0).tool;
+  CHECK(tool.is_ball());
+  CHECK(tool.ball_radius_mm() == Approx(r));
+  CHECK(tool.taper_rad == Approx(b_rad));
+  CHECK(tool.flute_length_mm == Approx(h));
+  REQUIRE(tp.notices.size() == 1);
+  CHECK_THAT(tp.notices[0], Catch::Contains("tapered ball-end mill"));
+  // The cone, R / cos b + s tan b at s above the ball centre, lies inside the flute bodies,
+  // which exceed it by at most 0.02 mm, or by its rise over a 64th of the flutes.
+  const ToolModel m = ToolModel::ball_end(tool);
+  REQUIRE(m.flute_bodies > 1);
+  for (int k = 0; k <= 1000; ++k) {
+    const double s = (h - r) * k / 1000.0;
+    const double cone = r / std::cos(b_rad) + s * std::tan(b_rad);
+    bool inside = false;
+    for (int i = 0; i < m.flute_bodies; ++i) {
+      const ToolBody& body = m.bodies[static_cast<std::size_t>(i)];
+      if (s >= body.start_mm - 1e-12 && s <= body.end_mm + 1e-12) {
+        inside = inside || body.radius_mm >= cone - 1e-12;
+        CHECK(body.radius_mm - cone <= std::max(0.02, (h - r) * std::tan(b_rad) / 64.0) + 1e-9);
+      }
+    }
+    REQUIRE(inside);
+  }
+  // The shank past the flutes is the cone's top by default, never thinner.
+  CHECK(m.bodies[static_cast<std::size_t>(m.flute_bodies)].radius_mm >=
+        r / std::cos(b_rad) + (h - r) * std::tan(b_rad) - 1e-9);
+  // r > d/2 that is no tapered ball: refused, naming the formula.
+  CHECK_THAT(error_of_text("CUTTER/6,3.5,0,3.5,0,0,30\nGOTO/0,0,0\n"),
+             Catch::Contains("d = 2 r (1 - sin b) / cos b"));
+}
+
+TEST_CASE(
+    "cl words: with MSYS posted as written, a part mesh in the MCS is taken as it is and one in "
+    "absolute coordinates is moved into the MCS, decided by where the ball touches it",
+    "[io][cl][words][msys][part]") {
+  std::mt19937 rng(32);
+  const auto hfs = random_heightfields(rng);
+  const GeneratedCl g = raster_cl(hfs[1], 3.0, 0.0, 3, 2.0, 10.0, 30.0, 10.0, 40.0);
+  // The MCS at (100, -50, 20) turned a quarter about z: p_abs = R p + o.
+  const std::size_t eol = g.text.find('\n');
+  const std::string text =
+      g.text.substr(0, eol + 1) + "MSYS/100,-50,20,0,1,0,-1,0,0\n" + g.text.substr(eol + 1);
+  const Toolpath tp = parse_cl(text, "m.cls");
+  REQUIRE(tp.declared_frames.size() == 1);
+  // The points are as written.
+  CHECK((tp.operations.at(0).points.at(0).tip_mm - g.tips_mm.at(0)).norm() < 1e-6);
+  const TriangleMesh in_mcs = heightfield_mesh(hfs[1], 1.0);
+  Eigen::Matrix3d R;
+  R << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  const Vec3d o(100, -50, 20);
+  TriangleMesh absolute = in_mcs;
+  for (Vec3d& v : absolute.vertices) v = R * v + o;
+  std::string note;
+  const TriangleMesh a = part_mesh_for(tp, in_mcs, LengthUnit::Millimetre, &note);
+  CHECK_THAT(note, Catch::Contains("taken as it is"));
+  const TriangleMesh b = part_mesh_for(tp, absolute, LengthUnit::Millimetre, &note);
+  CHECK_THAT(note, Catch::Contains("moved into the MCS"));
+  REQUIRE(a.vertices.size() == b.vertices.size());
+  for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+    REQUIRE((a.vertices[i] - in_mcs.vertices[i]).norm() < 1e-12);
+    REQUIRE((b.vertices[i] - in_mcs.vertices[i]).norm() < 1e-9);
+  }
+  // A mesh the points touch in neither frame is refused.
+  TriangleMesh elsewhere = in_mcs;
+  for (Vec3d& v : elsewhere.vertices) v += Vec3d(0, 0, 40);
+  CHECK_THROWS_WITH(part_mesh_for(tp, elsewhere, LengthUnit::Millimetre, &note),
+                    Catch::Contains("neither frame"));
 }

@@ -95,6 +95,9 @@ struct Tool {
   double flute_length_mm = 0.0;
   /// True when the file described this tool (TLDATA or CUTTER); false for the default.
   bool from_file = false;
+  /// A tapered ball-end mill (APT CUTTER with r > d/2): the half angle of the cone tangent to
+  /// the ball, rad; 0 for a cylindrical tool. diameter_mm is then the ball's (2 r).
+  double taper_rad = 0.0;
 
   /// A ball-end mill of the given diameter and flute length (mm): corner radius d / 2.
   static Tool ball_end_mill(double diameter_mm, double flute_length_mm);

@@ -310,7 +310,8 @@ int main(int argc, char** argv) {
       ->group("Input");
   app.add_option(
          "--contact-tolerance", a.contact_tolerance,
-         "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, 0.1 x mean edge))")
+         "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, the mesh's chordal "
+         "error))")
       ->group("Input");
   app.add_option("--threads", a.threads, "worker threads, 1 to 1024 (default: all cores)")
       ->group("Diagnostics");

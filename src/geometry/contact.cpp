@@ -4,15 +4,28 @@
 
 namespace taxopt {
 
+const char* to_string(CurvatureSource source) {
+  switch (source) {
+    case CurvatureSource::Fit: return "fit";
+    case CurvatureSource::Facet: return "facet";
+    case CurvatureSource::Edge: return "edge";
+    case CurvatureSource::Vertex: return "vertex";
+  }
+  return "?";
+}
+
 double contact_tolerance_mm(const Part& part, const ContactOptions& options) {
+  // CAM finishing tolerances and CAD export chordal errors are hundredths of a millimetre;
+  // a mesh whose curves are tessellated coarser than that is judged by its own chordal error.
   return options.tolerance_mm > 0.0 ? options.tolerance_mm
-                                    : std::max(0.05, 0.1 * part.mean_edge_mm());
+                                    : std::max(0.05, part.chordal_error_mm());
 }
 
 std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
                                            double ball_radius_mm, const ContactOptions& options) {
   const double R = ball_radius_mm;
   const double tol = contact_tolerance_mm(part, options);
+  const double agree_cos = std::cos(deg_to_rad(options.fit_normal_agreement_deg));
   const std::size_t n = op.points.size();
   std::vector<ContactPoint> out(n);
   // Contact point, normal and curvature per point: independent, so in parallel.
@@ -20,24 +33,42 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
     const CLPointd& p = op.points[i];
     const Vec3d centre = p.tip_mm + R * p.axis;
     ContactPoint& c = out[i];
+    // The exact answer: the nearest point of the mesh, the normal towards the centre.
     const Part::Closest near = part.closest(centre);
-    if (near.distance_mm > R + tol + 0.5 * part.mean_edge_mm()) {
+    c.cc_mm = near.point;
+    c.gap_mm = near.distance_mm - R;
+    if (c.gap_mm > tol) {
       c.state = ContactState::InAir;
-      c.gap_mm = near.distance_mm - R;
       return;
     }
-    const LocalFit fit = part.fit_towards(centre, options.fit_neighbours);
-    c.cc_mm = fit.jet.p;
-    c.normal = unit_normal(fit.jet);
-    c.curvature = principal_curvatures(fit.jet);
-    c.gap_mm = std::min((centre - c.cc_mm).norm(), near.distance_mm) - R;
-    // The fitted surface may lie a little off the facets; the mesh itself decides a gouge.
-    if (near.distance_mm - R < -tol) {
-      c.state = ContactState::Gouging;
-    } else if (c.gap_mm > tol) {
-      c.state = ContactState::InAir;
+    c.state = c.gap_mm < -tol ? ContactState::Gouging : ContactState::Touching;
+    const Vec3d to_centre = centre - near.point;
+    if (to_centre.norm() > 1e-9) {
+      c.normal = to_centre.normalized();
     } else {
-      c.state = ContactState::Touching;
+      // The centre on the mesh (a ball cut in by its radius): the facet's normal, towards the
+      // tool.
+      const auto& f = part.mesh().faces[static_cast<std::size_t>(near.face)];
+      const auto& V = part.mesh().vertices;
+      Vec3d fn = (V[static_cast<std::size_t>(f[1])] - V[static_cast<std::size_t>(f[0])])
+                     .cross(V[static_cast<std::size_t>(f[2])] - V[static_cast<std::size_t>(f[0])])
+                     .normalized();
+      if (fn.dot(p.axis) < 0.0) fn = -fn;
+      c.normal = fn;
+    }
+    // Curvature: the local fit only where it agrees with the exact contact, else the mesh's.
+    const LocalFit fit = part.fit_towards(centre, options.fit_neighbours);
+    const Vec3d fit_normal = unit_normal(fit.jet);
+    if (fit.samples > 0 && (fit.jet.p - c.cc_mm).norm() <= tol && fit_normal.allFinite() &&
+        fit_normal.dot(c.normal) >= agree_cos) {
+      c.curvature = principal_curvatures(fit.jet);
+      c.curvature_from = CurvatureSource::Fit;
+    } else {
+      const Part::MeshCurvature mc = part.mesh_curvature(near, c.normal);
+      c.curvature = mc.curvature;
+      c.curvature_from = mc.feature == Part::Feature::Facet  ? CurvatureSource::Facet
+                         : mc.feature == Part::Feature::Edge ? CurvatureSource::Edge
+                                                             : CurvatureSource::Vertex;
     }
     c.local_gouge = c.curvature.k1 > 0.0 && 1.0 / c.curvature.k1 < R;
   });

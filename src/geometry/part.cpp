@@ -10,6 +10,8 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <iterator>
 #include <stdexcept>
 
@@ -30,6 +32,29 @@ Vec3d to_eigen(const K::Point_3& p) { return {p.x(), p.y(), p.z()}; }
 /// Monomials of the height jet up to degree 3: 1, x, y, x2, xy, y2, x3, x2y, xy2, y3.
 constexpr int kTerms3 = 10, kTerms2 = 6;
 
+/// Unit normal of face f (by its vertex order), zero for a degenerate face.
+Vec3d face_normal(const TriangleMesh& m, const std::array<int, 3>& f) {
+  const Vec3d& a = m.vertices[static_cast<std::size_t>(f[0])];
+  const Vec3d n = (m.vertices[static_cast<std::size_t>(f[1])] - a)
+                      .cross(m.vertices[static_cast<std::size_t>(f[2])] - a);
+  const double l = n.norm();
+  return l > 0.0 ? Vec3d(n / l) : Vec3d::Zero();
+}
+
+/// Distance of face f's vertex opposite the edge (a, b) from that edge's line, and the vertex.
+double width_across(const TriangleMesh& m, const std::array<int, 3>& f, int a, int b,
+                    Vec3d* opposite = nullptr) {
+  int o = f[0];
+  for (int v : f) {
+    if (v != a && v != b) o = v;
+  }
+  const Vec3d& pa = m.vertices[static_cast<std::size_t>(a)];
+  const Vec3d e = (m.vertices[static_cast<std::size_t>(b)] - pa).normalized();
+  const Vec3d d = m.vertices[static_cast<std::size_t>(o)] - pa;
+  if (opposite) *opposite = m.vertices[static_cast<std::size_t>(o)];
+  return (d - d.dot(e) * e).norm();
+}
+
 }  // namespace
 
 struct Part::Impl {
@@ -38,7 +63,55 @@ struct Part::Impl {
   Tree tree;
   KdTree kd;
   double mean_edge = 0.0;
+  double chordal_error = 0.0;
 };
+
+namespace {
+
+/// The chordal error estimate of Part::chordal_error_mm.
+double chordal_error_of(const TriangleMesh& m) {
+  // Edges as (low vertex, high vertex, face), sorted so that a shared edge's faces meet.
+  struct HalfEdge {
+    int a, b, face;
+  };
+  std::vector<HalfEdge> edges;
+  edges.reserve(3 * m.faces.size());
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.faces[f][static_cast<std::size_t>(k)];
+      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
+      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
+  });
+  std::vector<double> sagitta;
+  const double sharp = 30.0 * 3.14159265358979323846 / 180.0;
+  for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+    const HalfEdge& e = edges[i];
+    const HalfEdge& g = edges[i + 1];
+    if (e.a != g.a || e.b != g.b) continue;
+    if (i + 2 < edges.size() && edges[i + 2].a == e.a && edges[i + 2].b == e.b) continue;
+    const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(e.face)];
+    const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(g.face)];
+    const Vec3d n1 = face_normal(m, f1), n2 = face_normal(m, f2);
+    if (n1.isZero() || n2.isZero()) continue;
+    // Consistently oriented neighbours share the edge in opposite directions: the angle
+    // between their normals is the turn; else one is flipped.
+    const double angle = std::acos(std::clamp(std::abs(n1.dot(n2)), 0.0, 1.0));
+    if (angle >= sharp) continue;
+    const double h = std::min(width_across(m, f1, e.a, e.b), width_across(m, f2, e.a, e.b));
+    sagitta.push_back(h * angle / 8.0);
+  }
+  if (sagitta.empty()) return 0.0;
+  const std::size_t at = std::min(sagitta.size() - 1, (sagitta.size() * 99) / 100);
+  std::nth_element(sagitta.begin(), sagitta.begin() + static_cast<std::ptrdiff_t>(at),
+                   sagitta.end());
+  return sagitta[at];
+}
+
+}  // namespace
 
 Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
   if (mesh.faces.empty()) throw std::invalid_argument("Part: empty mesh");
@@ -54,6 +127,7 @@ Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
     edges += (b - a).norm() + (c - b).norm() + (a - c).norm();
   }
   impl_->mean_edge = edges / (3.0 * static_cast<double>(m.faces.size()));
+  impl_->chordal_error = chordal_error_of(m);
   impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
@@ -67,6 +141,97 @@ Part& Part::operator=(Part&&) noexcept = default;
 
 const TriangleMesh& Part::mesh() const { return impl_->mesh; }
 double Part::mean_edge_mm() const { return impl_->mean_edge; }
+double Part::chordal_error_mm() const { return impl_->chordal_error; }
+
+Part::MeshCurvature Part::mesh_curvature(const Closest& c, const Vec3d& normal) const {
+  const TriangleMesh& m = impl_->mesh;
+  const std::array<int, 3>& f = m.faces[static_cast<std::size_t>(c.face)];
+  MeshCurvature out;
+  out.curvature.d1 = normal.unitOrthogonal();
+  out.curvature.d2 = normal.cross(out.curvature.d1);
+  // Barycentric coordinates of the point in its face: which vertices it lies on.
+  const Vec3d& A = m.vertices[static_cast<std::size_t>(f[0])];
+  const Vec3d& B = m.vertices[static_cast<std::size_t>(f[1])];
+  const Vec3d& C = m.vertices[static_cast<std::size_t>(f[2])];
+  const Vec3d n = (B - A).cross(C - A);
+  const double area2 = n.squaredNorm();
+  if (!(area2 > 0.0)) return out;
+  const double w[3] = {(C - B).cross(c.point - B).dot(n) / area2,
+                       (A - C).cross(c.point - C).dot(n) / area2,
+                       (B - A).cross(c.point - A).dot(n) / area2};
+  std::vector<int> on;  // the face's vertices whose weight is not ~0
+  for (int k = 0; k < 3; ++k) {
+    if (w[k] > 1e-7) on.push_back(f[static_cast<std::size_t>(k)]);
+  }
+  if (on.size() == 3) return out;  // inside the facet: flat
+  // The curvature across edge (a, b) of this mesh, from the two faces on it.
+  const auto across = [&](int a, int b, double& k, Vec3d& dir) {
+    k = 0.0;
+    const Vec3d& pa = m.vertices[static_cast<std::size_t>(a)];
+    const Vec3d e = (m.vertices[static_cast<std::size_t>(b)] - pa).normalized();
+    dir = e.cross(normal);
+    if (dir.norm() < 1e-12) return false;
+    dir.normalize();
+    const Vec3d mid = 0.5 * (pa + m.vertices[static_cast<std::size_t>(b)]);
+    std::vector<int> faces;
+    for (int g : faces_within(mid, 1e-9 * std::max(1.0, mid.norm()))) {
+      const auto& fg = m.faces[static_cast<std::size_t>(g)];
+      if (std::count(fg.begin(), fg.end(), a) && std::count(fg.begin(), fg.end(), b)) {
+        faces.push_back(g);
+      }
+    }
+    if (faces.size() != 2) return false;  // a border or a non-manifold edge: no turn known
+    Vec3d o1, o2;
+    const auto& f1 = m.faces[static_cast<std::size_t>(faces[0])];
+    const auto& f2 = m.faces[static_cast<std::size_t>(faces[1])];
+    const double h = 0.5 * (width_across(m, f1, a, b, &o1) + width_across(m, f2, a, b, &o2));
+    Vec3d n1 = face_normal(m, f1), n2 = face_normal(m, f2);
+    if (n1.dot(normal) < 0.0) n1 = -n1;
+    if (n2.dot(normal) < 0.0) n2 = -n2;
+    const double angle = std::acos(std::clamp(n1.dot(n2), -1.0, 1.0));
+    // Concave where a face's far vertex rises above the other face towards `normal`.
+    const bool concave = (o2 - pa).dot(n1) > 0.0 || (o1 - pa).dot(n2) > 0.0;
+    k = h > 0.0 ? (concave ? 1.0 : -1.0) * angle / h : 0.0;
+    return true;
+  };
+  std::vector<std::pair<int, int>> edges;
+  if (on.size() == 2) {
+    out.feature = Feature::Edge;
+    edges.push_back({on[0], on[1]});
+  } else {
+    out.feature = Feature::Vertex;
+    const int v = on.empty() ? f[0] : on[0];
+    for (int g : faces_within(m.vertices[static_cast<std::size_t>(v)], 1e-9)) {
+      for (int u : m.faces[static_cast<std::size_t>(g)]) {
+        if (u != v) edges.push_back({std::min(u, v), std::max(u, v)});
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  }
+  double k_max = 0.0, k_min = 0.0;
+  Vec3d d_max = out.curvature.d1, d_min = out.curvature.d2;
+  for (const auto& [a, b] : edges) {
+    double k = 0.0;
+    Vec3d dir;
+    if (!across(a, b, k, dir)) continue;
+    if (k > k_max) k_max = k, d_max = dir;
+    if (k < k_min) k_min = k, d_min = dir;
+  }
+  // k1 >= k2; the other direction is perpendicular in the tangent plane.
+  if (k_max > 0.0) {
+    out.curvature.k1 = k_max;
+    out.curvature.d1 = d_max;
+    out.curvature.d2 = normal.cross(d_max).normalized();
+    out.curvature.k2 = k_min;
+  } else if (k_min < 0.0) {
+    out.curvature.k2 = k_min;
+    out.curvature.d2 = d_min;
+    out.curvature.d1 = d_min.cross(normal).normalized();
+    out.curvature.k1 = 0.0;
+  }
+  return out;
+}
 
 Part::Closest Part::closest(const Vec3d& q) const {
   const auto hit = impl_->tree.closest_point_and_primitive(to_cgal(q));

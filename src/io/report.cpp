@@ -6,6 +6,7 @@
 
 #include "taxopt/core/version.hpp"
 #include "taxopt/cspace/tool_model.hpp"
+#include "taxopt/geometry/contact.hpp"
 #include "taxopt/job.hpp"
 
 namespace taxopt {
@@ -125,8 +126,17 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       {"feed_schedule", options.feed_schedule},
       {"shank_clearance_mm", *options.shank_clearance_mm},
       {"holder_clearance_mm", *options.holder_clearance_mm},
-      {"part_tolerance_mm", options.part_tolerance_mm ? nlohmann::json(*options.part_tolerance_mm)
-                                                      : nlohmann::json(nullptr)},
+      // The tolerances in force: as given, else the part's default (the mesh's chordal error,
+      // at least 0.05 mm: contact.hpp); null without a part.
+      {"part_tolerance_mm",
+       options.part_tolerance_mm ? nlohmann::json(*options.part_tolerance_mm)
+       : options.part ? nlohmann::json(contact_tolerance_mm(*options.part, options.contact))
+                      : nlohmann::json(nullptr)},
+      {"contact_tolerance_mm",
+       options.part ? nlohmann::json(contact_tolerance_mm(*options.part, options.contact))
+                    : nlohmann::json(nullptr)},
+      {"part_chordal_error_mm",
+       options.part ? nlohmann::json(options.part->chordal_error_mm()) : nlohmann::json(nullptr)},
       {"gcode",
        {{"dialect", to_string(machine.gcode.dialect)},
         {"mode", machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine"},

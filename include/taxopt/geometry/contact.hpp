@@ -18,7 +18,18 @@ enum class ContactState {
   Gouging,   ///< nearer than R - tolerance: the ball cuts into the part
 };
 
-/// Geometry at one CL point (the vectors are meaningful when Touching).
+/// Where the curvature at a contact comes from (docs/method.md, "Contacts").
+enum class CurvatureSource {
+  Fit,     ///< the local jet fit, which agrees with the exact contact (point and normal)
+  Facet,   ///< the mesh: inside a facet (flat)
+  Edge,    ///< the mesh: on an edge (the turn of its two facets across it)
+  Vertex,  ///< the mesh: at a vertex (its most concave and most convex edges)
+};
+const char* to_string(CurvatureSource source);
+
+/// Geometry at one CL point (the vectors are meaningful when Touching). The contact point is
+/// the exact nearest point of the mesh to the ball centre and the normal the direction from
+/// it to the centre, whatever the facets' sizes.
 struct ContactPoint {
   ContactState state = ContactState::InAir;
   Vec3d cc_mm = Vec3d::Zero();
@@ -32,12 +43,17 @@ struct ContactPoint {
   double gap_mm = 0.0;
   /// A concave principal radius at Pc is below R (local gouge, eq. 19).
   bool local_gouge = false;
+  CurvatureSource curvature_from = CurvatureSource::Facet;
 };
 
 /// Options of recover_contacts.
 struct ContactOptions {
-  /// Largest | |C - Pc| - R | of a contact point, mm; 0: max(0.05 mm, 0.1 x mean edge).
+  /// Largest | |C - Pc| - R | of a contact point, mm; 0: the default, max(0.05 mm, the
+  /// mesh's own chordal error, Part::chordal_error_mm) -- never the facets' size.
   double tolerance_mm = 0.0;
+  /// A fit's curvature is used where its point lies within the tolerance of the exact
+  /// contact and its normal within this angle of the exact normal, deg.
+  double fit_normal_agreement_deg = 3.0;
   /// Vertices of the local jet fit.
   int fit_neighbours = 30;
 };

@@ -51,6 +51,26 @@ class Part {
   /// Indices of the faces within `radius_mm` of q (exact triangle distance), ascending.
   std::vector<int> faces_within(const Vec3d& q, double radius_mm) const;
 
+  /// The mesh's chordal error, mm: how far its facets may lie from the surface they stand
+  /// for, measured on the mesh itself. Each edge between two facets that meet at less than
+  /// 30 deg (a tessellated curve, not a sharp edge of the part) spans an arc of that angle over
+  /// the narrower facet's width h, whose sagitta is about h * angle / 8; this is the 99th
+  /// percentile of those (0 for a mesh of flat faces and sharp edges). Big flat facets do not
+  /// raise it: they meet their neighbours at 0 deg, or at a real edge.
+  double chordal_error_mm() const;
+
+  /// Where a closest point lies on the mesh, and the curvature the mesh itself gives there.
+  enum class Feature { Facet, Edge, Vertex };
+  struct MeshCurvature {
+    Feature feature = Feature::Facet;
+    PrincipalCurvatures<double> curvature;
+  };
+  /// The curvature of the mesh at its closest point `c` seen from the side `normal` points
+  /// to (positive: concave, curving towards that side): 0 inside a facet; across an edge the
+  /// turn of its two facets' normals over their mean width (none along it); at a vertex the
+  /// most concave and most convex of its edges.
+  MeshCurvature mesh_curvature(const Closest& c, const Vec3d& normal) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

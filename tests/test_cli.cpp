@@ -1,6 +1,7 @@
 // The command line as scripts see it: exit codes, the error line, atomic outputs.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 
 #include "support.hpp"
@@ -664,4 +665,36 @@ TEST_CASE("cli: help in groups with units, exit codes and examples; a bare call 
         "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   CHECK(taxopt::sha256_hex(std::string(1000000, 'a')) ==
         "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST_CASE(
+    "cli: a point refused for a shank hit names the body, its distance from the part and the "
+    "flute length that clears it, and that length does",
+    "[cli][collision][refusal]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  const std::string base = "--in " + d + "sine.cls --part " + d + "sine.stl --method none -q " +
+                           "--gauge-length 30 --gcode " + t.path("o.nc");
+  const RunResult r = run_taxopt(base + " --flute-length 4");
+  REQUIRE(r.code == 1);
+  const std::regex first(
+      "sine\\.cls:([0-9]+): operation SINE_FINISH: [0-9]+ CL points where the "
+      "tool hits the part[^\\n]*; at line ([0-9]+) the shank comes "
+      "([0-9.]+) mm from the part \\(its clearance 0\\.500 mm\\); flutes of "
+      "([0-9.]+) mm from the tip \\(--flute-length\\) would clear it here");
+  std::smatch m;
+  INFO(r.err);
+  REQUIRE(std::regex_search(r.err, m, first));
+  CHECK(m[1].str() == m[2].str());
+  const double distance = std::stod(m[3].str()), flutes = std::stod(m[4].str());
+  CHECK(distance >= 0.0);
+  CHECK(distance < 0.5);
+  // With those flutes that line is clear.
+  const RunResult again = run_taxopt(base + " --flute-length " + std::to_string(flutes + 0.02));
+  INFO(again.err);
+  const std::regex line(
+      "sine\\.cls:([0-9]+): operation SINE_FINISH: [0-9]+ CL points where the "
+      "tool hits the part");
+  std::smatch m2;
+  if (std::regex_search(again.err, m2, line)) CHECK(m2[1].str() != m[1].str());
 }

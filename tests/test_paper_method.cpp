@@ -6,6 +6,7 @@
 // triangle-versus-cylinder test (not FCL, which the optimiser uses).
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 
@@ -337,4 +338,51 @@ TEST_CASE(
   k.tool.holder_length_mm = 40.0;
   k.tool_args = "--holder-radius 10 --holder-length 40";
   check_case(k);
+}
+
+// Issue 34: the default method's output verifies wherever a program exists. Walls with a
+// concave fillet at their foot, the input leaning the shank and holder into them, at the
+// clearances a shop sets (shank 0.5 to 1 mm, holder 0.5 to 3 mm): --method paper writes a
+// program the verification (FCL, the grown bodies, every move as the machine runs it) passes.
+TEST_CASE(
+    "paper method: walls the input hits, at shank and holder clearances from 0.5/0.5 to 1/3 mm, "
+    "give a verified program",
+    "[paper][wall][clearance][integration]") {
+  TempDir dir;
+  for (int seed : {1, 3}) {
+    std::mt19937 rng(static_cast<unsigned>(seed * 77));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double height = 35.0 + 10.0 * u(rng), wall_y = 24.0 + 2.0 * u(rng);
+    const double width = 0.5 + 0.3 * u(rng), lean = 15.0 + 20.0 * u(rng);
+    Heightfield hf;
+    hf.name = "wall";
+    hf.z = [=](double, double y) { return height / (1.0 + std::exp(-(y - wall_y) / width)); };
+    hf.normal = [z = hf.z](double x, double y) {
+      const double e = 1e-5;
+      return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
+    };
+    const double d = 4.0 + 6.0 * u(rng);
+    const GeneratedCl g =
+        leaning_cl(hf, 3.0, lean, {wall_y - d - 4.0, wall_y - d - 2.0, wall_y - d}, 0.0, 50.0);
+    write_file(dir.path("w.cls"), g.text);
+    write_file(dir.path("w.stl"), format_stl_binary(heightfield_mesh(hf, 0.5)));
+    const std::string base = "--in " + dir.path("w.cls") + " --part " + dir.path("w.stl") +
+                             " --holder-radius 10 --holder-length 40 -q --gcode " +
+                             dir.path("w.nc") + " --report " + dir.path("w.json");
+    // The input hits the part: there is something to repair.
+    CHECK(run_taxopt(base + " --method none").code == 1);
+    for (const char* clearances : {"0.5 --holder-clearance 0.5", "0.5 --holder-clearance 2",
+                                   "0.5 --holder-clearance 3", "1 --holder-clearance 3"}) {
+      INFO("seed " << seed << " --shank-clearance " << clearances);
+      const RunResult r =
+          run_taxopt(base + " --method paper --shank-clearance " + std::string(clearances));
+      INFO(r.err);
+      CHECK(r.code == 0);
+      const auto rep = nlohmann::json::parse(read_file(dir.path("w.json")));
+      for (const auto& op : rep["operations"]) {
+        CHECK(op["verification"]["collision_free"] == true);
+        CHECK(op["verification"]["colliding_moves"] == 0);
+      }
+    }
+  }
 }

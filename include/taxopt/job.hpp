@@ -225,6 +225,16 @@ struct OperationResult {
     std::size_t total() const { return collision + peak_rate + no_free_axis; }
   };
   std::optional<KeptInputPoints> kept_input_points;
+  /// --objective time: the plan kept (paper, sum-squares, sum-squares-fine, time, input), its
+  /// scheduled cycle and peak a, and the shortest plan's: within the tie band of the shortest
+  /// cycle the smoothest plan wins (GlobalOptions::time_tie_band).
+  struct TimeChoice {
+    std::string plan, shortest_plan;
+    double cycle_s = 0.0, peak_accel_deg_s2 = 0.0;
+    double shortest_cycle_s = 0.0, shortest_peak_accel_deg_s2 = 0.0;
+    double tie_band = 0.0;
+  };
+  std::optional<TimeChoice> time_choice;
   std::vector<PointRow> rows;
   /// With JobOptions::cspace_maps: the maps of the chosen points.
   std::vector<CSpaceMap> cspace_maps;

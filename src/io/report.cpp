@@ -266,6 +266,16 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                                 {"whole_passes", kept.passes},
                                 {"stretches", kept.stretches}};
     }
+    if (r.time_choice) {
+      const auto& t = *r.time_choice;
+      o["time_objective"] = {{"plan", t.plan},
+                             {"cycle_s", t.cycle_s},
+                             {"peak_accel_deg_s2", t.peak_accel_deg_s2},
+                             {"shortest_plan", t.shortest_plan},
+                             {"shortest_cycle_s", t.shortest_cycle_s},
+                             {"shortest_peak_accel_deg_s2", t.shortest_peak_accel_deg_s2},
+                             {"tie_band", t.tie_band}};
+    }
     ops.push_back(o);
   }
   j["operations"] = ops;

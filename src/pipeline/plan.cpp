@@ -733,19 +733,16 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   };
   const double paper_s = cycle(paper), smooth_s = cycle(smooth), fast_s = cycle(fast);
   const double fine_s = pyramid ? cycle(fine) : std::numeric_limits<double>::infinity();
-  const char* chosen = "sum-squares";
-  double best_s = smooth_s;
-  out = smooth;
-  if (fine_s < best_s * (1.0 - 1e-9)) out = fine, best_s = fine_s, chosen = "sum-squares-fine";
-  if (paper_s < best_s * (1.0 - 1e-9)) out = paper, best_s = paper_s, chosen = "paper";
-  if (fast_s < best_s * (1.0 - 1e-9)) out = std::move(fast), best_s = fast_s, chosen = "time";
-  // The input's axes, where they are faster still and every point and move of theirs is free.
-  const double input_s = in_plan.ok()
-                             ? operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
-                                                 deg_to_rad(options.max_deviation_deg), in_axes, {},
-                                                 pose_options, fallback_feed, time.programmed_s)
-                             : std::numeric_limits<double>::infinity();
-  if (input_s < best_s * (1.0 - 1e-9)) {
+  // The input's axes count where every point and move of theirs is free.
+  double input_s = in_plan.ok()
+                       ? operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
+                                           deg_to_rad(options.max_deviation_deg), in_axes, {},
+                                           pose_options, fallback_feed, time.programmed_s)
+                       : std::numeric_limits<double>::infinity();
+  OptimisedOperation input = paper;
+  input.axes = in_axes;
+  input.preferred.clear();
+  if (std::isfinite(input_s)) {
     Machine path_machine = machine;
     if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
       path_machine.gcode.mode = GcodeMode::Tcp;
@@ -753,19 +750,71 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
     const std::vector<char> hit =
         points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, in_axes,
                              in_plan.poses, std::vector<char>(op.points.size(), 1));
-    if (std::find(hit.begin(), hit.end(), 1) == hit.end()) {
-      out = paper;
-      out.axes = in_axes;
-      out.preferred.clear();
-      best_s = input_s;
-      chosen = "input";
+    if (std::find(hit.begin(), hit.end(), 1) != hit.end()) {
+      input_s = std::numeric_limits<double>::infinity();
     }
   }
-  char line[320];
+  // The peak a of a plan's passes (eq. 16-18 at the metric feeds).
+  const auto peak_a = [&](const OptimisedOperation& o) {
+    const PosePlan pp = plan_poses(machine.ac, o.axes, rapid_into, {}, pose_options, o.preferred);
+    if (!pp.ok()) return std::numeric_limits<double>::infinity();
+    RotarySummary summary;
+    for (const IndexRange& pass : feed_passes(op)) {
+      std::vector<double> a, c;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) {
+        a.push_back(rad_to_deg(pp.poses[i].a_rad));
+        c.push_back(rad_to_deg(pp.poses[i].c_rad));
+      }
+      accumulate(summary,
+                 rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
+                                   pass_feeds(metric_feed, pass)),
+                 c);
+    }
+    return summary.max_accel_deg_s2;
+  };
+  struct Plan {
+    const char* name;
+    const OptimisedOperation* plan;
+    double cycle_s, peak_a;
+  };
+  std::vector<Plan> plans = {{"sum-squares", &smooth, smooth_s, 0.0},
+                             {"sum-squares-fine", &fine, fine_s, 0.0},
+                             {"paper", &paper, paper_s, 0.0},
+                             {"time", &fast, fast_s, 0.0},
+                             {"input", &input, input_s, 0.0}};
+  double shortest = std::numeric_limits<double>::infinity();
+  for (const Plan& p : plans) shortest = std::min(shortest, p.cycle_s);
+  // Within the tie band of the shortest cycle, the smoothest plan wins (then the shorter, then
+  // the earlier in the list: deterministic).
+  const Plan* best = nullptr;
+  const Plan* fastest = nullptr;
+  for (Plan& p : plans) {
+    if (!std::isfinite(p.cycle_s)) continue;
+    if (!fastest || p.cycle_s < fastest->cycle_s * (1.0 - 1e-9)) fastest = &p;
+    if (p.cycle_s > shortest * (1.0 + options.time_tie_band)) continue;
+    p.peak_a = peak_a(*p.plan);
+    if (!best || p.peak_a < best->peak_a * (1.0 - 1e-9) ||
+        (p.peak_a <= best->peak_a * (1.0 + 1e-9) && p.cycle_s < best->cycle_s * (1.0 - 1e-9))) {
+      best = &p;
+    }
+  }
+  if (!best) return "no plan could be timed: the paper's axes kept";
+  const std::string chosen = best->name;
+  const double best_s = best->cycle_s, best_peak = best->peak_a;
+  const double fastest_peak = fastest == best ? best_peak : peak_a(*fastest->plan);
+  const std::string fastest_name = fastest->name;
+  const double fastest_s = fastest->cycle_s;
+  out = *best->plan;
+  out.time_choice = OperationResult::TimeChoice{
+      chosen, fastest_name, best_s, best_peak, fastest_s, fastest_peak, options.time_tie_band};
+  char line[640];
   std::snprintf(line, sizeof line,
                 "scheduled cycle %.3f s (paper), %.3f s (sum-squares), %.3f s (sum-squares, "
-                "fine), %.3f s (time plan), %.3f s (input): %s axes kept",
-                paper_s, smooth_s, fine_s, fast_s, input_s, chosen);
+                "fine), %.3f s (time plan), %.3f s (input): %s axes kept (%.3f s, peak a %.1f "
+                "deg/s^2; the shortest, %s, %.3f s with peak a %.1f: within the %.1f %% tie band "
+                "the smoother wins)",
+                paper_s, smooth_s, fine_s, fast_s, input_s, chosen.c_str(), best_s, best_peak,
+                fastest_name.c_str(), fastest_s, fastest_peak, 100.0 * options.time_tie_band);
   return line;
 }
 
@@ -790,13 +839,13 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
   out.guard = guard_passes(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
                            options.pose_options, out);
   std::string time_line;
+  GlobalOptions global = options.global;
+  global.max_deviation_deg = options.paper.max_deviation_deg;
+  global.candidate_step_deg =
+      std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
+  // The pyramid down to the C-space cell size (refine_time uses it for one of its plans).
+  global.fine_step_deg = options.paper.grid_deg;
   if (options.method == Method::Global) {
-    GlobalOptions global = options.global;
-    global.max_deviation_deg = options.paper.max_deviation_deg;
-    global.candidate_step_deg =
-        std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
-    // The pyramid down to the C-space cell size (refine_time uses it for one of its plans).
-    global.fine_step_deg = options.paper.grid_deg;
     if (global.objective == GlobalObjective::Time) {
       time_line =
           refine_time(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
@@ -804,6 +853,52 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
     } else {
       refine_global(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
                     options.pose_options, global, out, progress);
+    }
+  }
+  if (options.method == Method::Paper && run.collision && tool) {
+    // The paper's plan judged as the verification judges it (FCL, the same grown bodies, every
+    // point and every move as the machine runs it): where it still hits, the global method's
+    // plan of the operation, else the input's axes over the stretches that hit (where those
+    // are free). The verification stays the judge of what is written.
+    const std::size_t n = op.points.size();
+    Machine path_machine = run.machine;
+    if (path_machine.gcode.program.linearise_tolerance_mm > 0.0) {
+      path_machine.gcode.mode = GcodeMode::Tcp;
+    }
+    const auto hits = [&](const OptimisedOperation& plan) -> std::size_t {
+      const PosePlan pp = plan_poses(run.machine.ac, plan.axes, rapid_into_of(op), {},
+                                     options.pose_options, plan.preferred);
+      if (!pp.ok()) return 0;  // unposable axes are the verification's to report
+      const std::vector<char> hit =
+          points_and_moves_hit(op, o.contacts, R, &*run.collision, tool, path_machine, plan.axes,
+                               pp.poses, std::vector<char>(n, 1));
+      return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
+    };
+    if (const std::size_t paper_hits = hits(out); paper_hits > 0) {
+      OptimisedOperation alt = out;
+      refine_global(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
+                    options.pose_options, global, alt, progress);
+      std::string how;
+      if (hits(alt) == 0) {
+        out = std::move(alt);
+        how = "the global method's plan is used for this operation";
+      } else {
+        const StretchGuardResult g =
+            guard_passes(op, o.contacts, R, &*run.collision, tool, run.machine,
+                         o.metric_feed_mm_per_min, options.pose_options, out);
+        out.guard.points_hit += g.points_hit;
+        out.guard.stretches += g.stretches;
+        out.guard.whole_passes += g.whole_passes;
+        how =
+            "neither the global method's plan is free: the input's axes are kept where they "
+            "hit, where those are free";
+      }
+      add_finding(res, FindingCode::InputAxesKept, k, 0,
+                  "operation " + op.name +
+                      ": the paper method's plan swept the tool through the "
+                      "part at " +
+                      std::to_string(paper_hits) +
+                      " points or moves, as the verification judges them; " + how);
     }
   }
   if (const StretchGuardResult& g = out.guard; g.whole_passes + g.stretches > 0) {

@@ -72,6 +72,8 @@ struct OptimisedOperation {
   std::size_t global_passes = 0;
   /// What the guard after --method global gave back the paper's axes.
   StretchGuardResult global_guard;
+  /// --objective time: which plan won and by how much.
+  std::optional<OperationResult::TimeChoice> time_choice;
 };
 
 /// One operation through the stages: what is worked out once (ball radius, tool model, feeds)

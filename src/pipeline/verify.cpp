@@ -201,6 +201,74 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   }
 }
 
+/// What hits at point i (axis `axis`): the first body of the judged `tool` past the flutes
+/// that meets the part, how far its real body (`real_tool`) stays from it (or that it enters
+/// it), and, for the shank, the flute length that would clear it when one does: the words a
+/// refusal gives (issue 34).
+std::string what_hits(const CollisionModel& model, const ToolModel& tool,
+                      const ToolModel& real_tool, const Operationd& op, std::size_t i,
+                      const Vec3d& axis, bool in_air) {
+  const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * axis;
+  const std::size_t first = static_cast<std::size_t>(tool.flute_bodies);
+  for (std::size_t b = first; b < tool.bodies.size(); ++b) {
+    ToolModel one = tool;
+    one.bodies = {tool.bodies[b]};
+    if (!model.collides(one, centre, axis, false)) continue;
+    const bool holder = static_cast<int>(b) == tool.holder_body;
+    const char* name = holder ? "holder" : "shank";
+    const double clearance = tool.bodies[b].radius_mm - real_tool.bodies[b].radius_mm;
+    // The real body grown by d stays free for d below its distance from the part.
+    const auto free_grown = [&](double d) {
+      ToolModel g = real_tool;
+      g.bodies = {real_tool.bodies[b]};
+      g.bodies[0].radius_mm += d;
+      if (holder) g.bodies[0].start_mm -= d;
+      return !model.collides(g, centre, axis, false);
+    };
+    std::ostringstream os;
+    os.precision(3);
+    os << std::fixed;
+    if (!free_grown(0.0)) {
+      os << "the " << name << " itself enters the part";
+    } else {
+      double lo = 0.0, hi = clearance;
+      while (hi - lo > 0.001) {
+        const double mid = 0.5 * (lo + hi);
+        (free_grown(mid) ? lo : hi) = mid;
+      }
+      os << "the " << name << " comes " << lo << " mm from the part (its clearance " << clearance
+         << " mm)";
+    }
+    if (!holder && b == first && tool.bodies[b].end_mm > tool.bodies[b].start_mm) {
+      // Longer flutes (the flute body as judged) over the shank's first x mm.
+      const double s0 = tool.bodies[b].start_mm, s1 = tool.bodies[b].end_mm;
+      const auto clear_with = [&](double x) {
+        ToolModel g = tool;
+        g.bodies.erase(g.bodies.begin(), g.bodies.begin() + static_cast<long>(b));
+        g.bodies.front().start_mm = s0 + x;
+        ToolBody flutes = tool.bodies.front();
+        flutes.start_mm = s0;
+        flutes.end_mm = s0 + x;
+        if (x > 0.0) g.bodies.insert(g.bodies.begin(), flutes);
+        return !model.collides(g, centre, axis, false);
+      };
+      if (clear_with(s1 - s0 - 1e-6)) {
+        double lo = 0.0, hi = s1 - s0 - 1e-6;
+        while (hi - lo > 0.01) {
+          const double mid = 0.5 * (lo + hi);
+          (clear_with(mid) ? hi : lo) = mid;
+        }
+        os << "; flutes of " << hi + s0 + tool.ball_radius_mm
+           << " mm from the tip (--flute-length) would clear it here";
+      } else {
+        os << "; no flute length up to the gauge length clears it here";
+      }
+    }
+    return os.str();
+  }
+  return in_air ? "the ball, in the air, meets the part" : "";
+}
+
 /// The collisions of an operation's points and moves as written (FCL, the reference), told
 /// apart by body, and the clearance of the bodies that do not cut.
 void check_collisions(const Run& run, const OperationContext& o, const PostedOperation& po,
@@ -248,21 +316,34 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
       if (run.collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
     }
     r.verification.flute_gouge_points = static_cast<long>(gouges.size());
-    const auto report = [&](const std::vector<std::size_t>& at, const std::string& what) {
+    const auto report = [&](const std::vector<std::size_t>& at, const std::string& what,
+                            const std::string& first_detail = std::string()) {
       if (at.empty()) return;
       std::string lines;
       for (std::size_t j = 0; j < at.size() && j < 10; ++j) {
         lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
       }
       if (at.size() > 10) lines += ", ...";
-      add_finding(res, FindingCode::PointCollision, k, op.points[at.front()].line,
-                  format_location(run.tp.source, op.points[at.front()].line,
-                                  "operation " + op.name + ": " + std::to_string(at.size()) +
-                                      " CL points " + what + ", at lines " + lines));
+      add_finding(
+          res, FindingCode::PointCollision, k, op.points[at.front()].line,
+          format_location(run.tp.source, op.points[at.front()].line,
+                          "operation " + op.name + ": " + std::to_string(at.size()) +
+                              " CL points " + what + ", at lines " + lines +
+                              (first_detail.empty()
+                                   ? std::string()
+                                   : "; at line " + std::to_string(op.points[at.front()].line) +
+                                         " " + first_detail)));
     };
+    const std::string hit_detail =
+        hits.empty()
+            ? std::string()
+            : what_hits(
+                  *run.collision, tool, real_tool, op, hits.front(), out_axes[hits.front()],
+                  o.contacts.empty() || o.contacts[hits.front()].state != ContactState::Touching);
     report(hits,
            "where the tool hits the part (the shank or holder within its clearance, or a "
-           "ball in the air)");
+           "ball in the air)",
+           hit_detail);
     report(gouges,
            "where the flutes reach into the part deeper than the part tolerance "
            "(a gouge; --part-tolerance)");
@@ -491,6 +572,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       kept.join_points += kw == KeptWhy::Join;
     }
     r.kept_input_points = kept;
+    r.time_choice = opt.time_choice;
     // The optimiser keeps every axis within the cone; this proves it on what is written.
     const double allowed = options.paper.max_deviation_deg + 1e-6;
     if (r.max_axis_change_deg > allowed) {

@@ -200,6 +200,7 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   if (!posted) return res;
   const pipeline::Written written = pipeline::write_program(run, ops, *posted, res);
   pipeline::verify_operations(run, ops, *posted, written, res);
+  pipeline::mark_unverified(run, *posted, res);
   return res;
 }
 

@@ -560,7 +560,11 @@ TEST_CASE("cli: -v tells each long stage's time, -q says nothing", "[cli]") {
   CHECK(r.err.find('\r') == std::string::npos);
   r = run_taxopt(args + " -q");
   REQUIRE(r.code == 0);
-  CHECK(r.err.empty());
+  // -q silences progress, notes and the summary, never what was not checked.
+  std::istringstream err_lines(r.err);
+  for (std::string l; std::getline(err_lines, l);) {
+    CHECK_THAT(l, Catch::StartsWith("taxopt: warning: NOT CHECKED: "));
+  }
   CHECK(r.out.empty());
 }
 
@@ -608,7 +612,9 @@ TEST_CASE("cli: the report can be reproduced from itself, its numbers tidy", "[c
   const RunResult r = run_taxopt("demo --out " + t.path("demo") + " -q");
   INFO(r.err);
   REQUIRE(r.code == 0);
-  CHECK(r.err.empty());
+  // Only the NOT CHECKED safety warnings (-q never silences them): here the holder.
+  CHECK(r.err.find("taxopt: note:") == std::string::npos);
+  CHECK(r.err.find("NOT CHECKED: no holder model") != std::string::npos);
   const std::string text = read_file(t.path("demo/report.json"));
   const auto rep = nlohmann::json::parse(text);
   const auto& run = rep["run"];
@@ -697,4 +703,34 @@ TEST_CASE(
       "tool hits the part");
   std::smatch m2;
   if (std::regex_search(again.err, m2, line)) CHECK(m2[1].str() != m[1].str());
+}
+
+TEST_CASE(
+    "cli: a program says in its first lines what was not checked, and a --force program that "
+    "its verification failed",
+    "[cli][safety]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  // No part: the program's header says so.
+  RunResult r = run_taxopt("--in " + d + "sine.cls --gcode " + t.path("a.ngc") + " -q");
+  REQUIRE(r.code == 0);
+  const auto head = [](const std::string& text) {
+    std::istringstream in(text);
+    std::string out, l;
+    for (int i = 0; i < 12 && std::getline(in, l); ++i) out += l + "\n";
+    return out;
+  };
+  CHECK_THAT(head(read_file(t.path("a.ngc"))), Catch::Contains("(NOT CHECKED: no part"));
+  CHECK(read_file(t.path("a.ngc")).find("NOT VERIFIED") == std::string::npos);
+  // A failed verification written with --force: named in the header; rs274 still reads it.
+  r = run_taxopt("--in " + d + "sine.cls --part " + d + "sine.stl --method none -q " +
+                 "--gauge-length 30 --flute-length 4 --force --gcode " + t.path("f.ngc"));
+  REQUIRE(r.code == 1);
+  const std::string forced = read_file(t.path("f.ngc"));
+  CHECK_THAT(head(forced), Catch::Contains("(NOT VERIFIED: the verification failed ["));
+  CHECK_THAT(forced, Catch::Contains("(FAILED: "));
+  if (have_rs274()) {
+    std::vector<CanonMove> moves;
+    CHECK(run_rs274(t.path("f.ngc"), moves).code == 0);
+  }
 }

@@ -366,7 +366,8 @@ TEST_CASE("rs274: a 3+2 arc in a tilted plane is G17 in machine mode, chords in 
     INFO(mode);
     write_file(dir.path("m.toml"),
                "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
-               "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\nmode = \"" +
+               "max_deg = 120\n[axes.C]\ncontinuous = true\n[pivot]\na_axis_y = 0\n"
+               "a_axis_z = 0\nc_axis_x = 0\nc_axis_y = 0\n[gcode]\nmode = \"" +
                    std::string(mode) + "\"\n");
     const RunResult r =
         run_taxopt("--in " + dir.path("a.cls") + " --machine " + dir.path("m.toml") + " --gcode " +
@@ -477,8 +478,11 @@ TEST_CASE(
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   TempDir dir;
   const std::string machine = read_file(d + "machines/paper-ac.toml");
-  write_file(dir.path("m.toml"), machine + "mode = \"machine\"\n");
-  write_file(dir.path("m0.toml"), machine + "mode = \"machine\"\nlinearise_tolerance_mm = 0\n");
+  // The paper's machine has its rotary axes through the origin: said explicitly.
+  const std::string pivot = "[pivot]\na_axis_y = 0\na_axis_z = 0\nc_axis_x = 0\nc_axis_y = 0\n";
+  write_file(dir.path("m.toml"), machine + "mode = \"machine\"\n" + pivot);
+  write_file(dir.path("m0.toml"),
+             machine + "mode = \"machine\"\nlinearise_tolerance_mm = 0\n" + pivot);
   const std::string args = "--in " + d + "demo/sine.cls --part " + d +
                            "demo/sine.stl --gauge-length 15 -q --report " + dir.path("r.json");
   const RunResult r =

@@ -321,7 +321,8 @@ int main(int argc, char** argv) {
       ->group("Machine");
   app.add_flag("--force", a.force, "write the G-code even when verification fails (exit 1)")
       ->group("Outputs");
-  app.add_flag("-q,--quiet", a.quiet, "only errors on stderr")->group("Diagnostics");
+  app.add_flag("-q,--quiet", a.quiet, "only errors and NOT CHECKED safety warnings on stderr")
+      ->group("Diagnostics");
   app.add_flag("-v", a.verbose, "more on stderr")->group("Diagnostics");
   app.add_option("--shank-radius", a.shank_radius,
                  "shank radius, CL file units (default: the ball radius)")
@@ -639,11 +640,12 @@ int main(int argc, char** argv) {
       std::cerr << "taxopt: error: ... and " << result.problems.size() - shown
                 << " more (-v lists them all)\n";
     }
+    // What was not checked first (even with -q: -q silences progress and notes, never a
+    // safety warning), then how the file was read, then the other warnings.
+    for (const auto& w : result.safety_warnings) {
+      std::cerr << "taxopt: warning: NOT CHECKED: " << w << "\n";
+    }
     if (!a.quiet) {
-      // What was not checked first, then how the file was read, then the other warnings.
-      for (const auto& w : result.safety_warnings) {
-        std::cerr << "taxopt: warning: NOT CHECKED: " << w << "\n";
-      }
       for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
       for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
       if (a.verbose > 0) {

@@ -1482,6 +1482,11 @@ class Reader {
         }
         const double mm_per_min = *value * (unit == "SFM" ? 304.8 : 1000.0);
         rpm = mm_per_min / (Constants<double>::pi() * tool_.diameter_mm);
+        if (!(rpm <= 1e6)) {
+          fail(line, "SPINDL/" + unit +
+                         ": the surface speed at the cutter's diameter is more "
+                         "than 1e6 rpm");
+        }
         std::ostringstream os;
         os << "SPINDL: " << *value << " " << unit << " at the cutter's diameter "
            << tool_.diameter_mm << " mm is " << std::lround(rpm) << " rpm";

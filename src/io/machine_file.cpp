@@ -121,6 +121,15 @@ class MachineParser {
              m.gcode.dialect);
       choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
              m.gcode.mode);
+      if (m.gcode.mode == GcodeMode::Machine && !table_of(root, "pivot", false)) {
+        // Machine mode writes joint positions about the rotary axes' pivots: a file without
+        // them would post every point about a pivot at 0, silently (issue 33).
+        fail(line_of(*g->get("mode")),
+             std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
+                 (m.ac.tilt == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
+                 ", c_axis_x, c_axis_y: where the rotary axes lie in machine coordinates, from "
+                 "the machine's kinematics); give it, even as zeros, or use mode \"tcp\"");
+      }
       choose(
           *g, "gcode", "feed_mode",
           {{"units-per-minute", FeedMode::UnitsPerMinute}, {"inverse-time", FeedMode::InverseTime}},

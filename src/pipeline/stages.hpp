@@ -161,6 +161,12 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
 
 /// Writes the program, reads it back, schedules the written and the input path at the
 /// machine's limits; with --feed-schedule writes it again at the scheduled feeds.
+/// The program's header comments: the version, method, source and machine, and every NOT
+/// CHECKED item of the run so far (the program travels without its report).
+std::vector<std::string> program_comments(const Run& run, const JobResult& res);
+/// After a failed verification: the program's text again with the failed checks named in its
+/// header (a program written only with --force must say it was not verified).
+void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted, JobResult& res);
 Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                       std::vector<PostedOperation>& posted, JobResult& res);
 

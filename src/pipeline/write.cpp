@@ -73,14 +73,38 @@ std::vector<JointPosition> written_joints(const Machine& machine,
   return q;
 }
 
-Written write_program(const Run& run, const std::vector<OperationContext>& ops,
-                      std::vector<PostedOperation>& posted, JobResult& res) {
+std::vector<std::string> program_comments(const Run& run, const JobResult& res) {
   const Machine& machine = run.machine;
-  const std::vector<std::string> comments = {
+  std::vector<std::string> comments = {
       std::string("taxopt ") + kVersion + ", method " + to_string(run.options.method),
       "source " + run.tp.source,
       "machine " + machine.name + ", " +
           (machine.gcode.mode == GcodeMode::Tcp ? "tcp" : "machine") + " mode"};
+  // What was not checked, in the program itself: the program travels without its report.
+  for (const std::string& w : res.safety_warnings) comments.push_back("NOT CHECKED: " + w);
+  return comments;
+}
+
+void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted, JobResult& res) {
+  if (res.problems.empty() || res.gcode.text.empty()) return;
+  // The same program with the failed checks named in its first lines (comments only: every
+  // block and its line's place after them is as verified, shifted).
+  std::vector<std::string> comments = program_comments(run, res);
+  comments.push_back("NOT VERIFIED: the verification failed (" +
+                     std::to_string(res.problems.size()) +
+                     " problems); a program written anyway (--force) is not to be run as it is");
+  for (std::size_t i = 0; i < res.problems.size() && i < 10; ++i) {
+    comments.push_back("FAILED: " + res.problems[i].substr(0, 200));
+  }
+  const std::size_t before = res.gcode.text.size();
+  GcodeProgram marked = write_gcode(posted, run.machine, res.gcode_units, comments);
+  if (marked.text.size() > before) res.gcode.text = std::move(marked.text);
+}
+
+Written write_program(const Run& run, const std::vector<OperationContext>& ops,
+                      std::vector<PostedOperation>& posted, JobResult& res) {
+  const Machine& machine = run.machine;
+  const std::vector<std::string> comments = program_comments(run, res);
   const auto t0 = Clock::now();
   Written w;
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);

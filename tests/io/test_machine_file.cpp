@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/machine_file.hpp"
 
@@ -226,4 +227,25 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");
   expect_error(head + "coolant = \"through\"\n", 9, "\"none\", \"flood\" or \"mist\"");
   expect_error(head + "linearise_tolerance_mm = -1\n", 9, ">= 0");
+}
+
+TEST_CASE("machine file: machine mode needs an explicit [pivot]; the Haas preset has none",
+          "[io][machine][bad-input]") {
+  // Without [pivot] every point would be posted about pivots at 0 (issue 33).
+  expect_error(replace(kFull,
+                       "[pivot]\na_axis_y = 1.5\na_axis_z = -2.0\nc_axis_x = 3.0\n"
+                       "c_axis_y = 4.0\n",
+                       ""),
+               20, "gcode.mode \"machine\" needs the machine's [pivot]");
+  // Zeros said explicitly are a pivot.
+  const Machine zeros = parse_machine_toml(
+      replace(kFull, "a_axis_y = 1.5\na_axis_z = -2.0\nc_axis_x = 3.0\nc_axis_y = 4.0",
+              "a_axis_y = 0\na_axis_z = 0\nc_axis_x = 0\nc_axis_y = 0"),
+      "m.toml");
+  CHECK(zeros.gcode.mode == GcodeMode::Machine);
+  // The Haas preset (G234 carries the pivots the control knows): machine mode is refused.
+  std::string haas =
+      taxopt::test::read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/haas-umc750.toml");
+  haas = replace(haas, "mode = \"tcp\"", "mode = \"machine\"");
+  CHECK_THROWS_WITH(parse_machine_toml(haas, "haas.toml"), Catch::Contains("b_axis_x, b_axis_z"));
 }

@@ -51,6 +51,25 @@ std::string real_data(const std::string& name) {
   return std::string(TAXOPT_TEST_DATA) + "/real/" + name;
 }
 
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    out.push_back(text.substr(at, end - at));
+    at = end == std::string::npos ? text.size() : end + 1;
+  }
+  return out;
+}
+
+std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
+                    std::size_t from) {
+  for (std::size_t i = from; i < lines.size(); ++i) {
+    if (lines[i].find(what) != std::string::npos) return i;
+  }
+  return std::string::npos;
+}
+
 std::vector<std::string> real_skips(const std::string& name) {
   if (name.rfind("amorim-", 0) == 0) return {"INSERT", "CUTCOM"};
   if (name.rfind("peening-", 0) == 0) {

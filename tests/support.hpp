@@ -48,6 +48,12 @@ std::string real_path(const std::string& name, const std::string& dir);
 /// A real file read as a user who decided its real_skips reads it (real_text).
 Toolpath read_real(const std::string& name, ClReadOptions options = {});
 
+/// The lines of a text (without their line ends), and the index (0-based) of the first line
+/// holding `what` at or after `from` (npos when none).
+std::vector<std::string> lines_of(const std::string& text);
+std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
+                    std::size_t from = 0);
+
 /// Result of a command: exit code, stdout and stderr.
 struct RunResult {
   int code = -1;

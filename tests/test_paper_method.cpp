@@ -218,6 +218,19 @@ void check_case(const Case& k) {
 
 /// Passes along x over `hf` at the given y, the axis the surface normal leaned by `lean_deg`
 /// towards +y; approach and retract 30 mm straight up with the same axis. NX CLSF in mm.
+/// A logistic step: a flat floor, then a wall of about 85 deg rising `height` mm near wall_y
+/// (its foot a concave fillet, sharper for a smaller `width`), as a heightfield.
+Heightfield logistic_wall(double height, double wall_y, double width) {
+  Heightfield hf;
+  hf.name = "wall";
+  hf.z = [=](double, double y) { return height / (1.0 + std::exp(-(y - wall_y) / width)); };
+  hf.normal = [z = hf.z](double x, double y) {
+    const double e = 1e-5;
+    return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
+  };
+  return hf;
+}
+
 GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
                        const std::vector<double>& ys, double x0, double x1) {
   GeneratedCl g;
@@ -319,14 +332,7 @@ TEST_CASE(
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const double height = 35.0 + 10.0 * u(rng), wall_y = 24.0 + 2.0 * u(rng);
   const double width = 0.5 + 0.3 * u(rng), lean = 20.0 + 8.0 * u(rng);
-  Heightfield hf;
-  hf.name = "wall";
-  // A logistic step: flat floor, then a wall of about 85 deg rising `height` mm near wall_y.
-  hf.z = [=](double, double y) { return height / (1.0 + std::exp(-(y - wall_y) / width)); };
-  hf.normal = [z = hf.z](double x, double y) {
-    const double e = 1e-5;
-    return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
-  };
+  const Heightfield hf = logistic_wall(height, wall_y, width);
   const std::vector<double> ys = {wall_y - 12.0, wall_y - 10.0, wall_y - 8.0};
   Case k;
   k.name = "wall";
@@ -354,13 +360,7 @@ TEST_CASE(
     std::uniform_real_distribution<double> u(0.0, 1.0);
     const double height = 35.0 + 10.0 * u(rng), wall_y = 24.0 + 2.0 * u(rng);
     const double width = 0.5 + 0.3 * u(rng), lean = 15.0 + 20.0 * u(rng);
-    Heightfield hf;
-    hf.name = "wall";
-    hf.z = [=](double, double y) { return height / (1.0 + std::exp(-(y - wall_y) / width)); };
-    hf.normal = [z = hf.z](double x, double y) {
-      const double e = 1e-5;
-      return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
-    };
+    const Heightfield hf = logistic_wall(height, wall_y, width);
     const double d = 4.0 + 6.0 * u(rng);
     const GeneratedCl g =
         leaning_cl(hf, 3.0, lean, {wall_y - d - 4.0, wall_y - d - 2.0, wall_y - d}, 0.0, 50.0);

@@ -32,22 +32,6 @@ std::string error_of_text(const std::string& text, const ClReadOptions& o = {}) 
   return error_of([&] { parse_cl(text, "w.cls", o); });
 }
 
-/// Index of the first line of `text` that contains `what`, from line `from` on; npos if none.
-std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
-                    std::size_t from = 0) {
-  for (std::size_t i = from; i < lines.size(); ++i) {
-    if (lines[i].find(what) != std::string::npos) return i;
-  }
-  return std::string::npos;
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("cl words: docs/cl-files.md shows the reader's word table as it is", "[io][cl][words]") {

@@ -5,11 +5,14 @@
 #include <fstream>
 #include <iterator>
 
+#include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
 
 using namespace taxopt;
+using taxopt::test::line_of;
+using taxopt::test::lines_of;
 
 namespace {
 
@@ -232,27 +235,6 @@ TEST_CASE("gcode: golden programs of each dialect, mode and feed mode", "[io][gc
     CHECK(written == op.points.size() + prog.linearised_blocks);
   }
 }
-
-namespace {
-/// Line (0-based) of the first line holding `what` at or after `from`; npos when none.
-std::size_t line_of(const std::vector<std::string>& lines, const std::string& what,
-                    std::size_t from = 0) {
-  for (std::size_t i = from; i < lines.size(); ++i) {
-    if (lines[i].find(what) != std::string::npos) return i;
-  }
-  return std::string::npos;
-}
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::size_t at = 0;
-  while (at < text.size()) {
-    const std::size_t end = text.find('\n', at);
-    out.push_back(text.substr(at, end - at));
-    at = end == std::string::npos ? text.size() : end + 1;
-  }
-  return out;
-}
-}  // namespace
 
 TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][gcode]") {
   struct Want {

@@ -734,3 +734,25 @@ TEST_CASE(
     CHECK(run_rs274(t.path("f.ngc"), moves).code == 0);
   }
 }
+
+TEST_CASE("cli: --dialect overrides the machine file's dialect under the same rules",
+          "[cli][gcode]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  RunResult r = run_taxopt("--in " + d + "sine.cls --dialect fanuc -q --gcode " + t.path("f.nc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(read_file(t.path("f.nc")), Catch::Contains("G43.4"));
+  r = run_taxopt("--in " + d + "sine.cls --dialect sinumerik -q --gcode " + t.path("s.nc"));
+  CHECK(r.code == 2);
+  // A template written for the file's dialect is not another dialect's.
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+             "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n"
+             "dialect = \"linuxcnc\"\nheader = [\"G64 P0.01\"]\n");
+  r = run_taxopt("--in " + d + "sine.cls --machine " + t.path("m.toml") +
+                 " --dialect haas -q --gcode " + t.path("h.nc"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("program template"));
+  CHECK_FALSE(file_exists(t.path("h.nc")));
+}

@@ -38,7 +38,7 @@ struct Args {
   std::string objective = "sum-squares";
   std::optional<double> jerk_weight;
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
-  std::string arc_direction = "auto", msys = "ignore";
+  std::string arc_direction = "auto", msys = "ignore", dialect;
   std::vector<std::string> skip_records;
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
   std::optional<double> shank_clearance_mm, holder_clearance_mm, part_tolerance;
@@ -288,6 +288,11 @@ int main(int argc, char** argv) {
       ->group("Input");
   app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)")
       ->group("Outputs");
+  app.add_option("--dialect", a.dialect,
+                 "G-code dialect, overriding the machine file's gcode.dialect: linuxcnc | fanuc "
+                 "| siemens | heidenhain | haas")
+      ->check(CLI::IsMember({"linuxcnc", "fanuc", "siemens", "heidenhain", "haas"}))
+      ->group("Machine");
   app.add_option("--arc-direction", a.arc_direction,
                  "sense of CIRCLE arcs about their axis: auto (the CAM system's, checked against "
                  "the moves beside each arc) | cw | ccw")
@@ -406,6 +411,7 @@ int main(int argc, char** argv) {
                                                     {"--units-out", "in|mm"},
                                                     {"--arc-direction", "auto|cw|ccw"},
                                                     {"--msys", "ignore|apply"},
+                                                    {"--dialect", "NAME"},
                                                     {"--skip-record", "WORD"},
                                                     {"--tool-radius", "LENGTH"},
                                                     {"--part", "FILE"},
@@ -555,8 +561,39 @@ int main(int argc, char** argv) {
     }
     if (a.feed_mm_per_min && !(*a.feed_mm_per_min > 0.0))
       return error("--feed must be positive", 2);
-    const taxopt::Machine machine =
+    taxopt::Machine machine =
         a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
+    if (!a.dialect.empty() && a.dialect != taxopt::to_string(machine.gcode.dialect)) {
+      // --dialect overrides the machine file's gcode.dialect, under the same rules: a program
+      // template written for the file's dialect is not another's, and the decimals must fit.
+      const taxopt::ProgramTemplate& t = machine.gcode.program;
+      if (!t.header.empty() || !t.footer.empty() || !t.tool_change.empty() || !t.tcp_on.empty() ||
+          !t.tcp_off.empty()) {
+        return error("--dialect " + a.dialect + ": the machine file's program template " +
+                         "(header, footer, tool_change, tcp_on, tcp_off) is written for the " +
+                         taxopt::to_string(machine.gcode.dialect) +
+                         " dialect; change gcode.dialect in the file instead",
+                     2);
+      }
+      for (const auto d : {taxopt::GcodeDialect::LinuxCNC, taxopt::GcodeDialect::Fanuc,
+                           taxopt::GcodeDialect::Siemens, taxopt::GcodeDialect::Heidenhain,
+                           taxopt::GcodeDialect::Haas}) {
+        if (a.dialect == taxopt::to_string(d)) machine.gcode.dialect = d;
+      }
+      if (machine.gcode.decimals > taxopt::max_decimals(machine.gcode.dialect) ||
+          machine.gcode.feed_decimals > taxopt::max_feed_decimals(machine.gcode.dialect)) {
+        return error("--dialect " + a.dialect + ": the machine file's gcode.decimals or " +
+                         "feed_decimals are more than the " + a.dialect + " dialect takes",
+                     2);
+      }
+      if (machine.gcode.dialect == taxopt::GcodeDialect::Heidenhain &&
+          machine.gcode.feed_mode == taxopt::FeedMode::InverseTime) {
+        return error(
+            "--dialect heidenhain: the machine's gcode.feed_mode is inverse-time, which "
+            "the heidenhain dialect does not write (its ISO mode has no G93)",
+            2);
+      }
+    }
     taxopt::ClReadOptions read_options;
     read_options.units = parse_unit(a.units, "--units");
     read_options.arc_direction = a.arc_direction == "cw"    ? taxopt::ArcDirection::Clockwise

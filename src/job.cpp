@@ -107,8 +107,9 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
 ToolOverrides tool_overrides(const ToolDimensions& given) {
   const double u = mm_per_unit(given.units);
   const auto mm = [u](const std::optional<double>& v) -> std::optional<double> {
-    if (v && !(*v > 0.0 && std::isfinite(*v))) {
-      throw InputError("tool dimensions must be positive");
+    // A tool is no larger than a metre: larger dimensions make the checks hang (issue 35).
+    if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
+      throw InputError("tool dimensions must be within (0, 1000] mm");
     }
     return v ? std::optional<double>(*v * u) : std::nullopt;
   };

@@ -348,3 +348,79 @@ TEST_CASE(
   run_taxopt(base + " --holder-clearance 0.5 --force");
   CHECK(nlohmann::json::parse(read_file(t.path("r.json")))["clearances_mm"]["holder"] == 0.5);
 }
+
+TEST_CASE(
+    "hostile input, round 3: numbers outside their bounds are exit 2 naming the option or the "
+    "line, before any output",
+    "[cli][bad-input][hostile]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  const std::string base =
+      "--in " + d + "sine.cls --part " + d + "sine.stl --method none -q --gcode " + t.path("o.nc");
+  const struct {
+    const char* args;
+    const char* says;
+  } cases[] = {
+      {"--contact-tolerance inf", "--contact-tolerance must be within (0, 1] mm"},
+      {"--contact-tolerance 1e300", "--contact-tolerance must be within (0, 1] mm"},
+      {"--contact-tolerance 2", "--contact-tolerance must be within (0, 1] mm"},
+      {"--part-tolerance 5", "--part-tolerance must be within [0, 1] mm"},
+      {"--shank-clearance inf", "--shank-clearance must be within [0, 50] mm"},
+      {"--holder-clearance 1e300", "--holder-clearance must be within [0, 50] mm"},
+      {"--grid 1e-8", "--grid must be within [0.1, 10] deg"},
+      {"--feed 1e-300", "--feed must be within [0.01, 1e6] mm/min"},
+      {"--shank-radius inf", "--shank-radius must be within (0, 1000] mm"},
+      {"--gauge-length 1e300", "--gauge-length must be within (0, 1000] mm"},
+      {"--holder-radius 1e30", "--holder-radius must be within (0, 1000] mm"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args);
+    const RunResult r = run_taxopt(base + " " + c.args);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains(c.says));
+    CHECK_FALSE(file_exists(t.path("o.nc")));
+  }
+  // A feed no program writes.
+  write_file(t.path("f.cls"), "FEDRAT/MMPM,1e-300\nGOTO/0,0,0\nGOTO/1,0,0\n");
+  const RunResult f = run_taxopt("--in " + t.path("f.cls") + " -q --gcode " + t.path("o.nc"));
+  CHECK(f.code == 2);
+  CHECK_THAT(f.err, Catch::Contains(t.path("f.cls") + ":1: FEDRAT: a feed of 1e-300 mm/min"));
+}
+
+TEST_CASE("hostile input, round 3: no output replaces an input, a device or a read-only file",
+          "[cli][bad-input][hostile]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  write_file(t.path("p.stl"), read_file(d + "demo/sine.stl"));
+  write_file(t.path("m.toml"), read_file(d + "machines/paper-ac.toml"));
+  const std::string part = read_file(t.path("p.stl")), machine = read_file(t.path("m.toml"));
+  const std::string base = "--in " + d + "demo/sine.cls --part " + t.path("p.stl") + " --machine " +
+                           t.path("m.toml") + " --gauge-length 15 -q ";
+  const struct {
+    std::string args;
+    const char* says;
+  } cases[] = {
+      {"--gcode " + t.path("o.nc") + " --report " + t.path("p.stl"), "is the --part file"},
+      {"--gcode " + t.path("o.nc") + " --points-csv " + t.path("m.toml"), "is the --machine file"},
+      {"--gcode " + t.path("pl/o.nc") + " --plots " + t.path("pl"), "lies in the --plots folder"},
+      {"--gcode " + t.path("o.nc") + " --plots " + t.path("o.nc"), "lies in the --plots folder"},
+      {"--gcode /dev/null", "is not a regular file"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args);
+    const RunResult r = run_taxopt(base + c.args);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains(c.says));
+  }
+  CHECK(read_file(t.path("p.stl")) == part);
+  CHECK(read_file(t.path("m.toml")) == machine);
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  CHECK_FALSE(file_exists(t.path("pl")));
+  // A read-only program stays as it was.
+  write_file(t.path("ro.nc"), "(keep)\n");
+  std::filesystem::permissions(t.path("ro.nc"), std::filesystem::perms::owner_read);
+  const RunResult ro = run_taxopt(base + "--gcode " + t.path("ro.nc"));
+  CHECK(ro.code == 2);
+  CHECK_THAT(ro.err, Catch::Contains("is read-only"));
+  CHECK(read_file(t.path("ro.nc")) == "(keep)\n");
+}

@@ -524,7 +524,26 @@ int main(int argc, char** argv) {
                                             {"--points-csv", a.points_csv},
                                             {"--out-cls", a.out_cls}}) {
       if (path.empty()) continue;
-      if (taxopt::same_file(path, a.in)) return error(opt + " " + path + " is the input file", 2);
+      // No output may replace an input (the CL file, the part, the machine file).
+      for (const auto& [in_opt, in_path] : std::map<std::string, std::string>{
+               {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
+        if (!in_path.empty() && taxopt::same_file(path, in_path)) {
+          return error(opt + " " + path + " is the " +
+                           (in_opt == "--in" ? std::string("input") : in_opt) + " file",
+                       2);
+        }
+      }
+      // Nor may it lie in the plots folder (whose SVGs are written after it) or be that folder.
+      if (!a.plots.empty()) {
+        std::error_code ec;
+        const auto dir =
+            std::filesystem::weakly_canonical(std::filesystem::absolute(a.plots, ec), ec);
+        const auto file =
+            std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec), ec);
+        if (file == dir || file.parent_path() == dir) {
+          return error(opt + " " + path + " lies in the --plots folder " + a.plots, 2);
+        }
+      }
       for (const auto& [other_opt, other] : outputs) {
         if (taxopt::same_file(path, other)) {
           return error(opt + " and " + other_opt + " name the same file " + path, 2);
@@ -556,11 +575,11 @@ int main(int argc, char** argv) {
     if (a.max_deviation && !(*a.max_deviation >= 0.0 && *a.max_deviation <= 90.0)) {
       return error("--max-deviation must be within [0, 90] deg", 2);
     }
-    if (a.grid && !(*a.grid > 0.0 && *a.grid <= 10.0)) {
-      return error("--grid must be within (0, 10] deg", 2);
+    if (a.grid && !(*a.grid >= 0.1 && *a.grid <= 10.0)) {
+      return error("--grid must be within [0.1, 10] deg", 2);
     }
-    if (a.feed_mm_per_min && !(*a.feed_mm_per_min > 0.0))
-      return error("--feed must be positive", 2);
+    if (a.feed_mm_per_min && !(*a.feed_mm_per_min >= 0.01 && *a.feed_mm_per_min <= 1e6))
+      return error("--feed must be within [0.01, 1e6] mm/min", 2);
     taxopt::Machine machine =
         a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
     if (!a.dialect.empty() && a.dialect != taxopt::to_string(machine.gcode.dialect)) {
@@ -636,7 +655,20 @@ int main(int argc, char** argv) {
       };
     }
     {
-      // Tool dimensions are in the CL file's units.
+      // Tool dimensions are in the CL file's units; none larger than a metre.
+      const double u = taxopt::mm_per_unit(toolpath.units);
+      for (const auto& [name, v] : {std::make_pair("--tool-radius", a.tool_radius),
+                                    std::make_pair("--shank-radius", a.shank_radius),
+                                    std::make_pair("--flute-length", a.flute_length),
+                                    std::make_pair("--holder-radius", a.holder_radius),
+                                    std::make_pair("--holder-length", a.holder_length),
+                                    std::make_pair("--gauge-length", a.gauge_length)}) {
+        if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
+          return error(std::string(name) + " must be within (0, 1000] mm (in the CL file's " +
+                           taxopt::to_string(toolpath.units) + ")",
+                       2);
+        }
+      }
       options.tool =
           taxopt::tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
                                   a.holder_radius, a.holder_length, a.gauge_length});
@@ -644,7 +676,10 @@ int main(int argc, char** argv) {
       // resolved_options).
     }
     if (a.contact_tolerance) {
-      if (!(*a.contact_tolerance > 0.0)) return error("--contact-tolerance must be positive", 2);
+      // Beyond a millimetre a contact is no contact: the gouge and flute checks would be off.
+      if (!(*a.contact_tolerance > 0.0 && *a.contact_tolerance <= 1.0)) {
+        return error("--contact-tolerance must be within (0, 1] mm", 2);
+      }
       options.contact.tolerance_mm = *a.contact_tolerance;
     }
     options.method = a.method == "none"    ? taxopt::Method::None
@@ -656,9 +691,16 @@ int main(int argc, char** argv) {
     if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
     if (a.grid) options.paper.grid_deg = *a.grid;
     options.max_deviation_deg = a.max_deviation;
-    for (const auto& v : {a.shank_clearance_mm, a.holder_clearance_mm, a.part_tolerance}) {
-      if (v && !(*v >= 0.0)) {
-        return error("--shank-clearance, --holder-clearance and --part-tolerance must be >= 0", 2);
+    // Clearances a machine keeps (50 mm is more than any holder's), and a part tolerance that
+    // is still one (1 mm): larger values turn the checks off or make them hang.
+    for (const auto& [name, v, most] :
+         {std::make_tuple("--shank-clearance", a.shank_clearance_mm, 50.0),
+          std::make_tuple("--holder-clearance", a.holder_clearance_mm, 50.0),
+          std::make_tuple("--part-tolerance", a.part_tolerance, 1.0)}) {
+      if (v && !(*v >= 0.0 && *v <= most)) {
+        std::ostringstream os;
+        os << name << " must be within [0, " << most << "] mm";
+        return error(os.str(), 2);
       }
     }
     options.shank_clearance_mm = a.shank_clearance_mm;

@@ -179,6 +179,16 @@ std::string writable_output_problem(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) return "is a folder";
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::exists(st)) {
+    // The output replaces the file by renaming over it: a device, FIFO or socket would be
+    // replaced by a regular file, and a file whose mode forbids writing would be written.
+    if (!fs::is_regular_file(st)) return "is not a regular file (a device, FIFO or socket)";
+    if ((st.permissions() & (fs::perms::owner_write | fs::perms::group_write |
+                             fs::perms::others_write)) == fs::perms::none) {
+      return "is read-only (its mode has no write bit)";
+    }
+  }
   const fs::path target = fs::absolute(path, ec);
   const fs::path dir = target.parent_path();
   if (!fs::exists(dir, ec)) return "its folder " + dir.string() + " does not exist";

@@ -1025,13 +1025,24 @@ class Reader {
     }
     if (count != 1) fail(line, major + " expects exactly one number (the feed)");
     if (!(value > 0.0)) fail(line, major + ": feed must be positive");
-    if (!per_rev) return value * to_mm;
+    // A feed the G-code can write (0.01 mm/min is F0.0004 in inches) and a machine can run
+    // (1e6 mm/min is 1 km/min).
+    const auto bounded = [&](double mm_per_min) {
+      if (!(mm_per_min >= 0.01 && mm_per_min <= 1e6)) {
+        std::ostringstream os;
+        os << major << ": a feed of " << mm_per_min
+           << " mm/min is outside [0.01, 1e6] mm/min (no program writes or runs it)";
+        fail(line, os.str());
+      }
+      return mm_per_min;
+    };
+    if (!per_rev) return bounded(value * to_mm);
     if (!(spindle_rpm_ > 0.0)) {
       tp_.warnings.push_back(format_location(
           source_, line, "feed per revolution without a spindle speed: feed unknown"));
       return 0.0;
     }
-    return value * to_mm * spindle_rpm_;
+    return bounded(value * to_mm * spindle_rpm_);
   }
 
   void start_cycle(const std::vector<std::string>& args, int line) {

@@ -91,13 +91,37 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
     throw InputError("JobOptions::max_deviation_deg must be within [0, 90] deg, got " +
                      shown(options.paper.max_deviation_deg));
   }
-  if (!(options.paper.grid_deg > 0.0 && options.paper.grid_deg <= 10.0)) {
-    throw InputError("JobOptions::paper.grid_deg must be within (0, 10] deg, got " +
+  // Below 0.1 deg the cap grids and C-space windows outgrow any memory budget (a 30 deg cone
+  // at 0.1 deg is 300 x 300 cells a point) and their counts overflow an int.
+  if (!(options.paper.grid_deg >= 0.1 && options.paper.grid_deg <= 10.0)) {
+    throw InputError("JobOptions::paper.grid_deg must be within [0.1, 10] deg, got " +
                      shown(options.paper.grid_deg));
   }
-  if (options.feed_mm_per_min && !(*options.feed_mm_per_min > 0.0)) {
-    throw InputError("JobOptions::feed_mm_per_min must be positive, got " +
+  // A feed the G-code can write and a machine can run (as the CL reader's FEDRAT).
+  if (options.feed_mm_per_min &&
+      !(*options.feed_mm_per_min >= 0.01 && *options.feed_mm_per_min <= 1e6)) {
+    throw InputError("JobOptions::feed_mm_per_min must be within [0.01, 1e6] mm/min, got " +
                      shown(*options.feed_mm_per_min));
+  }
+  if (options.contact.tolerance_mm != 0.0 &&
+      !(options.contact.tolerance_mm > 0.0 && options.contact.tolerance_mm <= 1.0)) {
+    throw InputError(
+        "JobOptions::contact.tolerance_mm must be within (0, 1] mm (0: the "
+        "default), got " +
+        shown(options.contact.tolerance_mm));
+  }
+  if (options.part_tolerance_mm &&
+      !(*options.part_tolerance_mm >= 0.0 && *options.part_tolerance_mm <= 1.0)) {
+    throw InputError("JobOptions::part_tolerance_mm must be within [0, 1] mm, got " +
+                     shown(*options.part_tolerance_mm));
+  }
+  for (const auto& [name, v] :
+       {std::make_pair("shank_clearance_mm", options.shank_clearance_mm),
+        std::make_pair("holder_clearance_mm", options.holder_clearance_mm)}) {
+    if (v && !(*v >= 0.0 && *v <= 50.0)) {
+      throw InputError(std::string("JobOptions::") + name + " must be within [0, 50] mm, got " +
+                       shown(*v));
+    }
   }
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);

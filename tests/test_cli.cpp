@@ -756,3 +756,26 @@ TEST_CASE("cli: --dialect overrides the machine file's dialect under the same ru
   CHECK_THAT(r.err, Catch::Contains("program template"));
   CHECK_FALSE(file_exists(t.path("h.nc")));
 }
+
+TEST_CASE("cli: every operation's first feed block carries its F", "[cli][gcode]") {
+  TempDir t;
+  const RunResult r = run_taxopt("--in " + real_data("mech491-project2-multiop.cls") +
+                                 " --method none -q " + "--gcode " + t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::vector<std::string> lines = lines_of(read_file(t.path("o.ngc")));
+  int operations = 0;
+  for (std::size_t at = line_of(lines, "(operation "); at != std::string::npos;
+       at = line_of(lines, "(operation ", at + 1)) {
+    ++operations;
+    const std::size_t next = line_of(lines, "(operation ", at + 1);
+    for (std::size_t i = at; i < std::min(next, lines.size()); ++i) {
+      if (lines[i].rfind("G1 ", 0) == 0 || lines[i].find(" G1 ") != std::string::npos) {
+        INFO(lines[i]);
+        CHECK(lines[i].find(" F") != std::string::npos);
+        break;
+      }
+    }
+  }
+  CHECK(operations == 15);
+}

@@ -341,6 +341,9 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
     }
     raw(dialect.comment("operation " + op.name));
+    // Every operation's first feed block carries its F (a reader of one operation, or a
+    // restart at it, must not inherit the last operation's feed).
+    last_feed.clear();
     // Safe start: up to the retract height, the tool, the spindle and the coolant, the table
     // turned to the first pose with the tool up, then the tool length and TCP on.
     lines(dialect.retract(retract_z));

@@ -779,3 +779,26 @@ TEST_CASE("cli: every operation's first feed block carries its F", "[cli][gcode]
   }
   CHECK(operations == 15);
 }
+
+TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "[cli][feed]") {
+  TempDir t;
+  REQUIRE(run_taxopt("generate --surface sine --height 10 --tilt 15 --yaw 10 --out-cls " +
+                     t.path("s.cls") + " --out-mesh " + t.path("s.stl"))
+              .code == 0);
+  const RunResult r =
+      run_taxopt("--in " + t.path("s.cls") + " --part " + t.path("s.stl") +
+                 " --method paper -q --gcode " + t.path("s.nc") + " --report " + t.path("s.json"));
+  REQUIRE(r.code == 0);
+  const auto rep = nlohmann::json::parse(read_file(t.path("s.json")));
+  const auto& op = rep["operations"][0];
+  const double before = op["before"]["cycle_time_s"], after = op["after"]["cycle_time_s"];
+  bool said = false;
+  for (const auto& f : rep["findings"]) {
+    if (f["code"] != "longer_cycle") continue;
+    said = true;
+    const std::string m = f["message"];
+    // What grew, with its times: here the rapids, by the table's turns between passes.
+    CHECK_THAT(m, Catch::Contains("rapids ") && Catch::Contains(" -> "));
+  }
+  CHECK(said == (after - before > std::max(0.01, 1e-3 * before)));
+}

@@ -424,3 +424,20 @@ TEST_CASE("hostile input, round 3: no output replaces an input, a device or a re
   CHECK_THAT(ro.err, Catch::Contains("is read-only"));
   CHECK(read_file(t.path("ro.nc")) == "(keep)\n");
 }
+
+TEST_CASE("hostile input, round 3: generate refuses NaN, infinite and out-of-budget options",
+          "[cli][bad-input][hostile][generate]") {
+  TempDir t;
+  const std::string out = " --out-cls " + t.path("g.cls") + " --out-mesh " + t.path("g.stl");
+  for (const char* o :
+       {"--tilt nan", "--tilt inf", "--yaw nan", "--tilt 1e300", "--spindle -1", "--mesh-step 1e-4",
+        "--mesh-step 0.01", "--width 1e9", "--length 1e12", "--scallop 1e-12", "--tool-radius inf",
+        "--width 2000 --length 2000 --mesh-step 0.05"}) {
+    INFO(o);
+    const RunResult r = run_taxopt(std::string("generate ") + o + out);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: generate: "));
+    CHECK_FALSE(file_exists(t.path("g.cls")));
+    CHECK_FALSE(file_exists(t.path("g.stl")));
+  }
+}

@@ -149,9 +149,51 @@ int run_generate(const GenerateArgs& g) {
   if (g.surface != "sine" && g.surface != "plane") {
     return error("generate: --surface must be sine or plane", 2);
   }
-  for (double v :
-       {g.height_mm, g.wavelength_mm, g.width_mm, g.length_mm, g.mesh_step_mm, g.feed_mm_per_min}) {
-    if (!(v > 0.0)) return error("generate: lengths, mesh step and feed must be positive", 2);
+  // Each option within what a part and a machine are (and NaN never): a bound with a reason,
+  // checked before anything is allocated (issue 35).
+  struct Bound {
+    const char* name;
+    double value, lo, hi;
+    bool lo_open;
+    const char* why;
+  };
+  const Bound bounds[] = {
+      {"--height", g.height_mm, 0.0, 500.0, true, "mm: a part on a machine table"},
+      {"--wavelength", g.wavelength_mm, 0.0, 2000.0, true, "mm"},
+      {"--width", g.width_mm, 0.0, 2000.0, true, "mm: a machine's travel"},
+      {"--length", g.length_mm, 0.0, 2000.0, true, "mm: a machine's travel"},
+      {"--mesh-step", g.mesh_step_mm, 0.05, 50.0, false, "mm"},
+      {"--feed", g.feed_mm_per_min, 0.01, 1e6, false, "mm/min"},
+      {"--spindle", g.spindle_rpm, 0.0, 1e6, false, "rpm"},
+      {"--tool-radius", g.raster.tool_radius_mm, 0.0, 100.0, true, "mm"},
+      {"--scallop", g.raster.scallop_mm, 1e-4, 10.0, false, "mm"},
+      {"--chord-error", g.raster.chord_error_mm, 1e-4, 10.0, false, "mm"},
+      {"--tilt", g.raster.tilt_deg, -89.0, 89.0, false, "deg: the tool stays above the surface"},
+      {"--yaw", g.raster.yaw_deg, -360.0, 360.0, false, "deg"},
+  };
+  for (const Bound& b : bounds) {
+    const bool ok = (b.lo_open ? b.value > b.lo : b.value >= b.lo) && b.value <= b.hi;
+    if (!ok) {
+      std::ostringstream os;
+      os << "generate: " << b.name << " must be within " << (b.lo_open ? "(" : "[") << b.lo << ", "
+         << b.hi << "] " << b.why;
+      return error(os.str(), 2);
+    }
+  }
+  // Memory before allocating: the mesh's cells and the raster's points.
+  const double reach = 2.0 * 4.0 * g.raster.tool_radius_mm;
+  const double cells_budget = ((g.width_mm + reach) / g.mesh_step_mm + 1.0) *
+                              ((g.length_mm + reach) / g.mesh_step_mm + 1.0);
+  const double passes =
+      g.width_mm / std::max(std::sqrt(8.0 * g.raster.tool_radius_mm * g.raster.scallop_mm), 1e-9);
+  const double per_pass =
+      g.length_mm / std::min(g.raster.max_step_mm,
+                             std::sqrt(8.0 * g.raster.tool_radius_mm * g.raster.chord_error_mm));
+  if (cells_budget > 5e6 || passes * per_pass > 5e6) {
+    return error(
+        "generate: more than 2e7 mesh cells or CL points (a budget of about 2 GB); "
+        "coarsen --mesh-step, --scallop or --chord-error, or shrink --width/--length",
+        2);
   }
   taxopt::SineSurfaced sine;
   sine.height_mm = g.height_mm;

@@ -912,6 +912,14 @@ class Reader {
       }
       prev = k;
     }
+    // The list follows the p + 1 zeros and ends with the last 1: a 0 in it, or a 1 before its
+    // end, would give an end knot more than p + 1 times (no clamped B-spline).
+    for (std::size_t i = 0; i + 1 < sp.knots.size(); ++i) {
+      if (!(sp.knots[i] > 0.0 && sp.knots[i] < 1.0)) {
+        fail(sp.line, what + ": knot " + std::to_string(i + 1) +
+                          " repeats an end knot (0 or 1) beyond the degree + 1 times");
+      }
+    }
     if (std::abs(sp.knots.back() - 1.0) > 1e-6) fail(sp.line, what + ": the last knot must be 1");
     std::vector<double> U(static_cast<std::size_t>(p + 1), 0.0);
     U.insert(U.end(), sp.knots.begin(), sp.knots.end() - 1);
@@ -1187,6 +1195,11 @@ class Reader {
                        std::to_string(args.size()) + " fields");
       }
       const auto v = numbers(args, 0, args.size(), major, line);
+      if (v.size() == 6 && multax_off_line_ > 0) {
+        fail(line, major + " gives a tool axis after MULTAX/OFF (line " +
+                       std::to_string(multax_off_line_) +
+                       "): a 3-axis file with a 5-axis point is not interpreted");
+      }
       if (v.size() == 6) axis_ = to_mcs_vector(parse_axis(v, 3, major, line));
       const Vec3d tip = to_mcs_point(Vec3d(v[0], v[1], v[2]));
       ++tp_.reading.motion_records;
@@ -1245,7 +1258,8 @@ class Reader {
       c.centre = to_mcs_point(Vec3d(v[0], v[1], v[2]));
       c.axis = to_mcs_vector(parse_axis(v, 3, major, line));
       c.radius_mm = nnum >= 7 ? v[6] * scale_ : 0.0;
-      if (c.radius_mm < 0.0) fail(line, "CIRCLE radius must not be negative");
+      // A radius written is the arc's (6 numbers: SOLIDWORKS, the start point gives it).
+      if (nnum >= 7 && !(c.radius_mm > 0.0)) fail(line, "CIRCLE radius must be positive");
       for (std::size_t k = nnum; k < args.size(); ++k) {
         if (upper(args[k]) == "TIMES") {
           double t = 0.0;
@@ -1342,7 +1356,14 @@ class Reader {
                        ": --msys apply, the coordinates that follow are moved into it and "
                        "posted there");
     } else if (major == "MULTAX") {
-      if (!args.empty() && upper(args[0]) == "OFF") axis_ = Vec3d::UnitZ();  // 3-axis: +Z
+      if (!args.empty() && upper(args[0]) == "OFF") {
+        axis_ = Vec3d::UnitZ();  // 3-axis: +Z
+        multax_off_line_ = line;
+      } else if (args.empty() || upper(args[0]) == "ON") {
+        multax_off_line_ = 0;
+      } else {
+        fail(line, "MULTAX/" + args_text + ": MULTAX, MULTAX/ON or MULTAX/OFF");
+      }
     } else if (major == "CYCLE") {
       if (args.empty()) fail(line, "CYCLE expects a cycle type, INIT or OFF");
       const std::string kind = upper(args[0]);
@@ -1602,7 +1623,8 @@ class Reader {
   std::size_t points_ = 0;
   double last_rpm_ = 0.0;
   std::optional<ClCoolant> coolant_;
-  int finished_line_ = 0;  // line of FINI / END
+  int finished_line_ = 0;    // line of FINI / END
+  int multax_off_line_ = 0;  // line of the MULTAX/OFF in force
 };
 
 }  // namespace

@@ -373,3 +373,25 @@ TEST_CASE(
   CHECK_THROWS_WITH(part_mesh_for(tp, elsewhere, LengthUnit::Millimetre, &note),
                     Catch::Contains("neither frame"));
 }
+
+TEST_CASE(
+    "cl words: hostile records -- end knots repeated, an axis after MULTAX/OFF, a zero "
+    "CIRCLE radius -- are refused by line",
+    "[io][cl][words][hostile]") {
+  const std::string head = "TOOL PATH/OP,TOOL,T\nGOTO/0,0,0\n";
+  CHECK_THAT(
+      error_of_text(
+          head +
+          "NURBS/\nKNOT/0,0,1\nCNTRL/1,1,1\nCNTRL/2,1,1\nCNTRL/3,2,1\nCNTRL/4,2,1\nGOTO/5,3,3\n"),
+      Catch::Contains("w.cls:3: NURBS at line 3: knot 1 repeats an end knot"));
+  CHECK_THAT(
+      error_of_text(
+          head +
+          "NURBS/\nKNOT/0.5,1,1\nCNTRL/1,1,1\nCNTRL/2,1,1\nCNTRL/3,2,1\nCNTRL/4,2,1\nGOTO/5,3,3\n"),
+      Catch::Contains("knot 2 repeats an end knot"));
+  CHECK_THAT(error_of_text("GOTO/0,0,0\nMULTAX/OFF\nGOTO/1,0,0,0.5,0,0.8660254\n"),
+             Catch::Contains("w.cls:3: GOTO gives a tool axis after MULTAX/OFF (line 2)"));
+  CHECK(error_of_text("GOTO/0,0,0\nMULTAX/OFF\nGOTO/1,0,0\nMULTAX/ON\nGOTO/1,0,0,0,0,1\n").empty());
+  CHECK_THAT(error_of_text("GOTO/0,10,0\nCIRCLE/0,0,0,0,0,1,0\nGOTO/10,0,0\n"),
+             Catch::Contains("w.cls:2: CIRCLE radius must be positive"));
+}

@@ -441,3 +441,43 @@ TEST_CASE("hostile input, round 3: generate refuses NaN, infinite and out-of-bud
     CHECK_FALSE(file_exists(t.path("g.stl")));
   }
 }
+
+TEST_CASE(
+    "hostile input, round 3: machine lengths and C ranges beyond a machine, a 10 MB token, a "
+    "closed stdout",
+    "[cli][bad-input][hostile]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  const std::string ac =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n";
+  const struct {
+    std::string toml;
+    const char* says;
+  } machines[] = {
+      {ac + "[axes.C]\ncontinuous = true\n[pivot]\na_axis_y = 1e300\n[gcode]\nmode = \"machine\"\n",
+       "pivot.a_axis_y must be within [-1e4, 1e4] mm"},
+      {ac + "[axes.C]\nmin_deg = -1e9\nmax_deg = 1e9\n", "range must lie within [-1e5, 1e5] deg"},
+      {ac + "[axes.C]\ncontinuous = true\n[gcode]\nretract_z_mm = 1e300\n",
+       "gcode.retract_z_mm must be within [-1e4, 1e4] mm"},
+  };
+  for (const auto& m : machines) {
+    INFO(m.toml);
+    write_file(t.path("m.toml"), m.toml);
+    const RunResult r = run_taxopt("--in " + d + "demo/sine.cls --machine " + t.path("m.toml") +
+                                   " -q --gcode " + t.path("o.nc"));
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains(m.says));
+  }
+  // A 10 MB token is not echoed back.
+  write_file(t.path("big.cls"), "GOTO/0,0,0\nCUTCOM/" + std::string(10000000, 'X') + "\n");
+  const RunResult big = run_taxopt("--in " + t.path("big.cls") + " -q --gcode " + t.path("o.nc"));
+  CHECK(big.code == 2);
+  CHECK(big.err.size() < 1000);
+  // A closed stdout: the run ends as it would, not by SIGPIPE (exit 141).
+  const RunResult piped =
+      run("(" + std::string(TAXOPT_EXE) + " --in " + d + "demo/sine.cls --gcode " + t.path("p.nc") +
+          " 2>/dev/null; echo $? > " + t.path("code") + ") | true");
+  CHECK(piped.code == 0);
+  CHECK(read_file(t.path("code")) == "0\n");
+  CHECK(file_exists(t.path("p.nc")));
+}

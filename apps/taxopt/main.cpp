@@ -6,6 +6,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -292,6 +293,9 @@ std::string utc_now() {
 }
 
 int main(int argc, char** argv) {
+  // A closed stdout (taxopt ... | head) is an error to write to, not a signal that kills the
+  // run after its outputs were written (exit 141, issue 35).
+  std::signal(SIGPIPE, SIG_IGN);
   const std::string command_line = quoted_command_line(argc, argv);
   const std::string started_utc = utc_now();
   Args a;

@@ -42,7 +42,9 @@ extern "C" void remove_pending_and_reraise(int sig) {
 void install_handlers() {
   static std::once_flag once;
   std::call_once(once, [] {
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    // Every signal whose default ends the process (SIGKILL and SIGSTOP cannot be caught).
+    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGXFSZ, SIGXCPU,
+                    SIGVTALRM, SIGPROF}) {
       struct sigaction sa {};
       sa.sa_handler = remove_pending_and_reraise;
       sigemptyset(&sa.sa_mask);

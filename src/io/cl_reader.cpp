@@ -401,7 +401,8 @@ class Reader {
 
  private:
   [[noreturn]] void fail(int line, const std::string& what) const {
-    throw InputError(source_, line, what);
+    // A message quotes the record: never a 10 MB token back (issue 35).
+    throw InputError(source_, line, what.size() > 400 ? what.substr(0, 400) + "... (cut)" : what);
   }
 
   void notice(int line, const std::string& what) {

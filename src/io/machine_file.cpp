@@ -96,15 +96,15 @@ class MachineParser {
     if (const toml::table* pivot = table_of(root, "pivot", false)) {
       if (m.ac.tilt == TiltAxis::Y) {
         check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
-        m.ac.a_axis_point_mm = Vec3d(number_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
-                                     number_or(*pivot, "pivot", "b_axis_z", 0.0));
+        m.ac.a_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
+                                     length_or(*pivot, "pivot", "b_axis_z", 0.0));
       } else {
         check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
-        m.ac.a_axis_point_mm = Vec3d(0.0, number_or(*pivot, "pivot", "a_axis_y", 0.0),
-                                     number_or(*pivot, "pivot", "a_axis_z", 0.0));
+        m.ac.a_axis_point_mm = Vec3d(0.0, length_or(*pivot, "pivot", "a_axis_y", 0.0),
+                                     length_or(*pivot, "pivot", "a_axis_z", 0.0));
       }
-      m.ac.c_axis_point_mm = Vec3d(number_or(*pivot, "pivot", "c_axis_x", 0.0),
-                                   number_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
+      m.ac.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
+                                   length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
     if (const toml::table* g = table_of(root, "gcode", false)) {
       check_keys(*g, "gcode",
@@ -180,7 +180,7 @@ class MachineParser {
              t.coolant);
       choose(*g, "gcode", "safe_retract",
              {{"machine-z", SafeRetract::MachineZ}, {"none", SafeRetract::None}}, t.retract);
-      t.retract_z_mm = number_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
+      t.retract_z_mm = length_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
       if (auto* n = g->get("linearise_tolerance_mm")) {
         t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
         if (t.linearise_tolerance_mm < 0.0) {
@@ -341,6 +341,16 @@ class MachineParser {
     return n ? number_of(*n, where + "." + key) : fallback;
   }
 
+  /// A length of the machine (a pivot, a retract height): within 10 m of its origin.
+  double length_or(const toml::table& t, const std::string& where, const std::string& key,
+                   double fallback) const {
+    const double v = number_or(t, where, key, fallback);
+    if (!(std::abs(v) <= 1e4)) {
+      fail(line_of(*t.get(key)), where + "." + key + " must be within [-1e4, 1e4] mm (a machine)");
+    }
+    return v;
+  }
+
   void parse_axis(const toml::table& t, const std::string& where, RotaryAxis<double>& axis,
                   bool is_c) const {
     check_keys(t, where,
@@ -368,6 +378,11 @@ class MachineParser {
       }
       if (!is_c && (min_deg < -360.0 || max_deg > 360.0)) {
         fail(line_of(*lo), where + ": range must lie within [-360, 360] deg");
+      }
+      // A bounded C of many turns (LinuxCNC's sample: +-36000 deg, 100 turns) is real; beyond
+      // 1e5 deg (278 turns) the winding plans outgrow memory and time (issue 35).
+      if (is_c && (min_deg < -1e5 || max_deg > 1e5)) {
+        fail(line_of(*lo), where + ": range must lie within [-1e5, 1e5] deg (278 turns)");
       }
       axis.min_rad = deg_to_rad(min_deg);
       axis.max_rad = deg_to_rad(max_deg);

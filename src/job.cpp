@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <sstream>
 
 #include "pipeline/stages.hpp"
@@ -191,9 +192,13 @@ AxisPlan plan_axes(const Toolpath& tp, const Machine& machine, const JobOptions&
   return out;
 }
 
-JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+namespace {
+
+JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions& options,
+                   const std::set<std::size_t>& paper_fallback) {
   JobResult res;
   pipeline::Run run = pipeline::validate(tp, machine, options, res);
+  run.paper_fallback = paper_fallback;
   std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
   pipeline::recover_contacts(run, ops, res);
   pipeline::plan_operations(run, ops, res);
@@ -203,6 +208,25 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   pipeline::verify_operations(run, ops, *posted, written, res);
   pipeline::mark_unverified(run, *posted, res);
   return res;
+}
+
+}  // namespace
+
+JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+  JobResult res = run_once(tp, machine, options, {});
+  if (options.method != Method::Paper || !options.part) return res;
+  // The default method's output verifies wherever a program exists (issue 34): operations
+  // whose points or moves the verification found hitting the part are planned again with the
+  // fallbacks of plan_operation. Only failed runs pay for the second run.
+  std::set<std::size_t> refused;
+  for (const Finding& f : res.findings) {
+    if ((f.code == FindingCode::PointCollision || f.code == FindingCode::MoveCollision) &&
+        f.operation) {
+      refused.insert(*f.operation);
+    }
+  }
+  if (refused.empty()) return res;
+  return run_once(tp, machine, options, refused);
 }
 
 }  // namespace taxopt

@@ -379,3 +379,37 @@ TEST_CASE(
   }
   CHECK(cases == 6);
 }
+
+TEST_CASE(
+    "pipeline: an operation whose paper plan the verification refused is planned again with "
+    "the global method's plan (or the input's where free), and says so",
+    "[pipeline][stages][fallback]") {
+  std::mt19937 rng(34);
+  const Heightfield hf = random_heightfields(rng)[0];
+  const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+  const Toolpath tp = parse_cl(g.text, "p.cls");
+  const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+  const Machine machine = default_machine();
+  JobOptions given;
+  given.part = &part;
+  given.method = Method::Paper;
+  given.paper.grid_deg = 4.0;
+  JobResult res;
+  pipeline::Run run = pipeline::validate(tp, machine, given, res);
+  run.paper_fallback = {0};  // as run_job does after a refused first run
+  std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
+  pipeline::recover_contacts(run, ops, res);
+  pipeline::plan_operations(run, ops, res);
+  bool said = false;
+  for (const Finding& f : res.findings) {
+    said = said || (f.code == FindingCode::InputAxesKept &&
+                    f.message.find("the verification refused the paper method's plan") !=
+                        std::string::npos);
+  }
+  CHECK(said);
+  std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, res);
+  REQUIRE(posted);
+  const pipeline::Written w = pipeline::write_program(run, ops, *posted, res);
+  pipeline::verify_operations(run, ops, *posted, w, res);
+  for (const OperationResult& r : res.operations) CHECK(r.verification.collision_free);
+}

@@ -855,11 +855,12 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
                     options.pose_options, global, out, progress);
     }
   }
-  if (options.method == Method::Paper && run.collision && tool) {
-    // The paper's plan judged as the verification judges it (FCL, the same grown bodies, every
-    // point and every move as the machine runs it): where it still hits, the global method's
-    // plan of the operation, else the input's axes over the stretches that hit (where those
-    // are free). The verification stays the judge of what is written.
+  if (options.method == Method::Paper && run.collision && tool && run.paper_fallback.count(k)) {
+    // The verification refused the paper's plan of this operation in a first run (run_job):
+    // the global method's plan of the operation where that is free as the verification judges
+    // it (FCL, the same grown bodies, every point and every move as the machine runs it), else
+    // the input's axes over the stretches that hit (where those are free). The verification
+    // stays the judge of what is written.
     const std::size_t n = op.points.size();
     Machine path_machine = run.machine;
     if (path_machine.gcode.program.linearise_tolerance_mm > 0.0) {
@@ -874,7 +875,8 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
                                pp.poses, std::vector<char>(n, 1));
       return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
     };
-    if (const std::size_t paper_hits = hits(out); paper_hits > 0) {
+    {
+      const std::size_t paper_hits = hits(out);
       OptimisedOperation alt = out;
       refine_global(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
                     options.pose_options, global, alt, progress);
@@ -895,10 +897,9 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
       }
       add_finding(res, FindingCode::InputAxesKept, k, 0,
                   "operation " + op.name +
-                      ": the paper method's plan swept the tool through the "
+                      ": the verification refused the paper method's plan (the tool hit the "
                       "part at " +
-                      std::to_string(paper_hits) +
-                      " points or moves, as the verification judges them; " + how);
+                      std::to_string(paper_hits) + " points or moves as it judges them); " + how);
     }
   }
   if (const StretchGuardResult& g = out.guard; g.whole_passes + g.stretches > 0) {

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <deque>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,10 @@ struct Run {
   std::optional<CollisionModel> collision;
   std::optional<CSpaceRasteriser> checker;
   const PartCheck* planner_check() const { return checker ? &*checker : nullptr; }
+  /// --method paper: operations whose paper plan the verification refused (a point or move
+  /// hit the part) in a first run; run_job plans them again, falling back to the global
+  /// method's plan, else the input's axes where those are free (plan_operation).
+  std::set<std::size_t> paper_fallback = {};
 };
 
 /// The axes of one operation after the paper's optimiser, and what it did.

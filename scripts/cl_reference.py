@@ -130,7 +130,10 @@ def reference(path):
                     step = first if reached == 0.0 else nxt
                     new = min(depth, reached + step)
                     if reached > 0.0:
-                        seq += [add(v, mul(axis, rapto)), sub(v, mul(axis, reached))]
+                        # back to the rapid plane, down to 0.254 mm above the depth reached
+                        # (LinuxCNC 2.9's G83_RAPID_DELTA, as taxopt's reader)
+                        back = max(reached - 0.254, -rapto)
+                        seq += [add(v, mul(axis, rapto)), sub(v, mul(axis, back))]
                     seq.append(sub(v, mul(axis, new)))
                     reached = new
                 seq.append(add(v, mul(axis, clear)))

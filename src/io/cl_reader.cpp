@@ -1126,8 +1126,11 @@ class Reader {
       const double next =
           std::min(c.depth_mm, reached + (reached == 0.0 ? c.first_peck_mm : c.next_peck_mm));
       if (reached > 0.0) {
+        // Back to the rapid plane, then down to a clearance above the depth reached (a rapid
+        // onto the chips at the very depth would strike them).
         add_point(top + c.rapid_to_mm * u, Motion::Rapid, record, line);
-        add_point(top - reached * u, Motion::Rapid, record, line);
+        const double back = std::max(reached - options_.peck_clearance_mm, -c.rapid_to_mm);
+        add_point(top - back * u, Motion::Rapid, record, line);
       }
       add_point(top - next * u, Motion::Feed, record, line);
       reached = next;

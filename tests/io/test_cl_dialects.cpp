@@ -364,8 +364,11 @@ TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") 
   CHECK(tp.reading.cycle_holes == 1);
   std::vector<double> z;
   for (const auto& p : pts) z.push_back(p.tip_mm.z());
-  // In at 20, down to 3, pecks to -5, -7, -9, -10 with returns to 3, out at 20.
-  const std::vector<double> expect = {50, 20, 3, -5, 3, -5, -7, 3, -7, -9, 3, -9, -10, 20, 50};
+  // In at 20, down to 3, pecks to -5, -7, -9, -10 with returns to 3 and rapids back down to
+  // 0.254 mm above the depth reached (LinuxCNC's G83), out at 20.
+  const double c = 0.254;
+  const std::vector<double> expect = {50,     20, 3, -5,     3,   -5 + c, -7, 3,
+                                      -7 + c, -9, 3, -9 + c, -10, 20,     50};
   REQUIRE(z.size() == expect.size());
   for (std::size_t i = 0; i < z.size(); ++i) CHECK(z[i] == Approx(expect[i]));
   CHECK(pts[3].motion == Motion::Feed);

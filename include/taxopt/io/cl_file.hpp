@@ -29,6 +29,10 @@ struct ClReadOptions {
   /// the Haas UMC-750 writes them unchanged: tests/data/real-post). On: the coordinates after
   /// an MSYS record are taken as absolute and moved into its MCS, in which the G-code is posted.
   bool apply_msys = false;
+  /// Peck drilling: after each peck the tool rapids back down to this far above the depth
+  /// reached, then feeds on, mm. 0.254 mm (0.010 in) is LinuxCNC 2.9's G83 (rs274ngc's
+  /// G83_RAPID_DELTA, "how far above hole bottom for rapid return").
+  double peck_clearance_mm = 0.254;
   /// Record words to skip (--skip-record WORD, upper case): words the reader does not know, or
   /// knows as information, a program event or a refused word that leaves the motion as it is
   /// (cl_words.hpp, ClWord::skippable). Skipping a motion, state or frame word is refused.

@@ -802,3 +802,20 @@ TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "
   }
   CHECK(said == (after - before > std::max(0.01, 1e-3 * before)));
 }
+
+TEST_CASE("cli: the LinuxCNC preset turns the tool length on before the TCP kinematics",
+          "[cli][gcode][linuxcnc]") {
+  // LinuxCNC's motion controller jumps its joints when M428 switches to the TCP kinematics with
+  // the table tilted and G43 follows (issue 36): G43 first.
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  const RunResult r = run_taxopt("--in " + d + "demo/sine.cls --machine " + d +
+                                 "machines/linuxcnc-xyzac-trt.toml -q --gcode " + t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::vector<std::string> lines = lines_of(read_file(t.path("o.ngc")));
+  const std::size_t g43 = line_of(lines, "G43 H"), m428 = line_of(lines, "M428");
+  REQUIRE(g43 != std::string::npos);
+  REQUIRE(m428 != std::string::npos);
+  CHECK(g43 < m428);
+}

@@ -414,8 +414,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       line(dialect.rapid() + tilt_word + dialect.number(rad_to_deg(op.poses.front().a_rad), d) +
            " C" + dialect.number(rad_to_deg(op.poses.front().c_rad), d));
     }
-    verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
+    // The tool length before the TCP switch: LinuxCNC's controller, switched to its TCP
+    // kinematics (the sample's M428) with the table tilted and the length then turned on,
+    // jumps its joints (Y by 17 mm at 7,227 mm/s, Z past its limit: issue 36, measured on the
+    // real motion controller); with G43 first the same programs run to the end.
     lines(dialect.length_on(tcp, current_tool));
+    verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
     lines(dialect.tcp_on(tcp, current_tool));
     std::string prefix = dialect.first_move_prefix(tcp, current_tool);
     std::vector<int> emitted(op.points.size(), 0);

@@ -809,8 +809,9 @@ TEST_CASE("cli: the LinuxCNC preset turns the tool length on before the TCP kine
   // the table tilted and G43 follows (issue 36): G43 first.
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
-  const RunResult r = run_taxopt("--in " + d + "demo/sine.cls --machine " + d +
-                                 "machines/linuxcnc-xyzac-trt.toml -q --gcode " + t.path("o.ngc"));
+  const RunResult r =
+      run_taxopt("--in " + d + "demo/sine.cls --machine " + d +
+                 "machines/linuxcnc-xyzac-trt.toml --feed-schedule -q --gcode " + t.path("o.ngc"));
   INFO(r.err);
   REQUIRE(r.code == 0);
   const std::vector<std::string> lines = lines_of(read_file(t.path("o.ngc")));

@@ -9,6 +9,7 @@
 
 #include "support.hpp"
 #include "taxopt/core/types.hpp"
+#include "taxopt/io/machine_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
 
 using namespace taxopt::test;
@@ -480,4 +481,52 @@ TEST_CASE(
   CHECK(piped.code == 0);
   CHECK(read_file(t.path("code")) == "0\n");
   CHECK(file_exists(t.path("p.nc")));
+}
+
+TEST_CASE(
+    "hostile input, round 3: the LinuxCNC importer refuses garbage pins, offsets beyond a "
+    "machine and files that are no configuration, and quotes nothing it reads",
+    "[cli][bad-input][hostile][machine]") {
+  TempDir t;
+  const std::string sample =
+      read_file(std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini");
+  const auto with = [&](const std::string& from, const std::string& to) {
+    std::string s = sample;
+    const std::size_t at = s.find(from);
+    REQUIRE(at != std::string::npos);
+    return s.replace(at, from.size(), to);
+  };
+  const struct {
+    std::string ini;
+    const char* says;
+  } cases[] = {
+      {with("setp xyzac-trt-kins.y-rot-point 0", "setp xyzac-trt-kins.y-rot-point abc"),
+       "y-rot-point = abc is not a number"},
+      {with("setp xyzac-trt-kins.y-rot-point 0", "setp xyzac-trt-kins.y-rot-point nan"),
+       "y-rot-point = nan is not a number"},
+      {with("sets :y-offset     20", "sets :y-offset     1e300"), "lies beyond 1e4 mm"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.says);
+    write_file(t.path("x.ini"), c.ini);
+    const RunResult r =
+        run_taxopt("machine --from-linuxcnc-ini " + t.path("x.ini") + " --out " + t.path("m.toml"));
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains(c.says));
+    CHECK_FALSE(file_exists(t.path("m.toml")));
+  }
+  // A name with a quote and a newline becomes a plain TOML string; the file reads back.
+  const std::string odd = t.path("my\"mill\nx.ini");
+  write_file(odd, sample);
+  const RunResult named =
+      run_taxopt("machine --from-linuxcnc-ini '" + odd + "' --out " + t.path("n.toml"));
+  INFO(named.err);
+  REQUIRE(named.code == 0);
+  const taxopt::Machine m = taxopt::read_machine_file(t.path("n.toml"));
+  CHECK(m.name == "my_mill_x");
+  // A FIFO is no configuration file: refused, not waited on.
+  REQUIRE(run("mkfifo " + t.path("f.ini")).code == 0);
+  const RunResult fifo = run_taxopt("machine --from-linuxcnc-ini " + t.path("f.ini"));
+  CHECK(fifo.code == 2);
+  CHECK_THAT(fifo.err, Catch::Contains("not a regular file"));
 }

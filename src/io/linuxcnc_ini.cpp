@@ -20,6 +20,15 @@ namespace {
 using detail::trim;
 
 std::string read_text(const std::string& path) {
+  // A configuration file is a regular file of a few kB: a FIFO would hang, /dev/zero would
+  // fill memory (issue 35); 16 MB is far beyond any INI or HAL file.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path, 0, "not a regular file (a LinuxCNC INI or HAL file is one)");
+  }
+  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{16} << 20)) {
+    throw InputError(path, 0, "larger than 16 MB: not a LinuxCNC configuration file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open the LinuxCNC configuration file");
   std::ostringstream ss;
@@ -167,9 +176,17 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
   const auto pin = [&](const std::string& name) {
     for (const std::string prefix : {"xyzac-trt-kins.", "xyzac-trt."}) {
       if (const auto v = hal.value(prefix + name)) {
+        // A value that is set but no number (or no machine's) is an error, never a 0.
         char* end = nullptr;
         const double d = std::strtod(v->c_str(), &end);
-        if (end != v->c_str() && std::isfinite(d)) return d * unit_mm;
+        if (end == v->c_str() || !std::isfinite(d) || trim(end) != "") {
+          fail(0, "pin " + prefix + name + " = " + v->substr(0, 60) + " is not a number");
+        }
+        if (!(std::abs(d * unit_mm) <= 1e4)) {
+          fail(0, "pin " + prefix + name + " = " + v->substr(0, 60) +
+                      " lies beyond 1e4 mm: not a machine's");
+        }
+        return d * unit_mm;
       }
     }
     out.assumptions.push_back("pin " + name + " not set in the HAL commands: 0");
@@ -179,8 +196,13 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
   const double y_off = pin("y-offset"), z_off = pin("z-offset");
 
   std::ostringstream t;
-  const std::string name = std::filesystem::path(ini_path).stem().string();
-  t << "# Made by taxopt machine --from-linuxcnc-ini " << std::filesystem::path(ini_path).filename()
+  // The machine's name from the INI file's, as a TOML string: only plain characters kept.
+  std::string name;
+  for (char ch : std::filesystem::path(ini_path).stem().string()) {
+    const unsigned char c = static_cast<unsigned char>(ch);
+    name += std::isalnum(c) || ch == '-' || ch == '_' || ch == '.' ? ch : '_';
+  }
+  t << "# Made by taxopt machine --from-linuxcnc-ini " << name << ".ini"
     << "\n# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 on A and C.\n"
     << "# Pivot: C through (x-rot-point, y-rot-point), A at y = y-rot-point + y-offset,\n"
     << "# z = z-rot-point + z-offset.\n"

@@ -530,3 +530,19 @@ TEST_CASE(
   CHECK(fifo.code == 2);
   CHECK_THAT(fifo.err, Catch::Contains("not a regular file"));
 }
+
+TEST_CASE("hostile input, round 3: a FIFO or /dev/zero as the CL or machine file is refused",
+          "[cli][bad-input][hostile][files]") {
+  TempDir t;
+  REQUIRE(run("mkfifo " + t.path("in.cls") + " " + t.path("m.toml")).code == 0);
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls";
+  const std::vector<std::string> cases = {"--in " + t.path("in.cls"), "--in /dev/zero",
+                                          "--in " + d + " --machine " + t.path("m.toml"),
+                                          "--in " + d + " --machine /dev/zero"};
+  for (const std::string& args : cases) {
+    INFO(args);
+    const RunResult r = run_taxopt(args + " -q --gcode " + t.path("o.nc"));
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("not a regular file"));
+  }
+}

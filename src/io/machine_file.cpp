@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -420,6 +421,14 @@ Machine parse_machine_toml(const std::string& text, const std::string& source) {
 }
 
 Machine read_machine_file(const std::string& path) {
+  // A machine file is a regular file of a few kB: a FIFO would hang (issue 35).
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path, 0, "not a regular file (a machine file is one)");
+  }
+  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{16} << 20)) {
+    throw InputError(path, 0, "larger than 16 MB: not a machine file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open machine file");
   std::ostringstream ss;

@@ -115,6 +115,36 @@ std::vector<double> segment_lengths_mm(const Operationd& op,
   return len;
 }
 
+/// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
+/// Segment lengths are the paper's L_i between contact points where both ends touch the
+/// part, else between reference points.
+RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        double ball_radius_mm, const std::vector<double>& a_deg,
+                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
+                        std::vector<PointRow>* rows, bool rows_before) {
+  RotarySummary summary;
+  double arc = 0.0;
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::vector<double> a(a_deg.begin() + static_cast<long>(pass.begin),
+                          a_deg.begin() + static_cast<long>(pass.end));
+    std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
+                          c_deg.begin() + static_cast<long>(pass.end));
+    const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
+    const RotaryKinematics k = rotary_kinematics(a, c, len, pass_feeds(metric_feed, pass));
+    accumulate(summary, k, c);
+    if (rows) {
+      for (std::size_t j = 0; j < pass.size(); ++j) {
+        PointRow& r = (*rows)[pass.begin + j];
+        if (j > 0) arc += len[j - 1];
+        r.arc_mm = arc;
+        (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
+        (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
+      }
+    }
+  }
+  return summary;
+}
+
 /// Joint positions (X Y Z mm, A C deg) of tips and poses: the machine-mode convention of
 /// CLI.md, which is where the joints are whatever the G-code mode.
 std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,

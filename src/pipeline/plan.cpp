@@ -754,23 +754,16 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
       input_s = std::numeric_limits<double>::infinity();
     }
   }
-  // The peak a of a plan's passes (eq. 16-18 at the metric feeds).
+  // The peak a of a plan's passes (eq. 16-18 at the metric feeds), as the report measures it.
   const auto peak_a = [&](const OptimisedOperation& o) {
     const PosePlan pp = plan_poses(machine.ac, o.axes, rapid_into, {}, pose_options, o.preferred);
     if (!pp.ok()) return std::numeric_limits<double>::infinity();
-    RotarySummary summary;
-    for (const IndexRange& pass : feed_passes(op)) {
-      std::vector<double> a, c;
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        a.push_back(rad_to_deg(pp.poses[i].a_rad));
-        c.push_back(rad_to_deg(pp.poses[i].c_rad));
-      }
-      accumulate(summary,
-                 rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                                   pass_feeds(metric_feed, pass)),
-                 c);
+    std::vector<double> a, c;
+    for (const Posed& q : pp.poses) {
+      a.push_back(rad_to_deg(q.a_rad));
+      c.push_back(rad_to_deg(q.c_rad));
     }
-    return summary.max_accel_deg_s2;
+    return summarise(op, contacts, ball_radius_mm, a, c, metric_feed).max_accel_deg_s2;
   };
   struct Plan {
     const char* name;

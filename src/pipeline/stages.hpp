@@ -207,6 +207,12 @@ std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const Ind
 std::vector<double> segment_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const IndexRange& pass);
+/// Rotary kinematics (eq. 16-18) of every pass of an operation for the axis angles a_deg,
+/// c_deg of its points, at the metric feeds; fills the rows' omega, accel and arc when given.
+RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        double ball_radius_mm, const std::vector<double>& a_deg,
+                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
+                        std::vector<PointRow>* rows = nullptr, bool rows_before = false);
 /// Joint positions (X Y Z mm, A C deg) of tips and poses, in machine coordinates.
 std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
                                      const std::vector<Posed>& poses);

@@ -147,6 +147,12 @@ const char* to_string(FindingCode code) {
     case FindingCode::DeviationExceeded: return "deviation_exceeded";
     case FindingCode::PointCollision: return "point_collision";
     case FindingCode::MoveCollision: return "move_collision";
+    case FindingCode::NoToolCalled: return "no_tool_called";
+    case FindingCode::SpindleOff: return "spindle_off";
+    case FindingCode::CoolantMismatch: return "coolant_mismatch";
+    case FindingCode::IndexWithoutRetract: return "index_without_retract";
+    case FindingCode::DiagonalApproach: return "diagonal_approach";
+    case FindingCode::EndPoseNotHome: return "end_pose_not_home";
   }
   return "?";
 }

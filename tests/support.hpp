@@ -37,7 +37,8 @@ std::string real_data(const std::string& name);
 /// files"): the SOLIDWORKS CAM files' INSERT (tool-holder text) and CUTCOM/LEFT; the words of
 /// the shot-peening machine in the CATIA file.
 std::vector<std::string> real_skips(const std::string& name);
-/// The same as CLI flags (" --skip-record W ...").
+/// The same as CLI flags (" --skip-record W ..."), with the tool number and spindle speed the
+/// NX files lack (as the production post for them wrote).
 std::string real_flags(const std::string& name);
 /// The real file's text; in the peening file its SPINDLE/CLW20 records made comments (a state
 /// taxopt refuses by name: the file as it is cannot be posted), so that its CATIA traps can be

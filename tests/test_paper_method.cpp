@@ -239,6 +239,9 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
   os.precision(6);
   os << "TOOL PATH/GENERATED_" << hf.name << ",TOOL,BALL\n";
   os << "TLDATA/MILL," << 2 * r_mm << "," << r_mm << ",30.0,0.0,0.0\n";
+  // As a CAM system writes them: the tool called and the spindle started (a program that
+  // calls neither is refused, issue 33).
+  os << "LOADTL/1\nSPINDL/RPM,8000,CLW\n";
   const auto put = [&](const Vec3d& tip, const Vec3d& v, bool rapid, const Vec3d& cc) {
     append_goto(g, os, tip, v, rapid, cc, tip + r_mm * v);
   };

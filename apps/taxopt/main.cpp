@@ -41,7 +41,8 @@ struct Args {
   std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
   std::string arc_direction = "auto", msys = "ignore", dialect;
   std::vector<std::string> skip_records;
-  std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance;
+  std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance, spindle_rpm;
+  std::optional<int> tool_number;
   std::optional<double> shank_clearance_mm, holder_clearance_mm, part_tolerance;
   int threads = 0;
   bool force = false, quiet = false, feed_schedule = false;
@@ -326,6 +327,14 @@ int main(int argc, char** argv) {
   app.add_option("--feed", a.feed_mm_per_min,
                  "feed for the metrics, mm/min (overrides FEDRAT; the feed written when the "
                  "file has none; default 1000)")
+      ->group("Machine");
+  app.add_option("--spindle-rpm", a.spindle_rpm,
+                 "spindle speed of operations whose CL file has no SPINDL, rpm (before the "
+                 "machine file's [defaults] spindle_rpm; none of them: exit 2)")
+      ->group("Machine");
+  app.add_option("--tool-number", a.tool_number,
+                 "tool number of operations whose CL file calls no tool (LOADTL), 1 to 99999 "
+                 "(before the machine file's [defaults] tool_number; none of them: exit 2)")
       ->group("Machine");
   app.add_option("--report", a.report, "JSON report to write")->group("Outputs");
   app.add_option("--points-csv", a.points_csv, "per-point CSV to write")->group("Outputs");
@@ -626,6 +635,10 @@ int main(int argc, char** argv) {
     }
     if (a.feed_mm_per_min && !(*a.feed_mm_per_min >= 0.01 && *a.feed_mm_per_min <= 1e6))
       return error("--feed must be within [0.01, 1e6] mm/min", 2);
+    if (a.spindle_rpm && !(*a.spindle_rpm >= 1.0 && *a.spindle_rpm <= 2e5))
+      return error("--spindle-rpm must be within [1, 200000] rpm", 2);
+    if (a.tool_number && !(*a.tool_number >= 1 && *a.tool_number <= 99999))
+      return error("--tool-number must be a whole number from 1 to 99999", 2);
     taxopt::Machine machine =
         a.machine.empty() ? taxopt::default_machine() : taxopt::read_machine_file(a.machine);
     if (!a.dialect.empty() && a.dialect != taxopt::to_string(machine.gcode.dialect)) {
@@ -753,6 +766,8 @@ int main(int argc, char** argv) {
     options.holder_clearance_mm = a.holder_clearance_mm;
     options.part_tolerance_mm = a.part_tolerance;
     options.feed_mm_per_min = a.feed_mm_per_min;
+    options.spindle_rpm = a.spindle_rpm;
+    options.tool_number = a.tool_number;
     options.units_out = parse_unit(a.units_out, "--units-out");
     const taxopt::JobResult result = taxopt::run_job(toolpath, machine, options);
 

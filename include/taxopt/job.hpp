@@ -43,6 +43,12 @@ struct JobOptions {
   /// has no feed at all, it (or `default_feed_mm_per_min`) is also the feed written.
   std::optional<double> feed_mm_per_min;
   double default_feed_mm_per_min = 1000.0;
+  /// The spindle speed (rpm) and tool number of an operation whose CL file gives none
+  /// (--spindle-rpm, --tool-number); before the machine file's [defaults]. With none of the
+  /// three, run_job refuses such an operation (InputError): a program must call its tool and
+  /// turn its spindle before it cuts.
+  std::optional<double> spindle_rpm;
+  std::optional<int> tool_number;
   /// Units of the G-code; empty: the CL file's.
   std::optional<LengthUnit> units_out;
   PosePlanOptions pose_options;
@@ -266,6 +272,13 @@ enum class FindingCode {
   DeviationExceeded,     ///< an output axis outside the deviation cone
   PointCollision,        ///< CL points whose tool hits the part
   MoveCollision,         ///< moves where the tool hits the part between CL points
+  // The program as a machinist checks it, on the read-back (issue 33).
+  NoToolCalled,          ///< a move with no tool called (T .. M6, a TNC's tool call)
+  SpindleOff,            ///< a feed move with the spindle stopped
+  CoolantMismatch,       ///< an operation starts with other coolant than the CL file asks
+  IndexWithoutRetract,   ///< without a part: a rapid turns the table more than the threshold
+  DiagonalApproach,      ///< a rapid leaves the retract height diagonally (not XY, then Z)
+  EndPoseNotHome,        ///< end_pose "home": the program ends away from the rotaries' home
 };
 /// "no_part", "no_free_axis", ...: the report's `findings[].code`.
 const char* to_string(FindingCode code);

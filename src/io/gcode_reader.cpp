@@ -33,11 +33,20 @@ std::string without_keywords(const std::string& line, std::initializer_list<cons
   return out;
 }
 
+unsigned given_mask(const bool (&given)[5]) {
+  unsigned mask = 0;
+  for (int q = 0; q < 5; ++q) {
+    if (given[q]) mask |= 1u << q;
+  }
+  return mask;
+}
+
 }  // namespace
 
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
                                         GcodeDialect dialect,
-                                        const std::vector<int>& verbatim_lines, char tilt_letter) {
+                                        const std::vector<int>& verbatim_lines, char tilt_letter,
+                                        const std::vector<std::pair<int, int>>& tool_calls) {
   // Haas is read as Fanuc is, with G234 (tool centre point control) and G53 (machine
   // coordinates) beside.
   const bool haas = dialect == GcodeDialect::Haas;
@@ -60,6 +69,19 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
   Vec3d xyz = Vec3d::Zero();
   double a = 0.0, c = 0.0;
   int line_no = 0;
+  // The machine's state (GcodeMove::tool ...): T selects, M6 changes.
+  int tool = 0, selected = 0, coolant = 0;
+  bool spindle_on = false;
+  double spindle_rpm = 0.0;
+  const auto stamp = [&](GcodeMove& m, unsigned given) {
+    m.length_offset = length_offset;
+    m.tcp = tcp;
+    m.given = given;
+    m.tool = tool;
+    m.spindle_on = spindle_on;
+    m.spindle_rpm = spindle_rpm;
+    m.coolant = coolant;
+  };
   std::size_t pos = 0;
   while (pos <= text.size()) {
     std::size_t end = text.find('\n', pos);
@@ -71,6 +93,9 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       ++next_verbatim;
     }
     if (next_verbatim < verbatim_lines.size() && verbatim_lines[next_verbatim] == line_no) {
+      for (const auto& [at, t] : tool_calls) {
+        if (at == line_no) tool = t;
+      }
       if (end == text.size()) break;
       continue;
     }
@@ -119,6 +144,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     bool given[5] = {false, false, false, false, false};
     bool reference_return = false;
     bool dwell = false;
+    bool spindle_start = false, change_tool = false;
     const Vec3d start = xyz;
     const Vec3d xyz_before = xyz;
     Vec3d offset = Vec3d::Zero();
@@ -229,14 +255,33 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           break;
         case 'M': {
           const long mv = std::lround(v);
+          if (v != static_cast<double>(mv)) {
+            throw InputError(source, line_no, "M" + std::to_string(v) + " is not a whole M code");
+          }
+          if (mv == 3 || mv == 4) spindle_start = true;  // with the block's S, wherever it stands
+          if (mv == 5 || mv == 2 || mv == 30) spindle_on = false;
+          if (mv == 7 || mv == 8) coolant = static_cast<int>(mv);
+          if (mv == 9 || mv == 2 || mv == 30) coolant = 0;
+          if (mv == 6) change_tool = true;
           if (dialect == GcodeDialect::Heidenhain && (mv == 128 || mv == 129)) tcp = mv == 128;
           if (dialect == GcodeDialect::Heidenhain && mv == 91) machine_coordinates = true;
           break;
         }
         case 'T':
-          if (dialect == GcodeDialect::Heidenhain) length_offset = true;  // the tool call
+          if (!(v >= 0.0 && v <= 1e6) || v != std::floor(v)) {
+            throw InputError(source, line_no, "bad tool number after 'T'");
+          }
+          selected = static_cast<int>(v);
+          if (dialect == GcodeDialect::Heidenhain) {
+            length_offset = true;  // the tool call: tool and its length
+            tool = selected;
+          }
           break;
         case 'S':
+          if (!(v >= 0.0)) throw InputError(source, line_no, "negative spindle speed");
+          spindle_rpm = v;
+          if (v == 0.0) spindle_on = false;
+          break;
         case 'N': break;
         case 'P':
           if (!dwell || !(v >= 0.0)) {
@@ -265,6 +310,8 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
                            std::string("word '") + letter + "' is outside taxopt's subset");
       }
     }
+    if (spindle_start) spindle_on = spindle_rpm > 0.0;
+    if (change_tool) tool = selected;
     if (dwell && has_axis) throw InputError(source, line_no, "G4 with an axis word");
     if (has_axis && (machine_coordinates || incremental)) {
       // The safe retract: in machine coordinates (or Fanuc's reference return); where the
@@ -280,8 +327,8 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       for (int q = 0; q < 3; ++q) known[q] = known[q] && !given[q];
       GcodeMove m{true, xyz, a, c, feed, inverse_time, line_no};
       m.positioning = true;
-      m.length_offset = length_offset;
-      m.tcp = tcp;
+      m.retract = true;
+      stamp(m, given_mask(given));
       moves.push_back(m);
       if (end == text.size()) break;
       continue;
@@ -291,8 +338,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       for (int q = 0; q < 5; ++q) known[q] = known[q] || given[q];
       GcodeMove m{motion == 0, xyz, a, c, feed, inverse_time, line_no};
       m.positioning = !(known[0] && known[1] && known[2] && known[3] && known[4]);
-      m.length_offset = length_offset;
-      m.tcp = tcp;
+      stamp(m, given_mask(given));
       if (motion == 2 || motion == 3) {
         // The centre is the start plus I J K in the plane (incremental, as taxopt writes).
         for (int q = 0; q < 3; ++q) {

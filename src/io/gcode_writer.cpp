@@ -155,6 +155,7 @@ class Dialect {
   }
   /// Fanuc starts tool centre point control (G43.4, or plain tool length compensation G43 in
   /// machine mode) on the operation's first motion block, with the tool's offset number.
+  bool length_on_first_move() const { return d_ == GcodeDialect::Fanuc; }
   std::string first_move_prefix(bool tcp, int tool) const {
     if (d_ != GcodeDialect::Fanuc) return {};
     return std::string(tcp ? "G43.4" : "G43") + " H" + std::to_string(std::max(tool, 1)) + " ";
@@ -351,6 +352,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       const auto [change, custom] = dialect.tool_change(op.tool.number);
       if (custom) {
         verbatim(change);
+        prog.tool_calls.emplace_back(prog.verbatim_lines.back(), op.tool.number);
       } else {
         lines(change);
       }
@@ -410,18 +412,34 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         }
       }
     };
-    if (g.program.retract != SafeRetract::None && !op.points.empty()) {
-      line(dialect.rapid() + tilt_word + dialect.number(rad_to_deg(op.poses.front().a_rad), d) +
-           " C" + dialect.number(rad_to_deg(op.poses.front().c_rad), d));
-    }
+    const bool retracts = g.program.retract != SafeRetract::None;
+    // The table turned with the tool up (after the retract), to `pose`.
+    const auto turn_table = [&](const Posed& pose) {
+      if (!retracts) return;
+      line(dialect.rapid() + tilt_word + dialect.number(rad_to_deg(pose.a_rad), d) + " C" +
+           dialect.number(rad_to_deg(pose.c_rad), d));
+    };
+    if (!op.points.empty()) turn_table(op.poses.front());
+    std::string prefix;
     // The tool length before the TCP switch: LinuxCNC's controller, switched to its TCP
     // kinematics (the sample's M428) with the table tilted and the length then turned on,
     // jumps its joints (Y by 17 mm at 7,227 mm/s, Z past its limit: issue 36, measured on the
     // real motion controller); with G43 first the same programs run to the end.
-    lines(dialect.length_on(tcp, current_tool));
-    verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
-    lines(dialect.tcp_on(tcp, current_tool));
-    std::string prefix = dialect.first_move_prefix(tcp, current_tool);
+    const auto length_and_tcp_on = [&] {
+      lines(dialect.length_on(tcp, current_tool));
+      verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
+      lines(dialect.tcp_on(tcp, current_tool));
+      prefix = dialect.first_move_prefix(tcp, current_tool);
+    };
+    const auto length_and_tcp_off = [&] {
+      lines(dialect.tcp_off(tcp));
+      verbatim(tcp ? g.program.tcp_off : std::vector<std::string>{});
+    };
+    length_and_tcp_on();
+    // From the retract height the tool goes XY first, then down (Haas's and Tormach's
+    // pages: no diagonal rapid from the retract): set before the operation's first block and
+    // after every index move.
+    bool approach = retracts;
     std::vector<int> emitted(op.points.size(), 0);
     const std::vector<double> own_times = programmed_block_times_s(op.points, op.poses);
     last_words.clear();
@@ -553,6 +571,34 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       const Vec3d xyz = out_xyz(p.tip_mm, pose);
       const std::string words = xyz_words(xyz) + angle_words(pose);
       if (words == last_words) continue;  // nothing would move
+      // An index move: a rapid that turns the table by more than the threshold goes up to the
+      // retract, turns there and comes down XY first (docs/gcode-dialects.md "Index moves").
+      // With a part model the turns stay in the air: the check verifies their swept moves.
+      if (p.motion == Motion::Rapid && have_prev && retracts && !op.swept_moves_checked) {
+        const double turn_deg = std::max(
+            std::abs(round_to(rad_to_deg(pose.a_rad), d) - round_to(rad_to_deg(prev_pose.a_rad), d)),
+            std::abs(round_to(rad_to_deg(pose.c_rad), d) - round_to(rad_to_deg(prev_pose.c_rad), d)));
+        if (turn_deg > g.program.index_threshold_deg) {
+          length_and_tcp_off();
+          lines(dialect.retract(retract_z));
+          turn_table(pose);
+          length_and_tcp_on();
+          approach = true;
+          ++prog.index_moves;
+        }
+      }
+      if (approach) {
+        std::string xy = dialect.rapid() + " X" + dialect.number(xyz.x() * scale, d) + " Y" +
+                         dialect.number(xyz.y() * scale, d);
+        if (dialect.length_on_first_move()) {
+          line(xy);  // Fanuc: its length and TCP come on with the Z block below
+        } else {
+          line(prefix + xy);
+          prefix.clear();
+        }
+        approach = false;
+        have_prev = false;  // the tool comes from the retract: no move to schedule or split
+      }
       std::string block;
       bool restore_inverse_time = false;
       if (p.motion == Motion::Rapid) {
@@ -675,13 +721,17 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     }
     events_before(op.points.size());
     prog.emitted.push_back(std::move(emitted));
-    lines(dialect.tcp_off(tcp));
-    verbatim(tcp ? g.program.tcp_off : std::vector<std::string>{});
+    length_and_tcp_off();
     if (coolant_on) line("M9");
     if (spindle_on) line("M5");
     last_words.clear();
   }
   lines(dialect.retract(retract_z));
+  // The rotary axes home (a continuous C within one turn of it), with the tool up.
+  if (g.program.end_pose == EndPose::Home && g.program.retract != SafeRetract::None &&
+      !operations.empty()) {
+    line(dialect.rapid() + tilt_word + dialect.number(0.0, d) + " C" + dialect.number(0.0, d));
+  }
   verbatim(g.program.footer);
   line(dialect.end());
   for (const auto& s : dialect.finish()) raw(s);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -31,7 +32,8 @@ class MachineParser {
                        "not valid TOML: " + std::string(e.description()));
     }
     Machine m = default_machine();
-    check_keys(root, "", {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder"});
+    check_keys(root, "",
+               {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder", "defaults"});
     if (auto* n = root.get("name")) m.name = string_of(*n, "name");
     const toml::node* kin = root.get("kinematics");
     if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\" or \"bc-table-table\")");
@@ -94,6 +96,20 @@ class MachineParser {
       m.holder_gauge_length_mm = positive(*h, "holder", "gauge_length_mm", false);
       if (!m.holder_radius_mm) fail(0, "[holder] needs radius_mm");
     }
+    if (const toml::table* d = table_of(root, "defaults", false)) {
+      // What an operation runs with where its CL file says nothing (issue 33): never guessed.
+      check_keys(*d, "defaults", {"spindle_rpm", "tool_number"});
+      if (const toml::node* n = d->get("spindle_rpm")) {
+        const double rpm = number_of(*n, "defaults.spindle_rpm");
+        if (!(rpm >= 1.0 && rpm <= 2e5)) {
+          fail(line_of(*n), "defaults.spindle_rpm must be within [1, 200000] rpm");
+        }
+        m.default_spindle_rpm = rpm;
+      }
+      if (const toml::node* n = d->get("tool_number")) {
+        m.default_tool_number = whole(*n, "defaults.tool_number", 1, 99999, "");
+      }
+    }
     if (const toml::table* pivot = table_of(root, "pivot", false)) {
       if (m.ac.tilt == TiltAxis::Y) {
         check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
@@ -112,7 +128,7 @@ class MachineParser {
                  {"dialect", "mode", "feed_mode", "feed_reference", "decimals", "feed_decimals",
                   "program_name", "program_number", "work_offset", "coolant", "header", "footer",
                   "tool_change", "tcp_on", "tcp_off", "safe_retract", "retract_z_mm",
-                  "linearise_tolerance_mm"});
+                  "linearise_tolerance_mm", "index_threshold_deg", "end_pose"});
       choose(*g, "gcode", "dialect",
              {{"linuxcnc", GcodeDialect::LinuxCNC},
               {"fanuc", GcodeDialect::Fanuc},
@@ -188,6 +204,20 @@ class MachineParser {
           fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
         }
       }
+      if (auto* n = g->get("index_threshold_deg")) {
+        t.index_threshold_deg = number_of(*n, "gcode.index_threshold_deg");
+        if (!(t.index_threshold_deg >= 0.0 && t.index_threshold_deg <= 360.0)) {
+          fail(line_of(*n), "gcode.index_threshold_deg must be within [0, 360] deg");
+        }
+      }
+      choose(*g, "gcode", "end_pose", {{"home", EndPose::Home}, {"none", EndPose::None}},
+             t.end_pose);
+      if (t.end_pose == EndPose::Home &&
+          (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+        fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.ac.tilt_letter() +
+                              " and C to 0, outside this machine's axis ranges; use \"none\" "
+                              "(and home them in the footer)");
+      }
       const std::pair<const char*, std::vector<std::string>*> blocks[] = {
           {"header", &t.header},
           {"footer", &t.footer},
@@ -199,9 +229,20 @@ class MachineParser {
         if (!n) continue;
         const std::string what = std::string("gcode.") + key;
         if (!n->is_array()) fail(line_of(*n), what + " must be a list of blocks (strings)");
+        if (std::string(key) == "tool_change") {
+          // The program is checked for the tool it calls: the template must call ours.
+          bool calls = false;
+          for (const toml::node& e : *n->as_array()) {
+            calls = calls || (e.is_string() &&
+                              e.value<std::string>().value().find("{tool}") != std::string::npos);
+          }
+          if (!calls) {
+            fail(line_of(*n), what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
+          }
+        }
         for (const toml::node& e : *n->as_array()) {
           const std::string b = string_of(e, what + " entries");
-          check_block(e, b, what);
+          check_block(e, b, what, std::string(key) == "footer");
           out->push_back(b);
         }
       }
@@ -252,7 +293,10 @@ class MachineParser {
 
   /// A block of the program template is written as it is and not read back: it may not move
   /// the machine nor change a mode the written program relies on.
-  void check_block(const toml::node& n, const std::string& block, const std::string& what) const {
+  /// A footer may also home the rotary axes: `G28` (Haas and Fanuc: `G91 G28 B0. C0.`) with
+  /// rotary words of 0 only, and `G90` to restore absolute positions (docs/gcode-dialects.md).
+  void check_block(const toml::node& n, const std::string& block, const std::string& what,
+                   bool footer = false) const {
     std::string code;
     int depth = 0;
     for (char ch : block) {
@@ -267,6 +311,45 @@ class MachineParser {
     static const char* const kForbidden[] = {"G0",  "G1",    "G2",  "G3",   "G20", "G21", "G28",
                                              "G43", "G43.4", "G49", "G53",  "G70", "G71", "G90",
                                              "G91", "G93",   "G94", "G700", "G710"};
+    // The G words and axis words of the block, for the footer's rotary homing.
+    std::vector<std::pair<char, std::string>> words;
+    for (std::size_t i = 0; i < code.size(); ++i) {
+      if (!std::isalpha(static_cast<unsigned char>(code[i])) ||
+          (i > 0 && std::isalpha(static_cast<unsigned char>(code[i - 1])))) {
+        continue;
+      }
+      std::size_t e = i + 1;
+      while (e < code.size() && std::isspace(static_cast<unsigned char>(code[e]))) ++e;
+      std::string v;
+      while (e < code.size() && (std::isdigit(static_cast<unsigned char>(code[e])) ||
+                                 code[e] == '.' || code[e] == '-' || code[e] == '+')) {
+        v += code[e++];
+      }
+      if (!v.empty()) words.emplace_back(code[i], v);
+    }
+    const auto g_is = [](const std::string& v, double want) {
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      return end && *end == '\0' && x == want;
+    };
+    if (footer) {
+      bool homes = false, only_homing = true, only_g90 = !words.empty();
+      for (const auto& [letter, v] : words) {
+        if (letter == 'G' && g_is(v, 28.0)) homes = true;
+        const bool g_ok =
+            letter == 'G' && (g_is(v, 28.0) || g_is(v, 91.0) || g_is(v, 90.0));
+        const bool rotary_zero =
+            (letter == 'A' || letter == 'B' || letter == 'C') && g_is(v, 0.0);
+        only_homing = only_homing && (g_ok || rotary_zero);
+        only_g90 = only_g90 && letter == 'G' && g_is(v, 90.0);
+      }
+      if ((homes && only_homing) || only_g90) return;
+      if (homes) {
+        fail(line_of(n), what + ": '" + block +
+                             "' holds G28 with more than rotary words of 0; a footer may home "
+                             "the rotary axes only (G91 G28 B0. C0.)");
+      }
+    }
     for (std::size_t i = 0; i < code.size(); ++i) {
       const char c = code[i];
       const bool word_start = i == 0 || !std::isalpha(static_cast<unsigned char>(code[i - 1]));

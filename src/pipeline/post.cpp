@@ -29,6 +29,13 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
                        op.arcs,
                        op.coolant,
                        op.events};
+    // The tool and spindle speed where the CL file gives none (validate checked they exist).
+    if (po.tool.number <= 0 && run.fallback_tool) po.tool.number = *run.fallback_tool;
+    if (needs_spindle_speed(op) && run.fallback_spindle_rpm) {
+      po.spindle_rpm = *run.fallback_spindle_rpm;
+      po.spindle_clockwise = true;
+    }
+    po.swept_moves_checked = run.collision.has_value() && o.contact.recovered;
     if (o.optimised) {
       for (std::size_t i = 0; i < po.points.size(); ++i) {
         po.points[i].axis = o.optimised->axes[i];

@@ -57,6 +57,11 @@ struct Run {
   /// hit the part) in a first run; run_job plans them again, falling back to the global
   /// method's plan, else the input's axes where those are free (plan_operation).
   std::set<std::size_t> paper_fallback = {};
+  /// The tool number and spindle speed of operations whose CL file gives none: the options',
+  /// else the machine file's [defaults] (validate refuses an operation that needs one of them
+  /// when neither gives it).
+  std::optional<int> fallback_tool = {};
+  std::optional<double> fallback_spindle_rpm = {};
 };
 
 /// The axes of one operation after the paper's optimiser, and what it did.
@@ -145,6 +150,11 @@ struct Written {
 /// Checks the options (InputError in the library's words) and records what will not be
 /// checked (no part, no holder, no safe retract, no linearisation) and the CL file's notes.
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res);
+
+/// The first feed move of an operation that starts without a spindle speed and whose CL file
+/// turns the spindle on before none of its feed moves; empty when it needs no speed from
+/// elsewhere.
+std::optional<std::size_t> needs_spindle_speed(const Operationd& op);
 
 /// One context per operation: ball radius and metric feeds.
 std::vector<OperationContext> operation_contexts(const Run& run);

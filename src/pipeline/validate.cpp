@@ -123,12 +123,72 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
                        shown(*v));
     }
   }
+  if (options.spindle_rpm && !(*options.spindle_rpm >= 1.0 && *options.spindle_rpm <= 2e5)) {
+    throw InputError("JobOptions::spindle_rpm must be within [1, 200000] rpm, got " +
+                     shown(*options.spindle_rpm));
+  }
+  if (options.tool_number && !(*options.tool_number >= 1 && *options.tool_number <= 99999)) {
+    throw InputError("JobOptions::tool_number must be within [1, 99999], got " +
+                     std::to_string(*options.tool_number));
+  }
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
   }
   res.gcode_units = options.units_out.value_or(tp.units);
   const double fallback = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
-  return Run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
+  Run run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
+  // The tool and the spindle speed: the CL file's, else the command line's, else the machine
+  // file's [defaults]; never guessed (issue 33: a program that feeds with the spindle off).
+  run.fallback_tool = run.options.tool_number ? run.options.tool_number : machine.default_tool_number;
+  run.fallback_spindle_rpm =
+      run.options.spindle_rpm ? run.options.spindle_rpm : machine.default_spindle_rpm;
+  const auto source_of = [&](bool option) {
+    return std::string(option ? "the command line" : "the machine file's [defaults]");
+  };
+  for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+    const Operationd& op = tp.operations[k];
+    const int line = op.points.empty() ? 0 : op.points.front().line;
+    if (op.tool.number <= 0) {
+      if (!run.fallback_tool) {
+        throw InputError(tp.source, line,
+                         "operation " + op.name +
+                             ": the CL file calls no tool (no LOADTL or TOOL number): give "
+                             "--tool-number N, or tool_number in the machine file's [defaults]");
+      }
+      add_finding(res, FindingCode::ClFileNote, k, line,
+                  "operation " + op.name + ": no tool number in the CL file: T" +
+                      std::to_string(*run.fallback_tool) + " from " +
+                      source_of(run.options.tool_number.has_value()));
+    }
+    const std::optional<std::size_t> first_feed = needs_spindle_speed(op);
+    if (!first_feed) continue;
+    if (!run.fallback_spindle_rpm) {
+      throw InputError(tp.source, op.points[*first_feed].line,
+                       "operation " + op.name +
+                           ": feed moves without a spindle speed (no SPINDL before them): give "
+                           "--spindle-rpm N, or spindle_rpm in the machine file's [defaults]");
+    }
+    add_finding(res, FindingCode::ClFileNote, k, op.points[*first_feed].line,
+                "operation " + op.name + ": no spindle speed in the CL file: S" +
+                    shown(*run.fallback_spindle_rpm) + " from " +
+                    source_of(run.options.spindle_rpm.has_value()));
+  }
+  return run;
+}
+
+std::optional<std::size_t> needs_spindle_speed(const Operationd& op) {
+  std::size_t first_feed = op.points.size();
+  for (std::size_t i = 0; i < op.points.size() && first_feed == op.points.size(); ++i) {
+    if (op.points[i].motion == Motion::Feed) first_feed = i;
+  }
+  if (first_feed == op.points.size() || op.spindle_rpm > 0.0) return std::nullopt;
+  for (const ProgramEvent& e : op.events) {
+    if (e.kind == ProgramEvent::Kind::Spindle && e.spindle_rpm > 0.0 &&
+        e.before_point <= first_feed) {
+      return std::nullopt;
+    }
+  }
+  return first_feed;
 }
 
 std::vector<OperationContext> operation_contexts(const Run& run) {

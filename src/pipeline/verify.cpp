@@ -3,6 +3,7 @@
 // the machine's dynamic limits -- and the report's rows (stages.hpp).
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "pipeline/stages.hpp"
@@ -638,9 +639,134 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
 
 }  // namespace
 
+namespace {
+
+/// The program as a machinist checks it, on the read-back (issue 33): a tool called and the
+/// spindle turning before anything moves at feed, the coolant the CL file asks for, no turn
+/// of the table below the retract without a part model to check it, the approach from the
+/// retract XY first and then down, and the rotary axes home at the end. The first breach of
+/// each kind is a finding, with how many there are.
+void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
+                   JobResult& res) {
+  const Machine& machine = run.machine;
+  const ProgramTemplate& t = machine.gcode.program;
+  const std::vector<GcodeMove>& moves = w.moves;
+  if (moves.empty() || posted.empty()) return;
+  // The operation a move belongs to: the first whose last point is at or after it.
+  std::vector<int> last_line(posted.size(), 0);
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    for (const GcodeMove* m : w.point_moves[k]) last_line[k] = std::max(last_line[k], m->line);
+  }
+  const auto op_of = [&](int line) {
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      if (last_line[k] >= line) return k;
+    }
+    return posted.size() - 1;
+  };
+  struct Breach {
+    std::size_t count = 0;
+    int line = 0;
+    std::string what;
+  };
+  std::map<FindingCode, Breach> breaches;
+  const auto breach = [&](FindingCode code, const GcodeMove& m, const std::string& what) {
+    Breach& b = breaches[code];
+    if (b.count++ == 0) {
+      b.line = m.line;
+      b.what = "operation " + posted[op_of(m.line)].name + ": G-code line " +
+               std::to_string(m.line) + " " + what;
+    }
+  };
+  const double threshold_deg = t.index_threshold_deg + 1e-9;
+  const auto shown = [](double v) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  };
+  bool after_retract = false, xy_set = false;
+  double xy[2] = {0.0, 0.0};
+  const GcodeMove* prev = nullptr;
+  for (const GcodeMove& m : moves) {
+    const PostedOperation& po = posted[op_of(m.line)];
+    if (!m.retract) {
+      if (m.tool <= 0) {
+        breach(FindingCode::NoToolCalled, m, "moves with no tool called (T with M6)");
+      } else if (po.tool.number > 0 && m.tool != po.tool.number && !m.positioning) {
+        breach(FindingCode::NoToolCalled, m,
+               "runs tool " + std::to_string(m.tool) + " where the operation's is " +
+                   std::to_string(po.tool.number));
+      }
+    }
+    if (!m.rapid && !m.spindle_on) {
+      breach(FindingCode::SpindleOff, m, "moves at feed with the spindle stopped");
+    }
+    if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
+        t.retract != SafeRetract::None &&
+        std::max(std::abs(m.a_deg - prev->a_deg), std::abs(m.c_deg - prev->c_deg)) >
+            threshold_deg) {
+      breach(FindingCode::IndexWithoutRetract, m,
+             "turns the table by more than " + shown(t.index_threshold_deg) +
+                 " deg in a rapid below the retract, with no part model to check the move");
+    }
+    if (m.retract) {
+      after_retract = true;
+      xy_set = false;
+    } else if (after_retract) {
+      const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
+      if (gives_xy && !gives_z) {
+        xy_set = true;
+        xy[0] = m.xyz_mm.x();
+        xy[1] = m.xyz_mm.y();
+      } else if (gives_z) {
+        if (!xy_set || m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1] ||
+            (prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
+          breach(FindingCode::DiagonalApproach, m,
+                 "leaves the retract height otherwise than XY first, then down");
+        }
+        after_retract = false;
+      }
+    }
+    prev = &m;
+  }
+  // The coolant at each operation's first point: the CL file's (its last change before that
+  // point), else the machine file's.
+  const auto code_of = [](ClCoolant c) { return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0; };
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    if (w.point_moves[k].empty()) continue;
+    int want = po.coolant ? code_of(*po.coolant)
+               : t.coolant == Coolant::Flood ? 8
+               : t.coolant == Coolant::Mist  ? 7
+                                             : 0;
+    for (const ProgramEvent& e : po.events) {
+      if (e.kind == ProgramEvent::Kind::Coolant && e.before_point == 0) want = code_of(e.coolant);
+    }
+    const GcodeMove& first = *w.point_moves[k].front();
+    if (first.coolant != want) {
+      breach(FindingCode::CoolantMismatch, first,
+             "starts with coolant " + std::string(first.coolant == 0 ? "off" : first.coolant == 7 ? "M7" : "M8") +
+                 " where " + std::string(want == 0 ? "off" : want == 7 ? "M7 (mist)" : "M8 (flood)") +
+                 " is asked (CL file COOLNT, else the machine file's gcode.coolant)");
+    }
+  }
+  if (t.end_pose == EndPose::Home && t.retract != SafeRetract::None &&
+      (moves.back().a_deg != 0.0 || moves.back().c_deg != 0.0)) {
+    breach(FindingCode::EndPoseNotHome, moves.back(),
+           "ends with the rotary axes at " + shown(moves.back().a_deg) + " / " +
+               shown(moves.back().c_deg) + " deg, not at their home (gcode.end_pose)");
+  }
+  for (const auto& [code, b] : breaches) {
+    add_finding(res, code, std::nullopt, 0,
+                b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""));
+  }
+}
+
+}  // namespace
+
 void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,
                        JobResult& res) {
+  check_program(run, posted, written, res);
   const JobOptions& options = run.options;
   // Progress of the checks: per point, its pose before and after and the move into it, and
   // its C-space cells.

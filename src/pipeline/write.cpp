@@ -17,7 +17,7 @@ namespace {
 void read_back(const Machine& machine, const std::vector<PostedOperation>& posted,
                const GcodeProgram& program, Written& w) {
   w.moves = read_gcode_moves(program.text, "written G-code", machine.gcode.dialect,
-                             program.verbatim_lines, machine.ac.tilt_letter());
+                             program.verbatim_lines, machine.ac.tilt_letter(), program.tool_calls);
   w.on_arcs.clear();
   w.way_points.assign(posted.size(), {});
   w.point_moves.assign(posted.size(), {});

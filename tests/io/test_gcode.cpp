@@ -280,12 +280,31 @@ TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][g
     REQUIRE(off != std::string::npos);
     REQUIRE(end_retract != std::string::npos);
     CHECK(off < end_retract);
-    // Read back: the retracts and table turns are positioning moves, no point's.
+    // Read back: the retracts, table turns and XY approaches are positioning moves, no
+    // point's: per operation retract, turn, XY; at the end retract and the rotaries home.
     const auto moves = read_gcode_moves(prog.text, "t", w.dialect);
     std::size_t positioning = 0;
     for (const GcodeMove& g : moves) positioning += g.positioning ? 1 : 0;
-    CHECK(positioning == 2 + 2 + (w.dialect == GcodeDialect::Fanuc ? 1 : 1));
+    CHECK(positioning == 3 + 3 + 2);
     CHECK(moves.back().positioning);
+    CHECK(moves.back().a_deg == 0.0);
+    CHECK(moves.back().c_deg == 0.0);
+    // From the retract: XY first (no Z word), then down to the first point with the same X Y
+    // (issue 33: no diagonal rapid from the retract height).
+    for (std::size_t k = 0; k < 2; ++k) {
+      const int point_line = prog.emitted[k][0];
+      std::size_t at = 0;
+      while (moves[at].line != point_line) ++at;
+      REQUIRE(at > 0);
+      const GcodeMove& xy = moves[at - 1];
+      CHECK(xy.given == 3u);  // X and Y only
+      CHECK(moves[at].xyz_mm.x() == xy.xyz_mm.x());
+      CHECK(moves[at].xyz_mm.y() == xy.xyz_mm.y());
+      CHECK(moves[at].a_deg == xy.a_deg);
+      CHECK(moves[at].c_deg == xy.c_deg);
+      CHECK(moves[at].tool == (k == 0 ? 3 : 4));
+      CHECK(moves[at].spindle_on);
+    }
   }
 }
 

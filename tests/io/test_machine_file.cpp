@@ -218,7 +218,9 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   // A template block may not move the machine nor change a mode taxopt writes itself.
   expect_error(head + "header = [\"M3 X0\"]\n", 9, "moves an axis (X)");
   expect_error(head + "header = [\"G0 X0\"]\n", 9, "holds G0");
-  expect_error(head + "footer = [\"G91 G28 Z0\"]\n", 9, "holds G91");
+  expect_error(head + "footer = [\"G91 G28 Z0\"]\n", 9, "home the rotary axes only");
+  expect_error(head + "header = [\"G91 G28 C0\"]\n", 9, "holds G91");
+  expect_error(head + "tool_change = [\"M6\"]\n", 9, "must call the tool by \"{tool}\"");
   expect_error(head + "tcp_on = [\"G49\"]\n", 9, "holds G49");
   expect_error(head + "tool_change = [\"T{tool} M6\", \"G20\"]\n", 9, "holds G20");
   expect_error(head + "work_offset = \"G43 H1\"\n", 9, "holds G43");
@@ -227,6 +229,47 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");
   expect_error(head + "coolant = \"through\"\n", 9, "\"none\", \"flood\" or \"mist\"");
   expect_error(head + "linearise_tolerance_mm = -1\n", 9, ">= 0");
+}
+
+TEST_CASE(
+    "machine file: [defaults] spindle speed and tool, the index threshold, the end pose and a "
+    "footer that homes the rotaries",
+    "[io][machine]") {
+  const std::string head =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n";
+  const Machine plain = parse_machine_toml(head, "m.toml");
+  CHECK(!plain.default_spindle_rpm);
+  CHECK(!plain.default_tool_number);
+  CHECK(plain.gcode.program.index_threshold_deg == 1.0);
+  CHECK(plain.gcode.program.end_pose == EndPose::Home);
+  const Machine m = parse_machine_toml(
+      head +
+          "[defaults]\nspindle_rpm = 12000\ntool_number = 7\n[gcode]\ndialect = \"fanuc\"\n"
+          "index_threshold_deg = 5\nend_pose = \"none\"\n"
+          "footer = [\"G91 G28 A0. C0.\", \"G90\"]\n",
+      "m.toml");
+  CHECK(m.default_spindle_rpm == 12000.0);
+  CHECK(m.default_tool_number == 7);
+  CHECK(m.gcode.program.index_threshold_deg == 5.0);
+  CHECK(m.gcode.program.end_pose == EndPose::None);
+  CHECK(m.gcode.program.footer == std::vector<std::string>{"G91 G28 A0. C0.", "G90"});
+  const std::string d = head + "[defaults]\n";
+  expect_error(d + "spindle_rpm = 0\n", 8, "within [1, 200000] rpm");
+  expect_error(d + "spindle_rpm = nan\n", 8, "must be finite");
+  expect_error(d + "tool_number = 0\n", 8, "from 1 to 99999");
+  expect_error(d + "tool_number = 2.5\n", 8, "from 1 to 99999");
+  expect_error(d + "tool = 1\n", 8, "unknown key 'defaults.tool'");
+  const std::string g = head + "[gcode]\n";
+  expect_error(g + "index_threshold_deg = -1\n", 8, "within [0, 360] deg");
+  expect_error(g + "end_pose = \"park\"\n", 8, "\"home\" or \"none\"");
+  expect_error(g + "footer = [\"G91 G28 C90.\"]\n", 8, "home the rotary axes only");
+  expect_error(g + "footer = [\"G28 X0 C0\"]\n", 8, "home the rotary axes only");
+  // Home outside the tilt range: no silent end pose.
+  expect_error(
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 10\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n[gcode]\n",
+      7, "outside this machine's axis ranges");
 }
 
 TEST_CASE("machine file: machine mode needs an explicit [pivot]; the Haas preset has none",

@@ -35,6 +35,10 @@ struct PostedOperation {
   std::optional<ClCoolant> coolant;
   /// Stops, dwells, spindle and coolant changes where they stand (Operation::events).
   std::vector<ProgramEvent> events;
+  /// The moves are checked against a part model, swept (the verification's move check): the
+  /// turns of the table stay in the air; false: a rapid turning more than the machine's
+  /// index threshold is an index move (up, turn, XY, down).
+  bool swept_moves_checked = false;
 };
 
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it
@@ -56,9 +60,13 @@ struct GcodeProgram {
   /// Machine mode: blocks written between points to keep the tip on the straight line
   /// (linearisation); they belong to no point.
   std::size_t linearised_blocks = 0;
+  /// Rapids written as index moves (retract, turn, XY, down; ProgramTemplate).
+  std::size_t index_moves = 0;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.
   std::vector<int> verbatim_lines;
+  /// The template's tool changes among them: line, tool number.
+  std::vector<std::pair<int, int>> tool_calls;
 };
 
 /// Linearisation of a machine-mode feed move from (from_tip_mm, from) to (to_tip_mm, to):
@@ -99,6 +107,17 @@ struct GcodeMove {
   /// Sinumerik TRAORI, TNC M128).
   bool length_offset = false;
   bool tcp = false;
+  /// A move in machine coordinates (the dialect's retract: G53, G28, SUPA, M91).
+  bool retract = false;
+  /// Which of X Y Z A C (bits 0 to 4) the block gives.
+  unsigned given = 0;
+  /// The machine's state at the block, as the program set it: the tool in the spindle (T with
+  /// M6, a TNC's tool call, a template's tool change; 0: none), the spindle (S with M3/M4;
+  /// M5, M2, M30 stop it), the coolant (7 mist, 8 flood, 0 off after M9).
+  int tool = 0;
+  bool spindle_on = false;
+  double spindle_rpm = 0.0;
+  int coolant = 0;
 };
 
 /// The point of the arc of `to` (a G2/G3 move starting at `from_mm`) at the same angle as
@@ -120,10 +139,12 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
 /// `G00 Z M91`) are read as positioning moves. Haas as Fanuc, with G234 H (tool centre point
 /// control) and `G53 G0 Z`. The tilt axis's word is `tilt_letter` (A, or B on a B/C machine;
-/// GcodeMove::a_deg holds it); the other is refused.
+/// GcodeMove::a_deg holds it); the other is refused. `tool_calls` (GcodeProgram::tool_calls)
+/// are the verbatim lines that change the tool.
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
                                         GcodeDialect dialect = GcodeDialect::LinuxCNC,
                                         const std::vector<int>& verbatim_lines = {},
-                                        char tilt_letter = 'A');
+                                        char tilt_letter = 'A',
+                                        const std::vector<std::pair<int, int>>& tool_calls = {});
 
 }  // namespace taxopt

@@ -44,6 +44,11 @@ enum class Coolant { None, Flood, Mist };
 /// Sinumerik SUPA, Heidenhain M91), or none (the user takes care of it; a warning says so).
 enum class SafeRetract { MachineZ, None };
 
+/// Where the program leaves the rotary axes: home (0, 0), turned there after the last retract,
+/// so that a continuous C ends within one turn of its home and the next program starts from a
+/// known table; or none (the footer homes them, e.g. Haas `G91 G28 B0. C0.`, or the user).
+enum class EndPose { Home, None };
+
 /// What a program holds besides its moves; empty strings and lists take the dialect's
 /// defaults (docs/gcode-dialects.md "Program template").
 struct ProgramTemplate {
@@ -69,6 +74,12 @@ struct ProgramTemplate {
   /// Machine mode: the largest distance the tip may leave the straight line between two
   /// points while the joints move linearly; longer moves are split (linearisation), mm.
   double linearise_tolerance_mm = 0.01;
+  /// A rapid that turns a rotary axis by more than this (written deg) inside an operation is
+  /// an index move: tool up to the retract, the table turned there, XY at that height, then
+  /// down (docs/gcode-dialects.md "Index moves"); with a part model, whose check verifies the
+  /// swept moves, the turns stay in the air.
+  double index_threshold_deg = 1.0;
+  EndPose end_pose = EndPose::Home;
 };
 
 /// How G-code is written for a machine.
@@ -118,6 +129,10 @@ struct Machine {
   /// [holder]: the machine's usual holder (mm), used where the command line names none:
   /// radius_mm, length_mm and the tool's gauge_length_mm (tip to holder face).
   std::optional<double> holder_radius_mm, holder_length_mm, holder_gauge_length_mm;
+  /// [defaults]: the spindle speed (rpm) and tool number of an operation whose CL file gives
+  /// none and where the command line gives none (--spindle-rpm, --tool-number).
+  std::optional<double> default_spindle_rpm;
+  std::optional<int> default_tool_number;
   GcodeSettings gcode;
 };
 

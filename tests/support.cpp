@@ -188,7 +188,29 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
   double feed_rate = 0.0;
   bool inverse_time = false;
   int plane = 2;  // the axis normal to the selected plane
+  bool spindle_on = false, flood = false, mist = false;
+  double spindle_speed = 0.0;
+  int tool = 0;
+  const auto stamp = [&](CanonMove& m) {
+    m.spindle_on = spindle_on;
+    m.tool = tool;
+    m.coolant = flood || mist;
+  };
   while (std::getline(in, line)) {
+    if (const auto at = line.find("SET_SPINDLE_SPEED("); at != std::string::npos) {
+      double spindle = 0.0;
+      std::sscanf(line.c_str() + at + 18, "%*d, %lf", &spindle);
+      spindle_speed = spindle;
+    }
+    if (line.find("START_SPINDLE_") != std::string::npos) spindle_on = spindle_speed > 0.0;
+    if (line.find("STOP_SPINDLE_TURNING") != std::string::npos) spindle_on = false;
+    if (const auto at = line.find("CHANGE_TOOL("); at != std::string::npos) {
+      tool = std::atoi(line.c_str() + at + 12);
+    }
+    if (line.find("FLOOD_ON()") != std::string::npos) flood = true;
+    if (line.find("FLOOD_OFF()") != std::string::npos) flood = false;
+    if (line.find("MIST_ON()") != std::string::npos) mist = true;
+    if (line.find("MIST_OFF()") != std::string::npos) mist = false;
     if (line.find("feed mode set to inverse time") != std::string::npos) inverse_time = true;
     if (line.find("feed mode set to units per minute") != std::string::npos) inverse_time = false;
     if (const auto at = line.find("SET_FEED_RATE("); at != std::string::npos) {
@@ -234,6 +256,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
       m.inverse_time = inverse_time;
       m.tool_length = tool_length;
       m.kins = kins;
+      stamp(m);
       moves.push_back(m);
       continue;
     }
@@ -251,6 +274,7 @@ RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,
     }
     m.tool_length = tool_length;
     m.kins = kins;
+    stamp(m);
     moves.push_back(m);
   }
   if (all_moves) *all_moves = moves;

@@ -85,6 +85,12 @@ struct CanonMove {
   /// The kinematics last switched to by the stubbed M428 (1, TCP) / M429 (0, identity);
   /// -1 before either.
   int kins = -1;
+  /// The machine's state at the move as rs274's canonical calls set it: the spindle turning
+  /// (START_SPINDLE_* at a speed above 0, until STOP_SPINDLE_TURNING), the tool in it
+  /// (CHANGE_TOOL; 0 before), the coolant (FLOOD_ON or MIST_ON).
+  bool spindle_on = false;
+  int tool = 0;
+  bool coolant = false;
 };
 /// How rs274 is run: the tool length of every tool in its table (mm), and a LinuxCNC INI file (its
 /// folder copied, so that its remaps and subroutines are found).

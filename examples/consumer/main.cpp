@@ -25,6 +25,10 @@ int main(int argc, char** argv) {
     options.method = taxopt::Method::Paper;
     options.part = part ? &*part : nullptr;
     options.feed_schedule = true;
+    // Where the CL file calls no tool or starts no spindle (NX files often do neither: the
+    // post supplies them), the caller says which; without them run_job refuses the file.
+    options.tool_number = 1;
+    options.spindle_rpm = 1000.0;
     options.progress = [](const std::string& stage, std::size_t done, std::size_t total) {
       if (done == total && total > 0) std::fprintf(stderr, "%s: done\n", stage.c_str());
     };

@@ -332,6 +332,19 @@ class MachineParser {
       const double x = std::strtod(v.c_str(), &end);
       return end && *end == '\0' && x == want;
     };
+    // The spindle, coolant, tool and program end are taxopt's to write, so that the program
+    // read back knows their state (issue 33): a template only calls the tool, by {tool}.
+    const bool tool_change = what == "gcode.tool_change";
+    for (const auto& [letter, v] : words) {
+      const bool state_m = letter == 'M' && (g_is(v, 2) || g_is(v, 3) || g_is(v, 4) || g_is(v, 5) ||
+                                             g_is(v, 7) || g_is(v, 8) || g_is(v, 9) ||
+                                             g_is(v, 30) || (g_is(v, 6) && !tool_change));
+      if (state_m || letter == 'S' || (letter == 'T' && !tool_change)) {
+        fail(line_of(n), what + ": '" + block + "' holds " + std::string(1, letter) + v +
+                             ": the spindle, coolant, tool and program end are written by taxopt "
+                             "(the CL file, --spindle-rpm, [defaults], gcode.coolant)");
+      }
+    }
     if (footer) {
       bool homes = false, only_homing = true, only_g90 = !words.empty();
       for (const auto& [letter, v] : words) {

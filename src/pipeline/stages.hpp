@@ -191,6 +191,15 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,
                        JobResult& res);
 
+/// The program as a machinist checks it, on the read-back (issue 33; verify_operations runs
+/// it): a tool called and the spindle turning before anything moves at feed, the coolant the
+/// CL file asks for at each operation's start, no turn of the table by more than the index
+/// threshold in a rapid below the retract without a part model to check the move, the
+/// approach from the retract XY first and then down, and the rotary axes home at the end
+/// (end_pose "home"). The first breach of each kind is a finding, with how many there are.
+void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
+                   JobResult& res);
+
 // ---- Shared by the stages -----------------------------------------------------------------
 
 /// Records a finding, and its message by severity (JobResult's display lists).

@@ -639,13 +639,6 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
 
 }  // namespace
 
-namespace {
-
-/// The program as a machinist checks it, on the read-back (issue 33): a tool called and the
-/// spindle turning before anything moves at feed, the coolant the CL file asks for, no turn
-/// of the table below the retract without a part model to check it, the approach from the
-/// retract XY first and then down, and the rotary axes home at the end. The first breach of
-/// each kind is a finding, with how many there are.
 void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
                    JobResult& res) {
   const Machine& machine = run.machine;
@@ -760,8 +753,6 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
                 b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""));
   }
 }
-
-}  // namespace
 
 void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,

@@ -248,7 +248,7 @@ TEST_CASE(
   const std::string text =
       "UNITS/MM\nCUTTER/10,5\nLOADTL/2\nSPINDL/150,SMM,CLW\nCOOLNT/MIST\nFEDRAT/600,MMPM\n"
       "GOTO/0,0,10\nGOTO/0,0,0\nGOTO/10,0,0\nSTOP\nGOTO/20,0,0\nOPSTOP\nGOTO/30,0,0\n"
-      "DELAY/1.5\nGOTO/40,0,0\nSPINDL/OFF\nGOTO/50,0,0\nSPINDL/3000,RPM,CCLW\nCOOLNT/FLOOD\n"
+      "DELAY/1.5\nGOTO/40,0,0\nSPINDL/OFF\nRAPID\nGOTO/50,0,0\nSPINDL/3000,RPM,CCLW\nCOOLNT/FLOOD\n"
       "GOTO/60,0,0\nCOOLNT/OFF\nGOTO/70,0,0\nFINI\n";
   const Toolpath tp = parse_cl(text, "p.apt");
   const auto& op = tp.operations.at(0);
@@ -267,6 +267,14 @@ TEST_CASE(
   const std::string g = read_file(dir.path("o.ngc"));
   std::vector<CanonMove> moves;
   REQUIRE(run_rs274(dir.path("o.ngc"), moves).code == 0);
+  // A feed move with the spindle off (the rapid made a feed) is refused by the program check.
+  std::string feeding = text;
+  feeding.replace(feeding.find("RAPID\nGOTO/50"), 6, "");
+  write_file(dir.path("f.apt"), feeding);
+  const RunResult off = run_taxopt("--in " + dir.path("f.apt") + " --method none --gcode " +
+                                   dir.path("f.ngc") + " -q");
+  CHECK(off.code == 1);
+  CHECK_THAT(off.err, Catch::Contains("moves at feed with the spindle stopped"));
   const auto lines = lines_of(g);
   // Each event stands between the blocks of the points before and after it.
   const std::size_t x10 = line_of(lines, "X10."), x20 = line_of(lines, "X20."),

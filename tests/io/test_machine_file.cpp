@@ -216,12 +216,20 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   CHECK(t.linearise_tolerance_mm == 0.002);
   CHECK(m.gcode.feed_decimals == 2);
   // A template block may not move the machine nor change a mode taxopt writes itself.
-  expect_error(head + "header = [\"M3 X0\"]\n", 9, "moves an axis (X)");
+  expect_error(head + "header = [\"M1 X0\"]\n", 9, "moves an axis (X)");
   expect_error(head + "header = [\"G0 X0\"]\n", 9, "holds G0");
   expect_error(head + "footer = [\"G91 G28 Z0\"]\n", 9, "home the rotary axes only");
   expect_error(head + "header = [\"G91 G28 C0\"]\n", 9, "holds G91");
   expect_error(head + "tool_change = [\"M6\"]\n", 9, "must call the tool by \"{tool}\"");
   expect_error(head + "tcp_on = [\"G49\"]\n", 9, "holds G49");
+  // Spindle, coolant, tool and program end: the read-back must know them (issue 33).
+  expect_error(head + "tcp_on = [\"M5\"]\n", 9, "holds M5: the spindle, coolant");
+  expect_error(head + "header = [\"S1000 M3\"]\n", 9, "holds S1000");
+  expect_error(head + "footer = [\"M09\"]\n", 9, "holds M09");
+  expect_error(head + "header = [\"T5\"]\n", 9, "holds T5");
+  expect_error(head + "header = [\"M6\"]\n", 9, "holds M6");
+  expect_error(head + "footer = [\"M30\"]\n", 9, "holds M30");
+  expect_error(head + "tool_change = [\"T{tool} M6\", \"M8\"]\n", 9, "holds M8");
   expect_error(head + "tool_change = [\"T{tool} M6\", \"G20\"]\n", 9, "holds G20");
   expect_error(head + "work_offset = \"G43 H1\"\n", 9, "holds G43");
   expect_error(head + "header = \"M98\"\n", 9, "list of blocks");

@@ -1,0 +1,315 @@
+// The program as a machinist checks it (issue 33): a tool called and the spindle turning
+// before the first feed move, the coolant the CL file asks for, no table turned below the
+// retract without a part model, the approach from the retract XY first and then down, the
+// rotary axes home at the end; in every dialect, on every real CL file, and through rs274.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <sstream>
+
+#include "pipeline/stages.hpp"
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/gcode.hpp"
+#include "taxopt/job.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+/// The real CL files (tests/data/real/reference.tsv's first column).
+std::vector<std::string> real_files() {
+  std::istringstream table(read_file(real_data("reference.tsv")));
+  std::string row;
+  std::getline(table, row);  // header
+  std::vector<std::string> out;
+  while (std::getline(table, row)) {
+    std::istringstream fields(row);
+    std::string f;
+    fields >> f;
+    if (!f.empty()) out.push_back(f);
+  }
+  return out;
+}
+
+/// What a machinist checks, counted over the moves read back (independently of taxopt's own
+/// check_program: a breach of each kind, by the same rules written again here).
+struct Breaches {
+  int no_tool = 0, spindle_off = 0, index = 0, diagonal = 0, retracts = 0;
+  bool home_at_end = false;
+};
+Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) {
+  Breaches b;
+  const GcodeMove* prev = nullptr;
+  bool after_retract = false, xy_given = false;
+  double x = 0.0, y = 0.0;
+  for (const GcodeMove& m : moves) {
+    if (!m.retract && m.tool <= 0) ++b.no_tool;
+    if (!m.rapid && !m.spindle_on) ++b.spindle_off;
+    if (prev && m.rapid && !m.positioning && !prev->positioning &&
+        std::max(std::abs(m.a_deg - prev->a_deg), std::abs(m.c_deg - prev->c_deg)) >
+            threshold_deg + 1e-9) {
+      ++b.index;
+    }
+    if (m.retract) {
+      ++b.retracts;
+      after_retract = true;
+      xy_given = false;
+    } else if (after_retract && (m.given & 4u)) {
+      if (!xy_given || m.xyz_mm.x() != x || m.xyz_mm.y() != y) ++b.diagonal;
+      after_retract = false;
+    } else if (after_retract && (m.given & 3u)) {
+      xy_given = true;
+      x = m.xyz_mm.x();
+      y = m.xyz_mm.y();
+    }
+    prev = &m;
+  }
+  b.home_at_end = !moves.empty() && moves.back().a_deg == 0.0 && moves.back().c_deg == 0.0;
+  return b;
+}
+
+const char* const kDialects[] = {"linuxcnc", "fanuc", "siemens", "heidenhain", "haas"};
+
+GcodeDialect dialect_of(const std::string& name) {
+  if (name == "fanuc") return GcodeDialect::Fanuc;
+  if (name == "siemens") return GcodeDialect::Siemens;
+  if (name == "heidenhain") return GcodeDialect::Heidenhain;
+  if (name == "haas") return GcodeDialect::Haas;
+  return GcodeDialect::LinuxCNC;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "program: every real CL file, in every dialect, calls its tool and starts its spindle "
+    "before it feeds, indexes up at the retract, comes down XY first, ends home and says what "
+    "was not checked; rs274 runs no feed move with the spindle off",
+    "[program][real][rs274][integration]") {
+  REQUIRE(have_rs274());
+  int programs = 0, index_retracts = 0;
+  for (const std::string& f : real_files()) {
+    for (const char* dialect : kDialects) {
+      INFO(f << " --dialect " << dialect);
+      TempDir dir;
+      const RunResult r =
+          run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --dialect " +
+                     dialect + " --gcode " + dir.path("o.nc") + " --method none -q");
+      INFO(r.err);
+      if (r.code == 2 && r.err.find("DELAY: taxopt writes a dwell for LinuxCNC") !=
+                             std::string::npos) {
+        // A dwell of the file in a dialect whose dwell words taxopt does not write: refused.
+        CHECK(std::string(dialect) != "linuxcnc");
+        CHECK(std::string(dialect) != "fanuc");
+        continue;
+      }
+      REQUIRE(r.code == 0);
+      ++programs;
+      const std::string text = read_file(dir.path("o.nc"));
+      // No part: the program says so before its first block.
+      CHECK(text.substr(0, 1500).find("NOT CHECKED: no part") != std::string::npos);
+      const std::vector<GcodeMove> moves =
+          read_gcode_moves(text, "o.nc", dialect_of(dialect), {}, 'A');
+      const Breaches b = breaches_of(moves, 1.0);
+      CHECK(b.no_tool == 0);
+      CHECK(b.spindle_off == 0);
+      CHECK(b.index == 0);
+      CHECK(b.diagonal == 0);
+      CHECK(b.home_at_end);
+      std::size_t operations = 0;
+      for (std::size_t at = text.find("operation "); at != std::string::npos;
+           at = text.find("operation ", at + 1)) {
+        ++operations;
+      }
+      // One retract before each operation and one at the end; more are index moves.
+      if (std::string(dialect) == "linuxcnc") {
+        index_retracts += b.retracts - static_cast<int>(operations) - 1;
+        std::vector<CanonMove> points, all;
+        const RunResult rs = run_rs274(dir.path("o.nc"), points, {}, &all);
+        INFO(rs.err);
+        REQUIRE(rs.code == 0);
+        int feeds = 0, off = 0, toolless = 0;
+        for (const CanonMove& m : all) {
+          if (!m.feed) continue;
+          ++feeds;
+          off += m.spindle_on ? 0 : 1;
+          toolless += m.tool > 0 ? 0 : 1;
+        }
+        CHECK(feeds > 0);
+        CHECK(off == 0);
+        CHECK(toolless == 0);
+      }
+    }
+  }
+  CHECK(programs >= 8 * 3);
+  // amorim-wall-holes turns its table by 90 deg inside an operation (CL lines 2112-2119).
+  CHECK(index_retracts >= 1);
+}
+
+TEST_CASE(
+    "program: a 90 deg index inside an operation goes up, turns, comes down XY first; "
+    "index_threshold_deg above it keeps the turn in the air",
+    "[program][cli]") {
+  TempDir t;
+  write_file(t.path("a.cls"),
+             "TOOL PATH/IDX,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/2\nSPINDL/RPM,5000,CLW\n"
+             "RAPID\nGOTO/0,0,10,0,0,1\nFEDRAT/MMPM,500\nGOTO/0,0,0\nGOTO/10,0,0\n"
+             "RAPID\nGOTO/10,0,10\nRAPID\nGOTO/20,-10,0,0,-1,0\nFEDRAT/MMPM,500\nGOTO/30,-10,0\n"
+             "END-OF-PATH\n");
+  const auto r = run_taxopt("--in " + t.path("a.cls") + " --gcode " + t.path("o.ngc") +
+                            " --method none -q --max-deviation 0");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::string text = read_file(t.path("o.ngc"));
+  const auto moves = read_gcode_moves(text, "o.ngc");
+  const Breaches b = breaches_of(moves, 1.0);
+  CHECK(b.retracts == 3);  // the start, the index, the end
+  CHECK(b.index == 0);
+  CHECK(b.diagonal == 0);
+  CHECK(text.find("T2 M6") != std::string::npos);
+  CHECK(text.find("S5000 M3") != std::string::npos);
+  // The turn is made with the tool up: the turning block follows a retract and holds A and C
+  // only.
+  const std::size_t idx = text.find("G53 G0 Z", text.find("G53 G0 Z") + 1);
+  REQUIRE(idx != std::string::npos);
+  const std::size_t turn = text.find('\n', idx) + 1;
+  const std::string turn_block = text.substr(turn, text.find('\n', turn) - turn);
+  CHECK(turn_block == "G0 A90.0000 C0.0000");
+  // The rapid's 90 deg stays in the air with a threshold above it: the check then fails it,
+  // since nothing verifies the move without a part.
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n"
+             "[axes.C]\ncontinuous = true\n[gcode]\nindex_threshold_deg = 120\n");
+  const auto wide = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                               " --gcode " + t.path("w.ngc") + " --method none -q");
+  CHECK(wide.code == 0);
+  const Breaches bw = breaches_of(read_gcode_moves(read_file(t.path("w.ngc")), "w.ngc"), 1.0);
+  CHECK(bw.retracts == 2);
+  CHECK(bw.index == 1);
+}
+
+TEST_CASE(
+    "program: the spindle speed and tool come from the CL file, else the command line, else "
+    "the machine file's [defaults]; with none of them exit 2 naming them",
+    "[program][cli][bad-input]") {
+  TempDir t;
+  const std::string body =
+      "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nRAPID\nGOTO/0,0,10,0,0,1\n"
+      "FEDRAT/MMPM,250\nGOTO/0,0,0\nGOTO/5,0,0\nEND-OF-PATH\n";
+  write_file(t.path("bare.cls"), body);
+  write_file(t.path("full.cls"), "LOADTL/4\nSPINDL/RPM,7000,CCLW\n" + body);
+  write_file(t.path("m.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n"
+             "[axes.C]\ncontinuous = true\n[defaults]\nspindle_rpm = 9000\ntool_number = 6\n");
+  const std::string out = " --gcode " + t.path("o.ngc") + " --method none -q";
+  const auto none = run_taxopt("--in " + t.path("bare.cls") + out);
+  CHECK(none.code == 2);
+  CHECK_THAT(none.err, Catch::Contains("bare.cls:4: operation T: the CL file calls no tool"));
+  CHECK_THAT(none.err, Catch::Contains("--tool-number N, or tool_number in the machine file"));
+  CHECK_FALSE(file_exists(t.path("o.ngc")));
+  const auto no_speed = run_taxopt("--in " + t.path("bare.cls") + " --tool-number 3" + out);
+  CHECK(no_speed.code == 2);
+  CHECK_THAT(no_speed.err, Catch::Contains("bare.cls:6: operation T: feed moves without a "
+                                           "spindle speed"));
+  CHECK_THAT(no_speed.err, Catch::Contains("--spindle-rpm N, or spindle_rpm in the machine"));
+  // The command line.
+  const auto cli =
+      run_taxopt("--in " + t.path("bare.cls") + " --tool-number 3 --spindle-rpm 4500" + out);
+  REQUIRE(cli.code == 0);
+  std::string text = read_file(t.path("o.ngc"));
+  CHECK(text.find("T3 M6") != std::string::npos);
+  CHECK(text.find("S4500 M3") != std::string::npos);
+  // The machine file's [defaults]; the command line before them.
+  const std::string machine = " --machine " + t.path("m.toml");
+  REQUIRE(run_taxopt("--in " + t.path("bare.cls") + machine + out).code == 0);
+  text = read_file(t.path("o.ngc"));
+  CHECK(text.find("T6 M6") != std::string::npos);
+  CHECK(text.find("S9000 M3") != std::string::npos);
+  REQUIRE(run_taxopt("--in " + t.path("bare.cls") + machine + " --spindle-rpm 4500" + out).code ==
+          0);
+  CHECK(read_file(t.path("o.ngc")).find("S4500 M3") != std::string::npos);
+  // The CL file before both.
+  REQUIRE(run_taxopt("--in " + t.path("full.cls") + machine + " --spindle-rpm 4500" + out).code ==
+          0);
+  text = read_file(t.path("o.ngc"));
+  CHECK(text.find("T4 M6") != std::string::npos);
+  CHECK(text.find("S7000 M4") != std::string::npos);
+  // Hostile values.
+  for (const char* bad : {"--spindle-rpm 0", "--spindle-rpm -5", "--spindle-rpm nan",
+                          "--spindle-rpm 1e9", "--tool-number 0", "--tool-number 1.5",
+                          "--tool-number abc", "--tool-number 100000"}) {
+    INFO(bad);
+    const auto b = run_taxopt("--in " + t.path("bare.cls") + " " + bad + out);
+    CHECK(b.code == 2);
+  }
+}
+
+TEST_CASE(
+    "program: check_program finds each breach a machinist looks for in a program read back",
+    "[program]") {
+  const Toolpath tp = parse_cl(
+      "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/1\nSPINDL/RPM,6000,CLW\n"
+      "COOLNT/FLOOD\nRAPID\nGOTO/0,0,10,0,0,1\nFEDRAT/MMPM,250\nGOTO/0,0,0\nGOTO/5,0,0\n"
+      "GOTO/10,0,0\nRAPID\nGOTO/10,0,10\nRAPID\nGOTO/12,0,10\nEND-OF-PATH\n",
+      "t.cls");
+  const Machine machine = default_machine();
+  JobOptions given;
+  given.method = Method::None;
+  const auto findings_of = [&](const std::function<void(pipeline::Written&)>& tamper) {
+    JobResult res;
+    pipeline::Run run = pipeline::validate(tp, machine, given, res);
+    std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
+    pipeline::plan_operations(run, ops, res);
+    std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, res);
+    REQUIRE(posted);
+    pipeline::Written w = pipeline::write_program(run, ops, *posted, res);
+    tamper(w);
+    JobResult checked;
+    pipeline::check_program(run, *posted, w, checked);
+    std::vector<FindingCode> codes;
+    for (const Finding& f : checked.findings) {
+      codes.push_back(f.code);
+      CHECK(f.severity == Severity::Problem);
+      CHECK_THAT(f.message, Catch::Contains("operation T: G-code line "));
+    }
+    return codes;
+  };
+  using V = std::vector<FindingCode>;
+  CHECK(findings_of([](pipeline::Written&) {}).empty());
+  const auto first_feed = [](pipeline::Written& w) -> GcodeMove& {
+    for (GcodeMove& m : w.moves) {
+      if (!m.rapid) return m;
+    }
+    throw std::logic_error("no feed move");
+  };
+  CHECK(findings_of([&](pipeline::Written& w) { first_feed(w).spindle_on = false; }) ==
+        V{FindingCode::SpindleOff});
+  CHECK(findings_of([&](pipeline::Written& w) { first_feed(w).tool = 0; }) ==
+        V{FindingCode::NoToolCalled});
+  CHECK(findings_of([&](pipeline::Written& w) { w.point_moves[0][0] = &first_feed(w); }) ==
+        V{});  // the first point's move starts with flood: no breach
+  CHECK(findings_of([&](pipeline::Written& w) {
+          for (GcodeMove& m : w.moves) m.coolant = 0;
+        }) == V{FindingCode::CoolantMismatch});
+  // The last rapid (10,0,10) -> (12,0,10) turned by 5 deg below the retract.
+  CHECK(findings_of([&](pipeline::Written& w) {
+          for (std::size_t i = w.moves.size(); i-- > 0;) {
+            if (!w.moves[i].positioning) {
+              w.moves[i].c_deg += 5.0;
+              break;
+            }
+          }
+        }) == V{FindingCode::IndexWithoutRetract});
+  // The XY approach moved off the point's X: the way down is diagonal.
+  CHECK(findings_of([&](pipeline::Written& w) {
+          for (GcodeMove& m : w.moves) {
+            if (m.given == 3u) {
+              m.xyz_mm.x() += 1.0;
+              break;
+            }
+          }
+        }) == V{FindingCode::DiagonalApproach});
+  CHECK(findings_of([&](pipeline::Written& w) { w.moves.back().c_deg = 360.0; }) ==
+        V{FindingCode::EndPoseNotHome});
+}

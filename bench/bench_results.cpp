@@ -61,6 +61,7 @@ Case sine_case(const std::string& name, double height_mm, double wavelength_mm, 
   op.name = name;
   op.tool = Tool::ball_end_mill(6.0, 15.0);
   op.tool.number = 1;
+  op.spindle_rpm = 3000.0;
   for (const GeneratedPoint& p : generate_raster(sine, raster)) {
     CLPointd c;
     c.tip_mm = p.tip_mm;

@@ -32,7 +32,9 @@ int main(int argc, char** argv) {
   const long n = argc > 1 ? std::atol(argv[1]) : 1000000;
   // Raster passes of 1000 points over z = 10 cos(2 pi y / 40), axis 5 deg off the normal.
   auto t0 = std::chrono::steady_clock::now();
-  std::string text = "TOOL PATH/SCALE,TOOL,BALL\nTLDATA/MILL,6.0,3.0,15.0,0,0\nFEDRAT/MMPM,2000\n";
+  std::string text =
+      "TOOL PATH/SCALE,TOOL,BALL\nTLDATA/MILL,6.0,3.0,15.0,0,0\nLOADTL/1\nSPINDL/RPM,8000,CLW\n"
+      "FEDRAT/MMPM,2000\n";
   text.reserve(static_cast<std::size_t>(n) * 80);
   char buf[200];
   const double w = 2.0 * Constants<double>::pi() / 40.0;

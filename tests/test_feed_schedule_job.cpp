@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "support.hpp"
+#include "taxopt/io/machine_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
 
 using namespace taxopt;
@@ -370,4 +371,65 @@ TEST_CASE(
   CHECK(checked == 6);
   // The objective buys time somewhere, not only ties.
   CHECK(shorter >= 2);
+}
+
+TEST_CASE(
+    "feed schedule: every real CL file at LinuxCNC's sample rates exits 0 in tcp and machine "
+    "mode, and rs274's reading of every block, linearisation and arc chords included, stays "
+    "within the limits",
+    "[feed][real][rs274][integration]") {
+  REQUIRE(have_rs274());
+  // The sample configuration's rates (data/machines/linuxcnc-xyzac-trt.toml), with its travel
+  // left out: the real parts do not fit its 200 mm cube, which is a finding of its own.
+  std::string sample;
+  {
+    std::istringstream in(read_file(std::string(TAXOPT_SOURCE_DIR) +
+                                    "/data/machines/linuxcnc-xyzac-trt.toml"));
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("min_mm", 0) == 0 || line.rfind("max_mm", 0) == 0) continue;
+      sample += line + "\n";
+    }
+  }
+  const Machine m = parse_machine_toml(sample, "sample");
+  Limits lim{};
+  for (int j = 0; j < 5; ++j) {
+    lim.v[j] = m.limits[static_cast<std::size_t>(j)].max_velocity_per_s;
+    lim.a[j] = m.limits[static_cast<std::size_t>(j)].max_accel_per_s2;
+    REQUIRE(lim.v[j] > 0.0);
+    REQUIRE(lim.a[j] > 0.0);
+  }
+  const double none[2] = {0.0, 0.0};
+  double binding = 0.0;
+  for (const char* mode : {"tcp", "machine"}) {
+    TempDir t;
+    std::string toml = sample;
+    toml.replace(toml.find("mode = \"tcp\""), 12, std::string("mode = \"") + mode + "\"");
+    write_file(t.path("m.toml"), toml);
+    for (const char* f :
+         {"amorim-wall-holes.apt", "amorim-interface-glue.apt", "amorim-tilt-support1.apt",
+          "taxopt-fusion-style-movarc.apt", "mech491-variable-axis-ballmill.cls",
+          "mech491-project2-multiop.cls", "creopost-profilfraesen.ncl"}) {
+      INFO(f << ", " << mode << " mode");
+      const RunResult r = run_taxopt("--in " + real_path(f, t.dir()) + real_flags(f) +
+                                     " --machine " + t.path("m.toml") +
+                                     " --feed-schedule --method none -q --gcode " +
+                                     t.path("o.ngc"));
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      if (std::string(mode) != "machine") continue;
+      // Machine mode: the words are the joints, read by rs274 block by block.
+      std::vector<CanonMove> points, all;
+      const RunResult rs = run_rs274(t.path("o.ngc"), points, {}, &all);
+      REQUIRE(rs.code == 0);
+      const Measured got = measure(all, true, none, none, lim,
+                                   std::vector<Vec3d>(all.size(), Vec3d::Zero()), 250.0);
+      CHECK(got.feed_moves > 0);
+      // rs274 prints the feed rate with 4 decimals (a slow block's rate of ~10 units/min is
+      // then known to 1e-5 of itself): within that.
+      CHECK(got.worst_ratio <= 1.0 + 1e-4);
+      binding = std::max(binding, got.worst_ratio);
+    }
+  }
+  CHECK(binding > 0.99);  // the limits bind somewhere: the check is not empty
 }

@@ -679,7 +679,13 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
             const Posed mid{prev_pose.a_rad + at[j] * (pose.a_rad - prev_pose.a_rad),
                             prev_pose.c_rad + at[j] * (pose.c_rad - prev_pose.c_rad)};
             const Vec3d mid_xyz = out_xyz(prev_tip + at[j] * (p.tip_mm - prev_tip), mid);
-            const double minutes = time_min * (at[j] - at[j - 1]);
+            double minutes = time_min * (at[j] - at[j - 1]);
+            if (scheduled && i < op.linearised_time_s.size() &&
+                op.linearised_time_s[i].size() + 1 == at.size()) {
+              // Block by block as scheduled, never faster than programmed.
+              minutes = std::max(programmed_min * (at[j] - at[j - 1]),
+                                 op.linearised_time_s[i][j - 1] / 60.0);
+            }
             if (j + 1 == at.size()) {
               f = joint_feed(from, from_pose, xyz, pose, minutes);
               break;

@@ -172,23 +172,51 @@ std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
-                                     const JointLimits& limits, const ACMachined& ac) {
+                                     const JointLimits& limits, const ACMachined& ac,
+                                     const std::vector<Linearised>* via) {
   OperationSchedule out;
   const std::size_t n = points.size();
   out.time_s.assign(n, 0.0);
   out.feed_mm_min.assign(n, std::nullopt);
+  out.block_time_s.assign(n, {});
   std::vector<FeedBound> bound(n, FeedBound::Programmed);
   std::vector<Joint> bound_joint(n, Joint::X);
+  const auto blocks_of = [&](std::size_t i) -> const Linearised* {
+    return via && i < via->size() && !(*via)[i].share.empty() ? &(*via)[i] : nullptr;
+  };
   for (const IndexRange& c : feed_chains(points)) {
+    // The chain's blocks: one a point, or a linearised move's blocks, each with its share of
+    // the programmed time; `owner` maps a block to its point.
     FeedChain chain;
-    chain.joints = slice(joints, c.begin - 1, c.end);
-    chain.min_time_s = slice(programmed_s, c.begin, c.end);
+    chain.joints = {joints[c.begin - 1]};
+    std::vector<std::size_t> owner;
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      if (const Linearised* l = blocks_of(i)) {
+        for (std::size_t j = 0; j < l->share.size(); ++j) {
+          chain.joints.push_back(j < l->joints.size() ? l->joints[j] : joints[i]);
+          chain.min_time_s.push_back(programmed_s[i] * l->share[j]);
+          owner.push_back(i);
+        }
+      } else {
+        chain.joints.push_back(joints[i]);
+        chain.min_time_s.push_back(programmed_s[i]);
+        owner.push_back(i);
+      }
+    }
     const FeedSchedule s = schedule_feed(chain, limits);
     out.summary.sweeps = std::max(out.summary.sweeps, s.sweeps);
-    for (std::size_t i = c.begin; i < c.end; ++i) {
-      out.time_s[i] = s.time_s[i - c.begin];
-      bound[i] = s.bound[i - c.begin];
-      bound_joint[i] = s.bound_joint[i - c.begin];
+    // A point's time adds up its blocks'; its bound is that of its most slowed block.
+    std::vector<double> slowed(n, 0.0);
+    for (std::size_t b = 0; b < owner.size(); ++b) {
+      const std::size_t i = owner[b];
+      out.time_s[i] += s.time_s[b];
+      if (blocks_of(i)) out.block_time_s[i].push_back(s.time_s[b]);
+      const double ratio = chain.min_time_s[b] > 0.0 ? s.time_s[b] / chain.min_time_s[b] : 1.0;
+      if (ratio > slowed[i]) {
+        slowed[i] = ratio;
+        bound[i] = s.bound[b];
+        bound_joint[i] = s.bound_joint[b];
+      }
     }
   }
   FeedSummary& sum = out.summary;

@@ -117,6 +117,17 @@ struct OperationSchedule {
   std::vector<double> time_s;
   std::vector<std::optional<double>> feed_mm_min;
   FeedSummary summary;
+  /// Per point reached by a linearised move (Linearised): its blocks' scheduled times, adding
+  /// up to time_s; empty elsewhere.
+  std::vector<std::vector<double>> block_time_s;
+};
+
+/// The blocks a linearised feed move into a point is written as (machine mode): the joints at
+/// the end of each block but the last (the point's own), and each block's share of the move's
+/// time at the programmed feed (adding up to 1). Empty: one block.
+struct Linearised {
+  std::vector<JointPosition> joints;
+  std::vector<double> share;
 };
 
 /// One written position on the way between two points (a linearisation block): X Y Z as
@@ -238,11 +249,14 @@ std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec
 /// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
 /// feed move; a chain's joints are those of points begin - 1 .. end - 1.
 std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points);
-/// The feed schedule of one operation's points at `limits`.
+/// The feed schedule of one operation's points at `limits`. With `via` (per point), a
+/// linearised move is scheduled block by block, so that none of its blocks exceeds a limit
+/// (issue 33: scheduled on the points alone, a block ran X at 32 mm/s against 20).
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
-                                     const JointLimits& limits, const ACMachined& ac);
+                                     const JointLimits& limits, const ACMachined& ac,
+                                     const std::vector<Linearised>* via = nullptr);
 /// The points with every feed move's feed set (`fallback_feed` where the file gives none).
 std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed);
 /// Per point, whether the move into it is a rapid (the first point counts as one).

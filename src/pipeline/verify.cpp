@@ -3,6 +3,7 @@
 // the machine's dynamic limits -- and the report's rows (stages.hpp).
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -98,7 +99,8 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::vector<const GcodeMove*>& at,
                           const std::vector<GcodeMove>& moves, JobResult& res,
                           const std::string& source, const JointLimits& check, bool scheduled,
-                          char tilt_letter, std::size_t op_index) {
+                          char tilt_letter, std::size_t op_index,
+                          const std::function<JointPosition(const GcodeMove&)>& joint_of) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
   const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
@@ -124,15 +126,35 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   };
   std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
   for (const IndexRange& c : feed_chains(po.points)) {
-    const JointRates jr =
-        joint_rates(slice(joints, c.begin - 1, c.end), slice(written_s, c.begin, c.end));
+    // The chain as written: a linearised move is its blocks (machine mode), each at its own F
+    // with its own joints, so that no block between the points is faster than the limits
+    // (issue 33); `owner` maps a block back to its point.
+    std::vector<JointPosition> q = {joints[c.begin - 1]};
+    std::vector<double> t;
+    std::vector<std::size_t> owner = {c.begin - 1};
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
+      if (at[i] != at[i - 1] && from >= 0 && to > from + 1) {
+        for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+          const GcodeMove& m = moves[static_cast<std::size_t>(j)];
+          q.push_back(j == to ? joints[i] : joint_of(m));
+          t.push_back(block_time_s(moves[static_cast<std::size_t>(j - 1)], m, res.gcode_units));
+          owner.push_back(i);
+        }
+      } else {
+        q.push_back(joints[i]);
+        t.push_back(written_s[i]);
+        owner.push_back(i);
+      }
+    }
+    const JointRates jr = joint_rates(q, t);
     for (std::size_t j = 0; j < kJointCount; ++j) {
       const auto keep = [](Worst& w, double v, std::size_t point) {
         if (v > w.value) w = Worst{v, point};
       };
-      keep(velocity[j], jr.max_velocity_per_s[j], c.begin + jr.velocity_at[j]);
-      keep(accel[j], jr.max_accel_per_s2[j], std::min(n - 1, c.begin - 1 + jr.accel_at[j]));
-      keep(jerk[j], jr.max_jerk_per_s3[j], std::min(n - 1, c.begin - 1 + jr.jerk_at[j]));
+      keep(velocity[j], jr.max_velocity_per_s[j], owner[std::min(owner.size() - 1, jr.velocity_at[j] + 1)]);
+      keep(accel[j], jr.max_accel_per_s2[j], owner[std::min(owner.size() - 1, jr.accel_at[j])]);
+      keep(jerk[j], jr.max_jerk_per_s3[j], owner[std::min(owner.size() - 1, jr.jerk_at[j])]);
     }
   }
   const char* at_feed = scheduled ? " at the scheduled feed" : " at the programmed feed";
@@ -631,7 +653,8 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   check_dynamic_limits(r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves,
                        res, run.tp.source,
                        options.feed_schedule ? effective_limits(machine) : machine.limits,
-                       options.feed_schedule, machine.ac.tilt_letter(), k);
+                       options.feed_schedule, machine.ac.tilt_letter(), k,
+                       [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); });
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
   return r;

@@ -60,6 +60,38 @@ void read_back(const Machine& machine, const std::vector<PostedOperation>& poste
   }
 }
 
+/// The linearisation blocks of every feed move read back (Linearised): the blocks between
+/// two points' moves, their joints and their shares of the move's time as written.
+std::vector<Linearised> linearised_blocks(const Machine& machine, const PostedOperation& po,
+                                          const std::vector<const GcodeMove*>& at,
+                                          const std::vector<GcodeMove>& moves, LengthUnit units) {
+  std::vector<Linearised> via(po.points.size());
+  const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
+    if (moves.empty() || m < moves.data() || m >= moves.data() + moves.size()) return -1;
+    return m - moves.data();
+  };
+  for (std::size_t i = 1; i < po.points.size(); ++i) {
+    if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
+    const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
+    if (from < 0 || to <= from + 1) continue;
+    Linearised& l = via[i];
+    double total = 0.0;
+    for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+      const GcodeMove& m = moves[static_cast<std::size_t>(j)];
+      if (m.positioning || m.arc) return std::vector<Linearised>(po.points.size());
+      if (j < to) l.joints.push_back(written_joints(machine, {&m}).front());
+      l.share.push_back(block_time_s(moves[static_cast<std::size_t>(j - 1)], m, units));
+      total += l.share.back();
+    }
+    if (!(total > 0.0)) {
+      via[i] = Linearised{};
+      continue;
+    }
+    for (double& s : l.share) s /= total;
+  }
+  return via;
+}
+
 }  // namespace
 
 std::vector<JointPosition> written_joints(const Machine& machine,
@@ -107,6 +139,19 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
   const std::vector<std::string> comments = program_comments(run, res);
   const auto t0 = Clock::now();
   Written w;
+  if (run.options.feed_schedule) {
+    // A scheduled block is written as a straight block (an arc's chords, not G2/G3: its F is
+    // the scheduled time over the written distance), so the schedule is made on the program
+    // as it will be written: the first program already writes every feed block that way, at
+    // its programmed time. Scheduled on the arcs read back instead, the chords ran up to
+    // 0.06 % over the velocity limit and 2.4 % over the acceleration limit (issue 33,
+    // amorim-wall-holes at LinuxCNC's sample's rates).
+    for (PostedOperation& po : posted) {
+      po.block_time_s = po.programmed_time_s.empty()
+                            ? programmed_block_times_s(po.points, po.poses)
+                            : po.programmed_time_s;
+    }
+  }
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
   read_back(machine, posted, res.gcode, w);
 
@@ -117,11 +162,13 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     const PostedOperation& po = posted[k];
     const Operationd& op = *ops[k].op;
     const std::vector<Posed>& input_poses = ops[k].input_poses;
+    const std::vector<Linearised> via = linearised_blocks(machine, po, w.point_moves[k], w.moves,
+                                                          res.gcode_units);
     w.schedule_after.push_back(schedule_operation(
         po.points, written_joints(machine, w.point_moves[k]),
         po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)
                                      : po.programmed_time_s,
-        limits, machine.ac));
+        limits, machine.ac, &via));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -137,8 +184,10 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                                  machine.ac));
   }
   if (run.options.feed_schedule) {
-    for (std::size_t k = 0; k < posted.size(); ++k)
+    for (std::size_t k = 0; k < posted.size(); ++k) {
       posted[k].block_time_s = w.schedule_after[k].time_s;
+      posted[k].linearised_time_s = w.schedule_after[k].block_time_s;
+    }
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
     read_back(machine, posted, res.gcode, w);
   }

@@ -39,6 +39,10 @@ struct PostedOperation {
   /// turns of the table stay in the air; false: a rapid turning more than the machine's
   /// index threshold is an index move (up, turn, XY, down).
   bool swept_moves_checked = false;
+  /// Optional, per point reached by a linearised move (machine mode): the scheduled time of
+  /// each of its blocks, s (adding up to block_time_s); used where the count matches the
+  /// blocks written, else the point's time is shared in proportion to the blocks' lengths.
+  std::vector<std::vector<double>> linearised_time_s = {};
 };
 
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it

@@ -199,11 +199,16 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       plan.poses[keys[k]] = cand[keys[k]][static_cast<std::size_t>(s)].pose;
       s = from[k][static_cast<std::size_t>(s)];
     }
-    // Continuous C: take the turn nearest to the previous key point.
+    // Continuous C: take the turn nearest to the previous key point (the first from `start`,
+    // else from home, C = 0). A half turn either way is a tie: turned negative, as the
+    // production NX post for the Haas UMC-750 turns it (issue 33: it turns -180 deg where
+    // taxopt turned +180, and every C after differed by a whole turn).
     if (m.c.continuous) {
-      double prev_c = start ? start->c_rad : plan.poses[keys[0]].c_rad;
+      double prev_c = start ? start->c_rad : 0.0;
       for (std::size_t k : keys) {
-        plan.poses[k].c_rad = prev_c + wrap_pi(plan.poses[k].c_rad - prev_c);
+        double turn = wrap_pi(plan.poses[k].c_rad - prev_c);
+        if (std::abs(turn - Constants<double>::pi()) < kTie) turn = -Constants<double>::pi();
+        plan.poses[k].c_rad = prev_c + turn;
         prev_c = plan.poses[k].c_rad;
       }
     }

@@ -313,3 +313,33 @@ TEST_CASE(
   CHECK(findings_of([&](pipeline::Written& w) { w.moves.back().c_deg = 360.0; }) ==
         V{FindingCode::EndPoseNotHome});
 }
+
+TEST_CASE(
+    "program: Fanuc keeps G2/G3 under G43.4 only where neither rotary axis has moved since "
+    "G43.4 came on (FANUC 30i-A TCP manual, alarm PS5421); LinuxCNC keeps the arc",
+    "[program][arcs][cli]") {
+  TempDir t;
+  const std::string head =
+      "TOOL PATH/ARC,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/1\nSPINDL/RPM,6000,CLW\n"
+      "FEDRAT/MMPM,600\n";
+  const std::string arc = "CIRCLE/10,0,0,0,0,1,10\nGOTO/20,0,0\nGOTO/20,-10,0\nEND-OF-PATH\n";
+  // A10 from the start: the table does not move under TCP before the arc.
+  write_file(t.path("still.cls"),
+             head + "GOTO/0,10,0,0,-0.1736482,0.9848078\nGOTO/10,10,0\n" + arc);
+  // A0 at the start, A10 by a feed move under TCP, then the same arc.
+  write_file(t.path("turned.cls"),
+             head + "GOTO/0,10,0,0,0,1\nGOTO/10,10,0,0,-0.1736482,0.9848078\n" + arc);
+  const auto post = [&](const std::string& cls, const std::string& dialect) {
+    const auto r = run_taxopt("--in " + t.path(cls) + " --dialect " + dialect +
+                              " --method none -q --gcode " + t.path("o.nc"));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string text = read_file(t.path("o.nc"));
+    return text.find(" G2 ") != std::string::npos || text.find(" G3 ") != std::string::npos;
+  };
+  CHECK(post("still.cls", "fanuc"));
+  CHECK_FALSE(post("turned.cls", "fanuc"));
+  CHECK_FALSE(post("turned.cls", "haas"));
+  CHECK(post("turned.cls", "linuxcnc"));
+  CHECK(post("turned.cls", "siemens"));
+}

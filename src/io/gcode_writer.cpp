@@ -425,7 +425,14 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     // kinematics (the sample's M428) with the table tilted and the length then turned on,
     // jumps its joints (Y by 17 mm at 7,227 mm/s, Z past its limit: issue 36, measured on the
     // real motion controller); with G43 first the same programs run to the end.
+    // The rotary words where tool centre point control came on (set by the first block after
+    // it): a Fanuc 30i raises PS5421 for G2/G3 after A or C has turned under G43.4 (FANUC
+    // Series 30i-MODEL A, Tool center point control for 5-axis machining, A-79348E, pp. 22-24:
+    // circular interpolation is allowed where neither rotary axis moves after the G43.4
+    // command). Haas's G234 is treated alike (its rule is not published here).
+    std::string tcp_angles;
     const auto length_and_tcp_on = [&] {
+      tcp_angles.clear();
       lines(dialect.length_on(tcp, current_tool));
       verbatim(tcp ? g.program.tcp_on : std::vector<std::string>{});
       lines(dialect.tcp_on(tcp, current_tool));
@@ -466,6 +473,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         return false;
       }
       const std::string pose_words = angle_words(op.poses[run.start]);
+      if (tcp && (g.dialect == GcodeDialect::Fanuc || g.dialect == GcodeDialect::Haas) &&
+          pose_words != tcp_angles) {
+        return false;  // the table turned under TCP since it came on: chords
+      }
       double programmed_s = 0.0;
       bool own = true;
       for (std::size_t j = run.start + 1; j <= run.end; ++j) {
@@ -718,6 +729,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       }
       emitted[i] = line(prefix + block);
       prefix.clear();
+      if (tcp_angles.empty()) tcp_angles = angle_words(pose);
       if (restore_inverse_time) line("G93");
       last_words = words;
       prev_xyz = xyz;

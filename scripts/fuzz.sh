@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-30}
 CXX=clang++ cmake -S fuzz -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build/fuzz
-for t in cl_reader:cl machine_file:machine gcode_reader:gcode mesh_reader:mesh; do
+for t in cl_reader:cl machine_file:machine gcode_reader:gcode mesh_reader:mesh linuxcnc_ini:ini; do
   name=${t%%:*}
   corpus=${t##*:}
   work="build/fuzz/corpus-$corpus"

@@ -56,10 +56,10 @@ TEST_CASE("bad input: a UTF-8 byte-order mark changes nothing: same units, names
   TempDir t;
   write_file(t.path("a.cls"), kInchCl);
   write_file(t.path("b.cls"), std::string("\xEF\xBB\xBF") + kInchCl);
-  const auto a =
-      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --gcode " + t.path("a.nc") + " --method none -q");
-  const auto b =
-      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("b.cls") + " --gcode " + t.path("b.nc") + " --method none -q");
+  const auto a = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") +
+                            " --gcode " + t.path("a.nc") + " --method none -q");
+  const auto b = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("b.cls") +
+                            " --gcode " + t.path("b.nc") + " --method none -q");
   REQUIRE(a.code == 0);
   REQUIRE(b.code == 0);
   std::string ga = read_file(t.path("a.nc")), gb = read_file(t.path("b.nc"));
@@ -71,7 +71,8 @@ TEST_CASE("bad input: a UTF-8 byte-order mark changes nothing: same units, names
   CHECK_THAT(gb, Catch::Contains("(operation T)"));
   // UTF-16 is refused by name.
   write_file(t.path("u.cls"), std::string("\xFF\xFEG\0O\0", 6));
-  const auto u = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("u.cls") + " --gcode " + t.path("u.nc"));
+  const auto u = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("u.cls") +
+                            " --gcode " + t.path("u.nc"));
   CHECK(u.code == 2);
   CHECK_THAT(u.err, Catch::Contains("UTF-16"));
 }
@@ -162,8 +163,9 @@ TEST_CASE("bad input: the machine's linear travel is checked, errors come first 
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n"
              "[axes.C]\ncontinuous = true\n[axes.X]\nmin_mm = -10\nmax_mm = 30\n");
-  const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
-                            " --gcode " + t.path("o.nc") + " --method none");
+  const auto r =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                 t.path("m.toml") + " --gcode " + t.path("o.nc") + " --method none");
   CHECK(r.code == 1);
   // X reaches 2 in = 50.8 mm at line 9.
   CHECK_THAT(r.err, Catch::StartsWith("taxopt: error: " + t.path("a.cls") +
@@ -172,8 +174,8 @@ TEST_CASE("bad input: the machine's linear travel is checked, errors come first 
   write_file(t.path("bad.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n"
              "[axes.C]\ncontinuous = true\n[axes.Y]\nmin_mm = 10\n");
-  const auto b = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("bad.toml") +
-                            " --gcode " + t.path("o.nc"));
+  const auto b = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") +
+                            " --machine " + t.path("bad.toml") + " --gcode " + t.path("o.nc"));
   CHECK(b.code == 2);
   CHECK_THAT(b.err, Catch::Contains("axes.Y needs min_mm and max_mm"));
   // Many operations out of range: ten lines and a count, not one line each.
@@ -183,8 +185,9 @@ TEST_CASE("bad input: the machine's linear travel is checked, errors come first 
             ",TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nGOTO/0,0,1,0,0.8,0.6\nGOTO/100,0,1\nEND-OF-PATH\n";
   }
   write_file(t.path("many.cls"), many);
-  const auto n = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("many.cls") + " --machine " + t.path("m.toml") +
-                            " --gcode " + t.path("o.nc") + " --method none");
+  const auto n =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("many.cls") + " --machine " +
+                 t.path("m.toml") + " --gcode " + t.path("o.nc") + " --method none");
   CHECK(n.code == 1);
   std::size_t lines = 0;
   for (std::size_t p = n.err.find("taxopt: error:"); p != std::string::npos;
@@ -200,8 +203,9 @@ TEST_CASE("bad input: --force never writes an empty program", "[cli][bad-input]"
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 50\nmax_deg = 60\n"
              "[axes.C]\ncontinuous = true\n");
-  const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
-                            " --gcode " + t.path("o.nc") + " --method none --force");
+  const auto r =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                 t.path("m.toml") + " --gcode " + t.path("o.nc") + " --method none --force");
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("no G-code to write"));
   CHECK_FALSE(file_exists(t.path("o.nc")));

@@ -88,8 +88,9 @@ TEST_CASE("cli: axes out of the machine's range exit 1 and write nothing without
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -10\nmax_deg = 10\n"
              "[axes.C]\ncontinuous = true\n");
-  const std::string base = "--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
-                           " --gcode " + t.path("o.nc") + " --method none";
+  const std::string base = "--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") +
+                           " --machine " + t.path("m.toml") + " --gcode " + t.path("o.nc") +
+                           " --method none";
   const auto r = run_taxopt(base);
   CHECK(r.code == 1);
   CHECK_THAT(r.err,
@@ -121,9 +122,10 @@ TEST_CASE("cli: bad optimiser options are refused clearly", "[cli]") {
 TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   TempDir t;
   write_file(t.path("a.cls"), kSmallCl);
-  const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --gcode " + t.path("o.nc") +
-                            " --report " + t.path("r.json") + " --points-csv " + t.path("p.csv") +
-                            " --out-cls " + t.path("o.cls") + " --method none -q");
+  const auto r =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --gcode " +
+                 t.path("o.nc") + " --report " + t.path("r.json") + " --points-csv " +
+                 t.path("p.csv") + " --out-cls " + t.path("o.cls") + " --method none -q");
   REQUIRE(r.code == 0);
   CHECK(r.out.empty());
   const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
@@ -150,8 +152,8 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   // Before and after agree with --method none; the paper's first axis gives its omega.
   CHECK(op["before"]["max_omega_deg_s"] == op["after"]["max_omega_deg_s"]);
   // With an optimiser the report says how many points kept their input axes, and why.
-  REQUIRE(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --gcode " + t.path("o.nc") + " --report " +
-                     t.path("r.json") + " --method paper -q")
+  REQUIRE(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --gcode " +
+                     t.path("o.nc") + " --report " + t.path("r.json") + " --method paper -q")
               .code == 0);
   const auto kept =
       nlohmann::json::parse(read_file(t.path("r.json")))["operations"].at(0)["kept_input_points"];
@@ -173,10 +175,12 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
 TEST_CASE("cli: the same input gives the same bytes at 1 and 2 threads", "[cli]") {
   TempDir t;
   const std::string in = real_data("mech491-variable-axis-ballmill.cls");
-  const auto a = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + in + " --gcode " + t.path("1.nc") + " --points-csv " +
-                            t.path("1.csv") + " --method none --threads 1 -q");
-  const auto b = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + in + " --gcode " + t.path("2.nc") + " --points-csv " +
-                            t.path("2.csv") + " --method none --threads 2 -q");
+  const auto a =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + in + " --gcode " + t.path("1.nc") +
+                 " --points-csv " + t.path("1.csv") + " --method none --threads 1 -q");
+  const auto b =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + in + " --gcode " + t.path("2.nc") +
+                 " --points-csv " + t.path("2.csv") + " --method none --threads 2 -q");
   REQUIRE(a.code == 0);
   REQUIRE(b.code == 0);
   CHECK(read_file(t.path("1.nc")) == read_file(t.path("2.nc")));
@@ -364,15 +368,17 @@ TEST_CASE("cli: a move that sweeps the shank through the part between two free p
   write_file(
       t.path("a.cls"),
       "TLDATA/MILL,6,3,20,0,0\nFEDRAT/MMPM,500\nGOTO/-10,0,0,0,0,1\nGOTO/10,0,0\nGOTO/10,10,0\n");
-  const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --part " + t.path("part.off") +
-                            " --method none --gauge-length 30 --gcode " + t.path("o.nc"));
+  const auto r =
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --part " +
+                 t.path("part.off") + " --method none --gauge-length 30 --gcode " + t.path("o.nc"));
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains(
                         "a.cls:4: operation 1: 1 moves where the tool hits the part "
                         "between CL points as the machine moves it, first from line 3 to line 4"));
   CHECK_FALSE(file_exists(t.path("o.nc")));
   // A short tool stays below the pin: clear.
-  CHECK(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --part " + t.path("part.off") +
+  CHECK(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --part " +
+                   t.path("part.off") +
                    " --method none --flute-length 6 --gauge-length 7 --gcode " + t.path("o.nc") +
                    " -q")
             .code == 0);
@@ -388,23 +394,23 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
       "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n";
   // 10 deg per mm at 10 mm/s: A turns at 100 deg/s.
   write_file(t.path("slow.toml"), m + "max_velocity_deg_s = 50.0\n[axes.C]\ncontinuous = true\n");
-  auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("slow.toml") +
-                      " --method none --gcode " + t.path("o.nc"));
+  auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                      t.path("slow.toml") + " --method none --gcode " + t.path("o.nc"));
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("axis A velocity 100.0"));
   CHECK_THAT(r.err, Catch::Contains("the machine allows 50.0"));
   CHECK_FALSE(file_exists(t.path("o.nc")));
   write_file(t.path("stiff.toml"), m + "max_accel_deg_s2 = 500.0\n[axes.C]\ncontinuous = true\n");
-  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("stiff.toml") +
-                 " --method none --gcode " + t.path("o.nc"));
+  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                 t.path("stiff.toml") + " --method none --gcode " + t.path("o.nc"));
   CHECK(r.code == 1);
   // From rest to 100 deg/s within half the first move (0.1 s): 2000 deg/s^2.
   CHECK_THAT(r.err, Catch::Contains("axis A acceleration 2000.0"));
   CHECK_THAT(r.err, Catch::Contains("--feed-schedule writes feeds within the machine's limits"));
   // With --feed-schedule the same machine gets feeds it can hold: A within 50 deg/s.
-  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("slow.toml") +
-                 " --method none --feed-schedule --gcode " + t.path("o.nc") + " --report " +
-                 t.path("r.json"));
+  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                 t.path("slow.toml") + " --method none --feed-schedule --gcode " + t.path("o.nc") +
+                 " --report " + t.path("r.json"));
   INFO(r.err);
   CHECK(r.code == 0);
   const auto j = nlohmann::json::parse(read_file(t.path("r.json")));
@@ -422,9 +428,9 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   // A jerk limit is checked and reported, not scheduled: a warning, still exit 0.
   write_file(t.path("jerky.toml"), m + "max_velocity_deg_s = 50.0\nmax_jerk_deg_s3 = 1.0\n"
                                        "[axes.C]\ncontinuous = true\n");
-  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("jerky.toml") +
-                 " --method none --feed-schedule --gcode " + t.path("o.nc") + " -v --points-csv " +
-                 t.path("p.csv"));
+  r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                 t.path("jerky.toml") + " --method none --feed-schedule --gcode " + t.path("o.nc") +
+                 " -v --points-csv " + t.path("p.csv"));
   CHECK(r.code == 0);
   CHECK_THAT(r.err, Catch::Contains("axis A jerk"));
   CHECK_THAT(r.err, Catch::Contains("not jerk"));
@@ -442,8 +448,8 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   write_file(
       t.path("fast.toml"),
       m + "max_velocity_deg_s = 150.0\nmax_accel_deg_s2 = 2500.0\n[axes.C]\ncontinuous = true\n");
-  CHECK(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("fast.toml") +
-                   " --method none --gcode " + t.path("o.nc") + " -q")
+  CHECK(run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
+                   t.path("fast.toml") + " --method none --gcode " + t.path("o.nc") + " -q")
             .code == 0);
 }
 
@@ -528,7 +534,8 @@ TEST_CASE("cli: the machine file's dialect picks the controller's program format
                                              "min_deg = -120\nmax_deg = 120\n[axes.C]\n"
                                              "continuous = true\n[gcode]\ndialect = \"") +
                                      dialect + "\"\n");
-    const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+    const auto r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") +
+                              " --machine " + t.path("m.toml") +
                               " --method none --feed-schedule --gcode " + t.path("o.nc") + " -q");
     INFO(r.err);
     REQUIRE(r.code == 0);
@@ -759,8 +766,9 @@ TEST_CASE("cli: --dialect overrides the machine file's dialect under the same ru
 
 TEST_CASE("cli: every operation's first feed block carries its F", "[cli][gcode]") {
   TempDir t;
-  const RunResult r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + real_data("mech491-project2-multiop.cls") +
-                                 " --method none -q " + "--gcode " + t.path("o.ngc"));
+  const RunResult r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " +
+                                 real_data("mech491-project2-multiop.cls") + " --method none -q " +
+                                 "--gcode " + t.path("o.ngc"));
   INFO(r.err);
   REQUIRE(r.code == 0);
   const std::vector<std::string> lines = lines_of(read_file(t.path("o.ngc")));

@@ -383,8 +383,8 @@ TEST_CASE(
   // left out: the real parts do not fit its 200 mm cube, which is a finding of its own.
   std::string sample;
   {
-    std::istringstream in(read_file(std::string(TAXOPT_SOURCE_DIR) +
-                                    "/data/machines/linuxcnc-xyzac-trt.toml"));
+    std::istringstream in(
+        read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml"));
     std::string line;
     while (std::getline(in, line)) {
       if (line.rfind("min_mm", 0) == 0 || line.rfind("max_mm", 0) == 0) continue;
@@ -411,10 +411,9 @@ TEST_CASE(
           "taxopt-fusion-style-movarc.apt", "mech491-variable-axis-ballmill.cls",
           "mech491-project2-multiop.cls", "creopost-profilfraesen.ncl"}) {
       INFO(f << ", " << mode << " mode");
-      const RunResult r = run_taxopt("--in " + real_path(f, t.dir()) + real_flags(f) +
-                                     " --machine " + t.path("m.toml") +
-                                     " --feed-schedule --method none -q --gcode " +
-                                     t.path("o.ngc"));
+      const RunResult r = run_taxopt(
+          "--in " + real_path(f, t.dir()) + real_flags(f) + " --machine " + t.path("m.toml") +
+          " --feed-schedule --method none -q --gcode " + t.path("o.ngc"));
       INFO(r.err);
       REQUIRE(r.code == 0);
       if (std::string(mode) != "machine") continue;
@@ -422,8 +421,8 @@ TEST_CASE(
       std::vector<CanonMove> points, all;
       const RunResult rs = run_rs274(t.path("o.ngc"), points, {}, &all);
       REQUIRE(rs.code == 0);
-      const Measured got = measure(all, true, none, none, lim,
-                                   std::vector<Vec3d>(all.size(), Vec3d::Zero()), 250.0);
+      const Measured got =
+          measure(all, true, none, none, lim, std::vector<Vec3d>(all.size(), Vec3d::Zero()), 250.0);
       CHECK(got.feed_moves > 0);
       // rs274 prints the feed rate with 4 decimals (a slow block's rate of ~10 units/min is
       // then known to 1e-5 of itself): within that.

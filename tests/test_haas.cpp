@@ -151,7 +151,8 @@ TEST_CASE(
   REQUIRE(post.size() == 348);  // one per GOTO
   // The post writes the GOTOs as they are in the listing (the MCS's own coordinates): so does
   // taxopt by default, though the file says MSYS/3,3,0,... (issue 32).
-  const RunResult r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + cls + " --machine " + std::string(TAXOPT_SOURCE_DIR) +
+  const RunResult r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + cls + " --machine " +
+                                 std::string(TAXOPT_SOURCE_DIR) +
                                  "/data/machines/haas-umc750.toml --method none "
                                  "--gcode " +
                                  dir.path("o.nc") + " -q");
@@ -228,9 +229,9 @@ TEST_CASE(
   for (const char* method : {"paper", "global", "global --objective time"}) {
     INFO(method);
     const RunResult m =
-        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + cls + " --machine " + machines + "haas-umc750.toml --method " +
-                   method + " --max-deviation 5 --gcode " + dir.path("m.nc") + " --report " +
-                   dir.path("m.json") + " -q");
+        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + cls + " --machine " + machines +
+                   "haas-umc750.toml --method " + method + " --max-deviation 5 --gcode " +
+                   dir.path("m.nc") + " --report " + dir.path("m.json") + " -q");
     INFO(m.err);
     CHECK(m.code == 0);
     const std::string report = read_file(dir.path("m.json"));

@@ -94,11 +94,11 @@ TEST_CASE(
       INFO(f << " --dialect " << dialect);
       TempDir dir;
       const RunResult r =
-          run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --dialect " +
-                     dialect + " --gcode " + dir.path("o.nc") + " --method none -q");
+          run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --dialect " + dialect +
+                     " --gcode " + dir.path("o.nc") + " --method none -q");
       INFO(r.err);
-      if (r.code == 2 && r.err.find("DELAY: taxopt writes a dwell for LinuxCNC") !=
-                             std::string::npos) {
+      if (r.code == 2 &&
+          r.err.find("DELAY: taxopt writes a dwell for LinuxCNC") != std::string::npos) {
         // A dwell of the file in a dialect whose dwell words taxopt does not write: refused.
         CHECK(std::string(dialect) != "linuxcnc");
         CHECK(std::string(dialect) != "fanuc");
@@ -236,18 +236,17 @@ TEST_CASE(
   CHECK(text.find("T4 M6") != std::string::npos);
   CHECK(text.find("S7000 M4") != std::string::npos);
   // Hostile values.
-  for (const char* bad : {"--spindle-rpm 0", "--spindle-rpm -5", "--spindle-rpm nan",
-                          "--spindle-rpm 1e9", "--tool-number 0", "--tool-number 1.5",
-                          "--tool-number abc", "--tool-number 100000"}) {
+  for (const char* bad :
+       {"--spindle-rpm 0", "--spindle-rpm -5", "--spindle-rpm nan", "--spindle-rpm 1e9",
+        "--tool-number 0", "--tool-number 1.5", "--tool-number abc", "--tool-number 100000"}) {
     INFO(bad);
     const auto b = run_taxopt("--in " + t.path("bare.cls") + " " + bad + out);
     CHECK(b.code == 2);
   }
 }
 
-TEST_CASE(
-    "program: check_program finds each breach a machinist looks for in a program read back",
-    "[program]") {
+TEST_CASE("program: check_program finds each breach a machinist looks for in a program read back",
+          "[program]") {
   const Toolpath tp = parse_cl(
       "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/1\nSPINDL/RPM,6000,CLW\n"
       "COOLNT/FLOOD\nRAPID\nGOTO/0,0,10,0,0,1\nFEDRAT/MMPM,250\nGOTO/0,0,0\nGOTO/5,0,0\n"

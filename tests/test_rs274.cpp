@@ -302,8 +302,8 @@ TEST_CASE(
                "dialect = \"" +
                    std::string(dialect) + "\"\n");
     const RunResult r =
-        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " + dir.path("m.toml") + " --gcode " +
-                   dir.path("o.nc") + " --method none -q");
+        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " +
+                   dir.path("m.toml") + " --gcode " + dir.path("o.nc") + " --method none -q");
     INFO(r.err);
     REQUIRE(r.code == 0);  // the read-back verification passed, arcs included
     const std::string g = read_file(dir.path("o.nc"));
@@ -336,8 +336,8 @@ TEST_CASE(
              "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n"
              "feed_mode = \"inverse-time\"\n");
   const RunResult r93 =
-      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " + dir.path("g93.toml") + " --gcode " +
-                 dir.path("o93.nc") + " --method none -q");
+      run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " +
+                 dir.path("g93.toml") + " --gcode " + dir.path("o93.nc") + " --method none -q");
   REQUIRE(r93.code == 0);
   CHECK(read_file(dir.path("o93.nc")).find(" G2 ") == std::string::npos);
   std::vector<CanonMove> moves;
@@ -370,8 +370,8 @@ TEST_CASE("rs274: a 3+2 arc in a tilted plane is G17 in machine mode, chords in 
                "a_axis_z = 0\nc_axis_x = 0\nc_axis_y = 0\n[gcode]\nmode = \"" +
                    std::string(mode) + "\"\n");
     const RunResult r =
-        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " + dir.path("m.toml") + " --gcode " +
-                   dir.path("o.nc") + " --method none -q");
+        run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + dir.path("a.cls") + " --machine " +
+                   dir.path("m.toml") + " --gcode " + dir.path("o.nc") + " --method none -q");
     INFO(r.err);
     REQUIRE(r.code == 0);
     std::vector<CanonMove> moves;

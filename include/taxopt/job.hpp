@@ -273,12 +273,12 @@ enum class FindingCode {
   PointCollision,        ///< CL points whose tool hits the part
   MoveCollision,         ///< moves where the tool hits the part between CL points
   // The program as a machinist checks it, on the read-back (issue 33).
-  NoToolCalled,          ///< a move with no tool called (T .. M6, a TNC's tool call)
-  SpindleOff,            ///< a feed move with the spindle stopped
-  CoolantMismatch,       ///< an operation starts with other coolant than the CL file asks
-  IndexWithoutRetract,   ///< without a part: a rapid turns the table more than the threshold
-  DiagonalApproach,      ///< a rapid leaves the retract height diagonally (not XY, then Z)
-  EndPoseNotHome,        ///< end_pose "home": the program ends away from the rotaries' home
+  NoToolCalled,         ///< a move with no tool called (T .. M6, a TNC's tool call)
+  SpindleOff,           ///< a feed move with the spindle stopped
+  CoolantMismatch,      ///< an operation starts with other coolant than the CL file asks
+  IndexWithoutRetract,  ///< without a part: a rapid turns the table more than the threshold
+  DiagonalApproach,     ///< a rapid leaves the retract height diagonally (not XY, then Z)
+  EndPoseNotHome,       ///< end_pose "home": the program ends away from the rotaries' home
 };
 /// "no_part", "no_free_axis", ...: the report's `findings[].code`.
 const char* to_string(FindingCode code);

@@ -353,6 +353,8 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       if (custom) {
         verbatim(change);
         prog.tool_calls.emplace_back(prog.verbatim_lines.back(), op.tool.number);
+        // The machine's own tool-change macro may leave its modes behind: the set-up again.
+        line(dialect.setup(g.feed_mode == FeedMode::InverseTime));
       } else {
         lines(change);
       }
@@ -586,9 +588,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       // retract, turns there and comes down XY first (docs/gcode-dialects.md "Index moves").
       // With a part model the turns stay in the air: the check verifies their swept moves.
       if (p.motion == Motion::Rapid && have_prev && retracts && !op.swept_moves_checked) {
-        const double turn_deg = std::max(
-            std::abs(round_to(rad_to_deg(pose.a_rad), d) - round_to(rad_to_deg(prev_pose.a_rad), d)),
-            std::abs(round_to(rad_to_deg(pose.c_rad), d) - round_to(rad_to_deg(prev_pose.c_rad), d)));
+        const double turn_deg = std::max(std::abs(round_to(rad_to_deg(pose.a_rad), d) -
+                                                  round_to(rad_to_deg(prev_pose.a_rad), d)),
+                                         std::abs(round_to(rad_to_deg(pose.c_rad), d) -
+                                                  round_to(rad_to_deg(prev_pose.c_rad), d)));
         if (turn_deg > g.program.index_threshold_deg) {
           length_and_tcp_off();
           lines(dialect.retract(retract_z));

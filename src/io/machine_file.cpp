@@ -125,10 +125,26 @@ class MachineParser {
     }
     if (const toml::table* g = table_of(root, "gcode", false)) {
       check_keys(*g, "gcode",
-                 {"dialect", "mode", "feed_mode", "feed_reference", "decimals", "feed_decimals",
-                  "program_name", "program_number", "work_offset", "coolant", "header", "footer",
-                  "tool_change", "tcp_on", "tcp_off", "safe_retract", "retract_z_mm",
-                  "linearise_tolerance_mm", "index_threshold_deg", "end_pose"});
+                 {"dialect",
+                  "mode",
+                  "feed_mode",
+                  "feed_reference",
+                  "decimals",
+                  "feed_decimals",
+                  "program_name",
+                  "program_number",
+                  "work_offset",
+                  "coolant",
+                  "header",
+                  "footer",
+                  "tool_change",
+                  "tcp_on",
+                  "tcp_off",
+                  "safe_retract",
+                  "retract_z_mm",
+                  "linearise_tolerance_mm",
+                  "index_threshold_deg",
+                  "end_pose"});
       choose(*g, "gcode", "dialect",
              {{"linuxcnc", GcodeDialect::LinuxCNC},
               {"fanuc", GcodeDialect::Fanuc},
@@ -190,7 +206,9 @@ class MachineParser {
       if (auto* n = g->get("work_offset")) {
         t.work_offset = string_of(*n, "gcode.work_offset");
         if (t.work_offset.empty()) fail(line_of(*n), "gcode.work_offset is empty (\"none\"?)");
-        if (t.work_offset != "none") check_block(*n, t.work_offset, "gcode.work_offset");
+        if (t.work_offset != "none") {
+          check_block(*n, t.work_offset, "gcode.work_offset", m.gcode.dialect);
+        }
       }
       choose(*g, "gcode", "coolant",
              {{"none", Coolant::None}, {"flood", Coolant::Flood}, {"mist", Coolant::Mist}},
@@ -212,8 +230,7 @@ class MachineParser {
       }
       choose(*g, "gcode", "end_pose", {{"home", EndPose::Home}, {"none", EndPose::None}},
              t.end_pose);
-      if (t.end_pose == EndPose::Home &&
-          (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+      if (t.end_pose == EndPose::Home && (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
         fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.ac.tilt_letter() +
                               " and C to 0, outside this machine's axis ranges; use \"none\" "
                               "(and home them in the footer)");
@@ -242,7 +259,7 @@ class MachineParser {
         }
         for (const toml::node& e : *n->as_array()) {
           const std::string b = string_of(e, what + " entries");
-          check_block(e, b, what, std::string(key) == "footer");
+          check_block(e, b, what, m.gcode.dialect, std::string(key) == "footer");
           out->push_back(b);
         }
       }
@@ -291,106 +308,264 @@ class MachineParser {
     return static_cast<int>(v);
   }
 
-  /// A block of the program template is written as it is and not read back: it may not move
-  /// the machine nor change a mode the written program relies on.
-  /// A footer may also home the rotary axes: `G28` (Haas and Fanuc: `G91 G28 B0. C0.`) with
-  /// rotary words of 0 only, and `G90` to restore absolute positions (docs/gcode-dialects.md).
+  /// A block of the program template is written as it is and stepped over by the read-back,
+  /// so it is checked by what it does, against an allowlist (issue 35): machine-specific M
+  /// codes (an unlock, a kinematics switch such as LinuxCNC's M428), dwell and path-control
+  /// codes (G4 P, G40, G61, G61.1, G64 P Q, G80; Fanuc G5.1 Q and G8 P; Haas G187 P E;
+  /// Sinumerik FFWON, SOFT, G642, COMPCAD, CYCLE832(...) ...), and comments. Everything else
+  /// is refused with its line: a word that moves an axis, a G code outside the list (motion,
+  /// units, planes, frames such as G10 L2, G7, G59.3, G30, G95, G96), the spindle, coolant,
+  /// tool, H and D offsets, F and S, the program end (M2, M30), subprogram calls (M98, G65, an
+  /// O word; in the tool change only: the machine's own macro), expressions and parameters
+  /// ([, #, =), "%" and an unclosed comment. Per key: `tool_change` must call T{tool} (and may
+  /// hold M6); `work_offset` holds one work offset code (G54 ... G59.3, G54.1 P, Sinumerik
+  /// G505 ... G599); a footer may home the rotary axes (`G91 G28 B0. C0.`: G28 with rotary
+  /// words of 0 only) and restore `G90`.
   void check_block(const toml::node& n, const std::string& block, const std::string& what,
-                   bool footer = false) const {
+                   GcodeDialect dialect, bool footer = false) const {
+    const auto refuse = [&](const std::string& why) {
+      fail(line_of(n), what + ": '" + block + "' " + why);
+    };
+    const bool siemens = dialect == GcodeDialect::Siemens;
+    const bool heidenhain = dialect == GcodeDialect::Heidenhain;
+    const bool parens = !siemens && !heidenhain;  // ( ) comments
+    const bool tool_change = what == "gcode.tool_change";
+    const bool work_offset = what == "gcode.work_offset";
+    // The code outside comments, upper case; "{tool}" kept as one token.
     std::string code;
     int depth = 0;
-    for (char ch : block) {
-      if (ch == '\n' || ch == '\r') fail(line_of(n), what + ": one block per string");
-      if (ch == '(') ++depth;
-      if (ch == ')') depth = std::max(0, depth - 1);
-      if (ch == ';' && depth == 0) break;
-      if (depth == 0 && ch != '(' && ch != ')') {
-        code += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const char ch = block[i];
+      if (ch == '\n' || ch == '\r') refuse("holds a line break: one block per string");
+      if (parens && ch == '(') {
+        if (depth > 0) refuse("nests a comment");
+        ++depth;
+        continue;
+      }
+      if (parens && ch == ')') {
+        if (depth == 0) refuse("closes a comment it did not open");
+        --depth;
+        continue;
+      }
+      if (depth > 0) continue;
+      if (ch == ';') break;
+      if (static_cast<unsigned char>(ch) < 0x20 || static_cast<unsigned char>(ch) > 0x7e) {
+        refuse("holds a character outside printable ASCII");
+      }
+      code += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    }
+    if (depth > 0) refuse("opens a comment it does not close");
+    for (const char bad : std::string("%[]#=<>*/+^&!?$@\"'\\|")) {
+      if (code.find(bad) != std::string::npos) {
+        refuse(std::string("holds '") + bad +
+               "': expressions, parameters, subroutine calls and program marks are not "
+               "written as they are");
       }
     }
-    static const char* const kForbidden[] = {"G0",  "G1",    "G2",  "G3",   "G20", "G21", "G28",
-                                             "G43", "G43.4", "G49", "G53",  "G70", "G71", "G90",
-                                             "G91", "G93",   "G94", "G700", "G710"};
-    // The G words and axis words of the block, for the footer's rotary homing.
-    std::vector<std::pair<char, std::string>> words;
-    for (std::size_t i = 0; i < code.size(); ++i) {
-      if (!std::isalpha(static_cast<unsigned char>(code[i])) ||
-          (i > 0 && std::isalpha(static_cast<unsigned char>(code[i - 1])))) {
+    // Words: a letter and its number ("G 64" too); Sinumerik identifiers (FFWON, CYCLE832).
+    struct Word {
+      std::string letter, number;
+    };
+    std::vector<Word> words;
+    for (std::size_t i = 0; i < code.size();) {
+      const char c = code[i];
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        ++i;
+        continue;
+      }
+      if (!std::isalpha(static_cast<unsigned char>(c))) {
+        refuse(std::string("holds '") + c + "' where a word letter belongs");
+      }
+      if (code.compare(i, 7, "T{TOOL}") == 0) {
+        if (!tool_change) refuse("calls a tool: only the tool_change template does");
+        words.push_back({"T", "{TOOL}"});
+        i += 7;
         continue;
       }
       std::size_t e = i + 1;
+      if (siemens) {
+        while (e < code.size() &&
+               (std::isalnum(static_cast<unsigned char>(code[e])) || code[e] == '_')) {
+          ++e;
+        }
+        const std::string id = code.substr(i, e - i);
+        const bool letter_number =
+            id.size() >= 2 && std::all_of(id.begin() + 1, id.end(), [](char d) {
+              return std::isdigit(static_cast<unsigned char>(d)) != 0;
+            });
+        static const std::set<std::string> kSiemens = {"FFWON",   "FFWOF",    "SOFT",     "BRISK",
+                                                       "COMPCAD", "COMPCURV", "COMPSURF", "COMPOF",
+                                                       "UPATH",   "SPATH",    "CYCLE832"};
+        if (!letter_number && id.size() > 1) {
+          if (!kSiemens.count(id)) {
+            refuse("holds " + id +
+                   ", which is not on the list of Sinumerik words a template "
+                   "may hold (FFWON, FFWOF, SOFT, BRISK, COMPCAD, COMPCURV, "
+                   "COMPSURF, COMPOF, UPATH, SPATH, CYCLE832(...))");
+          }
+          if (id == "CYCLE832") {
+            // Its arguments: numbers and names, nothing that nests.
+            std::size_t k = e;
+            while (k < code.size() && std::isspace(static_cast<unsigned char>(code[k]))) ++k;
+            if (k < code.size() && code[k] == '(') {
+              const std::size_t close = code.find(')', k);
+              if (close == std::string::npos) refuse("opens CYCLE832( without closing it");
+              for (std::size_t q = k + 1; q < close; ++q) {
+                const char d = code[q];
+                if (!(std::isalnum(static_cast<unsigned char>(d)) || d == '_' || d == '.' ||
+                      d == ',' || d == '-' || std::isspace(static_cast<unsigned char>(d)))) {
+                  refuse("holds '" + std::string(1, d) + "' in CYCLE832's arguments");
+                }
+              }
+              e = close + 1;
+            }
+          }
+          words.push_back({id, ""});
+          i = e;
+          continue;
+        }
+        e = i + 1;
+      }
       while (e < code.size() && std::isspace(static_cast<unsigned char>(code[e]))) ++e;
       std::string v;
       while (e < code.size() && (std::isdigit(static_cast<unsigned char>(code[e])) ||
-                                 code[e] == '.' || code[e] == '-' || code[e] == '+')) {
+                                 code[e] == '.' || code[e] == '-')) {
         v += code[e++];
       }
-      if (!v.empty()) words.emplace_back(code[i], v);
+      if (v.empty() || v == "-" || v == ".") {
+        refuse(std::string("holds the letter ") + c + " without a number");
+      }
+      words.push_back({std::string(1, c), v});
+      i = e;
     }
     const auto g_is = [](const std::string& v, double want) {
       char* end = nullptr;
       const double x = std::strtod(v.c_str(), &end);
       return end && *end == '\0' && x == want;
     };
-    // The spindle, coolant, tool and program end are taxopt's to write, so that the program
-    // read back knows their state (issue 33): a template only calls the tool, by {tool}.
-    const bool tool_change = what == "gcode.tool_change";
-    for (const auto& [letter, v] : words) {
-      const bool state_m = letter == 'M' && (g_is(v, 2) || g_is(v, 3) || g_is(v, 4) || g_is(v, 5) ||
-                                             g_is(v, 7) || g_is(v, 8) || g_is(v, 9) ||
-                                             g_is(v, 30) || (g_is(v, 6) && !tool_change));
-      if (state_m || letter == 'S' || (letter == 'T' && !tool_change)) {
-        fail(line_of(n), what + ": '" + block + "' holds " + std::string(1, letter) + v +
-                             ": the spindle, coolant, tool and program end are written by taxopt "
-                             "(the CL file, --spindle-rpm, [defaults], gcode.coolant)");
+    const auto has = [&](const char* letter, double v) {
+      for (const Word& w : words) {
+        if (w.letter == letter && g_is(w.number, v)) return true;
       }
+      return false;
+    };
+    if (work_offset) {
+      // One work offset code: G54 ... G59, G59.1 ... G59.3 (LinuxCNC), G54.1 P1 ... P300
+      // (Fanuc, Haas), G505 ... G599 (Sinumerik's settable frames).
+      bool ok = false;
+      if (words.size() == 1 && words[0].letter == "G") {
+        for (double g : {54.0, 55.0, 56.0, 57.0, 58.0, 59.0, 59.1, 59.2, 59.3}) {
+          ok = ok || g_is(words[0].number, g);
+        }
+        const double x = std::strtod(words[0].number.c_str(), nullptr);
+        ok = ok || (siemens && x >= 505.0 && x <= 599.0 && x == std::floor(x));
+      } else if (words.size() == 2 && words[0].letter == "G" && g_is(words[0].number, 54.1) &&
+                 words[1].letter == "P") {
+        const double p = std::strtod(words[1].number.c_str(), nullptr);
+        ok = p >= 1.0 && p <= 300.0 && p == std::floor(p);
+      }
+      if (!ok) refuse("is no work offset code (G54 ... G59.3, G54.1 P1 ... P300, G505 ... G599)");
+      return;
     }
     if (footer) {
-      bool homes = false, only_homing = true, only_g90 = !words.empty();
-      for (const auto& [letter, v] : words) {
-        if (letter == 'G' && g_is(v, 28.0)) homes = true;
-        const bool g_ok =
-            letter == 'G' && (g_is(v, 28.0) || g_is(v, 91.0) || g_is(v, 90.0));
+      // The rotaries homed: G28 with G91/G90 and rotary words of 0 only; or G90 alone.
+      bool homes = false, only_homing = !words.empty(), only_g90 = !words.empty();
+      for (const Word& w : words) {
+        if (w.letter == "G" && g_is(w.number, 28.0)) homes = true;
+        const bool g_ok = w.letter == "G" &&
+                          (g_is(w.number, 28.0) || g_is(w.number, 91.0) || g_is(w.number, 90.0));
         const bool rotary_zero =
-            (letter == 'A' || letter == 'B' || letter == 'C') && g_is(v, 0.0);
+            (w.letter == "A" || w.letter == "B" || w.letter == "C") && g_is(w.number, 0.0);
         only_homing = only_homing && (g_ok || rotary_zero);
-        only_g90 = only_g90 && letter == 'G' && g_is(v, 90.0);
+        only_g90 = only_g90 && w.letter == "G" && g_is(w.number, 90.0);
       }
       if ((homes && only_homing) || only_g90) return;
       if (homes) {
-        fail(line_of(n), what + ": '" + block +
-                             "' holds G28 with more than rotary words of 0; a footer may home "
-                             "the rotary axes only (G91 G28 B0. C0.)");
+        refuse(
+            "holds G28 with more than rotary words of 0; a footer may home the rotary axes "
+            "only (G91 G28 B0. C0.)");
       }
     }
-    for (std::size_t i = 0; i < code.size(); ++i) {
-      const char c = code[i];
-      const bool word_start = i == 0 || !std::isalpha(static_cast<unsigned char>(code[i - 1]));
-      if (!word_start || !std::isalpha(static_cast<unsigned char>(c))) continue;
-      std::size_t j = i + 1;
-      while (j < code.size() && std::isspace(static_cast<unsigned char>(code[j]))) ++j;
-      const bool number = j < code.size() && (std::isdigit(static_cast<unsigned char>(code[j])) ||
-                                              code[j] == '-' || code[j] == '+' || code[j] == '.');
-      if (!number) continue;
-      if (std::string("XYZABCUVWIJK").find(c) != std::string::npos) {
-        fail(line_of(n),
-             what + ": '" + block + "' moves an axis (" + c + "); taxopt writes every move itself");
+    // Codes that take P Q E L parameters.
+    bool takes_parameters = false;
+    for (const auto& [letter, v] : std::vector<std::pair<const char*, double>>{{"G", 4},
+                                                                               {"G", 64},
+                                                                               {"G", 5.1},
+                                                                               {"G", 8},
+                                                                               {"G", 187},
+                                                                               {"G", 65},
+                                                                               {"M", 98},
+                                                                               {"M", 66},
+                                                                               {"M", 62},
+                                                                               {"M", 63},
+                                                                               {"M", 64},
+                                                                               {"M", 65}}) {
+      takes_parameters = takes_parameters || has(letter, v);
+    }
+    for (const Word& w : words) {
+      if (w.letter.size() > 1) continue;  // a Sinumerik word of the list
+      const char c = w.letter[0];
+      const std::string word = w.letter + w.number;
+      if (std::string("XYZABCUVWIJKR").find(c) != std::string::npos) {
+        refuse("moves an axis (" + std::string(1, c) + "); taxopt writes every move itself");
+      }
+      if (c == 'T') {
+        if (!tool_change) refuse("holds " + word + ": only the tool_change template calls a tool");
+        if (w.number != "{TOOL}") refuse("calls tool " + word + ": the template calls T{tool}");
+        continue;
+      }
+      if (c == 'M') {
+        const double x = std::strtod(w.number.c_str(), nullptr);
+        if (!(x >= 0.0 && x <= 9999.0) || x != std::floor(x)) {
+          refuse("holds " + word + ", no M code (a whole number up to 9999)");
+        }
+        const long m = static_cast<long>(x);
+        const bool state = m == 2 || m == 3 || m == 4 || m == 5 || m == 7 || m == 8 || m == 9 ||
+                           m == 30 || (m == 6 && !tool_change);
+        if (state) {
+          refuse("holds " + word +
+                 ": the spindle, coolant, tool and program end are written by taxopt (the CL "
+                 "file, --spindle-rpm, [defaults], gcode.coolant)");
+        }
+        if ((m == 97 || m == 98 || m == 99 || m == 198) && !tool_change) {
+          refuse("holds " + word +
+                 ": a subprogram's blocks are not known to the check (put them in the template; "
+                 "the tool change alone may call the machine's own macro)");
+        }
+        continue;
       }
       if (c == 'G') {
-        std::size_t e = j;
-        while (e < code.size() &&
-               (std::isdigit(static_cast<unsigned char>(code[e])) || code[e] == '.')) {
-          ++e;
+        static const double kAllowed[] = {4, 40, 80, 61, 61.1, 64, 5.1, 8, 187, 642, 641, 60};
+        bool ok = false;
+        for (double g : kAllowed) ok = ok || g_is(w.number, g);
+        if (g_is(w.number, 65) && tool_change) ok = true;
+        if (g_is(w.number, 17) && tool_change && heidenhain) ok = true;  // TNC: T n G17
+        if ((g_is(w.number, 5.1) || g_is(w.number, 8)) && dialect != GcodeDialect::Fanuc &&
+            dialect != GcodeDialect::Haas) {
+          ok = false;
         }
-        std::string g = code.substr(j, e - j);
-        while (g.size() > 1 && g[0] == '0' && g[1] != '.') g.erase(0, 1);
-        for (const char* f : kForbidden) {
-          if ("G" + g == f) {
-            fail(line_of(n), what + ": '" + block + "' holds G" + g +
-                                 ", a motion or mode taxopt writes itself (use the [gcode] keys)");
-          }
+        if (g_is(w.number, 187) && dialect != GcodeDialect::Haas) ok = false;
+        if (heidenhain && !(g_is(w.number, 4) || g_is(w.number, 40) || g_is(w.number, 17))) {
+          ok = false;  // a TNC in ISO: dwell and radius compensation off only
         }
+        if ((g_is(w.number, 642) || g_is(w.number, 641) || g_is(w.number, 60)) && !siemens) {
+          ok = false;
+        }
+        if (!ok) {
+          refuse("holds " + word +
+                 ", a motion, mode or frame code taxopt writes itself or does not know "
+                 "(a template may hold G4 P, G40, G61, G61.1, G64, G80; Fanuc/Haas G5.1, G8; "
+                 "Haas G187; Sinumerik G60, G641, G642; use the [gcode] keys)");
+        }
+        continue;
       }
+      if ((c == 'P' || c == 'Q' || c == 'E' || c == 'L') && takes_parameters) continue;
+      refuse("holds " + word + ", a word a template may not hold (" + std::string(1, c) + ": " +
+             (c == 'H' || c == 'D'   ? "a tool offset, written by taxopt"
+              : c == 'F' || c == 'S' ? "feed and spindle speed are taxopt's"
+              : c == 'N' || c == 'O' ? "block and program numbers are taxopt's"
+                                     : "not on the list") +
+             ")");
     }
   }
 

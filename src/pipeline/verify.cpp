@@ -152,7 +152,8 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
       const auto keep = [](Worst& w, double v, std::size_t point) {
         if (v > w.value) w = Worst{v, point};
       };
-      keep(velocity[j], jr.max_velocity_per_s[j], owner[std::min(owner.size() - 1, jr.velocity_at[j] + 1)]);
+      keep(velocity[j], jr.max_velocity_per_s[j],
+           owner[std::min(owner.size() - 1, jr.velocity_at[j] + 1)]);
       keep(accel[j], jr.max_accel_per_s2[j], owner[std::min(owner.size() - 1, jr.accel_at[j])]);
       keep(jerk[j], jr.max_jerk_per_s3[j], owner[std::min(owner.size() - 1, jr.jerk_at[j])]);
     }
@@ -746,11 +747,13 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   }
   // The coolant at each operation's first point: the CL file's (its last change before that
   // point), else the machine file's.
-  const auto code_of = [](ClCoolant c) { return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0; };
+  const auto code_of = [](ClCoolant c) {
+    return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0;
+  };
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     if (w.point_moves[k].empty()) continue;
-    int want = po.coolant ? code_of(*po.coolant)
+    int want = po.coolant                    ? code_of(*po.coolant)
                : t.coolant == Coolant::Flood ? 8
                : t.coolant == Coolant::Mist  ? 7
                                              : 0;
@@ -760,8 +763,14 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
     const GcodeMove& first = *w.point_moves[k].front();
     if (first.coolant != want) {
       breach(FindingCode::CoolantMismatch, first,
-             "starts with coolant " + std::string(first.coolant == 0 ? "off" : first.coolant == 7 ? "M7" : "M8") +
-                 " where " + std::string(want == 0 ? "off" : want == 7 ? "M7 (mist)" : "M8 (flood)") +
+             "starts with coolant " +
+                 std::string(first.coolant == 0   ? "off"
+                             : first.coolant == 7 ? "M7"
+                                                  : "M8") +
+                 " where " +
+                 std::string(want == 0   ? "off"
+                             : want == 7 ? "M7 (mist)"
+                                         : "M8 (flood)") +
                  " is asked (CL file COOLNT, else the machine file's gcode.coolant)");
     }
   }

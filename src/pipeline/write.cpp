@@ -147,9 +147,8 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     // 0.06 % over the velocity limit and 2.4 % over the acceleration limit (issue 33,
     // amorim-wall-holes at LinuxCNC's sample's rates).
     for (PostedOperation& po : posted) {
-      po.block_time_s = po.programmed_time_s.empty()
-                            ? programmed_block_times_s(po.points, po.poses)
-                            : po.programmed_time_s;
+      po.block_time_s = po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)
+                                                     : po.programmed_time_s;
     }
   }
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
@@ -162,8 +161,8 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     const PostedOperation& po = posted[k];
     const Operationd& op = *ops[k].op;
     const std::vector<Posed>& input_poses = ops[k].input_poses;
-    const std::vector<Linearised> via = linearised_blocks(machine, po, w.point_moves[k], w.moves,
-                                                          res.gcode_units);
+    const std::vector<Linearised> via =
+        linearised_blocks(machine, po, w.point_moves[k], w.moves, res.gcode_units);
     w.schedule_after.push_back(schedule_operation(
         po.points, written_joints(machine, w.point_moves[k]),
         po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)

@@ -199,7 +199,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   const Machine m = parse_machine_toml(
       head +
           "program_name = \"PART_7\"\nprogram_number = 7\nwork_offset = \"G54.1 P3\"\n"
-          "coolant = \"mist\"\nheader = [\"M98 P100\"]\nfooter = [\"M1\"]\n"
+          "coolant = \"mist\"\nheader = [\"G5.1 Q1 (AICC on)\"]\nfooter = [\"M1\"]\n"
           "tool_change = [\"T{tool} M6\"]\nsafe_retract = \"none\"\nretract_z_mm = -5\n"
           "linearise_tolerance_mm = 0.002\nfeed_decimals = 2\n",
       "m.toml");
@@ -208,7 +208,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   CHECK(t.number == 7);
   CHECK(t.work_offset == "G54.1 P3");
   CHECK(t.coolant == Coolant::Mist);
-  CHECK(t.header == std::vector<std::string>{"M98 P100"});
+  CHECK(t.header == std::vector<std::string>{"G5.1 Q1 (AICC on)"});
   CHECK(t.footer == std::vector<std::string>{"M1"});
   CHECK(t.tool_change == std::vector<std::string>{"T{tool} M6"});
   CHECK(t.retract == SafeRetract::None);
@@ -222,6 +222,68 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "header = [\"G91 G28 C0\"]\n", 9, "holds G91");
   expect_error(head + "tool_change = [\"M6\"]\n", 9, "must call the tool by \"{tool}\"");
   expect_error(head + "tcp_on = [\"G49\"]\n", 9, "holds G49");
+  // Issue 35: blocks that move or reframe the machine, found through rs274, each refused.
+  for (const auto& [block, says] : std::vector<std::pair<std::string, std::string>>{
+           {"footer = [\"Z[0-50]\"]", "holds '['"},
+           {"footer = [\"X[100]\"]", "holds '['"},
+           {"tool_change = [\"T{tool} M6 X[5]\"]", "holds '['"},
+           {"tcp_on = [\"Y[20]\"]", "holds '['"},
+           {"header = [\"G10 L2 P1 R45\"]", "holds G10"},
+           {"header = [\"G7\"]", "holds G7"},
+           {"header = [\"G59.3\"]", "holds G59.3"},
+           {"header = [\"G30\"]", "holds G30"},
+           {"header = [\"G95\"]", "holds G95"},
+           {"header = [\"G96 S100\"]", "holds G96"},
+           {"header = [\"G90.1\"]", "holds G90.1"},
+           {"header = [\"G41 D3\"]", "holds G41"},
+           {"header = [\"H5\"]", "holds H5"},
+           {"header = [\"(unclosed\"]", "opens a comment it does not close"},
+           {"header = [\"%\"]", "holds '%'"},
+           {"header = [\"M30\"]", "holds M30"},
+           {"header = [\"M2\"]", "holds M2"},
+           {"header = [\"#1=5\"]", "holds '#'"},
+           {"header = [\"M98 P9000\"]", "holds M98"},
+           {"header = [\"G65 P9000\"]", "holds G65"},
+           {"header = [\"O100\"]", "holds O100"},
+           {"header = [\"N10 M1\"]", "holds N10"},
+           {"header = [\"F100\"]", "holds F100"},
+           {"header = [\"G187 P1\"]", "holds G187"},  // Haas only
+           {"header = [\"P5\"]", "holds P5"},
+           {"tool_change = [\"T{tool} M333333333333333333333336\"]", "no M code"},  // fuzz
+           {"tool_change = [\"T5 M6\"]", "must call the tool by"},
+           {"tool_change = [\"T{tool} T5 M6\"]", "calls tool T5"},
+           {"header = [\"T{tool}\"]", "only the tool_change template"},
+           {"work_offset = \"G10 L20 P1 X0\"", "is no work offset code"},
+           {"work_offset = \"G55 G0 X1\"", "is no work offset code"},
+       }) {
+    INFO(block);
+    expect_error(head + block + "\n", 9, says);
+  }
+  // What a template may hold: machine M codes, dwell and path control, the machine's own
+  // tool-change macro, work offsets.
+  for (const std::string block :
+       {"header = [\"M11 (C UNLOCK)\", \"G64 P0.01 Q0.01\", \"G61.1\", \"G4 P0.5\"]",
+        "header = [\"G5.1 Q1\", \"G8 P1\", \"M1\"]", "tcp_on = [\"M428\"]",
+        "tool_change = [\"T{tool} M6\", \"G65 P9001\", \"M98 P9002\"]",
+        "work_offset = \"G54.1 P3\"", "work_offset = \"G59.3\"",
+        "footer = [\"G91 G28 A0. C0.\", \"G90\"]"}) {
+    INFO(block);
+    CHECK_NOTHROW(parse_machine_toml(head + block + "\n", "m.toml"));
+  }
+  // Per dialect: Haas's G187, Sinumerik's words and CYCLE832, a TNC's tool call with G17.
+  const std::string any =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n[gcode]\n";
+  CHECK_NOTHROW(
+      parse_machine_toml(any + "dialect = \"haas\"\nheader = [\"G187 P1 E0.01\"]\n", "m"));
+  CHECK_NOTHROW(
+      parse_machine_toml(any + "dialect = \"siemens\"\nheader = [\"FFWON\", \"SOFT\", \"G642\", "
+                               "\"CYCLE832(0.01,_ORI_FINISH,1)\", \"COMPCAD ; smooth\"]\n",
+                         "m"));
+  CHECK_NOTHROW(
+      parse_machine_toml(any + "dialect = \"heidenhain\"\ntool_change = [\"T{tool} G17\"]\n", "m"));
+  expect_error(any + "dialect = \"siemens\"\nheader = [\"TRANS X10\"]\n", 9, "holds TRANS");
+  expect_error(any + "dialect = \"siemens\"\nheader = [\"CYCLE832(0.01,[1])\"]\n", 9, "holds '['");
   // Spindle, coolant, tool and program end: the read-back must know them (issue 33).
   expect_error(head + "tcp_on = [\"M5\"]\n", 9, "holds M5: the spindle, coolant");
   expect_error(head + "header = [\"S1000 M3\"]\n", 9, "holds S1000");
@@ -231,7 +293,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "footer = [\"M30\"]\n", 9, "holds M30");
   expect_error(head + "tool_change = [\"T{tool} M6\", \"M8\"]\n", 9, "holds M8");
   expect_error(head + "tool_change = [\"T{tool} M6\", \"G20\"]\n", 9, "holds G20");
-  expect_error(head + "work_offset = \"G43 H1\"\n", 9, "holds G43");
+  expect_error(head + "work_offset = \"G43 H1\"\n", 9, "is no work offset code");
   expect_error(head + "header = \"M98\"\n", 9, "list of blocks");
   expect_error(head + "program_number = 10000\n", 9, "from 1 to 9999");
   expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");

@@ -551,3 +551,42 @@ TEST_CASE("hostile input, round 3: a FIFO or /dev/zero as the CL or machine file
     CHECK_THAT(r.err, Catch::Contains("not a regular file"));
   }
 }
+
+TEST_CASE(
+    "hostile input, round 3: a mill that is no ball end, with a part, has its shank and holder "
+    "checked: the collisions the ball-end run refuses are refused for it too",
+    "[cli][bad-input][collision]") {
+  TempDir t;
+  const std::string demo = read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls");
+  const std::string part = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl";
+  REQUIRE(demo.find("TLDATA/MILL,6.0000,3.0000,15.0000") != std::string::npos);
+  // The ball-end tool, its axes kept: the shank comes within its clearance at 330 points.
+  const auto ball =
+      run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls --part " + part +
+                 " --method none -q --gcode " + t.path("b.nc"));
+  CHECK(ball.code == 1);
+  CHECK_THAT(ball.err, Catch::Contains("330 CL points where the tool hits the part"));
+  for (const char* corner : {"1.0000", "2.9990", "0.0000"}) {
+    INFO("corner radius " << corner);
+    std::string cl = demo;
+    cl.replace(cl.find("TLDATA/MILL,6.0000,3.0000"), 25,
+               std::string("TLDATA/MILL,6.0000,") + corner);
+    write_file(t.path("c.cls"), cl);
+    const auto r = run_taxopt("--in " + t.path("c.cls") + " --part " + part + " -q --gcode " +
+                              t.path("c.nc") + " --report " + t.path("c.json"));
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Catch::Contains("CL points where the shank of the (not ball-end) tool hits "
+                                      "the part within its clearance"));
+    CHECK_FALSE(file_exists(t.path("c.nc")));
+    // Flutes long enough to reach past the part: free.
+    std::string longer = cl;
+    longer.replace(longer.find(",15.0000,"), 9, ",40.0000,");
+    write_file(t.path("l.cls"), longer);
+    const auto l = run_taxopt("--in " + t.path("l.cls") + " --part " + part + " -q --gcode " +
+                              t.path("l.nc") + " --report " + t.path("l.json"));
+    INFO(l.err);
+    CHECK(l.code == 0);
+    const auto j = nlohmann::json::parse(read_file(t.path("l.json")));
+    CHECK(j["operations"][0]["after"]["colliding_points"] == 0);
+  }
+}

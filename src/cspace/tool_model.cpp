@@ -63,6 +63,32 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
   return m;
 }
 
+ToolModel ToolModel::shank_and_holder(const Tool& tool, const ToolOverrides& o) {
+  const double D = tool.diameter_mm;
+  if (!(D > 0.0)) throw InputError("the shank and holder check needs the tool's diameter");
+  const double r = std::clamp(tool.corner_radius_mm, 0.0, 0.5 * D);
+  const double flute =
+      o.flute_length_mm.value_or(tool.flute_length_mm > 0.0 ? tool.flute_length_mm : 4.0 * D);
+  const double gauge = o.gauge_length_mm.value_or(std::max(flute, 10.0 * D));
+  const double shank = o.shank_radius_mm.value_or(0.5 * D);
+  if (!(flute > r)) throw InputError("flute length must exceed the corner radius");
+  if (!(gauge >= flute)) throw InputError("gauge length must be at least the flute length");
+  if (!(shank > 0.0)) throw InputError("shank radius must be positive");
+  ToolModel m;
+  m.ball_radius_mm = r;
+  m.flute_bodies = 0;
+  if (gauge > flute) m.bodies.push_back({shank, flute - r, gauge - r});
+  if (o.holder_radius_mm) {
+    const double hr = *o.holder_radius_mm;
+    const double hl = o.holder_length_mm.value_or(40.0);
+    if (!(hr >= shank)) throw InputError("holder radius must be at least the shank radius");
+    if (!(hl > 0.0)) throw InputError("holder length must be positive");
+    m.holder_body = static_cast<int>(m.bodies.size());
+    m.bodies.push_back({hr, gauge - r, gauge - r + hl});
+  }
+  return m;
+}
+
 ToolModel ToolModel::judged(const ToolMargins& margins) const {
   ToolModel m = *this;
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {

@@ -213,7 +213,11 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
   const auto t0 = Clock::now();
   if (!(o.ball_radius_mm > 0.0)) {
     add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
-                not_a_ball(op) + ", no contact recovery and no collision check");
+                not_a_ball(op) +
+                    (op.tool.from_file && op.tool.diameter_mm > 0.0
+                         ? ", no contact recovery: its flutes are not checked against the part, "
+                           "its shank and holder are"
+                         : ", no contact recovery and no collision check"));
     return;
   }
   const Part& part = *run.options.part;

@@ -368,6 +368,64 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
   }
 }
 
+/// An operation whose tool is no ball end (flat, bull nose) with a part: no contact model, so
+/// its flutes are not judged, but its shank and holder, which never cut, are checked at every
+/// point and along every move as written, with their clearances (issue 35: the demo with a
+/// corner radius of 1 mm was posted with 330 shank collisions at exit 0).
+void check_shank_and_holder(const Run& run, const OperationContext& o, const PostedOperation& po,
+                            const Written& w, const std::vector<Vec3d>& xyz_w,
+                            const std::vector<double>& a_w, const std::vector<double>& c_w,
+                            OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  ToolModel tool;
+  try {
+    tool = ToolModel::shank_and_holder(op.tool, run.options.tool).judged(margins_of(run.options));
+  } catch (const InputError& e) {
+    throw InputError(run.tp.source, op.points.empty() ? 0 : op.points.front().line,
+                     "operation " + op.name + ": " + e.message());
+  }
+  if (tool.bodies.empty()) return;  // the flutes reach the holder face: nothing above them
+  // Every point counts as touching: the check is of the bodies above the flutes only.
+  std::vector<ContactPoint> above(op.points.size());
+  for (ContactPoint& c : above) c.state = ContactState::Touching;
+  std::vector<Vec3d> axes;
+  for (const CLPointd& p : po.points) axes.push_back(p.axis);
+  const std::vector<std::size_t> hits =
+      colliding_points(*run.collision, tool, op, axes, above, nullptr);
+  const std::vector<std::size_t> moves = colliding_moves(
+      *run.collision, tool, run.machine, xyz_w, a_w, c_w, above, nullptr, &w.way_points[k]);
+  r.colliding_before = r.colliding_after = static_cast<long>(hits.size());
+  r.verification.colliding_moves = static_cast<long>(moves.size());
+  r.verification.collision_free = hits.empty() && moves.empty();
+  const std::string what = tool.holder_body >= 0 ? "shank or holder" : "shank";
+  if (!hits.empty()) {
+    std::string lines;
+    for (std::size_t j = 0; j < hits.size() && j < 10; ++j) {
+      lines += (j ? ", " : "") + std::to_string(op.points[hits[j]].line);
+    }
+    if (hits.size() > 10) lines += ", ...";
+    add_finding(res, FindingCode::PointCollision, k, op.points[hits.front()].line,
+                format_location(run.tp.source, op.points[hits.front()].line,
+                                "operation " + op.name + ": " + std::to_string(hits.size()) +
+                                    " CL points where the " + what +
+                                    " of the (not ball-end) tool hits the part within its "
+                                    "clearance, at lines " +
+                                    lines));
+  }
+  if (!moves.empty()) {
+    const std::size_t i = moves.front();
+    add_finding(res, FindingCode::MoveCollision, k, op.points[i].line,
+                format_location(run.tp.source, op.points[i].line,
+                                "operation " + op.name + ": " + std::to_string(moves.size()) +
+                                    " moves where the " + what +
+                                    " of the (not ball-end) tool hits the part, first from "
+                                    "line " +
+                                    std::to_string(op.points[i - 1].line) + " to line " +
+                                    std::to_string(op.points[i].line)));
+  }
+}
+
 /// The free cells of every contact's C-space (--count-free-cells) and the maps of the most
 /// constrained contact and the most turned one (--cspace-maps).
 void cspace_rows(const Run& run, const OperationContext& o, detail::StageProgress& checking,
@@ -578,6 +636,9 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   }
   if (run.collision && r.contact.recovered) {
     check_collisions(run, o, po, w, xyz_w, a_w, c_w, checking, r, res);
+  } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
+             op.tool.diameter_mm > 0.0) {
+    check_shank_and_holder(run, o, po, w, xyz_w, a_w, c_w, r, res);
   }
   if (!o.contacts.empty()) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {

@@ -58,6 +58,14 @@ struct ToolModel {
   /// gauge length shorter than the flutes, a holder thinner than the shank).
   static ToolModel ball_end(const Tool& tool, const ToolOverrides& overrides = {});
 
+  /// The bodies above the flutes of a mill that is no ball end (flat, bull nose: diameter D,
+  /// corner radius r): the shank (radius D / 2 unless overridden) and the holder, lengths as
+  /// in ball_end but measured from the point r above the tip on the axis (ball_radius_mm is
+  /// r). No flute body (flute_bodies 0): without a contact model the cutting part is not
+  /// judged, but the bodies that never cut are (issue 35).
+  /// @throws InputError as ball_end does, and for a tool without a diameter.
+  static ToolModel shank_and_holder(const Tool& tool, const ToolOverrides& overrides = {});
+
   /// The bodies as the collision checks judge them (ToolMargins): the flutes thinner by
   /// their tolerance (never below half the ball radius), the shank and holder grown.
   ToolModel judged(const ToolMargins& margins) const;

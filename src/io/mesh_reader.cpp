@@ -23,6 +23,188 @@ namespace {
 
 using K = CGAL::Simple_cartesian<double>;
 
+/// Coordinates beyond any machine (1e6 mm = 1 km; the CL reader's bound too): a broken file.
+/// Past it the areas and normals of the faces overflow.
+constexpr double kMaxCoordinate = 1e6;
+
+/// Why a text mesh CGAL could not read is broken: the first line that breaks its format, by a
+/// plain scan of the format's records (OBJ v/f, OFF counts, vertices and faces, ASCII STL's
+/// solid/facet/loop/vertex nesting, PLY's header); empty when the scan finds nothing.
+struct Diagnosis {
+  int line = 0;
+  std::string why;
+};
+
+bool finite_numbers(std::istringstream& in, int count) {
+  for (int k = 0; k < count; ++k) {
+    std::string tok;
+    if (!(in >> tok)) return false;
+    char* end = nullptr;
+    const double v = std::strtod(tok.c_str(), &end);
+    if (end == tok.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+Diagnosis diagnose_text_mesh(const std::string& path, const std::string& ext) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  int n = 0;
+  const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
+  if (ext == ".obj") {
+    long vertices = 0;
+    while (std::getline(in, line)) {
+      ++n;
+      std::istringstream ls(line);
+      std::string kind;
+      if (!(ls >> kind) || kind[0] == '#') continue;
+      if (kind == "v") {
+        if (!finite_numbers(ls, 3)) return fail("a vertex 'v' needs three finite numbers");
+        ++vertices;
+      } else if (kind == "f") {
+        int corners = 0;
+        for (std::string tok; ls >> tok; ++corners) {
+          char* end = nullptr;
+          const long i = std::strtol(tok.c_str(), &end, 10);
+          if (end == tok.c_str() || (*end != '\0' && *end != '/')) {
+            return fail("face corner '" + tok.substr(0, 40) + "' is no vertex index");
+          }
+          if (i == 0 || i > vertices || -i > vertices) {
+            return fail("face corner " + std::to_string(i) + " names no vertex (" +
+                        std::to_string(vertices) + " so far)");
+          }
+        }
+        if (corners < 3) return fail("a face 'f' needs at least three corners");
+      } else if (kind != "vt" && kind != "vn" && kind != "vp" && kind != "g" && kind != "o" &&
+                 kind != "s" && kind != "usemtl" && kind != "mtllib" && kind != "l" &&
+                 kind != "p") {
+        return fail("'" + kind.substr(0, 40) + "' is no OBJ record");
+      }
+    }
+    return {};
+  }
+  if (ext == ".off") {
+    // Header, counts, vertices, faces; '#' comments and blank lines skipped.
+    const auto next = [&](std::istringstream& ls) {
+      while (std::getline(in, line)) {
+        ++n;
+        const std::size_t hash = line.find('#');
+        if (hash != std::string::npos) line.erase(hash);
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        ls = std::istringstream(line);
+        return true;
+      }
+      return false;
+    };
+    std::istringstream ls;
+    if (!next(ls)) return fail("empty");
+    std::string head;
+    ls >> head;
+    if (head.size() < 3 || head.compare(head.size() - 3, 3, "OFF") != 0) {
+      return fail("the first line must be 'OFF', got '" + head.substr(0, 40) + "'");
+    }
+    long nv = -1, nf = -1, ne = 0;
+    if (!(ls >> nv)) {
+      if (!next(ls)) return fail("no vertex and face counts");
+      ls >> nv;
+    }
+    if (!(ls >> nf >> ne) || nv < 0 || nf < 0) {
+      return fail("the counts must be 'vertices faces edges', whole numbers");
+    }
+    for (long v = 0; v < nv; ++v) {
+      if (!next(ls))
+        return fail("the file ends after " + std::to_string(v) + " of " + std::to_string(nv) +
+                    " vertices");
+      if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
+    }
+    for (long f = 0; f < nf; ++f) {
+      if (!next(ls))
+        return fail("the file ends after " + std::to_string(f) + " of " + std::to_string(nf) +
+                    " faces");
+      long k = 0;
+      if (!(ls >> k) || k < 3) return fail("a face starts with its corner count, at least 3");
+      for (long c = 0; c < k; ++c) {
+        long i = -1;
+        if (!(ls >> i)) return fail("a face lists fewer corners than its count");
+        if (i < 0 || i >= nv) {
+          return fail("face corner " + std::to_string(i) + " names no vertex (0 to " +
+                      std::to_string(nv - 1) + ")");
+        }
+      }
+    }
+    return {};
+  }
+  if (ext == ".stl") {
+    // solid { facet normal n n n / outer loop / vertex x3 / endloop / endfacet } endsolid
+    int state = 0, vertices = 0;  // 0 outside solid, 1 in solid, 2 in facet, 3 in loop
+    while (std::getline(in, line)) {
+      ++n;
+      std::istringstream ls(line);
+      std::string kw;
+      if (!(ls >> kw)) continue;
+      if (kw == "solid" && state == 0) {
+        state = 1;
+      } else if (kw == "facet" && state == 1) {
+        std::string normal;
+        if (!(ls >> normal) || normal != "normal" || !finite_numbers(ls, 3)) {
+          return fail("'facet normal' needs three finite numbers");
+        }
+        state = 2;
+      } else if (kw == "outer" && state == 2) {
+        state = 3;
+        vertices = 0;
+      } else if (kw == "vertex" && state == 3) {
+        if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
+        ++vertices;
+      } else if (kw == "endloop" && state == 3) {
+        if (vertices != 3) return fail("a facet of " + std::to_string(vertices) + " vertices");
+        state = 2;
+      } else if (kw == "endfacet" && state == 2) {
+        state = 1;
+      } else if (kw == "endsolid" && state == 1) {
+        state = 0;
+      } else {
+        return fail("'" + kw.substr(0, 40) + "' where " +
+                    (state == 0   ? "'solid'"
+                     : state == 1 ? "'facet' or 'endsolid'"
+                     : state == 2 ? "'outer loop' or 'endfacet'"
+                                  : "'vertex' or 'endloop'") +
+                    " belongs");
+      }
+    }
+    if (state != 0) return fail("the file ends inside a solid (no 'endsolid')");
+    return {};
+  }
+  if (ext == ".ply") {
+    if (!std::getline(in, line) || (++n, line.rfind("ply", 0) != 0)) {
+      return fail("the first line must be 'ply'");
+    }
+    bool format = false;
+    while (std::getline(in, line)) {
+      ++n;
+      std::istringstream ls(line);
+      std::string kw;
+      ls >> kw;
+      if (kw == "format") {
+        std::string f;
+        ls >> f;
+        if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian") {
+          return fail("format '" + f.substr(0, 40) + "' is no PLY format");
+        }
+        format = true;
+      } else if (kw == "end_header") {
+        if (!format) return fail("a header without its 'format' line");
+        return {};
+      } else if (kw != "element" && kw != "property" && kw != "comment" && kw != "obj_info" &&
+                 !kw.empty()) {
+        return fail("'" + kw.substr(0, 40) + "' is no PLY header line");
+      }
+    }
+    return fail("the header has no 'end_header'");
+  }
+  return {};
+}
+
 /// Reads a binary STL whose size fits its header's triangle count; false when the file is no
 /// binary STL (then it is ASCII, or broken: the caller says which). A binary STL is told by its
 /// size, not by the word "solid" (many exporters begin binary headers with it).
@@ -66,6 +248,11 @@ bool read_binary_stl(const std::string& path, std::vector<K::Point_3>& points,
                              " has a vertex that is not "
                              "finite (NaN or infinity)");
       }
+      if (std::max({std::abs(xyz[0]), std::abs(xyz[1]), std::abs(xyz[2])}) > kMaxCoordinate) {
+        throw InputError(path, 0,
+                         "part mesh face " + std::to_string(f + 1) + " has a vertex beyond " +
+                             "+-1e6 (1 km in mm): not a part on a machine");
+      }
       poly.push_back(points.size());
       points.emplace_back(xyz[0], xyz[1], xyz[2]);
     }
@@ -99,13 +286,26 @@ TriangleMesh read_mesh_file(const std::string& path) {
       ok = false;
     }
   }
-  if (!ok)
-    throw InputError(path, 0, "cannot read part mesh: not a valid " + ext.substr(1) + " file");
-  if (polygons.empty() || points.empty()) throw InputError(path, 0, "part mesh has no faces");
+  if (!ok) {
+    const Diagnosis d = diagnose_text_mesh(path, ext);
+    throw InputError(path, d.line,
+                     "cannot read part mesh: not a valid " + ext.substr(1) + " file" +
+                         (d.why.empty() ? std::string() : ": " + d.why));
+  }
+  if (polygons.empty() || points.empty()) {
+    const Diagnosis d = diagnose_text_mesh(path, ext);
+    throw InputError(path, d.line,
+                     "part mesh has no faces" + (d.why.empty() ? std::string() : ": " + d.why));
+  }
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
       throw InputError(path, 0, "part mesh vertex " + std::to_string(i + 1) + " is not finite");
+    }
+    if (std::max({std::abs(p.x()), std::abs(p.y()), std::abs(p.z())}) > kMaxCoordinate) {
+      throw InputError(path, 0,
+                       "part mesh vertex " + std::to_string(i + 1) +
+                           " lies beyond +-1e6 (1 km in mm): not a part on a machine");
     }
   }
   for (std::size_t f = 0; f < polygons.size(); ++f) {

@@ -144,3 +144,57 @@ TEST_CASE("cli: with the part, the CSV has contact point, normal, tilt and yaw",
   CHECK(tilt_sum / with_contact == Approx(5.0).margin(0.1));
   CHECK(rows - with_contact < 200);  // approach and retract points only
 }
+
+TEST_CASE(
+    "mesh: a broken text mesh names its line and what is wrong there; a vertex past 1 km "
+    "names its face",
+    "[io][mesh][bad-input]") {
+  TempDir t;
+  struct Case {
+    const char* name;
+    std::string text;
+    int line;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"nan.stl",
+       "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 nan\nvertex 0 1 0\n"
+       "endloop\nendfacet\nendsolid x\n",
+       5, "a vertex needs three finite numbers"},
+      {"two.stl",
+       "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\n"
+       "endfacet\nendsolid x\n",
+       6, "a facet of 2 vertices"},
+      {"open.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", 4,
+       "ends inside a solid"},
+      {"corner.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", 6,
+       "face corner 7 names no vertex (0 to 2)"},
+      {"short.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n", 4, "ends after 2 of 4 vertices"},
+      {"head.off", "OF\n3 1 0\n", 1, "the first line must be 'OFF'"},
+      {"corner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", 4,
+       "face corner 9 names no vertex (3 so far)"},
+      {"record.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvx 1\nf 1 2 3\n", 4, "'vx' is no OBJ record"},
+      {"vertex.obj", "v 0 0\nf 1 1 1\n", 1, "three finite numbers"},
+      {"format.ply", "ply\nformat text 1.0\nend_header\n", 2, "is no PLY format"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    write_file(t.path(c.name), c.text);
+    try {
+      read_mesh_file(t.path(c.name));
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == c.line);
+      CHECK_THAT(e.message(), Catch::Contains(c.says));
+    }
+  }
+  // A binary STL vertex at 1e38 is named with its face (before: a later face was called
+  // degenerate, the areas overflowing).
+  TriangleMesh m;
+  m.vertices = {Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0, 1, 0), Vec3d(1e38, 0, 0)};
+  m.faces = {{0, 1, 2}, {1, 3, 2}};
+  write_file(t.path("far.stl"), format_stl_binary(m));
+  expect_mesh_error(t.path("far.stl"), "part mesh face 2 has a vertex beyond +-1e6");
+  write_file(t.path("far.off"), "OFF\n3 1 0\n0 0 0\n2e6 0 0\n0 1 0\n3 0 1 2\n");
+  expect_mesh_error(t.path("far.off"), "part mesh vertex 2 lies beyond +-1e6");
+}

@@ -590,3 +590,32 @@ TEST_CASE(
     CHECK(j["operations"][0]["after"]["colliding_points"] == 0);
   }
 }
+
+TEST_CASE(
+    "hostile input, round 3: out of memory (ulimit -v) with a 46 MB part is exit 2 naming "
+    "memory, nothing written, no crash",
+    "[cli][bad-input][hostile][memory]") {
+#if defined(TAXOPT_SANITIZE) || defined(TAXOPT_TSAN)
+  WARN("skipped under a sanitizer: it reserves more address space than the limit");
+  return;
+#else
+  TempDir t;
+  REQUIRE(run_taxopt("generate --mesh-step 0.1 --out-cls " + t.path("m.cls") + " --out-mesh " +
+                     t.path("m.stl"))
+              .code == 0);
+  // FCL's model of this part fails to allocate under the limit: it printed "BVH Error! Out of
+  // memory" and the next query segfaulted (issue 35, item 12).
+  const RunResult r =
+      run("ulimit -v 600000; " + std::string(TAXOPT_EXE) + " --in " + t.path("m.cls") + " --part " +
+          t.path("m.stl") + " --method none -q --gcode " + t.path("o.nc"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("taxopt: error: out of memory"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(t.dir())) {
+    (void)e;
+    ++files;
+  }
+  CHECK(files == 2);  // the CL file and the mesh: no temporary file left
+#endif
+}

@@ -852,6 +852,12 @@ int main(int argc, char** argv) {
     return result.ok() ? 0 : 1;
   } catch (const taxopt::InputError& e) {
     return error(e.what(), 2);
+  } catch (const std::bad_alloc&) {
+    // Not a failed verification (exit 1): the input is larger than this machine's memory.
+    return error(
+        "out of memory: the part, the CL file or an option's resolution needs more "
+        "memory than this machine gives (docs/cli.md \"Bounds\"); nothing written",
+        2);
   } catch (const std::exception& e) {
     return error(std::string("internal error: ") + e.what(), 1);
   }

@@ -6,6 +6,8 @@
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision.h>
 
+#include <new>
+
 namespace taxopt {
 
 struct CollisionModel::Impl {
@@ -23,9 +25,15 @@ CollisionModel::CollisionModel(const TriangleMesh& mesh) : impl_(std::make_uniqu
                            static_cast<std::size_t>(f[2]));
   }
   impl_->bvh = std::make_shared<fcl::BVHModel<fcl::OBBd>>();
-  impl_->bvh->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size()));
-  impl_->bvh->addSubModel(vertices, triangles);
-  impl_->bvh->endModel();
+  // FCL reports a failed allocation by a return code ("BVH Error! Out of memory") and leaves a
+  // model that crashes the first query (issue 35: a segfault under ulimit -v with a 183 MB
+  // part): every step is checked, and a failure is the out-of-memory it is.
+  const auto ok = [](int code) {
+    if (code != fcl::BVH_OK) throw std::bad_alloc();
+  };
+  ok(impl_->bvh->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size())));
+  ok(impl_->bvh->addSubModel(vertices, triangles));
+  ok(impl_->bvh->endModel());
   impl_->bvh->computeLocalAABB();
 }
 

@@ -619,3 +619,24 @@ TEST_CASE(
   CHECK(files == 2);  // the CL file and the mesh: no temporary file left
 #endif
 }
+
+TEST_CASE(
+    "hostile input, round 3: --plots for more than 200 operations is refused before "
+    "anything is written",
+    "[cli][bad-input][hostile]") {
+  TempDir t;
+  std::string cl = "LOADTL/1\nSPINDL/RPM,3000,CLW\nFEDRAT/MMPM,500\n";
+  for (int k = 0; k < 201; ++k) {
+    cl += "TOOL PATH/OP" + std::to_string(k) + ",TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\n" +
+          "GOTO/0,0,10,0,0,1\nGOTO/" + std::to_string(k + 1) + ",0,10\nEND-OF-PATH\n";
+  }
+  write_file(t.path("many.cls"), cl);
+  const RunResult r = run_taxopt("--in " + t.path("many.cls") + " --plots " + t.path("p") +
+                                 " --gcode " + t.path("o.nc") + " -q");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--plots: the CL file has 201 operations"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  CHECK_FALSE(std::filesystem::exists(t.path("p")));
+  // Without --plots the same file posts.
+  CHECK(run_taxopt("--in " + t.path("many.cls") + " --gcode " + t.path("o.nc") + " -q").code == 0);
+}

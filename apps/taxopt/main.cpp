@@ -687,6 +687,16 @@ int main(int argc, char** argv) {
     if (a.tool_radius && !(*a.tool_radius > 0.0)) {
       return error("--tool-radius must be positive", 2);
     }
+    // Plots: five SVG files an operation (and C-space maps); 20,000 operations wrote 100,000
+    // files, 468 MB (issue 35). A page of plots beyond a few hundred operations helps no one.
+    constexpr std::size_t kMostPlottedOperations = 200;
+    if (!a.plots.empty() && toolpath.operations.size() > kMostPlottedOperations) {
+      return error("--plots: the CL file has " + std::to_string(toolpath.operations.size()) +
+                       " operations; plots are written for at most " +
+                       std::to_string(kMostPlottedOperations) +
+                       " (about 5 SVG files each): split the file, or leave out --plots",
+                   2);
+    }
     // The part is in the CL file's units and coordinates (docs/cli.md).
     std::optional<taxopt::Part> part;
     if (!a.part.empty()) {

@@ -1529,6 +1529,11 @@ class Reader {
            << tool_.diameter_mm << " mm is " << std::lround(rpm) << " rpm";
         notice(line, os.str());
       }
+      if (rpm > 0.0 && rpm < 1.0) {
+        // Written as S0, which turns nothing: the program check found the cut without spindle.
+        fail(line, "SPINDL: " + std::to_string(rpm) +
+                       " rpm is no spindle speed (0 is off, else at least 1 rpm)");
+      }
       if (rpm > 0.0) last_rpm_ = rpm;
     } else if (on) {
       if (!(last_rpm_ > 0.0)) fail(line, "SPINDL/ON with no speed given before it");

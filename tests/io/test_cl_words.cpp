@@ -296,6 +296,8 @@ TEST_CASE(
   // After the program: the spindle is stopped once more only if it turns.
   CHECK(line_of(lines, "M5", x70) != std::string::npos);
   // A surface speed without a cutter is refused; DELAY for a dialect without a known dwell.
+  CHECK_THAT(error_of_text("SPINDL/0.0001,RPM\nGOTO/0,0,0\n"),
+             Catch::Contains("w.cls:1: SPINDL: 0.000100 rpm is no spindle speed"));
   CHECK_THAT(error_of_text("SPINDL/500,SFM\nGOTO/0,0,0\n"),
              Catch::Contains("w.cls:1: SPINDL/SFM: a surface speed needs the cutter's diameter"));
 }

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "pipeline/stages.hpp"
 #include "support.hpp"
@@ -341,4 +342,42 @@ TEST_CASE(
   CHECK_FALSE(post("turned.cls", "haas"));
   CHECK(post("turned.cls", "linuxcnc"));
   CHECK(post("turned.cls", "siemens"));
+}
+
+TEST_CASE(
+    "program: LinuxCNC programs bound the controller's blending (G64 P Q0 from "
+    "blend_tolerance_mm, G61 at 0), and rs274 sets that motion mode",
+    "[program][rs274][cli]") {
+  REQUIRE(have_rs274());
+  TempDir t;
+  write_file(t.path("a.cls"),
+             "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/1\nSPINDL/RPM,6000,CLW\n"
+             "FEDRAT/MMPM,500\nGOTO/0,0,5,0,0,1\nGOTO/10,0,0\nGOTO/10,10,0\nEND-OF-PATH\n");
+  const std::string head = "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+                           "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n";
+  for (const auto& [key, block, canon] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"", "G64 P0.0100 Q0", "SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.010000)"},
+           {"blend_tolerance_mm = 0.05\n", "G64 P0.0500 Q0",
+            "SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.050000)"},
+           {"blend_tolerance_mm = 0\n", "G61", "SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)"}}) {
+    INFO(key);
+    write_file(t.path("m.toml"), head + key);
+    const auto r = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                              " --method none -q --gcode " + t.path("o.ngc"));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string text = read_file(t.path("o.ngc"));
+    CHECK(text.find("\n" + block + "\n") != std::string::npos);
+    std::vector<CanonMove> moves;
+    const RunResult rs = run_rs274(t.path("o.ngc"), moves);
+    REQUIRE(rs.code == 0);
+    CHECK_THAT(rs.out, Catch::Contains(canon));
+    if (block != "G61") CHECK_THAT(rs.out, Catch::Contains("SET_NAIVECAM_TOLERANCE(0.0000)"));
+  }
+  write_file(t.path("m.toml"), head + "blend_tolerance_mm = 2\n");
+  const auto bad = run_taxopt("--in " + t.path("a.cls") + " --machine " + t.path("m.toml") +
+                              " --method none -q --gcode " + t.path("o.ngc"));
+  CHECK(bad.code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("gcode.blend_tolerance_mm must be within [0, 1] mm"));
 }

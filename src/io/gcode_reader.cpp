@@ -144,7 +144,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     bool given[5] = {false, false, false, false, false};
     bool reference_return = false;
     bool dwell = false;
-    bool spindle_start = false, change_tool = false;
+    bool spindle_start = false, change_tool = false, blending = false;
     const Vec3d start = xyz;
     const Vec3d xyz_before = xyz;
     Vec3d offset = Vec3d::Zero();
@@ -194,6 +194,8 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
                    (dialect == GcodeDialect::LinuxCNC || dialect == GcodeDialect::Fanuc)) {
             dwell = true;  // the CL file's DELAY: P is its time
           } else if (gv == 400 || gv == 800 || gv == 540) {
+          } else if (dialect == GcodeDialect::LinuxCNC && (gv == 640 || gv == 610)) {
+            blending = true;  // path control: G64 P Q, G61
           } else if (gv == 490 && dialect != GcodeDialect::Heidenhain &&
                      dialect != GcodeDialect::Siemens) {
             length_offset = false;
@@ -284,8 +286,11 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
           break;
         case 'N': break;
         case 'P':
-          if (!dwell || !(v >= 0.0)) {
-            throw InputError(source, line_no, "word 'P' is outside taxopt's subset (G4 P only)");
+        case 'Q':
+          if (!(v >= 0.0) || !(blending || (dwell && letter == 'P'))) {
+            throw InputError(source, line_no,
+                             std::string("word '") + letter +
+                                 "' is outside taxopt's subset (G4 P, G64 P Q only)");
           }
           break;
         case 'H':

@@ -332,6 +332,11 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   }
   for (const auto& c : comments) raw(dialect.comment(c));
   line(dialect.setup(g.feed_mode == FeedMode::InverseTime));
+  if (g.dialect == GcodeDialect::LinuxCNC) {
+    // The path's blending bound (ProgramTemplate::blend_tolerance_mm).
+    const double blend = g.program.blend_tolerance_mm;
+    line(blend > 0.0 ? "G64 P" + fmt(blend * scale, std::max(d, 4)) + " Q0" : "G61");
+  }
   if (const std::string w = dialect.work_offset(); !w.empty()) verbatim({w});
   verbatim(g.program.header);
   int current_tool = -1;

@@ -142,7 +142,7 @@ class MachineParser {
                   "tcp_off",
                   "safe_retract",
                   "retract_z_mm",
-                  "linearise_tolerance_mm",
+                  "linearise_tolerance_mm", "blend_tolerance_mm",
                   "index_threshold_deg",
                   "end_pose"});
       choose(*g, "gcode", "dialect",
@@ -220,6 +220,12 @@ class MachineParser {
         t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
         if (t.linearise_tolerance_mm < 0.0) {
           fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
+        }
+      }
+      if (auto* n = g->get("blend_tolerance_mm")) {
+        t.blend_tolerance_mm = number_of(*n, "gcode.blend_tolerance_mm");
+        if (!(t.blend_tolerance_mm >= 0.0 && t.blend_tolerance_mm <= 1.0)) {
+          fail(line_of(*n), "gcode.blend_tolerance_mm must be within [0, 1] mm (0: exact path)");
         }
       }
       if (auto* n = g->get("index_threshold_deg")) {

@@ -146,7 +146,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
         {"feed_decimals", feed_decimals(machine.gcode)},
         {"safe_retract", machine.gcode.program.retract == SafeRetract::None ? "none" : "machine-z"},
         {"retract_z_mm", machine.gcode.program.retract_z_mm},
-        {"linearise_tolerance_mm", machine.gcode.program.linearise_tolerance_mm}}}};
+        {"linearise_tolerance_mm", machine.gcode.program.linearise_tolerance_mm},
+        {"blend_tolerance_mm", machine.gcode.program.blend_tolerance_mm}}}};
   j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
   j["ok"] = result.ok();
   nlohmann::json findings = nlohmann::json::array();

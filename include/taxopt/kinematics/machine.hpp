@@ -74,6 +74,12 @@ struct ProgramTemplate {
   /// Machine mode: the largest distance the tip may leave the straight line between two
   /// points while the joints move linearly; longer moves are split (linearisation), mm.
   double linearise_tolerance_mm = 0.01;
+  /// LinuxCNC: how far the controller's blending may round the path off the programmed points,
+  /// mm: `G64 P<tolerance> Q0` after the set-up (without it LinuxCNC blends "at the best speed
+  /// possible, no matter how far away from the programmed point", its G-code reference; Q0:
+  /// no naive-CAM merging of the 5-axis blocks). 0: exact path, `G61`. Default 0.01 mm, as the
+  /// linearisation's: the path stays within the finishing tolerances of the CAM systems.
+  double blend_tolerance_mm = 0.01;
   /// A rapid that turns a rotary axis by more than this (written deg) inside an operation is
   /// an index move: tool up to the retract, the table turned there, XY at that height, then
   /// down (docs/gcode-dialects.md "Index moves"); with a part model, whose check verifies the

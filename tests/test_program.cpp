@@ -381,3 +381,27 @@ TEST_CASE(
   CHECK(bad.code == 2);
   CHECK_THAT(bad.err, Catch::Contains("gcode.blend_tolerance_mm must be within [0, 1] mm"));
 }
+
+TEST_CASE(
+    "program: the first table turn goes to the winding nearest home, whatever method, on "
+    "LinuxCNC's sample (C within +-36000 deg)",
+    "[program][cli][global]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  for (const char* method : {"paper", "global"}) {
+    INFO(method);
+    const auto r = run_taxopt("--in " + d + "demo/sine.cls --part " + d +
+                              "demo/sine.stl --machine " + d +
+                              "machines/linuxcnc-xyzac-trt.toml --method " + method +
+                              " --feed-schedule -q --gcode " + t.path("o.ngc"));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string text = read_file(t.path("o.ngc"));
+    const std::size_t at = text.find("\nG0 A");
+    REQUIRE(at != std::string::npos);
+    const std::size_t c = text.find(" C", at + 1);
+    const double c_deg = std::stod(text.substr(c + 2, 20));
+    // Before: the global method's first turn went to C-720, two turns (24 s) from home.
+    CHECK(std::abs(c_deg) <= 180.0);
+  }
+}

@@ -95,11 +95,12 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
     if (const std::optional<Posed>& want = preferred_at(i)) {
       // The caller's pose and its mirror (the whole pass mirrored has the same rates: which
       // one is left to the travel to and from the neighbouring passes), where the machine has
-      // them; a bounded C keeps the caller's turn.
+      // them; on a bounded C every turn of the caller's C within the range, the programme
+      // choosing the winding (issue 36: the global method's first table turn went to C-720,
+      // two turns from home, on LinuxCNC's sample with C in +-36000 deg).
       std::vector<Candidate> kept;
       for (Candidate c : cand[i]) {
-        const double dc =
-            m.c.continuous ? wrap_pi(c.pose.c_rad - want->c_rad) : c.pose.c_rad - want->c_rad;
+        const double dc = wrap_pi(c.pose.c_rad - want->c_rad);
         const double dm = wrap_pi(c.pose.c_rad - want->c_rad - Constants<double>::pi());
         if (std::abs(c.pose.a_rad - want->a_rad) < 1e-6 && std::abs(dc) < 1e-6) {
           c.side = 1;

@@ -420,6 +420,8 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   CHECK(after["min_feed_mm_min"].get<double>() <= 300.0 + 1e-6);  // 50 of 100 deg/s: half of 600
   // 10 deg at 50 deg/s twice, then 1 mm at the programmed 10 mm/s.
   CHECK(after["cycle_time_s"].get<double>() == Approx(0.2 + 0.2 + 0.1).epsilon(1e-3));
+  // The table's turns with the tool up, from home and back, on their own.
+  CHECK(after["table_turn_s"].get<double>() > 0.0);
   CHECK(j["operations"][0]["feed_schedule_written"] == true);
   // The G-code's F words say the same: 300 mm/min on the two turning moves, 600 after.
   const std::string nc = read_file(t.path("o.nc"));

@@ -194,6 +194,7 @@ TEST_CASE(
           for (const char* side : {"before", "after"}) {
             CHECK(op[side]["feed_time_s"].get<double>() + op[side]["rapid_time_s"].get<double>() ==
                   Approx(op[side]["cycle_time_s"].get<double>()).epsilon(1e-9));
+            CHECK(op[side]["table_turn_s"].get<double>() >= 0.0);
           }
           report_feed_s += op["after"]["feed_time_s"].get<double>();
           report_rapid_s += op["after"]["rapid_time_s"].get<double>();

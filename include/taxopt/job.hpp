@@ -174,13 +174,20 @@ struct CSpaceMap {
 
 /// The feed schedule of an operation at the machine's effective limits (feed_schedule.hpp).
 struct FeedSummary {
-  /// Feed moves at their scheduled feeds plus rapids on their joints' trapezoids, s. The move
-  /// into an operation's first point (from the previous one) is not counted.
+  /// Feed moves at their scheduled feeds plus rapids on their joints' trapezoids, s: the
+  /// operation's own cycle, what the methods compare. The move into an operation's first
+  /// point (from the previous one) is not counted; the table's turn before it is table_turn_s.
   double cycle_time_s = 0.0;
   /// Its two parts, s: the feed moves at their scheduled feeds (each block's time as the
   /// controller runs it from the F word written), the rapids (retract, traverse, descent) on
   /// their joints' trapezoids. cycle_time_s = feed_time_s + rapid_time_s.
   double feed_time_s = 0.0, rapid_time_s = 0.0;
+  /// The table turned with the tool up, A and C on their trapezoids: to the operation's first
+  /// pose from the previous operation's last (the first: from home, A = C = 0), and for the
+  /// last operation back home (gcode.end_pose "home"), s; the program's time adds it to the
+  /// cycles (issue 36: the global method's first turn of two whole turns took 24 s that the
+  /// report did not show).
+  double table_turn_s = 0.0;
   /// The part of rapid_time_s the rotary joints add: over the rapids, each one's time less the
   /// time of its linear joints alone, s. Between passes it is what turning the tool costs
   /// (the turn is spread over the rapids in the air where that is faster, air_turn.hpp).

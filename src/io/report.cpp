@@ -25,6 +25,7 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSu
   j["cycle_time_s"] = f.cycle_time_s;
   j["feed_time_s"] = f.feed_time_s;
   j["rapid_time_s"] = f.rapid_time_s;
+  j["table_turn_s"] = f.table_turn_s;
   j["transition_excess_s"] = f.transition_excess_s;
   j["feed_limited_fraction"] = f.feed_limited_fraction;
   j["min_feed_mm_min"] = f.min_feed_mm_min;

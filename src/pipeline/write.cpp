@@ -92,6 +92,34 @@ std::vector<Linearised> linearised_blocks(const Machine& machine, const PostedOp
   return via;
 }
 
+/// FeedSummary::table_turn_s of every operation, before and after.
+void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const JointLimits& limits,
+                       Written& w) {
+  const auto turn_s = [&](const Posed& from, const Posed& to) {
+    JointPosition a{}, b{};
+    a[static_cast<std::size_t>(Joint::A)] = rad_to_deg(from.a_rad);
+    a[static_cast<std::size_t>(Joint::C)] = rad_to_deg(from.c_rad);
+    b[static_cast<std::size_t>(Joint::A)] = rad_to_deg(to.a_rad);
+    b[static_cast<std::size_t>(Joint::C)] = rad_to_deg(to.c_rad);
+    return rapid_time_s(a, b, limits);
+  };
+  const bool home_at_end = run.machine.gcode.program.end_pose == EndPose::Home;
+  for (int side = 0; side < 2; ++side) {
+    Posed prev{0.0, 0.0};  // home
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      const std::vector<Posed>& poses =
+          side == 1 && !ops[k].input_poses.empty() ? ops[k].input_poses : posted[k].poses;
+      if (poses.empty()) continue;
+      double t = turn_s(prev, poses.front());
+      if (k + 1 == posted.size() && home_at_end) t += turn_s(poses.back(), Posed{0.0, 0.0});
+      prev = poses.back();
+      FeedSummary& s = (side == 0 ? w.schedule_after : w.schedule_before)[k].summary;
+      s.table_turn_s = t;
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<JointPosition> written_joints(const Machine& machine,
@@ -182,6 +210,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                                  programmed_block_times_s(in_points, input_poses), limits,
                                  machine.ac));
   }
+  count_table_turns(run, ops, posted, limits, w);
   if (run.options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k) {
       posted[k].block_time_s = w.schedule_after[k].time_s;

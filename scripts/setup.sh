@@ -13,7 +13,8 @@ PACKAGES=(
   libtbb-dev             # parallel over contact points
   libtomlplusplus-dev    # machine file (TOML, with source positions for errors)
   nlohmann-json3-dev     # JSON report
-  linuxcnc-uspace        # rs274: the real G-code interpreter used by the integration tests
+  linuxcnc-uspace        # rs274 and the motion controller the integration tests run
+  python3-numpy          # the controller test: the commanded path against the points
   clang clang-format libclang-rt-14-dev  # fuzzing, sanitizers, formatting
   librsvg2-bin           # render SVG plots to PNG for inspection
 )

@@ -164,12 +164,13 @@ TEST_CASE(
   CHECK(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'B').size() >= 348);
   CHECK_THROWS_AS(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'A'), InputError);
   std::vector<Position> ours = positions(ours_text, "G234");
-  // taxopt comes down from the retract XY first, then Z (issue 33); the post's first block
-  // goes there diagonally. The XY block is ours alone.
-  REQUIRE(ours.size() == post.size() + 1);
-  CHECK(ours[0].x == ours[1].x);
-  CHECK(ours[0].y == ours[1].y);
-  ours.erase(ours.begin());
+  // taxopt comes down from the retract to the clearance height, then XY, then Z (issues 33,
+  // 36); the post's first block goes there diagonally. The descent and the XY block are ours.
+  REQUIRE(ours.size() == post.size() + 2);
+  CHECK(ours[1].x == ours[2].x);
+  CHECK(ours[1].y == ours[2].y);
+  CHECK(ours[0].z >= ours[2].z);
+  ours.erase(ours.begin(), ours.begin() + 2);
   REQUIRE(ours.size() == post.size());
   double worst_b = 0.0, worst_c = 0.0, worst_xyz = 0.0;
   int branch = 0, moving = 0;

@@ -57,6 +57,9 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
       ++b.retracts;
       after_retract = true;
       xy_given = false;
+    } else if (after_retract && (m.given & 4u) && !(m.given & 3u) && !xy_given &&
+               !(prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
+      // straight down to the clearance height
     } else if (after_retract && (m.given & 4u)) {
       if (!xy_given || m.xyz_mm.x() != x || m.xyz_mm.y() != y) ++b.diagonal;
       after_retract = false;

@@ -55,6 +55,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
   // Workpiece positions known of X Y Z A C: none before the first full move, nor of an axis
   // moved in machine coordinates since.
   bool known[5] = {false, false, false, false, false};
+  bool approaching = false;
   // A TNC applies the length of the tool in the spindle always (its TOOL CALL may come
   // before the program); LinuxCNC's TCP is its kinematics.
   bool length_offset = dialect == GcodeDialect::Heidenhain;
@@ -330,6 +331,9 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       }
       xyz = xyz_before;
       for (int q = 0; q < 3; ++q) known[q] = known[q] && !given[q];
+      // The way back in (a table turn, a descent, an XY move) is positioning until a block
+      // gives X, Y and Z together: the point the program comes down to.
+      approaching = true;
       GcodeMove m{true, xyz, a, c, feed, inverse_time, line_no};
       m.positioning = true;
       m.retract = true;
@@ -341,8 +345,10 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
     if (has_axis) {
       if (motion < 0) throw InputError(source, line_no, "axis words without G0 or G1");
       for (int q = 0; q < 5; ++q) known[q] = known[q] || given[q];
+      if (given[0] && given[1] && given[2]) approaching = false;
       GcodeMove m{motion == 0, xyz, a, c, feed, inverse_time, line_no};
-      m.positioning = !(known[0] && known[1] && known[2] && known[3] && known[4]);
+      m.positioning =
+          approaching || !(known[0] && known[1] && known[2] && known[3] && known[4]);
       stamp(m, given_mask(given));
       if (motion == 2 || motion == 3) {
         // The centre is the start plus I J K in the plane (incremental, as taxopt writes).

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 
 #include "taxopt/core/error.hpp"
@@ -454,6 +455,16 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     // pages: no diagonal rapid from the retract): set before the operation's first block and
     // after every index move.
     bool approach = retracts;
+    // Under tool centre point control the retract height can lie above the axes' range in the
+    // workpiece frame: LinuxCNC's sample (Z to 120, its limit) with the table tilted 19 deg
+    // refused the XY move there ("would exceed Z's positive limit", measured on its motion
+    // controller, issue 36). So the tool first comes straight down to a clearance height, the
+    // operation's highest tip plus approach_clearance_mm, then XY, then down. Not on Fanuc,
+    // whose G43.4 comes on with the block down: before it, Z would place the spindle nose.
+    double clearance_z_mm = -std::numeric_limits<double>::infinity();
+    for (const CLPointd& q : op.points) clearance_z_mm = std::max(clearance_z_mm, q.tip_mm.z());
+    clearance_z_mm += g.program.approach_clearance_mm;
+    const bool descend = tcp && !dialect.length_on_first_move();
     std::vector<int> emitted(op.points.size(), 0);
     const std::vector<double> own_times = programmed_block_times_s(op.points, op.poses);
     last_words.clear();
@@ -607,6 +618,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         }
       }
       if (approach) {
+        if (descend) {
+          line(prefix + dialect.rapid() + " Z" + dialect.number(clearance_z_mm * scale, d));
+          prefix.clear();
+        }
         std::string xy = dialect.rapid() + " X" + dialect.number(xyz.x() * scale, d) + " Y" +
                          dialect.number(xyz.y() * scale, d);
         if (dialect.length_on_first_move()) {

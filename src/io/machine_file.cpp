@@ -142,7 +142,7 @@ class MachineParser {
                   "tcp_off",
                   "safe_retract",
                   "retract_z_mm",
-                  "linearise_tolerance_mm", "blend_tolerance_mm",
+                  "linearise_tolerance_mm", "blend_tolerance_mm", "approach_clearance_mm",
                   "index_threshold_deg",
                   "end_pose"});
       choose(*g, "gcode", "dialect",
@@ -226,6 +226,12 @@ class MachineParser {
         t.blend_tolerance_mm = number_of(*n, "gcode.blend_tolerance_mm");
         if (!(t.blend_tolerance_mm >= 0.0 && t.blend_tolerance_mm <= 1.0)) {
           fail(line_of(*n), "gcode.blend_tolerance_mm must be within [0, 1] mm (0: exact path)");
+        }
+      }
+      if (auto* n = g->get("approach_clearance_mm")) {
+        t.approach_clearance_mm = number_of(*n, "gcode.approach_clearance_mm");
+        if (!(t.approach_clearance_mm >= 0.0 && t.approach_clearance_mm <= 1000.0)) {
+          fail(line_of(*n), "gcode.approach_clearance_mm must be within [0, 1000] mm");
         }
       }
       if (auto* n = g->get("index_threshold_deg")) {

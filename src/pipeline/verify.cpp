@@ -791,7 +791,10 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
       xy_set = false;
     } else if (after_retract) {
       const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
-      if (gives_xy && !gives_z) {
+      const bool turns = prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg);
+      if (gives_z && !gives_xy && !xy_set && !turns) {
+        // Straight down (or up) to the clearance height, where it is: not the way in yet.
+      } else if (gives_xy && !gives_z) {
         xy_set = true;
         xy[0] = m.xyz_mm.x();
         xy[1] = m.xyz_mm.y();

@@ -102,9 +102,11 @@ struct GcodeMove {
   bool arc = false;
   Vec3d arc_centre_mm = Vec3d::Zero();
   Vec3d arc_normal = Vec3d::UnitZ();
-  /// A move in machine coordinates (the safe retract: G53, G28, SUPA, M91), or one with an
+  /// A move in machine coordinates (the safe retract: G53, G28, SUPA, M91), one with an
   /// axis whose workpiece position is not known since (the table turned before the first
-  /// point): it belongs to no point, and xyz_mm holds the last known values.
+  /// point), or one on the way back in after a retract before the block that gives X, Y and Z
+  /// together (the descent to the clearance height, the XY move): it belongs to no point, and
+  /// xyz_mm holds the last known values.
   bool positioning = false;
   /// The tool length offset is on (G43/G43.4 H, Sinumerik D1..., a TNC's tool call), and the
   /// controller's tool centre point control (LinuxCNC: its kinematics, always; Fanuc G43.4,

@@ -85,6 +85,10 @@ struct ProgramTemplate {
   /// down (docs/gcode-dialects.md "Index moves"); with a part model, whose check verifies the
   /// swept moves, the turns stay in the air.
   double index_threshold_deg = 1.0;
+  /// Tcp mode (not Fanuc): after the retract and the TCP switch the tool comes straight down
+  /// to the operation's highest tip plus this, mm, before it moves XY (docs/gcode-dialects.md
+  /// "The approach"). CAM systems' clearance heights are of this order above the stock.
+  double approach_clearance_mm = 10.0;
   EndPose end_pose = EndPose::Home;
 };
 

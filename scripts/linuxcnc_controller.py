@@ -1,0 +1,340 @@
+#!/usr/bin/python3
+"""Runs a G-code program on LinuxCNC's own motion controller, headless, and measures it.
+
+The controller is LinuxCNC 2.9 (Debian package linuxcnc-uspace) with a copy of its sample
+configuration `xyzac-trt` (or `xyzbc-trt`) made here: kinematics, limits and the M428/M429
+remaps as shipped; the display is linuxcncrsh (its remote shell, port 5007), no vismach, pyvcp
+or Tk tool-change dialog, and a tool table with tools 1-99 of one length. A HAL sampler on the
+servo thread records every joint's and axis's commanded position and the program line each
+servo period; halsampler writes them to a file.
+
+    linuxcnc_controller.py --ngc PROGRAM [--kins xyzac|xyzbc] [--tool-length MM]
+                           [--samples FILE] [--json FILE]
+
+prints (and writes with --json) a summary: whether the program ran to its end without an
+error, the controller's errors, its time from the first move to the end, every joint's peak
+velocity and acceleration (from the commanded positions, central differences over
+`--window` servo periods: see `filter` in the summary) against the INI's MAX_VELOCITY and
+MAX_ACCELERATION, and how far the axis path passed from every programmed point of the file
+(`--points` FILE: one "x y z a c" per line, program units).
+
+Facts this relies on (issue 36, measured here): as root, rtapi_app needs RTAPI_UID naming a
+fallback uid (65534); RTAPI_FIFO_PATH is the master's socket path (a file in a folder of our
+own); HOME must be writable; one LinuxCNC runs per machine (/tmp/linuxcnc.lock).
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+SAMPLE_ROOT = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis"
+SAMPLES = {
+    "xyzac": (SAMPLE_ROOT + "/table-rotary-tilting", "xyzac-trt.ini", "ac"),
+    "xyzbc": (SAMPLE_ROOT + "/bridgeport", "xyzbc-trt.ini", "bc"),
+}
+
+
+def make_config(work, kins, tool_length):
+    src, ini_name, _ = SAMPLES[kins]
+    cfg = os.path.join(work, "cfg")
+    os.makedirs(cfg)
+    if os.path.isdir(os.path.join(src, "remap_subs")):
+        shutil.copytree(os.path.join(src, "remap_subs"), os.path.join(cfg, "remap_subs"))
+    out = []
+    section = ""
+    with open(os.path.join(src, ini_name)) as f:
+        for line in f.read().split("\n"):
+            s = line.strip()
+            if s.startswith("["):
+                section = s
+            key = s.split("=")[0].strip() if "=" in s else ""
+            if section == "[DISPLAY]" and key == "DISPLAY":
+                line = "DISPLAY = linuxcncrsh"
+            elif section == "[DISPLAY]" and key in ("PYVCP", "OPEN_FILE", "TKPKG", "NGCGUI_FONT",
+                                                    "NGCGUI_SUBFILE"):
+                continue
+            elif section == "[HAL]" and key in ("POSTGUI_HALFILE", "HALUI"):
+                continue
+            elif section == "[HALUI]":
+                continue
+            elif section == "[HAL]" and key == "HALFILE" and "basic_sim" in s:
+                # The simulated machine (its servo thread), then our sampler on that thread.
+                out.append("HALFILE = LIB:basic_sim.tcl -no_use_hal_manualtoolchange")
+                line = "HALFILE = sampler.hal"
+            elif section == "[HAL]" and key == "HALCMD" and "-gui" in s:
+                # The vismach window's pins go; the kinematics' nets stay.
+                if "loadusr" in s:
+                    continue
+                words = [w for w in s.split("=", 1)[1].split() if "-gui." not in w]
+                if len(words) < 3:
+                    continue
+                line = "HALCMD = " + " ".join(words)
+            elif section == "[EMCIO]" and key == "TOOL_TABLE":
+                line = "TOOL_TABLE = tool.tbl"
+            elif section == "[RS274NGC]" and key == "PARAMETER_FILE":
+                line = "PARAMETER_FILE = params.var"
+            out.append(line)
+    with open(os.path.join(cfg, "m.ini"), "w") as f:
+        f.write("\n".join(out) + "\n")
+    with open(os.path.join(cfg, "tool.tbl"), "w") as f:
+        for t in range(1, 100):
+            f.write("T%d P%d Z%g D6 ;\n" % (t, t, tool_length))
+    joints = ["joint.%d.pos-cmd" % j for j in range(5)]
+    letters = "xyzac" if kins == "xyzac" else "xyzbc"
+    axes = ["axis.%s.pos-cmd" % a for a in letters]
+    with open(os.path.join(cfg, "sampler.hal"), "w") as f:
+        f.write("loadrt sampler depth=16384 cfg=ffffffffffs\n")
+        f.write("addf sampler.0 servo-thread\n")
+        for i, pin in enumerate(joints + axes):
+            f.write("net smp%d %s => sampler.0.pin.%d\n" % (i, pin, i))
+        f.write("net smpline motion.program-line => sampler.0.pin.10\n")
+    return cfg
+
+
+class Shell:
+    """linuxcncrsh's remote shell."""
+
+    def __init__(self, proc):
+        deadline = time.time() + 60
+        while True:
+            try:
+                self.sock = socket.create_connection(("127.0.0.1", 5007), timeout=30)
+                break
+            except OSError:
+                if proc.poll() is not None:
+                    raise RuntimeError("LinuxCNC ended before its shell opened")
+                if time.time() > deadline:
+                    raise RuntimeError("linuxcncrsh did not open port 5007 within 60 s")
+                time.sleep(0.5)
+        self.f = self.sock.makefile("rw", newline="\n")
+
+    def cmd(self, c):
+        self.f.write(c + "\r\n")
+        self.f.flush()
+        return self.f.readline().strip()
+
+
+def run(args):
+    work = tempfile.mkdtemp(prefix="taxopt-lcnc-")
+    os.chmod(work, 0o755)
+    fifo = os.path.join(work, "fifo")
+    home = os.path.join(work, "home")
+    os.makedirs(fifo)
+    os.makedirs(home)
+    os.chmod(fifo, 0o777)
+    os.chmod(home, 0o777)
+    cfg = make_config(work, args.kins, args.tool_length)
+    ngc = os.path.join(cfg, "program.ngc")
+    shutil.copy(args.ngc, ngc)
+    env = dict(os.environ, RTAPI_FIFO_PATH=os.path.join(fifo, "rtapi"), HOME=home)
+    if os.geteuid() == 0:
+        env["RTAPI_UID"] = "65534"
+    log_path = os.path.join(work, "linuxcnc.log")
+    log = open(log_path, "w")
+    proc = subprocess.Popen(["linuxcnc", "-r", "m.ini"], cwd=cfg, env=env, stdout=log,
+                            stderr=subprocess.STDOUT, start_new_session=True)
+    samples_path = args.samples or os.path.join(work, "samples.txt")
+    sampler = None
+    summary = {"ran_to_end": False, "errors": []}
+    try:
+        sh = Shell(proc)
+        sampler = subprocess.Popen(["halsampler", "-t", samples_path], env=env,
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        for c in ("hello EMC taxopt 1.0", "set enable EMCTOO", "set echo off",
+                  "set verbose on", "set estop off", "set machine on", "set mode manual",
+                  "set home -1"):
+            sh.cmd(c)
+        time.sleep(1.0)
+        sh.cmd("set mode auto")
+        reply = sh.cmd("set open " + ngc)
+        if "ACK" not in reply:
+            summary["errors"].append("open: " + reply)
+        lines = sum(1 for _ in open(ngc))
+        t0 = time.time()
+        sh.cmd("set run")
+        last_line = 0
+        while True:
+            time.sleep(0.25)
+            status = sh.cmd("get program_status")
+            line = sh.cmd("get program_line").split()
+            if len(line) >= 2 and line[-1].lstrip("-").isdigit():
+                last_line = max(last_line, int(line[-1]))
+            if "IDLE" in status.upper() and time.time() - t0 > 1.0:
+                break
+            if time.time() - t0 > args.timeout:
+                summary["errors"].append("timeout after %g s" % args.timeout)
+                sh.cmd("set abort")
+                break
+        summary["wall_s"] = time.time() - t0
+        summary["last_line"] = last_line
+        summary["program_lines"] = lines
+        time.sleep(0.5)
+        for c in ("set machine off", "set estop on"):
+            sh.cmd(c)
+        try:
+            sh.cmd("shutdown")
+        except OSError:
+            pass
+    finally:
+        if sampler:
+            time.sleep(0.5)
+            sampler.terminate()
+            try:
+                sampler.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                sampler.kill()
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGTERM)
+            try:
+                proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+        log.close()
+    with open(log_path) as f:
+        text = f.read()
+    for l in text.split("\n"):
+        low = l.lower()
+        if ("error" in low and "emctask" in low) or "exceeded" in low or "soft limit" in low or \
+           "joint" in low and "following error" in low:
+            summary["errors"].append(l.strip()[:300])
+    summary["log"] = log_path
+    analyse(samples_path, args, summary)
+    summary["ran_to_end"] = not summary["errors"] and summary.get("end_line", 0) > 0
+    if not args.keep:
+        shutil.rmtree(work, ignore_errors=True)
+    return summary
+
+
+def ini_limits(kins):
+    src, ini_name, _ = SAMPLES[kins]
+    limits = {}
+    section = ""
+    with open(os.path.join(src, ini_name)) as f:
+        for line in f:
+            s = line.strip()
+            if s.startswith("["):
+                section = s[1:-1]
+            elif section.startswith("JOINT_") and "=" in s:
+                k, v = [x.strip() for x in s.split("=", 1)]
+                j = int(section[6:])
+                if k in ("MAX_VELOCITY", "MAX_ACCELERATION"):
+                    limits.setdefault(j, {})[k] = float(v)
+    return limits
+
+
+def analyse(path, args, summary):
+    rows = []
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if len(w) != 12:
+                continue
+            rows.append([float(x) for x in w[1:11]] + [int(w[11])])
+    summary["samples"] = len(rows)
+    if not rows:
+        summary["errors"].append("no samples recorded")
+        return
+    period = 0.001  # SERVO_PERIOD of the sample configurations: 1 ms
+    moving = [i for i in range(1, len(rows)) if any(abs(rows[i][j] - rows[i - 1][j]) > 1e-9
+                                                    for j in range(5))]
+    if not moving:
+        summary["errors"].append("nothing moved")
+        return
+    first, last = moving[0] - 1, moving[-1]
+    summary["move_s"] = (last - first) * period
+    summary["end_line"] = max(r[10] for r in rows)
+    # Velocities and accelerations of the commanded joints: differences over a window of
+    # `w` servo periods (the controller's own trajectory is piecewise quadratic at 1 ms; a
+    # window smooths the quantisation of the positions' printed digits).
+    w = args.window
+    limits = ini_limits(args.kins)
+    peaks = {}
+    for j in range(5):
+        vmax = amax = 0.0
+        vmax_at = amax_at = 0
+        for i in range(first + w, last - w + 1):
+            v = (rows[i + w][j] - rows[i - w][j]) / (2 * w * period)
+            a = (rows[i + w][j] - 2 * rows[i][j] + rows[i - w][j]) / ((w * period) ** 2)
+            if abs(v) > vmax:
+                vmax, vmax_at = abs(v), rows[i][10]
+            if abs(a) > amax:
+                amax, amax_at = abs(a), rows[i][10]
+        lim = limits.get(j, {})
+        peaks[str(j)] = {"max_velocity": vmax, "velocity_line": vmax_at,
+                         "max_accel": amax, "accel_line": amax_at,
+                         "limit_velocity": lim.get("MAX_VELOCITY"),
+                         "limit_accel": lim.get("MAX_ACCELERATION")}
+    summary["joints"] = peaks
+    summary["filter"] = "central differences over %d servo periods (%g ms)" % (w, w * period * 1e3)
+    if args.points:
+        pts = points_of(args.ngc)
+        # Each point against the whole axis path (x y z, the tool length offset taken off Z):
+        # the nearest commanded position, and the rotaries there.
+        import numpy as np
+        path = np.array([[r[5], r[6], r[7] - args.tool_length, r[8], r[9]]
+                         for r in rows[first:last + 1]])
+        worst_mm = worst_deg = 0.0
+        for p in pts:
+            d = np.linalg.norm(path[:, 0:3] - np.array(p[0:3]), axis=1)
+            i = int(np.argmin(d))
+            worst_mm = max(worst_mm, float(d[i]))
+            worst_deg = max(worst_deg, abs(path[i, 3] - p[3]), abs(path[i, 4] - p[4]))
+        summary["points"] = len(pts)
+        summary["point_miss_mm"] = worst_mm
+        summary["point_miss_deg"] = worst_deg
+
+
+def points_of(ngc):
+    """The programmed points of a taxopt program: every G0/G1 block with all of X Y Z and the
+    two rotary words (the retracts, table turns and XY approaches give fewer)."""
+    pts = []
+    with open(ngc) as f:
+        for line in f:
+            code = line.split("(")[0].split(";")[0].upper().split()
+            words = {w[0]: w[1:] for w in code if w and w[0] in "XYZABC"}
+            if "G53" in code or not any(w in ("G0", "G1") for w in code):
+                continue
+            rot = [k for k in "ABC" if k in words]
+            if all(k in words for k in "XYZ") and len(rot) == 2 and "C" in rot:
+                pts.append([float(words["X"]), float(words["Y"]), float(words["Z"]),
+                            float(words[rot[0]]), float(words["C"])])
+    return pts
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--ngc", required=True)
+    ap.add_argument("--kins", default="xyzac", choices=sorted(SAMPLES))
+    ap.add_argument("--tool-length", type=float, default=50.0)
+    ap.add_argument("--samples")
+    ap.add_argument("--points", action="store_true",
+                    help="measure how far the axis path passes from the program's points")
+    ap.add_argument("--json")
+    ap.add_argument("--window", type=int, default=10)
+    ap.add_argument("--timeout", type=float, default=900.0)
+    ap.add_argument("--keep", action="store_true")
+    args = ap.parse_args()
+    if os.path.exists("/tmp/linuxcnc.lock"):
+        print("linuxcnc_controller: /tmp/linuxcnc.lock exists: another LinuxCNC runs",
+              file=sys.stderr)
+        return 2
+    summary = run(args)
+    text = json.dumps(summary, indent=1)
+    if args.json:
+        with open(args.json, "w") as f:
+            f.write(text)
+    print(text)
+    return 0 if summary["ran_to_end"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

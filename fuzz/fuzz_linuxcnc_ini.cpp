@@ -13,8 +13,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::filesystem::path dir = [] {
-    const auto d = std::filesystem::temp_directory_path() /
-                   ("taxopt-fuzz-ini-" + std::to_string(::getpid()));
+    const auto d =
+        std::filesystem::temp_directory_path() / ("taxopt-fuzz-ini-" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     return d;
   }();

@@ -356,8 +356,9 @@ TEST_CASE(
   write_file(t.path("a.cls"),
              "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6,3,20,0,0\nLOADTL/1\nSPINDL/RPM,6000,CLW\n"
              "FEDRAT/MMPM,500\nGOTO/0,0,5,0,0,1\nGOTO/10,0,0\nGOTO/10,10,0\nEND-OF-PATH\n");
-  const std::string head = "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
-                           "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n";
+  const std::string head =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+      "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n";
   for (const auto& [key, block, canon] :
        std::vector<std::tuple<std::string, std::string, std::string>>{
            {"", "G64 P0.0100 Q0", "SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.010000)"},
@@ -393,10 +394,10 @@ TEST_CASE(
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   for (const char* method : {"paper", "global"}) {
     INFO(method);
-    const auto r = run_taxopt("--in " + d + "demo/sine.cls --part " + d +
-                              "demo/sine.stl --machine " + d +
-                              "machines/linuxcnc-xyzac-trt.toml --method " + method +
-                              " --feed-schedule -q --gcode " + t.path("o.ngc"));
+    const auto r =
+        run_taxopt("--in " + d + "demo/sine.cls --part " + d + "demo/sine.stl --machine " + d +
+                   "machines/linuxcnc-xyzac-trt.toml --method " + method +
+                   " --feed-schedule -q --gcode " + t.path("o.ngc"));
     INFO(r.err);
     REQUIRE(r.code == 0);
     const std::string text = read_file(t.path("o.ngc"));

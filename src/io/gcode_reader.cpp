@@ -347,8 +347,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       for (int q = 0; q < 5; ++q) known[q] = known[q] || given[q];
       if (given[0] && given[1] && given[2]) approaching = false;
       GcodeMove m{motion == 0, xyz, a, c, feed, inverse_time, line_no};
-      m.positioning =
-          approaching || !(known[0] && known[1] && known[2] && known[3] && known[4]);
+      m.positioning = approaching || !(known[0] && known[1] && known[2] && known[3] && known[4]);
       stamp(m, given_mask(given));
       if (motion == 2 || motion == 3) {
         // The centre is the start plus I J K in the plane (incremental, as taxopt writes).

@@ -142,7 +142,9 @@ class MachineParser {
                   "tcp_off",
                   "safe_retract",
                   "retract_z_mm",
-                  "linearise_tolerance_mm", "blend_tolerance_mm", "approach_clearance_mm",
+                  "linearise_tolerance_mm",
+                  "blend_tolerance_mm",
+                  "approach_clearance_mm",
                   "index_threshold_deg",
                   "end_pose"});
       choose(*g, "gcode", "dialect",

@@ -13,6 +13,27 @@ double ToolModel::reach_mm() const {
   return r;
 }
 
+namespace {
+
+/// The holder of the overrides, from `face_mm` (the gauge length, measured from the model's
+/// reference point) up by its length (default 40 mm): the last body.
+void add_holder(ToolModel& m, const ToolOverrides& o, double shank_mm, double face_mm) {
+  if (o.holder_radius_mm) {
+    const double hr = *o.holder_radius_mm;
+    const double hl = o.holder_length_mm.value_or(40.0);
+    if (!(hr >= shank_mm)) throw InputError("holder radius must be at least the shank radius");
+    if (!(hl > 0.0)) throw InputError("holder length must be positive");
+    m.holder_body = static_cast<int>(m.bodies.size());
+    m.bodies.push_back({hr, face_mm, face_mm + hl});
+  } else if (o.holder_length_mm) {
+    throw InputError(
+        "a holder length needs a holder radius (ToolOverrides::holder_radius_mm, or the machine "
+        "file's [holder] radius_mm)");
+  }
+}
+
+}  // namespace
+
 ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
   const double R = o.ball_radius_mm.value_or(tool.ball_radius_mm());
   if (!(R > 0.0)) throw InputError("the collision check needs a ball-end mill (ball radius > 0)");
@@ -48,18 +69,7 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
     m.bodies.push_back({R, 0.0, flute - R});
     if (gauge > flute) m.bodies.push_back({shank, flute - R, gauge - R});
   }
-  if (o.holder_radius_mm) {
-    const double hr = *o.holder_radius_mm;
-    const double hl = o.holder_length_mm.value_or(40.0);
-    if (!(hr >= shank)) throw InputError("holder radius must be at least the shank radius");
-    if (!(hl > 0.0)) throw InputError("holder length must be positive");
-    m.holder_body = static_cast<int>(m.bodies.size());
-    m.bodies.push_back({hr, gauge - R, gauge - R + hl});
-  } else if (o.holder_length_mm) {
-    throw InputError(
-        "a holder length needs a holder radius (ToolOverrides::holder_radius_mm, or the machine "
-        "file's [holder] radius_mm)");
-  }
+  add_holder(m, o, shank, gauge - R);
   return m;
 }
 
@@ -78,14 +88,7 @@ ToolModel ToolModel::shank_and_holder(const Tool& tool, const ToolOverrides& o) 
   m.ball_radius_mm = r;
   m.flute_bodies = 0;
   if (gauge > flute) m.bodies.push_back({shank, flute - r, gauge - r});
-  if (o.holder_radius_mm) {
-    const double hr = *o.holder_radius_mm;
-    const double hl = o.holder_length_mm.value_or(40.0);
-    if (!(hr >= shank)) throw InputError("holder radius must be at least the shank radius");
-    if (!(hl > 0.0)) throw InputError("holder length must be positive");
-    m.holder_body = static_cast<int>(m.bodies.size());
-    m.bodies.push_back({hr, gauge - r, gauge - r + hl});
-  }
+  add_holder(m, o, shank, gauge - r);
   return m;
 }
 

@@ -292,7 +292,7 @@ TEST_CASE(
 
 TEST_CASE(
     "safe by default: flutes that touch the surface they cut within the part tolerance "
-    "are no collision; deeper they are",
+    "are no collision -- deeper they are",
     "[cli][safety][collision]") {
   // A plane z = 0; a ball of R = 3 with its axis lying flat (+X), its centre 0.02 mm lower than
   // touching: the flute cylinder reaches 0.02 mm into the part, as a concave fillet's faceting
@@ -312,7 +312,8 @@ TEST_CASE(
   // A necked shank (radius 2, 2.5 with its clearance) stays clear of the plane.
   const std::string base = "--in " + t.path("f.cls") + " --part " + t.path("p.stl") +
                            " --method none --machine " + std::string(TAXOPT_SOURCE_DIR) +
-                           "/data/machines/paper-ac.toml --gcode " + t.path("o.nc");
+                           "/data/machines/paper-ac.toml --gcode " + t.path("o.nc") +
+                           " --tool-number 1 --spindle-rpm 6000";
   // Default part tolerance (the contact tolerance, 0.05 mm and more): no collision.
   const auto ok = run_taxopt(base + " --shank-radius 2 --report " + t.path("r.json"));
   INFO(ok.err);

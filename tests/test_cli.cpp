@@ -656,7 +656,7 @@ TEST_CASE("cli: the report can be reproduced from itself, its numbers tidy", "[c
   }
 }
 
-TEST_CASE("cli: help in groups with units, exit codes and examples; a bare call says what to do",
+TEST_CASE("cli: help in groups with units, exit codes and examples -- a bare call says what to do",
           "[cli]") {
   const RunResult help = run_taxopt("--help");
   CHECK(help.code == 0);

@@ -89,7 +89,7 @@ GcodeDialect dialect_of(const std::string& name) {
 TEST_CASE(
     "program: every real CL file, in every dialect, calls its tool and starts its spindle "
     "before it feeds, indexes up at the retract, comes down XY first, ends home and says what "
-    "was not checked; rs274 runs no feed move with the spindle off",
+    "was not checked -- rs274 runs no feed move with the spindle off",
     "[program][real][rs274][integration]") {
   REQUIRE(have_rs274());
   int programs = 0, index_retracts = 0;
@@ -152,7 +152,7 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "program: a 90 deg index inside an operation goes up, turns, comes down XY first; "
+    "program: a 90 deg index inside an operation goes up, turns, comes down XY first -- "
     "index_threshold_deg above it keeps the turn in the air",
     "[program][cli]") {
   TempDir t;
@@ -195,7 +195,7 @@ TEST_CASE(
 
 TEST_CASE(
     "program: the spindle speed and tool come from the CL file, else the command line, else "
-    "the machine file's [defaults]; with none of them exit 2 naming them",
+    "the machine file's [defaults] -- with none of them exit 2 naming them",
     "[program][cli][bad-input]") {
   TempDir t;
   const std::string body =
@@ -319,7 +319,7 @@ TEST_CASE("program: check_program finds each breach a machinist looks for in a p
 
 TEST_CASE(
     "program: Fanuc keeps G2/G3 under G43.4 only where neither rotary axis has moved since "
-    "G43.4 came on (FANUC 30i-A TCP manual, alarm PS5421); LinuxCNC keeps the arc",
+    "G43.4 came on (FANUC 30i-A TCP manual, alarm PS5421) -- LinuxCNC keeps the arc",
     "[program][arcs][cli]") {
   TempDir t;
   const std::string head =

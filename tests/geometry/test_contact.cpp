@@ -144,7 +144,7 @@ TEST_CASE("contact: jet-fitted curvature of sphere and cylinder meshes", "[geome
   CHECK(std::abs(pc.d2.z()) == Approx(1.0).margin(0.01));
 }
 
-TEST_CASE("contact: a CL file in the wrong units touches nothing; a ball cutting in is named",
+TEST_CASE("contact: a CL file in the wrong units touches nothing -- a ball cutting in is named",
           "[geometry][contact][bad-input]") {
   std::mt19937 rng(8);
   const auto hfs = random_heightfields(rng);

@@ -380,7 +380,7 @@ TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") 
                     "CYCLE/THREAD: drilling cycle not interpreted"));
 }
 
-TEST_CASE("cl motion words: GODLTA and GOHOME move; words taxopt cannot interpret stop it",
+TEST_CASE("cl motion words: GODLTA and GOHOME move -- words taxopt cannot interpret stop it",
           "[io][cl]") {
   const Toolpath tp =
       parse_cl("FROM/0,0,100\nGOTO/10,0,5\nGODLTA/0,0,-5\nGODLTA/20\nGOHOME\n", "m.apt");
@@ -405,7 +405,7 @@ TEST_CASE("cl motion words: GODLTA and GOHOME move; words taxopt cannot interpre
   CHECK(throws_with([] { parse_cl("GOTO/0,0,0\nGOHOME\n", "h"); }, "h:2: GOHOME: no FROM"));
 }
 
-TEST_CASE("cl text: a UTF-8 byte-order mark is read past and written back; UTF-16 is refused",
+TEST_CASE("cl text: a UTF-8 byte-order mark is read past and written back -- UTF-16 is refused",
           "[io][cl]") {
   const std::string plain = "UNITS/INCHES\nTOOL PATH/OP,TOOL,T\nGOTO/1,2,3\n";
   const Toolpath a = parse_cl(plain, "a");

@@ -92,7 +92,7 @@ TEST_CASE(
              Catch::Contains("SPINDL: 'CLW20' not interpreted"));
 }
 
-TEST_CASE("cl words: unknown and misspelt words stop the reader; --skip-record skips by name",
+TEST_CASE("cl words: unknown and misspelt words stop the reader -- --skip-record skips by name",
           "[io][cl][words]") {
   for (const char* word : {"GOTO1/1,0,0", "GOTOX/1,0,0", "GOT0/1,0,0", "GO TO/1,0,0",
                            "FROBNICATE/3", "RETRCT", "POSTN/1", "CLAMP/ON"}) {
@@ -180,7 +180,7 @@ TEST_CASE("cl words: TLAXIS sets the axis of the 3-number GOTOs after it", "[io]
 }
 
 TEST_CASE(
-    "cl words: Fusion's MOVARC sweeps ANGLE deg counter-clockwise about its axis; rs274 moves "
+    "cl words: Fusion's MOVARC sweeps ANGLE deg counter-clockwise about its axis -- rs274 moves "
     "its path within 0.5 % of what it means",
     "[io][cl][words][movarc][rs274]") {
   // A Fusion-style pass: lead-in, three arcs of different sweeps and senses (the axis flipped
@@ -242,7 +242,7 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "cl words: stops, dwells, spindle and coolant changes reach the program where they stand; "
+    "cl words: stops, dwells, spindle and coolant changes reach the program where they stand -- "
     "a surface speed becomes rpm through the cutter's diameter",
     "[io][cl][words][program][rs274]") {
   const std::string text =
@@ -303,7 +303,7 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "cl words: a tapered ball CUTTER is read as its ball and taper; its flanks are checked as "
+    "cl words: a tapered ball CUTTER is read as its ball and taper -- its flanks are checked as "
     "cylinders that enclose the cone",
     "[io][cl][words][tool]") {
   const double r = 3.0, b = 5.0, h = 30.0;

@@ -342,7 +342,7 @@ TEST_CASE(
       7, "outside this machine's axis ranges");
 }
 
-TEST_CASE("machine file: machine mode needs an explicit [pivot]; the Haas preset has none",
+TEST_CASE("machine file: machine mode needs an explicit [pivot] -- the Haas preset has none",
           "[io][machine][bad-input]") {
   // Without [pivot] every point would be posted about pivots at 0 (issue 33).
   expect_error(replace(kFull,

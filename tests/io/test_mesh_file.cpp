@@ -90,7 +90,7 @@ TEST_CASE("mesh: every bad mesh kind is an error naming the file", "[io][mesh][b
   expect_mesh_error(t.path("missing.stl"), "cannot open");
 }
 
-TEST_CASE("cli: a bad part exits 2 naming the part file; a wrong part names the CL line",
+TEST_CASE("cli: a bad part exits 2 naming the part file -- a wrong part names the CL line",
           "[cli][mesh][bad-input]") {
   TempDir t;
   write_file(t.path("flat.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n");
@@ -146,7 +146,7 @@ TEST_CASE("cli: with the part, the CSV has contact point, normal, tilt and yaw",
 }
 
 TEST_CASE(
-    "mesh: a broken text mesh names its line and what is wrong there; a vertex past 1 km "
+    "mesh: a broken text mesh names its line and what is wrong there -- a vertex past 1 km "
     "names its face",
     "[io][mesh][bad-input]") {
   TempDir t;

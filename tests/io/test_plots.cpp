@@ -73,7 +73,7 @@ TEST_CASE("plots: a long series is reduced per pixel column and keeps its peak",
   }
 }
 
-TEST_CASE("plots: --plots writes A, C, omega, a and the C-space maps; blocked cells show",
+TEST_CASE("plots: --plots writes A, C, omega, a and the C-space maps -- blocked cells show",
           "[plots][cli]") {
   // A wall beside a flat path, axes leaning the shank into it (as in the wall acceptance
   // test): the map of the most constrained point must show blocked and free cells.

@@ -140,7 +140,7 @@ TEST_CASE("global: the objective is eq. 16-18's acceleration, squared and summed
 }
 
 TEST_CASE(
-    "global: from a feasible start it never leaves the free space and never ends worse; near "
+    "global: from a feasible start it never leaves the free space and never ends worse -- near "
     "the pole it lowers the acceleration",
     "[plan][global][pole]") {
   const ACMachined m = default_ac_machine();

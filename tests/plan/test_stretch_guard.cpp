@@ -171,7 +171,7 @@ TEST_CASE("stretch guard: a pass bad everywhere, or still bad after the rounds, 
 }
 
 TEST_CASE(
-    "stretch guard: an unguarded pass is never judged or changed; a stretch near a pass "
+    "stretch guard: an unguarded pass is never judged or changed -- a stretch near a pass "
     "end reaches the end",
     "[plan][guard]") {
   const Case c = make_case(60);
@@ -198,7 +198,7 @@ TEST_CASE(
 
 TEST_CASE(
     "stretch guard: a mix of kept and optimised axes with no gain on the input keeps the "
-    "input whole; a pass never kept needs no gain",
+    "input whole -- a pass never kept needs no gain",
     "[plan][guard]") {
   const Case c = make_case(100);
   const std::vector<IndexRange> passes = {{0, 50}, {50, 100}};

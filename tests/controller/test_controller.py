@@ -18,6 +18,7 @@ lines where they occur, and the controller's time against the report's.
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -71,6 +72,7 @@ def main():
             failures.append("%s: a point missed by %s mm" % (name, s.get("point_miss_mm")))
     for f in failures:
         print("FAILED: " + f)
+    shutil.rmtree(work, ignore_errors=True)
     return 1 if failures else 0
 
 

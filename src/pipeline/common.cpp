@@ -1,6 +1,7 @@
 // Helpers shared by the stages of a run (stages.hpp).
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "pipeline/stages.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
@@ -336,6 +337,15 @@ std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel
     }
     return false;
   });
+}
+
+std::ptrdiff_t move_index(const std::vector<GcodeMove>& moves, const GcodeMove* m) {
+  // std::less: a pointer into another container compares without unspecified behaviour.
+  const std::less<const GcodeMove*> before;
+  if (moves.empty() || before(m, moves.data()) || !before(m, moves.data() + moves.size())) {
+    return -1;
+  }
+  return m - moves.data();
 }
 
 /// Per point, whether the move into it is a rapid (the first point counts as one).

@@ -213,6 +213,10 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
 
 // ---- Shared by the stages -----------------------------------------------------------------
 
+/// The index of `m` in `moves` (a point's move read back), -1 when it is not one of them (a
+/// chord point's copy on its arc, Written::on_arcs).
+std::ptrdiff_t move_index(const std::vector<GcodeMove>& moves, const GcodeMove* m);
+
 /// Records a finding, and its message by severity (JobResult's display lists).
 void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
                  const std::string& message);

@@ -103,10 +103,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::function<JointPosition(const GcodeMove&)>& joint_of) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
-  const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
-    if (moves.empty() || m < moves.data() || m >= moves.data() + moves.size()) return -1;
-    return m - moves.data();
-  };
+  const auto index_of = [&](const GcodeMove* m) { return move_index(moves, m); };
   for (std::size_t i = 1; i < n; ++i) {
     if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
     // A linearised move: the blocks between the points, each at its own F.

@@ -66,10 +66,7 @@ std::vector<Linearised> linearised_blocks(const Machine& machine, const PostedOp
                                           const std::vector<const GcodeMove*>& at,
                                           const std::vector<GcodeMove>& moves, LengthUnit units) {
   std::vector<Linearised> via(po.points.size());
-  const auto index_of = [&](const GcodeMove* m) -> std::ptrdiff_t {
-    if (moves.empty() || m < moves.data() || m >= moves.data() + moves.size()) return -1;
-    return m - moves.data();
-  };
+  const auto index_of = [&](const GcodeMove* m) { return move_index(moves, m); };
   for (std::size_t i = 1; i < po.points.size(); ++i) {
     if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
     const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);

@@ -37,7 +37,7 @@ import time
 SAMPLE_ROOT = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis"
 SAMPLES = {
     "xyzac": (SAMPLE_ROOT + "/table-rotary-tilting", "xyzac-trt.ini", "ac"),
-    "xyzbc": (SAMPLE_ROOT + "/bridgeport", "xyzbc-trt.ini", "bc"),
+    "xyzbc": (SAMPLE_ROOT + "/table-rotary-tilting", "xyzbc-trt.ini", "bc"),
 }
 
 
@@ -162,6 +162,11 @@ def run(args):
         last_line = 0
         while True:
             time.sleep(0.25)
+            # The operator's messages (linuxcncrsh: "ERROR OK" when there is none): an error
+            # the controller shows its operator, whatever the log says.
+            err = sh.cmd("get error")
+            if err and err.upper() not in ("ERROR OK", "ERROR") and "OK" not in err.split()[-1:]:
+                summary["errors"].append("controller: " + err[:300])
             status = sh.cmd("get program_status")
             line = sh.cmd("get program_line").split()
             if len(line) >= 2 and line[-1].lstrip("-").isdigit():
@@ -251,6 +256,12 @@ def analyse(path, args, summary):
         return
     first, last = moving[0] - 1, moving[-1]
     summary["move_s"] = (last - first) * period
+    # The controller's time per program line (servo periods whose commanded motion belongs
+    # to it), s.
+    line_s = {}
+    for i in range(first + 1, last + 1):
+        line_s[rows[i][10]] = line_s.get(rows[i][10], 0.0) + period
+    summary["line_s"] = {str(k): v for k, v in sorted(line_s.items())}
     summary["end_line"] = max(r[10] for r in rows)
     # Velocities and accelerations of the commanded joints: differences over a window of
     # `w` servo periods (the controller's own trajectory is piecewise quadratic at 1 ms; a

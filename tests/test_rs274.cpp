@@ -464,10 +464,61 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   CHECK(preset.gcode.program.tcp_off == imported.gcode.program.tcp_off);
   CHECK(preset.gcode.program.retract_z_mm == imported.gcode.program.retract_z_mm);
   // Another kinematics is refused by name and line.
-  write_file(dir.path("bc.ini"), "[KINS]\nKINEMATICS = xyzbc-trt-kins\n");
-  const RunResult bc = run_taxopt("machine --from-linuxcnc-ini " + dir.path("bc.ini"));
-  CHECK(bc.code == 2);
-  CHECK_THAT(bc.err, Catch::Contains("bc.ini:2") && Catch::Contains("xyzac-trt-kins"));
+  write_file(dir.path("other.ini"), "[KINS]\nKINEMATICS = maxkins\n");
+  const RunResult other = run_taxopt("machine --from-linuxcnc-ini " + dir.path("other.ini"));
+  CHECK(other.code == 2);
+  CHECK_THAT(other.err, Catch::Contains("other.ini:2") && Catch::Contains("xyzbc-trt-kins"));
+}
+
+TEST_CASE(
+    "machine: LinuxCNC's sample xyzbc-trt configuration imports as the B/C sample preset, "
+    "B's range its joint's",
+    "[cli][machine][bc]") {
+  TempDir dir;
+  const std::string ini =
+      std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzbc-trt/xyzbc-trt.ini";
+  const RunResult r =
+      run_taxopt("machine --from-linuxcnc-ini " + ini + " --out " + dir.path("m.toml"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const Machine imported = read_machine_file(dir.path("m.toml"));
+  const Machine preset = read_machine_file(std::string(TAXOPT_SOURCE_DIR) +
+                                           "/data/machines/linuxcnc-xyzbc-trt-sample.toml");
+  CHECK(imported.ac.tilt == TiltAxis::Y);
+  // trtfuncs.c: joints = Rot(Y, B)(Rot(Z, C)(p - rot) - d) + d + rot, d = (x-offset 0 z-offset)
+  // with the sample's x-offset -20, z-offset -15: the B axis through (-20, 0, -15).
+  CHECK(imported.ac.a_axis_point_mm.isApprox(Vec3d(-20, 0, -15)));
+  CHECK(imported.ac.a.sense == -1);
+  CHECK(imported.ac.c.sense == -1);
+  // [AXIS_B] gives +-36000, joint 3 (B in COORDINATES = XYZBC) -100 .. 50.
+  CHECK(rad_to_deg(imported.ac.a.min_rad) == Approx(-100));
+  CHECK(rad_to_deg(imported.ac.a.max_rad) == Approx(50));
+  CHECK(imported.gcode.program.tcp_on == std::vector<std::string>{"M428"});
+  // The machine-mode convention reproduces trtfuncs.c's inverse kinematics (written out here
+  // from its formula) at a few poses.
+  for (const double b_deg : {-70.0, -10.0, 35.0}) {
+    for (const double c_deg : {-120.0, 0.0, 77.0}) {
+      const Vec3d p(12.0, -7.0, 4.0);
+      const double b = deg_to_rad(b_deg), c = deg_to_rad(c_deg), dx = -20.0, dz = -15.0;
+      const Vec3d lcnc(std::cos(c) * std::cos(b) * p.x() - std::sin(c) * std::cos(b) * p.y() +
+                           std::sin(b) * p.z() - std::cos(b) * dx - std::sin(b) * dz + dx,
+                       std::sin(c) * p.x() + std::cos(c) * p.y(),
+                       -std::cos(c) * std::sin(b) * p.x() + std::sin(c) * std::sin(b) * p.y() +
+                           std::cos(b) * p.z() + std::sin(b) * dx - std::cos(b) * dz + dz);
+      // Written B and C are the machine's values: the pose holds them (sense on the axes).
+      const Vec3d ours = imported.ac.to_machine_mm(p, Posed{b, c});
+      CHECK((ours - lcnc).norm() < 1e-9);
+    }
+  }
+  CHECK(preset.ac.a_axis_point_mm == imported.ac.a_axis_point_mm);
+  CHECK(preset.ac.a.min_rad == imported.ac.a.min_rad);
+  CHECK(preset.ac.a.max_rad == imported.ac.a.max_rad);
+  CHECK(preset.ac.a.sense == imported.ac.a.sense);
+  CHECK(preset.ac.c.sense == imported.ac.c.sense);
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    CHECK(preset.limits[j].max_velocity_per_s == imported.limits[j].max_velocity_per_s);
+    CHECK(preset.limits[j].max_accel_per_s2 == imported.limits[j].max_accel_per_s2);
+  }
 }
 
 TEST_CASE(

@@ -289,6 +289,61 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
   return at;
 }
 
+std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+                                                   const Vec3d& from_tip_mm, const Posed& from,
+                                                   const Vec3d& to_tip_mm, const Posed& to) {
+  // With A and C held the joints are an affine map of the tip: they move linearly, and the
+  // chord (the schedule's own model) is exact.
+  const double turn_rad = std::hypot(to.a_rad - from.a_rad, to.c_rad - from.c_rad);
+  if (turn_rad == 0.0) return {std::numeric_limits<double>::infinity(), Joint::X};
+  // Steps of at most 0.25 deg of turn (at most 64): the joints' rate of change varies by less
+  // than the step's turn (in rad) relative within a step, which the margin below covers.
+  const int steps = std::clamp(static_cast<int>(std::ceil(rad_to_deg(turn_rad) / 0.25)), 1, 64);
+  double rate = std::numeric_limits<double>::infinity();
+  Joint by = Joint::X;
+  const Vec3d d = to_tip_mm - from_tip_mm;
+  Vec3d prev = ac.to_machine_mm(from_tip_mm, from);
+  for (int s = 1; s <= steps; ++s) {
+    const double u = static_cast<double>(s) / steps;
+    const Posed pose{from.a_rad + u * (to.a_rad - from.a_rad),
+                     from.c_rad + u * (to.c_rad - from.c_rad)};
+    const Vec3d q = ac.to_machine_mm(from_tip_mm + u * d, pose);
+    for (std::size_t j = 0; j < 3; ++j) {
+      const double v = limits[j].max_velocity_per_s;
+      const auto e = static_cast<Eigen::Index>(j);
+      const double dq = std::abs(q[e] - prev[e]) * steps;
+      if (v > 0.0 && dq > 0.0 && v / dq < rate) {
+        rate = v / dq;
+        by = static_cast<Joint>(j);
+      }
+    }
+    prev = q;
+  }
+  return {rate * (1.0 - 1e-3 - turn_rad / steps), by};
+}
+
+std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+                                            const Vec3d& from_tip_mm, const Posed& from,
+                                            const Vec3d& to_tip_mm, const Posed& to) {
+  const double da_deg = rad_to_deg(to.a_rad - from.a_rad);
+  const double dc_deg = rad_to_deg(to.c_rad - from.c_rad);
+  if (da_deg == 0.0 && dc_deg == 0.0) return std::nullopt;  // the joints move as the axes
+  const Vec3d d = to_tip_mm - from_tip_mm;
+  const double axis_delta[kJointCount] = {d.x(), d.y(), d.z(), da_deg, dc_deg};
+  // The rapid's own rate: every axis within its velocity limit.
+  double axis_rate = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < kJointCount; ++k) {
+    const double v = limits[k].max_velocity_per_s;
+    if (v > 0.0 && axis_delta[k] != 0.0)
+      axis_rate = std::min(axis_rate, v / std::abs(axis_delta[k]));
+  }
+  if (!std::isfinite(axis_rate)) return std::nullopt;
+  const double joint_rate =
+      joint_velocity_rate_per_s(ac, limits, from_tip_mm, from, to_tip_mm, to).first;
+  if (!(joint_rate < axis_rate)) return std::nullopt;
+  return joint_rate;
+}
+
 GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
                          LengthUnit units, const std::vector<std::string>& comments) {
   const GcodeSettings& g = machine.gcode;
@@ -324,6 +379,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     for (const auto& s : v) prog.verbatim_lines.push_back(line(s));
   };
   const bool tcp = g.mode == GcodeMode::Tcp;
+  // LinuxCNC plans a tcp rapid in the program's axes: where that would run a joint over its
+  // velocity limit, the rapid is a feed block at a joint-safe feed (joint_safe_rate_per_s).
+  const bool joint_safe = tcp && g.dialect == GcodeDialect::LinuxCNC;
+  const JointLimits limits = effective_limits(machine);
   const std::string retract_z = dialect.number(g.program.retract_z_mm * scale, d);
   // The tilt axis's word: A or B (ac_machine.hpp).
   const std::string tilt_word = std::string(" ") + machine.ac.tilt_letter();
@@ -472,6 +531,11 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     Posed prev_pose;
     Vec3d prev_tip = Vec3d::Zero();
     bool have_prev = false;
+    // The last block written is a feed block (G1 of a feed move, not a joint-safe rapid), and
+    // a joint-safe rapid: LinuxCNC blends two feed blocks, and the blend leaves the programmed
+    // A and C (0.12 deg measured at the end of a pass), so a dwell G4 P0 (the controller runs
+    // its queue to a stop) stands between such a rapid and a feed block.
+    bool last_feed_block = false, last_joint_safe = false;
     const auto out_xyz = [&](const Vec3d& tip, const Posed& pose) {
       return written_xyz_mm(machine, tip, pose);
     };
@@ -590,6 +654,8 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       if (arc_cursor < op.arcs.size() && op.arcs[arc_cursor].start + 1 == i) {
         if (!event_inside(op.arcs[arc_cursor]) && write_arc(op.arcs[arc_cursor])) {
           ++prog.arcs_kept;
+          last_feed_block = true;
+          last_joint_safe = false;
           i = op.arcs[arc_cursor].end;
           continue;
         }
@@ -652,6 +718,41 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
           }
         }
         block = dialect.rapid() + " " + words;
+        if (joint_safe && have_prev) {
+          const std::optional<double> rate =
+              joint_safe_rate_per_s(machine.ac, limits, prev_tip, prev_pose, p.tip_mm, pose);
+          if (rate) {
+            // A feed block at the rate that keeps the joints within their limits: F is the
+            // tip's distance (the rotary one when only A and C turn) per minute, or under G93
+            // the block's inverse time.
+            const double tip_mm = (p.tip_mm - prev_tip).norm();
+            const double rot_deg = std::hypot(rad_to_deg(pose.a_rad - prev_pose.a_rad),
+                                              rad_to_deg(pose.c_rad - prev_pose.c_rad));
+            const double per_min = 60.0 * *rate;
+            const double feed = g.feed_mode == FeedMode::InverseTime
+                                    ? per_min
+                                    : (tip_mm > 1e-9 ? tip_mm * scale : rot_deg) * per_min;
+            // Eight significant digits, rounded down: slower, never faster.
+            const int digits = std::clamp(
+                7 - static_cast<int>(std::floor(std::log10(std::max(feed, 1e-300)))), fd, max_fd);
+            const double unit = std::pow(10.0, digits);
+            const std::string f = fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
+            block = dialect.linear() + " " + words;
+            if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;
+            last_feed = f;
+            if (last_feed_block) line("G4 P0");
+            emitted[i] = line(prefix + block);
+            last_feed_block = false;
+            last_joint_safe = true;
+            prog.joint_safe_rapids.push_back(emitted[i]);
+            prefix.clear();
+            last_words = words;
+            prev_xyz = xyz;
+            prev_pose = pose;
+            prev_tip = p.tip_mm;
+            continue;
+          }
+        }
       } else {
         if (!(p.feed_mm_per_min > 0.0)) {
           throw std::invalid_argument("write_gcode: feed move without a feed");
@@ -750,7 +851,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         if (g.feed_mode == FeedMode::InverseTime || f != last_feed) block += " F" + f;
         last_feed = restore_inverse_time ? std::string() : f;
       }
+      if (last_joint_safe && p.motion != Motion::Rapid) line("G4 P0");
       emitted[i] = line(prefix + block);
+      last_feed_block = p.motion != Motion::Rapid;
+      last_joint_safe = false;
       prefix.clear();
       if (tcp_angles.empty()) tcp_angles = angle_words(pose);
       if (restore_inverse_time) line("G93");

@@ -125,10 +125,15 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
   if (!kins) fail(0, "no [KINS] KINEMATICS: which kinematics is this machine?");
   std::string module;
   std::istringstream(kins->text) >> module;
-  if (module != "xyzac-trt-kins" && module != "xyzac-trt") {
+  // xyzac-trt-kins and xyzbc-trt-kins (LinuxCNC's trtfuncs.c): the table-table machines.
+  const bool bc = module == "xyzbc-trt-kins" || module == "xyzbc-trt";
+  if (module != "xyzac-trt-kins" && module != "xyzac-trt" && !bc) {
     fail(kins->line, "KINEMATICS = " + kins->text +
-                         ": only xyzac-trt-kins (an A/C table-table machine) is imported");
+                         ": only xyzac-trt-kins and xyzbc-trt-kins (A/C and B/C table-table "
+                         "machines) are imported");
   }
+  const std::string kins_prefix = bc ? "xyzbc-trt" : "xyzac-trt";
+  const char tilt = bc ? 'B' : 'A';
   double unit_mm = 1.0;
   if (const IniValue* u = first(ini, "TRAJ", "LINEAR_UNITS")) {
     const std::string t = u->text;
@@ -174,7 +179,7 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     }
   }
   const auto pin = [&](const std::string& name) {
-    for (const std::string prefix : {"xyzac-trt-kins.", "xyzac-trt."}) {
+    for (const std::string& prefix : {kins_prefix + "-kins.", kins_prefix + "."}) {
       if (const auto v = hal.value(prefix + name)) {
         // A value that is set but no number (or no machine's) is an error, never a 0.
         char* end = nullptr;
@@ -193,7 +198,37 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     return 0.0;
   };
   const double x_rot = pin("x-rot-point"), y_rot = pin("y-rot-point"), z_rot = pin("z-rot-point");
-  const double y_off = pin("y-offset"), z_off = pin("z-offset");
+  // xyzac: the A axis lies y-offset and z-offset from the C axis's rot point; xyzbc: the B
+  // axis x-offset and z-offset (trtfuncs.c; the tool offset pin is the tool length, set by
+  // G43: taxopt's joints are the tip's).
+  const double x_off = bc ? pin("x-offset") : 0.0, y_off = bc ? 0.0 : pin("y-offset");
+  const double z_off = pin("z-offset");
+  // A rotary axis's range: its [AXIS_] limits within its joint's (the joint's soft limits stop
+  // the machine; LinuxCNC's xyzbc sample gives B +-36000 as an axis and -100..50 as joint 3).
+  std::string coordinates = "XYZ" + std::string(1, tilt) + "C";
+  if (const IniValue* c = first(ini, "TRAJ", "COORDINATES")) {
+    coordinates.clear();
+    for (char ch : c->text) {
+      if (std::isalpha(static_cast<unsigned char>(ch))) {
+        coordinates += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      }
+    }
+  }
+  const auto rotary_range = [&](const std::string& axis, bool required) {
+    std::optional<double> lo = number("AXIS_" + axis, "MIN_LIMIT", required);
+    std::optional<double> hi = number("AXIS_" + axis, "MAX_LIMIT", required);
+    const std::size_t j = coordinates.find(axis);
+    if (j != std::string::npos && coordinates.find(axis, j + 1) == std::string::npos) {
+      const std::string joint = "JOINT_" + std::to_string(j);
+      if (const auto l = number(joint, "MIN_LIMIT", false)) lo = lo ? std::max(*lo, *l) : *l;
+      if (const auto h = number(joint, "MAX_LIMIT", false)) hi = hi ? std::min(*hi, *h) : *h;
+    }
+    if (lo && hi && !(*lo < *hi)) {
+      fail(0, "[AXIS_" + axis + "] and its joint leave no range: " + number_text(*lo) + " to " +
+                  number_text(*hi));
+    }
+    return std::make_pair(*lo, *hi);
+  };
 
   std::ostringstream t;
   // The machine's name from the INI file's, as a TOML string: only plain characters kept.
@@ -202,11 +237,18 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     const unsigned char c = static_cast<unsigned char>(ch);
     name += std::isalnum(c) || ch == '-' || ch == '_' || ch == '.' ? ch : '_';
   }
-  t << "# Made by taxopt machine --from-linuxcnc-ini " << name << ".ini"
-    << "\n# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 on A and C.\n"
-    << "# Pivot: C through (x-rot-point, y-rot-point), A at y = y-rot-point + y-offset,\n"
-    << "# z = z-rot-point + z-offset.\n"
-    << "name = \"" << name << "\"\nkinematics = \"ac-table-table\"\n";
+  t << "# Made by taxopt machine --from-linuxcnc-ini " << name << ".ini\n";
+  if (bc) {
+    t << "# xyzbc-trt-kins: joints = Rot(Y, B)(Rot(Z, C)(p - rot) - d) + d + rot, d = (x-offset,\n"
+      << "# 0, z-offset): sense -1 on B and C. Pivot: C through (x-rot-point, y-rot-point), B at\n"
+      << "# x = x-rot-point + x-offset, z = z-rot-point + z-offset.\n"
+      << "name = \"" << name << "\"\nkinematics = \"bc-table-table\"\n";
+  } else {
+    t << "# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 on A and C.\n"
+      << "# Pivot: C through (x-rot-point, y-rot-point), A at y = y-rot-point + y-offset,\n"
+      << "# z = z-rot-point + z-offset.\n"
+      << "name = \"" << name << "\"\nkinematics = \"ac-table-table\"\n";
+  }
   for (const char* axis : {"X", "Y", "Z"}) {
     const std::string section = std::string("AXIS_") + axis;
     const auto lo = number(section, "MIN_LIMIT", true), hi = number(section, "MAX_LIMIT", true);
@@ -219,11 +261,11 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
       t << "max_accel_mm_s2 = " << number_text(*a * unit_mm) << "\n";
     }
   }
-  for (const char* axis : {"A", "C"}) {
-    const std::string section = std::string("AXIS_") + axis;
-    const auto lo = number(section, "MIN_LIMIT", true), hi = number(section, "MAX_LIMIT", true);
-    t << "\n[axes." << axis << "]\nmin_deg = " << number_text(*lo)
-      << "\nmax_deg = " << number_text(*hi) << "\nsense = -1\n";
+  for (const std::string& axis : {std::string(1, tilt), std::string("C")}) {
+    const std::string section = "AXIS_" + axis;
+    const auto [lo, hi] = rotary_range(axis, true);
+    t << "\n[axes." << axis << "]\nmin_deg = " << number_text(lo)
+      << "\nmax_deg = " << number_text(hi) << "\nsense = -1\n";
     if (const auto v = number(section, "MAX_VELOCITY", false)) {
       t << "max_velocity_deg_s = " << number_text(*v) << "\n";
     }
@@ -232,9 +274,14 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     }
   }
   const double z_top = *number("AXIS_Z", "MAX_LIMIT", true) * unit_mm;
-  t << "\n[pivot]\na_axis_y = " << number_text(y_rot + y_off)
-    << "\na_axis_z = " << number_text(z_rot + z_off) << "\nc_axis_x = " << number_text(x_rot)
-    << "\nc_axis_y = " << number_text(y_rot) << "\n"
+  if (bc) {
+    t << "\n[pivot]\nb_axis_x = " << number_text(x_rot + x_off)
+      << "\nb_axis_z = " << number_text(z_rot + z_off);
+  } else {
+    t << "\n[pivot]\na_axis_y = " << number_text(y_rot + y_off)
+      << "\na_axis_z = " << number_text(z_rot + z_off);
+  }
+  t << "\nc_axis_x = " << number_text(x_rot) << "\nc_axis_y = " << number_text(y_rot) << "\n"
     << "\n[gcode]\ndialect = \"linuxcnc\"\nmode = \"tcp\"\nfeed_mode = \"units-per-minute\"\n"
     << "decimals = 4\n# The retract before and after each operation: Z's upper limit.\n"
     << "retract_z_mm = " << number_text(z_top) << "\n";

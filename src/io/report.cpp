@@ -194,7 +194,11 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                 {"arcs_chorded", result.gcode.arcs_chorded},
                 {"linearised_blocks", result.gcode.linearised_blocks},
                 {"arc_blocks", result.gcode.arc_blocks},
-                {"linearised_blocks", result.gcode.linearised_blocks}};
+                {"index_moves", result.gcode.index_moves},
+                {"joint_safe_rapids", result.gcode.joint_safe_rapids.size()},
+                {"time_s", result.gcode.time_s},
+                {"time_from_line", result.gcode.time_from_line},
+                {"time_tool_length_mm", result.gcode.time_tool_length_mm}};
   nlohmann::json ops = nlohmann::json::array();
   for (const auto& r : result.operations) {
     nlohmann::json o;

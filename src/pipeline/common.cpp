@@ -174,7 +174,8 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
                                      const JointLimits& limits, const ACMachined& ac,
-                                     const std::vector<Linearised>* via) {
+                                     const std::vector<Linearised>* via,
+                                     const std::vector<Posed>* tcp_poses) {
   OperationSchedule out;
   const std::size_t n = points.size();
   out.time_s.assign(n, 0.0);
@@ -182,6 +183,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
   out.block_time_s.assign(n, {});
   std::vector<FeedBound> bound(n, FeedBound::Programmed);
   std::vector<Joint> bound_joint(n, Joint::X);
+  std::vector<std::optional<Joint>> joint_bound(n);
   const auto blocks_of = [&](std::size_t i) -> const Linearised* {
     return via && i < via->size() && !(*via)[i].share.empty() ? &(*via)[i] : nullptr;
   };
@@ -200,7 +202,17 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
         }
       } else {
         chain.joints.push_back(joints[i]);
-        chain.min_time_s.push_back(programmed_s[i]);
+        double least_s = programmed_s[i];
+        if (tcp_poses && i < tcp_poses->size()) {
+          const auto [rate, joint] =
+              joint_velocity_rate_per_s(ac, limits, points[i - 1].tip_mm, (*tcp_poses)[i - 1],
+                                        points[i].tip_mm, (*tcp_poses)[i]);
+          if (1.0 / rate > least_s) {
+            least_s = 1.0 / rate;
+            joint_bound[i] = joint;
+          }
+        }
+        chain.min_time_s.push_back(least_s);
         owner.push_back(i);
       }
     }
@@ -217,6 +229,11 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
         slowed[i] = ratio;
         bound[i] = s.bound[b];
         bound_joint[i] = s.bound_joint[b];
+        if (s.bound[b] == FeedBound::Programmed && joint_bound[i]) {
+          // At its joints' velocity limit inside the block (tcp_poses).
+          bound[i] = FeedBound::Velocity;
+          bound_joint[i] = *joint_bound[i];
+        }
       }
     }
   }

@@ -674,7 +674,8 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
                                              ? programmed_s
                                              : programmed_block_times_s(po.points, po.poses);
   return schedule_operation(po.points, joints_of(machine.ac, tips, po.poses), programmed,
-                            effective_limits(machine), machine.ac)
+                            effective_limits(machine), machine.ac, nullptr,
+                            machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr)
       .summary.cycle_time_s;
 }
 

@@ -255,12 +255,16 @@ std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec
 std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points);
 /// The feed schedule of one operation's points at `limits`. With `via` (per point), a
 /// linearised move is scheduled block by block, so that none of its blocks exceeds a limit
-/// (issue 33: scheduled on the points alone, a block ran X at 32 mm/s against 20).
+/// (issue 33: scheduled on the points alone, a block ran X at 32 mm/s against 20). With
+/// `tcp_poses` (tcp mode: the controller interpolates the tip and A, C, and the joints follow
+/// through the kinematics), no feed block is shorter than its joints' velocity limits allow
+/// along it (joint_velocity_rate_per_s, issue 36).
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
                                      const JointLimits& limits, const ACMachined& ac,
-                                     const std::vector<Linearised>* via = nullptr);
+                                     const std::vector<Linearised>* via = nullptr,
+                                     const std::vector<Posed>* tcp_poses = nullptr);
 /// The points with every feed move's feed set (`fallback_feed` where the file gives none).
 std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed);
 /// Per point, whether the move into it is a rapid (the first point counts as one).

@@ -117,6 +117,105 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
   }
 }
 
+/// GcodeProgram::time_s: the feed blocks at their scheduled times (the operations'
+/// feed_time_s), every rapid block read back rest to rest (rapid_time_s) in the space the
+/// controller plans it in. The machine's state is followed from the end of the first retract
+/// as joints referred to the tip (kinematics/machine.hpp); the spindle's reference point is the
+/// tool length above it.
+void program_time(const Run& run, const Written& w, const JointLimits& limits, LengthUnit units,
+                  GcodeProgram& g) {
+  const Machine& machine = run.machine;
+  const ProgramTemplate& t = machine.gcode.program;
+  const double length_mm = run.options.tool.gauge_length_mm.value_or(0.0);
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  double feed_s = 0.0, rapid_s = 0.0;
+  for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
+  JointPosition q{};
+  bool known = false;
+  int from_line = 0;
+  for (const GcodeMove& m : w.moves) {
+    JointPosition to = q;
+    const bool gives[5] = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
+                           (m.given & 8u) != 0, (m.given & 16u) != 0};
+    if (gives[3]) to[kA] = m.a_deg;
+    if (gives[4]) to[kC] = m.c_deg;
+    const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
+    const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
+    if (m.retract) {
+      // Machine coordinates: the spindle's reference point to the retract height.
+      if (gives[2]) to[2] = t.retract_z_mm - length_mm;
+      if (known && m.rapid) rapid_s += rapid_time_s(q, to, limits);
+      if (!known) from_line = m.line;
+      known = true;
+      q = to;
+      continue;
+    }
+    if (!known && !from_line) {
+      // No retract before the first move: timed from its end.
+      const Vec3d xyz = joints_of_written_mm(machine, m.xyz_mm, to_pose);
+      q = {xyz.x(), xyz.y(), xyz.z(), to[kA], to[kC]};
+      known = true;
+      from_line = m.line;
+      continue;
+    }
+    // The reader takes LinuxCNC's kinematics as always on; a configuration that switches them
+    // (tcp_on, M428) has them on where the writer put them: with the tool length offset.
+    const bool switched = machine.gcode.dialect == GcodeDialect::LinuxCNC && !t.tcp_on.empty();
+    if (machine.gcode.mode == GcodeMode::Tcp && m.tcp && (!switched || m.length_offset)) {
+      // The program's axes: the tip where the joints stand, the words given replacing it.
+      Vec3d tip = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
+      const Vec3d written = m.xyz_mm;
+      for (int k = 0; k < 3; ++k) {
+        if (gives[k]) tip[k] = tip_of_written_mm(machine, written, to_pose)[k];
+      }
+      const Vec3d xyz = machine.ac.to_machine_mm(tip, to_pose);
+      to[0] = xyz.x();
+      to[1] = xyz.y();
+      to[2] = xyz.z();
+      const bool safe_rapid =
+          std::binary_search(g.joint_safe_rapids.begin(), g.joint_safe_rapids.end(), m.line);
+      if (m.rapid || safe_rapid) {
+        const Vec3d was = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
+        const JointPosition a{was.x(), was.y(), was.z(), q[kA], q[kC]};
+        const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
+        JointLimits capped = limits;
+        if (safe_rapid && m.feed > 0.0) {
+          // A rapid written at a joint-safe feed: every axis at that rate along the move.
+          const double tip_mm = (tip - was).norm();
+          const double rot_deg = std::hypot(to[kA] - q[kA], to[kC] - q[kC]);
+          const double rate = m.inverse_time  ? m.feed / 60.0
+                              : tip_mm > 1e-9 ? m.feed * mm_per_unit(units) / 60.0 / tip_mm
+                                              : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
+          for (std::size_t k = 0; k < kJointCount && rate > 0.0; ++k) {
+            const double v = rate * std::abs(b[k] - a[k]);
+            if (v > 0.0 &&
+                (capped[k].max_velocity_per_s <= 0.0 || v < capped[k].max_velocity_per_s)) {
+              capped[k].max_velocity_per_s = v;
+            }
+          }
+        }
+        rapid_s += rapid_time_s(a, b, capped);
+      }
+    } else {
+      // The joints, the written X Y Z the controlled point: the tip with the tool length
+      // offset on, else the spindle's reference point.
+      const double above = m.length_offset ? 0.0 : length_mm;
+      const Vec3d xyz = machine.gcode.mode == GcodeMode::Machine
+                            ? m.xyz_mm
+                            : Vec3d(m.xyz_mm.x(), m.xyz_mm.y(), m.xyz_mm.z() - above);
+      for (int k = 0; k < 3; ++k) {
+        if (gives[k]) to[static_cast<std::size_t>(k)] = xyz[k];
+      }
+      if (m.rapid) rapid_s += rapid_time_s(q, to, limits);
+    }
+    q = to;
+  }
+  g.time_s = feed_s + rapid_s;
+  g.time_from_line = from_line;
+  g.time_tool_length_mm = length_mm;
+}
+
 }  // namespace
 
 std::vector<JointPosition> written_joints(const Machine& machine,
@@ -182,6 +281,8 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
   // Feed schedules at the machine's limits: the written path (from the words read back) and
   // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
   const JointLimits limits = effective_limits(machine);
+  // Tcp mode: the joints follow the kinematics inside a block (schedule_operation).
+  const bool tcp = machine.gcode.mode == GcodeMode::Tcp;
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
     const Operationd& op = *ops[k].op;
@@ -192,7 +293,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
         po.points, written_joints(machine, w.point_moves[k]),
         po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)
                                      : po.programmed_time_s,
-        limits, machine.ac, &via));
+        limits, machine.ac, &via, tcp ? &po.poses : nullptr));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -205,7 +306,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
             ? w.schedule_after.back()
             : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses),
                                  programmed_block_times_s(in_points, input_poses), limits,
-                                 machine.ac));
+                                 machine.ac, nullptr, tcp ? &input_poses : nullptr));
   }
   count_table_turns(run, ops, posted, limits, w);
   if (run.options.feed_schedule) {
@@ -216,6 +317,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
     read_back(machine, posted, res.gcode, w);
   }
+  program_time(run, w, limits, res.gcode_units, res.gcode);
   w.write_s = seconds_since(t0);
   return w;
 }

@@ -8,6 +8,7 @@
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
+#include "taxopt/io/machine_file.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
 
 using namespace taxopt;
@@ -360,4 +361,73 @@ TEST_CASE("gcode: the program template of the machine file", "[io][gcode]") {
   const std::string text = write_gcode({op}, tnc, LengthUnit::Millimetre, {}).text;
   CHECK(text.find("F400.000 *") != std::string::npos);
   CHECK(text.find("F266.666 *") != std::string::npos);  // 10 mm in 2.25 s: 266.6667 down
+}
+
+TEST_CASE(
+    "A tcp rapid that turns the table gets a rate that keeps every joint within its "
+    "velocity limit, checked at 4000 steps along the move (LinuxCNC plans it in the "
+    "program's axes, issue 36)",
+    "[gcode][tcp]") {
+  // LinuxCNC's sample machine: pivot, senses and limits as its preset gives them.
+  const Machine m =
+      read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
+  const JointLimits limits = effective_limits(m);
+  REQUIRE(limits[0].max_velocity_per_s == 20.0);
+  // The joints' largest velocity when the move runs at `rate` (fraction per second).
+  const auto peak_ratio = [&](const Vec3d& t0, const Posed& p0, const Vec3d& t1, const Posed& p1,
+                              double rate) {
+    double worst = 0.0;
+    constexpr int kSteps = 4000;
+    Vec3d prev = m.ac.to_machine_mm(t0, p0);
+    for (int s = 1; s <= kSteps; ++s) {
+      const double u = static_cast<double>(s) / kSteps;
+      const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad), p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+      const Vec3d q = m.ac.to_machine_mm(t0 + u * (t1 - t0), pose);
+      for (int j = 0; j < 3; ++j) {
+        worst = std::max(worst, std::abs(q[j] - prev[j]) * kSteps * rate /
+                                    limits[static_cast<std::size_t>(j)].max_velocity_per_s);
+      }
+      prev = q;
+    }
+    return worst;
+  };
+  // The axis rate of the rapid: every program axis within its own limit.
+  const auto axis_rate = [&](const Vec3d& t0, const Posed& p0, const Vec3d& t1, const Posed& p1) {
+    const double d[5] = {t1.x() - t0.x(), t1.y() - t0.y(), t1.z() - t0.z(),
+                         rad_to_deg(p1.a_rad - p0.a_rad), rad_to_deg(p1.c_rad - p0.c_rad)};
+    double r = 1e300;
+    for (std::size_t k = 0; k < 5; ++k) {
+      if (d[k] != 0.0) r = std::min(r, limits[k].max_velocity_per_s / std::abs(d[k]));
+    }
+    return r;
+  };
+  SECTION("a lift with a small tilt far from the pivot (the test program's pass end)") {
+    const Vec3d t0(1.4, 18.8, -9.7), t1(1.4, 19.6, 0.24);
+    const Posed p0{deg_to_rad(-23.75), deg_to_rad(-180.0)},
+        p1{deg_to_rad(-24.76), deg_to_rad(-179.76)};
+    CHECK(peak_ratio(t0, p0, t1, p1, axis_rate(t0, p0, t1, p1)) > 1.0);  // G0 would breach
+    const std::optional<double> rate = joint_safe_rate_per_s(m.ac, limits, t0, p0, t1, p1);
+    REQUIRE(rate);
+    CHECK(peak_ratio(t0, p0, t1, p1, *rate) <= 1.0);
+    CHECK(peak_ratio(t0, p0, t1, p1, *rate) > 0.99);  // not slower than it needs
+  }
+  SECTION("a half turn of C with the tip 60 mm off its axis") {
+    const Vec3d t0(60.0, 0.0, 5.0), t1(60.0, 0.0, 5.0);
+    const Posed p0{deg_to_rad(-30.0), 0.0}, p1{deg_to_rad(-30.0), deg_to_rad(180.0)};
+    CHECK(peak_ratio(t0, p0, t1, p1, axis_rate(t0, p0, t1, p1)) > 1.0);
+    const std::optional<double> rate = joint_safe_rate_per_s(m.ac, limits, t0, p0, t1, p1);
+    REQUIRE(rate);
+    CHECK(peak_ratio(t0, p0, t1, p1, *rate) <= 1.0);
+  }
+  SECTION("no turn: the joints move as the axes, the rapid stays") {
+    const Posed p{deg_to_rad(-30.0), deg_to_rad(40.0)};
+    CHECK_FALSE(joint_safe_rate_per_s(m.ac, limits, Vec3d(0, 0, 5), p, Vec3d(30, 10, 50), p));
+  }
+  SECTION("a turn about the tip on the pivot: slow enough already") {
+    const Vec3d t(0.0, 0.0, 0.0);
+    Machine c = m;
+    c.ac.a_axis_point_mm = Vec3d::Zero();
+    CHECK_FALSE(joint_safe_rate_per_s(c.ac, limits, t, Posed{0.0, 0.0}, t,
+                                      Posed{deg_to_rad(-20.0), deg_to_rad(90.0)}));
+  }
 }

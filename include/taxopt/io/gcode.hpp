@@ -66,6 +66,19 @@ struct GcodeProgram {
   std::size_t linearised_blocks = 0;
   /// Rapids written as index moves (retract, turn, XY, down; ProgramTemplate).
   std::size_t index_moves = 0;
+  /// LinuxCNC tcp mode: rapids written as feed moves at a joint-safe feed
+  /// (joint_safe_rate_per_s), their lines.
+  std::vector<int> joint_safe_rapids;
+  /// The program's time as the controller runs it (pipeline: program_time), s: every block
+  /// from the end of the first retract (where the machine stands before it is not known) to
+  /// the end, the feed blocks at their scheduled times, every rapid (approach, retract, table
+  /// turn, index move) rest to rest on the trapezoids of the space the controller plans it in:
+  /// the program's axes with TCP on (LinuxCNC plans X Y Z A C, measured, issue 36), the joints
+  /// otherwise. A retract's length takes the tool length offset as the tool's gauge length
+  /// (time_tool_length_mm) and the work offset as zero. 0 before it is computed.
+  double time_s = 0.0;
+  int time_from_line = 0;
+  double time_tool_length_mm = 0.0;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.
   std::vector<int> verbatim_lines;
@@ -81,6 +94,29 @@ struct GcodeProgram {
 std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& from_tip_mm,
                                         const Posed& from, const Vec3d& to_tip_mm, const Posed& to,
                                         double tolerance_mm);
+
+/// A rapid in tcp mode: LinuxCNC with its kinematics on plans G0 in the program's axes (X Y Z
+/// of the tip, A, C), each at its own limits, and the joints follow through the kinematics,
+/// faster than their limits where the table turns (issue 36, measured on its controller:
+/// joints at 42 mm/s against 20). The rate along the move (fraction of it per second) that
+/// keeps every joint's velocity within its limit, from the joints' largest rate of change
+/// along the move (sampled in steps of at most 0.25 deg of turn, up to 64, less 0.1 % and the
+/// step's turn in rad for what falls between them); nullopt when the axes' own limits keep
+/// them there already.
+std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+                                            const Vec3d& from_tip_mm, const Posed& from,
+                                            const Vec3d& to_tip_mm, const Posed& to);
+
+/// The same bound for any tcp move, with the joint that sets it: the largest rate along the
+/// move (fraction per second, the tip on its line and A, C in proportion, as a tcp controller
+/// interpolates a block) at which the linear joints, which follow through the kinematics and
+/// not linearly, stay within their velocity limits. Infinite (and X) when no joint moves or A
+/// and C stay (the joints then move linearly, as the schedule's chords say). A
+/// feed schedule made on the joints at the points alone (their chords) misses this where the
+/// table turns within a block.
+std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+                                                   const Vec3d& from_tip_mm, const Posed& from,
+                                                   const Vec3d& to_tip_mm, const Posed& to);
 
 /// Writes G-code. Feed moves need a positive feed. `comments` go into the header.
 /// @param units units of the output (G20/G21); coordinates inside are mm.

@@ -409,3 +409,46 @@ TEST_CASE(
     CHECK(std::abs(c_deg) <= 180.0);
   }
 }
+
+TEST_CASE(
+    "program: every block's end stays within the machine's travel, the spindle's: NX's "
+    "variable-axis file on LinuxCNC's sample machine leaves Z's at its approach with a 50 mm "
+    "tool (where LinuxCNC's controller stopped), exit 1 naming that line",
+    "[program][travel]") {
+  TempDir dir;
+  const std::string cls = real_data("mech491-variable-axis-ballmill.cls");
+  const std::string machine =
+      std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml";
+  const std::string args = "--in " + cls + " --machine " + machine +
+                           " --spindle-rpm 1000 --tool-number 1 --method none --feed-schedule -q "
+                           "--gcode " +
+                           dir.path("o.ngc");
+  // 50 mm in the file's inches.
+  const RunResult r = run_taxopt(args + " --gauge-length 1.9685");
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK_FALSE(file_exists(dir.path("o.ngc")));
+  const std::size_t at = r.err.find("takes the spindle to Z ");
+  REQUIRE(at != std::string::npos);
+  CHECK(std::stod(r.err.substr(at + 23)) > 120.0);
+  // The line named is the descent to the approach height, the first block with TCP on.
+  const std::size_t l = r.err.find("G-code line ");
+  REQUIRE(l != std::string::npos);
+  const int line = std::stoi(r.err.substr(l + 12));
+  // Written anyway, the program says what failed in comments at its top, which shift its
+  // lines by their number.
+  const RunResult forced = run_taxopt(args + " --gauge-length 1.9685 --force");
+  const std::vector<std::string> lines = lines_of(read_file(dir.path("o.ngc")));
+  std::size_t shift = 0;
+  for (const std::string& s : lines) {
+    if (s.rfind("(NOT VERIFIED", 0) == 0 || s.rfind("(FAILED", 0) == 0) ++shift;
+  }
+  const std::size_t n = static_cast<std::size_t>(line) + shift;
+  REQUIRE(n <= lines.size());
+  CHECK(lines[n - 1].rfind("G0 Z", 0) == 0);
+  CHECK(lines[n - 2] == "M428");
+  // With the tip as the spindle (no tool length given) that block stays within the travel:
+  // what the tool's length adds is what breaks it.
+  const RunResult tip = run_taxopt(args);
+  CHECK(tip.err.find("G-code line " + std::to_string(line) + " ") == std::string::npos);
+}

@@ -153,6 +153,11 @@ struct Written {
   std::vector<std::vector<const GcodeMove*>> point_moves;
   std::vector<std::vector<std::vector<WayPoint>>> way_points;
   std::vector<OperationSchedule> schedule_after, schedule_before;
+  /// Per read-back move, the machine's linear joints at its end referred to the spindle (the
+  /// tip's plus the tool length along the machine's Z, GcodeProgram::time_tool_length_mm), as
+  /// program_time follows them; empty before the first retract (where the machine stands is
+  /// not known there). check_program holds them to the machine's travel.
+  std::vector<std::optional<Vec3d>> spindle_mm;
   double write_s = 0.0;
 };
 

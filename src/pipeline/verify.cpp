@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "pipeline/stages.hpp"
@@ -547,17 +548,21 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       }
       r.verification.within_axis_limits = false;
     }
-    // The linear travel, in machine coordinates, where the machine file gives it.
-    const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written);
+    // The linear travel, in machine coordinates, where the machine file gives it: the
+    // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
+    const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written) +
+                            Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
     for (int q = 0; q < 3; ++q) {
       const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
       if (range.contains(joints_mm[q])) continue;
       if (r.verification.within_axis_limits) {
         std::ostringstream os;
         os << "operation " << op.name << ": "
-           << "XYZ"[q] << " would be " << joints_mm[q]
-           << " mm in machine coordinates, outside the machine's travel [" << range.min_mm << ", "
-           << range.max_mm << "] mm";
+           << "XYZ"[q] << " would be " << joints_mm[q] << " mm in machine coordinates";
+        if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
+          os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
+        }
+        os << ", outside the machine's travel [" << range.min_mm << ", " << range.max_mm << "] mm";
         add_finding(res, FindingCode::TravelExceeded, k, want.line,
                     format_location(run.tp.source, want.line, os.str()));
       }
@@ -761,6 +766,29 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   bool after_retract = false, xy_set = false;
   double xy[2] = {0.0, 0.0};
   const GcodeMove* prev = nullptr;
+  // Every block's end within the machine's travel, the spindle's position (the approach, the
+  // index moves, the retracts too: a LinuxCNC program whose approach left Z's travel by the
+  // tool's length stopped there with a soft-limit error, issue 36).
+  // The CL points' own blocks are checked with their points (verify_operation, with the same
+  // tool length): here the blocks between them.
+  std::set<const GcodeMove*> at_points;
+  for (const auto& op_moves : w.point_moves) at_points.insert(op_moves.begin(), op_moves.end());
+  for (std::size_t k = 0; k < moves.size() && k < w.spindle_mm.size(); ++k) {
+    if (!w.spindle_mm[k] || at_points.count(&moves[k])) continue;
+    for (int q = 0; q < 3; ++q) {
+      const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
+      const double v = (*w.spindle_mm[k])[q];
+      if (range.contains(v) || std::abs(v - std::clamp(v, range.min_mm, range.max_mm)) < 1e-6) {
+        continue;
+      }
+      std::ostringstream os;
+      os << "takes the spindle to "
+         << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
+         << res.gcode.time_tool_length_mm << " mm), outside the machine's travel [" << range.min_mm
+         << ", " << range.max_mm << "] mm";
+      breach(FindingCode::TravelExceeded, moves[k], os.str());
+    }
+  }
   for (const GcodeMove& m : moves) {
     const PostedOperation& po = posted[op_of(m.line)];
     if (!m.retract) {
@@ -850,7 +878,6 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
 void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,
                        JobResult& res) {
-  check_program(run, posted, written, res);
   const JobOptions& options = run.options;
   // Progress of the checks: per point, its pose before and after and the move into it, and
   // its C-space cells.
@@ -871,6 +898,8 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
       out_ops[k].points[i].tip_mm = posted[k].points[i].tip_mm;
     }
   }
+  // The program as a whole after its points: a point's own finding names its CL line first.
+  check_program(run, posted, written, res);
   res.out_cls = format_cl(run.tp, out_ops);
 }
 

@@ -122,7 +122,7 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
 /// controller plans it in. The machine's state is followed from the end of the first retract
 /// as joints referred to the tip (kinematics/machine.hpp); the spindle's reference point is the
 /// tool length above it.
-void program_time(const Run& run, const Written& w, const JointLimits& limits, LengthUnit units,
+void program_time(const Run& run, Written& w, const JointLimits& limits, LengthUnit units,
                   GcodeProgram& g) {
   const Machine& machine = run.machine;
   const ProgramTemplate& t = machine.gcode.program;
@@ -134,7 +134,13 @@ void program_time(const Run& run, const Written& w, const JointLimits& limits, L
   JointPosition q{};
   bool known = false;
   int from_line = 0;
+  w.spindle_mm.assign(w.moves.size(), std::nullopt);
+  std::size_t at = 0;
+  const auto spindle = [&](const JointPosition& j) {
+    return std::optional<Vec3d>(Vec3d(j[0], j[1], j[2] + length_mm));
+  };
   for (const GcodeMove& m : w.moves) {
+    const std::size_t index = at++;
     JointPosition to = q;
     const bool gives[5] = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
                            (m.given & 8u) != 0, (m.given & 16u) != 0};
@@ -149,6 +155,7 @@ void program_time(const Run& run, const Written& w, const JointLimits& limits, L
       if (!known) from_line = m.line;
       known = true;
       q = to;
+      w.spindle_mm[index] = spindle(q);
       continue;
     }
     if (!known && !from_line) {
@@ -157,6 +164,7 @@ void program_time(const Run& run, const Written& w, const JointLimits& limits, L
       q = {xyz.x(), xyz.y(), xyz.z(), to[kA], to[kC]};
       known = true;
       from_line = m.line;
+      w.spindle_mm[index] = spindle(q);
       continue;
     }
     // The reader takes LinuxCNC's kinematics as always on; a configuration that switches them
@@ -210,6 +218,7 @@ void program_time(const Run& run, const Written& w, const JointLimits& limits, L
       if (m.rapid) rapid_s += rapid_time_s(q, to, limits);
     }
     q = to;
+    if (known) w.spindle_mm[index] = spindle(q);
   }
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;

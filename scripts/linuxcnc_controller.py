@@ -168,6 +168,11 @@ def run(args):
             if err and err.upper() not in ("ERROR OK", "ERROR") and "OK" not in err.split()[-1:]:
                 summary["errors"].append("controller: " + err[:300])
             status = sh.cmd("get program_status")
+            if "PAUSED" in status.upper():
+                # A program stop (M0, M1): the operator presses cycle start.
+                summary["resumed"] = summary.get("resumed", 0) + 1
+                sh.cmd("set resume")
+                continue
             line = sh.cmd("get program_line").split()
             if len(line) >= 2 and line[-1].lstrip("-").isdigit():
                 last_line = max(last_line, int(line[-1]))
@@ -256,11 +261,13 @@ def analyse(path, args, summary):
         return
     first, last = moving[0] - 1, moving[-1]
     summary["move_s"] = (last - first) * period
-    # The controller's time per program line (servo periods whose commanded motion belongs
-    # to it), s.
+    # The controller's time per program line: the servo periods in which the commanded
+    # joints moved, s (a program stop, a dwell or a tool change waits without moving and is
+    # not the motion's time).
     line_s = {}
     for i in range(first + 1, last + 1):
-        line_s[rows[i][10]] = line_s.get(rows[i][10], 0.0) + period
+        if any(abs(rows[i][j] - rows[i - 1][j]) > 1e-9 for j in range(5)):
+            line_s[rows[i][10]] = line_s.get(rows[i][10], 0.0) + period
     summary["line_s"] = {str(k): v for k, v in sorted(line_s.items())}
     summary["end_line"] = max(r[10] for r in rows)
     # Velocities and accelerations of the commanded joints: differences over a window of

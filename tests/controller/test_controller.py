@@ -22,16 +22,17 @@ Measured and printed, not asserted (issue 36 item 3 stays open for it): every jo
 acceleration. In tcp mode LinuxCNC limits the accelerations of the program's axes, not of the
 joints, and no F word changes how hard it accelerates.
 
-With `--set real` (ctest label `long`, run when TAXOPT_LONG=1: about 25 minutes) the same
-runs and checks for the real CL files that fit the sample machine's travel (Creo's
-profilfraesen, CATIA's peening file), tcp mode, `--method paper --feed-schedule`. The others
+With `--set real` (ctest label `long`, run when TAXOPT_LONG=1: about an hour) the same runs
+and checks for the real CL files that fit the sample machine's travel (Creo's profilfraesen,
+CATIA's peening file), tcp mode, and the bundled demo (data/demo) on both samples (A/C and
+B/C), `--method paper --feed-schedule`; `--set demo` the demo alone. The others
 leave its travel and taxopt refuses them: NX's variable-axis ball mill at its approach (the
 spindle at Z 132 mm against 120 with the 50 mm tool; written anyway, the controller stopped
 there), the other NX file and Amorim's at their points.
 
 Each program prints a row of the table in docs/feed-schedule.md "On LinuxCNC's controller".
 
-    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|real]
+    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|real|demo]
 """
 import json
 import os
@@ -56,6 +57,13 @@ REAL = [
 def cases(exe, src, work, which):
     """(name, taxopt arguments) of every program to run."""
     preset = os.path.join(src, "data/machines/linuxcnc-xyzac-trt.toml")
+    bc = os.path.join(src, "data/machines/linuxcnc-xyzbc-trt-sample.toml")
+    demo = ["--in", os.path.join(src, "data/demo/sine.cls"), "--part",
+            os.path.join(src, "data/demo/sine.stl"), "--gauge-length", "50"]
+    demos = [("demo, A/C", demo + ["--machine", preset], "xyzac"),
+             ("demo, B/C", demo + ["--machine", bc], "xyzbc")]
+    if which == "demo":
+        return demos
     if which == "real":
         real = os.path.join(src, "tests", "data", "real")  # the project's copies
         out = []
@@ -68,7 +76,7 @@ def cases(exe, src, work, which):
                     f.write("\n".join("$$ " + l if l.startswith("SPINDLE/") else l
                                        for l in text))
             out.append((name, ["--in", path, "--machine", preset] + extra, "xyzac"))
-        return out
+        return out + demos
     cls, stl = os.path.join(work, "g.cls"), os.path.join(work, "g.stl")
     subprocess.run([exe, "generate", "--width", "3", "--length", "20", "--out-cls", cls,
                     "--out-mesh", stl], check=True, capture_output=True)
@@ -78,7 +86,6 @@ def cases(exe, src, work, which):
     inverse_time = os.path.join(work, "inverse-time.toml")
     with open(preset) as f, open(inverse_time, "w") as g:
         g.write(f.read().replace('feed_mode = "units-per-minute"', 'feed_mode = "inverse-time"'))
-    bc = os.path.join(src, "data/machines/linuxcnc-xyzbc-trt-sample.toml")
     common = ["--in", cls, "--part", stl, "--gauge-length", "50"]
     return [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac"),
             ("sine, A/C, machine mode, G94", common + ["--machine", machine_mode], "xyzac"),
@@ -89,8 +96,8 @@ def cases(exe, src, work, which):
 def main():
     exe, src = sys.argv[1], sys.argv[2]
     which = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--set" else "sine"
-    if which == "real" and os.environ.get("TAXOPT_LONG") != "1":
-        print("skipped: the real files on the controller take about 25 minutes; "
+    if which in ("real", "demo") and os.environ.get("TAXOPT_LONG") != "1":
+        print("skipped: the real files and the demo on the controller take about an hour; "
               "TAXOPT_LONG=1 runs them")
         return 77
     work = tempfile.mkdtemp(prefix="taxopt-controller-test-")

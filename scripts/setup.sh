@@ -17,6 +17,8 @@ PACKAGES=(
   python3-numpy          # the controller test: the commanded path against the points
   clang clang-format libclang-rt-14-dev  # fuzzing, sanitizers, formatting
   librsvg2-bin           # render SVG plots to PNG for inspection
+  libjs-three libjs-dygraphs  # the HTML page (--html): 3D view and plots, embedded at write time
+  chromium fonts-liberation   # the page's tests: headless Chromium loads it, offline
 )
 
 missing=()

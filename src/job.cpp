@@ -166,6 +166,34 @@ const char* to_string(Severity severity) {
   return "?";
 }
 
+const char* to_string(PointMark mark) {
+  switch (mark) {
+    case PointMark::PointCollision: return "point_collision";
+    case PointMark::FluteGouge: return "flute_gouge";
+    case PointMark::MoveCollision: return "move_collision";
+    case PointMark::KeptCollision: return "kept_collision";
+    case PointMark::KeptPeakRate: return "kept_peak_rate";
+    case PointMark::KeptJoin: return "kept_join";
+    case PointMark::NoFreeAxis: return "no_free_axis";
+    case PointMark::AxisLimit: return "axis_limit";
+    case PointMark::TravelExceeded: return "travel_exceeded";
+    case PointMark::CFlip: return "c_flip";
+    case PointMark::CFlipBefore: return "c_flip_before";
+    case PointMark::NotChecked: return "not_checked";
+  }
+  return "?";
+}
+
+std::string point_marks_text(std::uint32_t marks) {
+  std::string text;
+  for (const PointMark m : kAllPointMarks) {
+    if ((marks & static_cast<std::uint32_t>(m)) == 0) continue;
+    if (!text.empty()) text += ';';
+    text += to_string(m);
+  }
+  return text;
+}
+
 bool JobResult::has(FindingCode code) const {
   return std::any_of(findings.begin(), findings.end(),
                      [code](const Finding& f) { return f.code == code; });

@@ -1,4 +1,5 @@
 // The command line as scripts see it: exit codes, the error line, atomic outputs.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -167,7 +168,8 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   CHECK_THAT(
       csv, Catch::StartsWith(
                "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
-               "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min\n"));
+               "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_"
+               "line,findings\n"));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
   CHECK(read_file(t.path("o.cls")) == kSmallCl);
 }
@@ -441,7 +443,22 @@ TEST_CASE("cli: axis velocity and acceleration beyond the machine file's limits 
   std::string line;
   std::vector<std::string> feeds;
   std::getline(csv, line);
-  while (std::getline(csv, line)) feeds.push_back(line.substr(line.rfind(',') + 1));
+  const auto fields = [](const std::string& row) {
+    std::vector<std::string> out(1);
+    for (char c : row) {
+      if (c == ',') {
+        out.emplace_back();
+      } else {
+        out.back().push_back(c);
+      }
+    }
+    return out;
+  };
+  const std::vector<std::string> header = fields(line);
+  const auto column = static_cast<std::size_t>(
+      std::find(header.begin(), header.end(), "feed_mm_min") - header.begin());
+  REQUIRE(column < header.size());
+  while (std::getline(csv, line)) feeds.push_back(fields(line).at(column));
   REQUIRE(feeds.size() == 4);
   CHECK(feeds[0].empty());
   CHECK(std::stod(feeds[1]) == Approx(300.0).epsilon(1e-4));

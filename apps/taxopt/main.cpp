@@ -27,6 +27,7 @@
 #include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/html_page.hpp"
 #include "taxopt/io/linuxcnc_ini.hpp"
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
@@ -47,7 +48,7 @@ struct Args {
   int threads = 0;
   bool force = false, quiet = false, feed_schedule = false;
   int verbose = 0;
-  std::string part, plots;
+  std::string part, plots, html;
   std::optional<double> grid, max_deviation, shank_radius, flute_length, holder_radius,
       holder_length, gauge_length;
 };
@@ -339,6 +340,10 @@ int main(int argc, char** argv) {
   app.add_option("--report", a.report, "JSON report to write")->group("Outputs");
   app.add_option("--points-csv", a.points_csv, "per-point CSV to write")->group("Outputs");
   app.add_option("--out-cls", a.out_cls, "optimised toolpath as a CL file")->group("Outputs");
+  app.add_option("--html", a.html,
+                 "one self-contained HTML page: the part, the tool axes before and after, where "
+                 "every check fired, the rotary plots with the machine's limits")
+      ->group("Outputs");
   app.add_option("--units", a.units, "units of the CL file: in | mm (default: from the file)")
       ->group("Input");
   app.add_option("--units-out", a.units_out, "units of the G-code: in | mm (default: as input)")
@@ -482,7 +487,8 @@ int main(int argc, char** argv) {
                                                     {"--gauge-length", "LENGTH"},
                                                     {"--grid", "DEG"},
                                                     {"--max-deviation", "DEG"},
-                                                    {"--plots", "FOLDER"}};
+                                                    {"--plots", "FOLDER"},
+                                                    {"--html", "FILE"}};
   for (CLI::Option* o : app.get_options()) {
     for (const auto& name : o->get_lnames()) {
       if (const auto t = takes.find("--" + name); t != takes.end()) o->option_text(t->second);
@@ -564,19 +570,21 @@ int main(int argc, char** argv) {
     a.gcode = demo_out + "/demo.nc";
     a.report = demo_out + "/report.json";
     a.points_csv = demo_out + "/points.csv";
+    a.html = demo_out + "/demo.html";
     a.plots = demo_out + "/plots";
   }
 
   try {
     if (a.in.empty()) return error("--in is required", 2);
-    if (a.gcode.empty() && a.out_cls.empty() && a.report.empty()) {
-      return error("nothing to write: give --gcode, --out-cls or --report", 2);
+    if (a.gcode.empty() && a.out_cls.empty() && a.report.empty() && a.html.empty()) {
+      return error("nothing to write: give --gcode, --out-cls, --report or --html", 2);
     }
     std::map<std::string, std::string> outputs;
     for (const auto& [opt, path] :
          std::map<std::string, std::string>{{"--gcode", a.gcode},
                                             {"--report", a.report},
                                             {"--points-csv", a.points_csv},
+                                            {"--html", a.html},
                                             {"--out-cls", a.out_cls}}) {
       if (path.empty()) continue;
       // No output may replace an input (the CL file, the part, the machine file).
@@ -681,6 +689,12 @@ int main(int argc, char** argv) {
     for (std::string w : a.skip_records) {
       for (auto& ch : w) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
       read_options.skip_records.insert(w);
+    }
+    // The page's libraries are read before any work: a run must not end in "cannot embed".
+    std::optional<taxopt::HtmlAssets> html_assets;
+    if (!a.html.empty()) {
+      const char* dir = std::getenv("TAXOPT_JAVASCRIPT_DIR");
+      html_assets = taxopt::load_html_assets(dir && *dir ? dir : taxopt::kDefaultJavascriptDir);
     }
     taxopt::Toolpath toolpath = taxopt::read_cl_file(a.in, read_options);
 
@@ -851,6 +865,15 @@ int main(int argc, char** argv) {
       tx.stage(a.report, taxopt::report_json(result, toolpath, machine, options, run));
     }
     if (!a.points_csv.empty()) tx.stage(a.points_csv, taxopt::points_csv(result));
+    if (!a.html.empty()) {
+      taxopt::RunInfo run;
+      run.command_line = command_line;
+      run.started_utc = started_utc;
+      run.machine_file = a.machine;
+      run.part_file = a.part;
+      tx.stage(a.html, taxopt::html_page(result, toolpath, machine, options, run,
+                                         part ? &part->mesh() : nullptr, *html_assets));
+    }
     if (!a.plots.empty()) {
       std::error_code ec;
       std::filesystem::create_directories(a.plots, ec);

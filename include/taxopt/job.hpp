@@ -2,6 +2,7 @@
 /// @file One run of taxopt as a library call: a read toolpath and a machine in, G-code,
 /// metrics, verification and report data out. The CLI is a thin layer over run_job.
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -125,9 +126,44 @@ struct Verification {
   bool within_dynamic_limits = true;
 };
 
+/// What fired at one CL point (PointRow::marks, the CSV's `findings`, the HTML page's markers):
+/// a bit each. The move marks are of the move into the point.
+enum class PointMark : std::uint32_t {
+  PointCollision = 1u << 0,  ///< the shank or holder (or a ball in the air) hits the part here
+  FluteGouge = 1u << 1,      ///< the flutes reach deeper than the part tolerance here
+  MoveCollision = 1u << 2,   ///< the tool hits the part on the move into this point
+  KeptCollision = 1u << 3,   ///< input axis kept: the optimised axes hit the part
+  KeptPeakRate = 1u << 4,    ///< input axis kept: the optimised axes raised the pass's peak rate
+  KeptJoin = 1u << 5,        ///< blended between kept and optimised axes
+  NoFreeAxis = 1u << 6,      ///< no acceptable axis within the deviation cone
+  AxisLimit = 1u << 7,       ///< the written tilt or C is at (within 0.01 deg) or past its range
+  TravelExceeded = 1u << 8,  ///< the spindle leaves the linear travel here
+  CFlip = 1u << 9,           ///< C turns by more than 90 deg on the move into this point (after)
+  CFlipBefore = 1u << 10,    ///< the same with the input axes
+  NotChecked = 1u << 11,     ///< no collision check judged the tool here (no part, or no model)
+};
+/// Every mark, in bit order.
+inline constexpr PointMark kAllPointMarks[] = {
+    PointMark::PointCollision, PointMark::FluteGouge,   PointMark::MoveCollision,
+    PointMark::KeptCollision,  PointMark::KeptPeakRate, PointMark::KeptJoin,
+    PointMark::NoFreeAxis,     PointMark::AxisLimit,    PointMark::TravelExceeded,
+    PointMark::CFlip,          PointMark::CFlipBefore,  PointMark::NotChecked};
+/// "point_collision", "flute_gouge", "move_collision", "kept_collision", "kept_peak_rate",
+/// "kept_join", "no_free_axis", "axis_limit", "travel_exceeded", "c_flip", "c_flip_before",
+/// "not_checked".
+const char* to_string(PointMark mark);
+/// The marks set in `marks`, in bit order, joined by `;` (the CSV's `findings`).
+std::string point_marks_text(std::uint32_t marks);
+
 /// Per-point values for the CSV (after optimisation).
 struct PointRow {
   std::size_t index = 0;
+  /// The CL file's line of this point.
+  int line = 0;
+  /// What fired here: PointMark bits.
+  std::uint32_t marks = 0;
+  void mark(PointMark m) { marks |= static_cast<std::uint32_t>(m); }
+  bool has(PointMark m) const { return (marks & static_cast<std::uint32_t>(m)) != 0; }
   double arc_mm = 0.0;
   Vec3d tip_mm = Vec3d::Zero();
   Vec3d axis = Vec3d::UnitZ();

@@ -303,7 +303,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
 std::string points_csv(const JobResult& result) {
   std::string out =
       "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
-      "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min\n";
+      "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_line,"
+      "findings\n";
   char buf[512];
   // A value that rounds to zero is written without its sign ("-0.000000" would say a side).
   const auto no_negative_zero = [](char* text) {
@@ -355,7 +356,8 @@ std::string points_csv(const JobResult& result) {
         std::snprintf(buf, sizeof buf, "%.3f", *p.feed_mm_min);
         out += buf;
       }
-      out += "\n";
+      // The marks hold only letters, '_' and ';': no quoting needed.
+      out += "," + std::to_string(p.line) + "," + point_marks_text(p.marks) + "\n";
     }
   }
   return out;

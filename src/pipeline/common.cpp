@@ -140,6 +140,10 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
         r.arc_mm = arc;
         (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
         (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
+        // A flip as RotarySummary::c_jumps counts it (metrics.cpp).
+        if (j > 0 && std::abs(c[j] - c[j - 1]) > 90.0) {
+          r.mark(rows_before ? PointMark::CFlipBefore : PointMark::CFlip);
+        }
       }
     }
   }

@@ -308,6 +308,11 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
       if (run.collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
     }
     r.verification.flute_gouge_points = static_cast<long>(gouges.size());
+    for (std::size_t i : gouges) r.rows[i].mark(PointMark::FluteGouge);
+    for (std::size_t i : hits) r.rows[i].mark(PointMark::PointCollision);
+    if (hits.empty() && gouges.empty()) {
+      for (std::size_t i : after) r.rows[i].mark(PointMark::PointCollision);
+    }
     const auto report = [&](const std::vector<std::size_t>& at, const std::string& what,
                             const std::string& first_detail = std::string()) {
       if (at.empty()) return;
@@ -348,6 +353,7 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
   const auto moves_hit = colliding_moves(*run.collision, tool, machine, xyz_w, a_w, c_w, o.contacts,
                                          &checking, &w.way_points[k]);
   r.verification.colliding_moves = static_cast<long>(moves_hit.size());
+  for (std::size_t i : moves_hit) r.rows[i].mark(PointMark::MoveCollision);
   if (const auto least = clearance_bound(*run.collision, real_tool, op, out_axes, &checking)) {
     r.verification.min_clearance_mm = least->first;
     r.verification.min_clearance_index = least->second;
@@ -396,6 +402,8 @@ void check_shank_and_holder(const Run& run, const OperationContext& o, const Pos
   r.colliding_before = r.colliding_after = static_cast<long>(hits.size());
   r.verification.colliding_moves = static_cast<long>(moves.size());
   r.verification.collision_free = hits.empty() && moves.empty();
+  for (std::size_t i : hits) r.rows[i].mark(PointMark::PointCollision);
+  for (std::size_t i : moves) r.rows[i].mark(PointMark::MoveCollision);
   const std::string what = tool.holder_body >= 0 ? "shank or holder" : "shank";
   if (!hits.empty()) {
     std::string lines;
@@ -537,6 +545,15 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
         std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
     r.verification.roundtrip_max_deg =
         std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
+    // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
+    const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
+      const double near_rad = deg_to_rad(0.01);
+      return !range.continuous &&
+             (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
+    };
+    if (at_limit(machine.ac.a, written.a_rad) || at_limit(machine.ac.c, written.c_rad)) {
+      r.rows[i].mark(PointMark::AxisLimit);
+    }
     if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
       if (r.verification.within_axis_limits) {
         add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
@@ -555,6 +572,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     for (int q = 0; q < 3; ++q) {
       const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
       if (range.contains(joints_mm[q])) continue;
+      r.rows[i].mark(PointMark::TravelExceeded);
       if (r.verification.within_axis_limits) {
         std::ostringstream os;
         os << "operation " << op.name << ": "
@@ -572,6 +590,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
         std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
     PointRow& row = r.rows[i];
     row.index = i;
+    row.line = want.line;
     row.tip_mm = want.tip_mm;
     row.axis = want.axis;
     row.a_deg = a_w[i];
@@ -619,6 +638,12 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     why.resize(op.points.size(), KeptWhy::None);
     for (std::size_t i : opt.no_free_axis) {
       if (why[i] == KeptWhy::None) ++kept.no_free_axis;
+      r.rows[i].mark(PointMark::NoFreeAxis);
+    }
+    for (std::size_t i = 0; i < why.size(); ++i) {
+      if (why[i] == KeptWhy::Collision) r.rows[i].mark(PointMark::KeptCollision);
+      if (why[i] == KeptWhy::PeakRate) r.rows[i].mark(PointMark::KeptPeakRate);
+      if (why[i] == KeptWhy::Join) r.rows[i].mark(PointMark::KeptJoin);
     }
     for (const KeptWhy kw : why) {
       kept.collision += kw == KeptWhy::Collision;
@@ -641,6 +666,9 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
              op.tool.diameter_mm > 0.0) {
     check_shank_and_holder(run, o, po, w, xyz_w, a_w, c_w, r, res);
+  }
+  if (!r.verification.collision_free) {
+    for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
   }
   if (!o.contacts.empty()) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {

@@ -1,0 +1,460 @@
+// The HTML page of a run (html_page.hpp): the data as JSON in the page, the libraries embedded,
+// the page's own script in html_page_script.hpp.
+#include "taxopt/io/html_page.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <tuple>
+#include <unordered_map>
+
+#include "html_page_script.hpp"
+#include "taxopt/core/error.hpp"
+
+namespace taxopt {
+
+namespace {
+
+std::string read_asset(const std::string& dir, const std::string& rel, const char* package) {
+  const std::string path = dir + "/" + rel;
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  if (in) bytes << in.rdbuf();
+  if (!in || bytes.str().empty()) {
+    throw InputError(path, 0,
+                     std::string("cannot read this file, which the HTML page embeds: install ") +
+                         package + " (scripts/setup.sh does)");
+  }
+  return bytes.str();
+}
+
+/// Data placed inside a <script> element: every '<' as "\u003c" (only JSON strings hold one), so
+/// that no "</script" ends the element early and no "<!--" opens the parser's escaped state.
+std::string json_inside_script(const std::string& json_text) {
+  std::string out;
+  out.reserve(json_text.size());
+  for (char c : json_text) {
+    if (c == '<') {
+      out += "\\u003c";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+/// A library placed inside a <script> or <style> element as read: checked that it holds
+/// nothing that would end the element early ("</script", "</style") or open the HTML parser's
+/// escaped state ("<!--"); Debian's files hold none (a "</div" in a string is harmless).
+const std::string& library_inside_element(const std::string& text, const char* what) {
+  std::string lower(text.size(), ' ');
+  std::transform(text.begin(), text.end(), lower.begin(), [](char c) {
+    return static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  });
+  for (const char* bad : {"</script", "</style", "<!--"}) {
+    if (lower.find(bad) != std::string::npos) {
+      throw InputError(what, 0,
+                       std::string("the library holds \"") + bad +
+                           "\", which would end its element in the HTML page early");
+    }
+  }
+  return text;
+}
+
+std::string escape_html(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// x rounded to `decimals` (the page shows 3; the file stays small), never -0.
+double rounded(double x, int decimals = 3) {
+  if (!std::isfinite(x)) return 0.0;
+  const double scale = std::pow(10.0, decimals);
+  const double r = std::round(x * scale) / scale;
+  return r == 0.0 ? 0.0 : r;
+}
+
+std::string fixed(double x, int decimals) {
+  std::ostringstream os;
+  os.precision(decimals);
+  os << std::fixed << rounded(x, decimals);
+  return os.str();
+}
+
+nlohmann::json vec_json(const Vec3d& v, int decimals) {
+  return nlohmann::json::array(
+      {rounded(v.x(), decimals), rounded(v.y(), decimals), rounded(v.z(), decimals)});
+}
+
+/// The rows an operation's plots show: every k-th and, within each stride, the largest omega
+/// and a before and after; sorted.
+std::vector<std::size_t> plotted_rows(const std::vector<PointRow>& rows, std::size_t stride) {
+  std::vector<std::size_t> keep;
+  for (std::size_t start = 0; start < rows.size(); start += stride) {
+    const std::size_t end = std::min(rows.size(), start + stride);
+    keep.push_back(start);
+    std::array<std::size_t, 4> best{start, start, start, start};
+    for (std::size_t i = start; i < end; ++i) {
+      const PointRow& r = rows[i];
+      if (r.omega_deg_s > rows[best[0]].omega_deg_s) best[0] = i;
+      if (r.omega_before_deg_s > rows[best[1]].omega_before_deg_s) best[1] = i;
+      if (r.accel_deg_s2 > rows[best[2]].accel_deg_s2) best[2] = i;
+      if (r.accel_before_deg_s2 > rows[best[3]].accel_before_deg_s2) best[3] = i;
+    }
+    keep.insert(keep.end(), best.begin(), best.end());
+  }
+  if (!rows.empty()) keep.push_back(rows.size() - 1);
+  std::sort(keep.begin(), keep.end());
+  keep.erase(std::unique(keep.begin(), keep.end()), keep.end());
+  return keep;
+}
+
+nlohmann::json range_json(const RotaryAxis<double>& axis) {
+  if (axis.continuous || !std::isfinite(axis.min_rad) || !std::isfinite(axis.max_rad)) {
+    return nullptr;
+  }
+  return nlohmann::json::array(
+      {rounded(rad_to_deg(axis.min_rad)), rounded(rad_to_deg(axis.max_rad))});
+}
+
+nlohmann::json limit_json(const JointLimit& l) {
+  nlohmann::json j;
+  j["velocity_deg_s"] = l.max_velocity_per_s > 0.0 ? nlohmann::json(l.max_velocity_per_s) : nullptr;
+  j["accel_deg_s2"] = l.max_accel_per_s2 > 0.0 ? nlohmann::json(l.max_accel_per_s2) : nullptr;
+  return j;
+}
+
+std::string summary_table(const JobResult& result) {
+  std::ostringstream t;
+  t << "<table class=\"summary\"><thead><tr><th>operation</th><th>points</th>"
+       "<th>peak &omega; deg/s<br>before &rarr; after</th>"
+       "<th>peak a deg/s&sup2;<br>before &rarr; after</th>"
+       "<th>RMS a deg/s&sup2;<br>before &rarr; after</th>"
+       "<th>C flips<br>before &rarr; after</th>"
+       "<th>colliding points<br>before &rarr; after</th><th>colliding moves</th>"
+       "<th>input axes kept</th><th>cycle s<br>before &rarr; after</th></tr></thead><tbody>";
+  const auto pair = [](double b, double a, int d) {
+    return fixed(b, d) + " &rarr; " + fixed(a, d);
+  };
+  for (const OperationResult& r : result.operations) {
+    t << "<tr><td>" << escape_html(r.name) << "</td><td>" << r.points << "</td><td>"
+      << pair(r.before.max_omega_deg_s, r.after.max_omega_deg_s, 2) << "</td><td>"
+      << pair(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, 1) << "</td><td>"
+      << pair(r.before.rms_accel_deg_s2, r.after.rms_accel_deg_s2, 1) << "</td><td>"
+      << r.before.c_jumps << " &rarr; " << r.after.c_jumps << "</td><td>";
+    if (r.colliding_after < 0) {
+      t << "<span class=\"unchecked\">NOT CHECKED</span></td><td>"
+           "<span class=\"unchecked\">NOT CHECKED</span>";
+    } else {
+      t << r.colliding_before << " &rarr; " << r.colliding_after << "</td><td>"
+        << r.verification.colliding_moves;
+    }
+    t << "</td><td>" << (r.kept_input_points ? std::to_string(r.kept_input_points->total()) : "-")
+      << "</td><td>" << pair(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, 2)
+      << "</td></tr>";
+  }
+  t << "</tbody></table>";
+  return t.str();
+}
+
+}  // namespace
+
+HtmlAssets load_html_assets(const std::string& javascript_dir) {
+  HtmlAssets a;
+  a.three_js = read_asset(javascript_dir, "three/three.min.js", "libjs-three");
+  a.orbit_controls_js =
+      read_asset(javascript_dir, "three/examples/js/controls/OrbitControls.js", "libjs-three");
+  a.dygraph_js = read_asset(javascript_dir, "dygraphs/dygraph.min.js", "libjs-dygraphs");
+  a.dygraph_css = read_asset(javascript_dir, "dygraphs/dygraph.min.css", "libjs-dygraphs");
+  return a;
+}
+
+TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles, double* cell_mm) {
+  if (cell_mm) *cell_mm = 0.0;
+  if (mesh.faces.size() <= max_triangles || mesh.vertices.empty()) return mesh;
+  Vec3d lo = mesh.vertices.front(), hi = lo;
+  for (const Vec3d& v : mesh.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double diagonal = std::max((hi - lo).norm(), 1e-9);
+  // A start where the grid has about as many cells across a face of the box as the budget's
+  // square root; coarser by a quarter until within the budget.
+  double cell = diagonal / std::sqrt(static_cast<double>(std::max<std::size_t>(max_triangles, 1)));
+  for (int attempt = 0; attempt < 200; ++attempt, cell *= 1.25) {
+    std::map<std::array<long, 3>, int> cluster_of_key;
+    std::vector<int> cluster(mesh.vertices.size());
+    std::vector<Vec3d> sum;
+    std::vector<int> count;
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Vec3d g = (mesh.vertices[i] - lo) / cell;
+      const std::array<long, 3> key{static_cast<long>(std::floor(g.x())),
+                                    static_cast<long>(std::floor(g.y())),
+                                    static_cast<long>(std::floor(g.z()))};
+      const auto [it, added] = cluster_of_key.emplace(key, static_cast<int>(sum.size()));
+      if (added) {
+        sum.push_back(Vec3d::Zero());
+        count.push_back(0);
+      }
+      cluster[i] = it->second;
+      sum[static_cast<std::size_t>(it->second)] += mesh.vertices[i];
+      ++count[static_cast<std::size_t>(it->second)];
+    }
+    TriangleMesh out;
+    for (std::size_t c = 0; c < sum.size(); ++c) out.vertices.push_back(sum[c] / count[c]);
+    std::map<std::array<int, 3>, bool> seen;
+    for (const auto& f : mesh.faces) {
+      std::array<int, 3> g{cluster[static_cast<std::size_t>(f[0])],
+                           cluster[static_cast<std::size_t>(f[1])],
+                           cluster[static_cast<std::size_t>(f[2])]};
+      if (g[0] == g[1] || g[1] == g[2] || g[0] == g[2]) continue;
+      std::array<int, 3> sorted = g;
+      std::sort(sorted.begin(), sorted.end());
+      if (!seen.emplace(sorted, true).second) continue;
+      out.faces.push_back(g);
+    }
+    if (out.faces.size() <= max_triangles) {
+      if (cell_mm) *cell_mm = cell;
+      return out;
+    }
+  }
+  return TriangleMesh{};  // never: at 200 steps the cell is far larger than the part
+}
+
+std::string html_page(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                      const JobOptions& options, const RunInfo& run, const TriangleMesh* part_mm,
+                      const HtmlAssets& assets, const HtmlBudget& budget) {
+  using nlohmann::json;
+  json data;
+  data["source"] = toolpath.source;
+  data["method"] = to_string(options.method);
+  data["tilt"] = std::string(1, result.tilt_letter);
+  data["collision_checked"] = result.collision_checked;
+  const JointLimits limits = effective_limits(machine);
+  data["machine"] = {{"name", machine.name},
+                     {"tilt_range_deg", range_json(machine.ac.a)},
+                     {"c_range_deg", range_json(machine.ac.c)},
+                     {"tilt_limits", limit_json(limits[3])},
+                     {"c_limits", limit_json(limits[4])}};
+  std::size_t total_points = 0;
+  for (const OperationResult& r : result.operations) total_points += r.rows.size();
+  data["points"] = total_points;
+
+  // The part, decimated to the budget.
+  if (part_mm && !part_mm->faces.empty()) {
+    double cell = 0.0;
+    const TriangleMesh shown = decimate_mesh(*part_mm, budget.max_triangles, &cell);
+    json v = json::array(), f = json::array();
+    for (const Vec3d& p : shown.vertices) {
+      v.push_back(rounded(p.x()));
+      v.push_back(rounded(p.y()));
+      v.push_back(rounded(p.z()));
+    }
+    for (const auto& t : shown.faces) {
+      f.push_back(t[0]);
+      f.push_back(t[1]);
+      f.push_back(t[2]);
+    }
+    data["mesh"] = {{"vertices", std::move(v)},
+                    {"faces", std::move(f)},
+                    {"triangles_in", part_mm->faces.size()},
+                    {"triangles_shown", shown.faces.size()},
+                    {"cell_mm", rounded(cell)}};
+  } else {
+    data["mesh"] = nullptr;
+  }
+
+  const std::size_t plot_stride =
+      std::max<std::size_t>(1, (total_points + budget.max_plot_points / 5 - 1) /
+                                   std::max<std::size_t>(1, budget.max_plot_points / 5));
+  const std::size_t axes_every = std::max<std::size_t>(
+      1, (total_points + budget.max_axes - 1) / std::max<std::size_t>(1, budget.max_axes));
+  data["decimation"] = {{"plot_stride", plot_stride}, {"axes_every", axes_every}};
+
+  json ops = json::array(), markers = json::array();
+  std::size_t marker_total = 0, plotted_total = 0;
+  std::map<std::uint32_t, std::size_t> marker_kinds;
+  for (std::size_t k = 0; k < result.operations.size(); ++k) {
+    const OperationResult& r = result.operations[k];
+    json o;
+    o["name"] = r.name;
+    o["points"] = r.rows.size();
+    o["checked"] = r.colliding_after >= 0;
+    o["colliding_after"] = r.colliding_after;
+    o["colliding_moves"] = r.verification.colliding_moves;
+    o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
+                  {"omega_after", r.after.max_omega_deg_s},
+                  {"accel_before", r.before.max_accel_deg_s2},
+                  {"accel_after", r.after.max_accel_deg_s2}};
+    o["programmed_feed_mm_min"] = r.feed_mm_min;
+    const std::vector<std::size_t> shown = plotted_rows(r.rows, plot_stride);
+    plotted_total += shown.size();
+    json idx = json::array(), line = json::array(), arc = json::array(), ab = json::array(),
+         aa = json::array(), cb = json::array(), ca = json::array(), wb = json::array(),
+         wa = json::array(), gb = json::array(), ga = json::array(), fb = json::array(),
+         fa = json::array(), path = json::array(), pass = json::array();
+    std::size_t pass_number = 0;
+    std::size_t at = 0;
+    // The plots' x: the rows' arc length over the passes (the paper's L), carried over the
+    // points outside them (rapids), so that it never runs back.
+    double arc_mm = 0.0;
+    for (std::size_t i = 0; i < r.rows.size(); ++i) {
+      const PointRow& p = r.rows[i];
+      arc_mm = std::max(arc_mm, p.arc_mm);
+      if (i > 0 && !p.feed_mm_min) ++pass_number;  // a rapid (or a move the schedule skips)
+      if (at >= shown.size() || shown[at] != i) continue;
+      ++at;
+      idx.push_back(i);
+      line.push_back(p.line);
+      arc.push_back(rounded(arc_mm));
+      ab.push_back(rounded(p.a_before_deg));
+      aa.push_back(rounded(p.a_deg));
+      cb.push_back(rounded(p.c_before_deg));
+      ca.push_back(rounded(p.c_deg));
+      wb.push_back(rounded(p.omega_before_deg_s));
+      wa.push_back(rounded(p.omega_deg_s));
+      gb.push_back(rounded(p.accel_before_deg_s2));
+      ga.push_back(rounded(p.accel_deg_s2));
+      fb.push_back(p.feed_before_mm_min ? json(rounded(*p.feed_before_mm_min, 1)) : json(nullptr));
+      fa.push_back(p.feed_mm_min ? json(rounded(*p.feed_mm_min, 1)) : json(nullptr));
+      pass.push_back(pass_number);
+      path.push_back(rounded(p.tip_mm.x()));
+      path.push_back(rounded(p.tip_mm.y()));
+      path.push_back(rounded(p.tip_mm.z()));
+    }
+    o["idx"] = std::move(idx);
+    o["line"] = std::move(line);
+    o["arc_mm"] = std::move(arc);
+    o["tilt_before"] = std::move(ab);
+    o["tilt_after"] = std::move(aa);
+    o["c_before"] = std::move(cb);
+    o["c_after"] = std::move(ca);
+    o["omega_before"] = std::move(wb);
+    o["omega_after"] = std::move(wa);
+    o["accel_before"] = std::move(gb);
+    o["accel_after"] = std::move(ga);
+    o["feed_before"] = std::move(fb);
+    o["feed_after"] = std::move(fa);
+    o["pass"] = std::move(pass);
+    o["path"] = std::move(path);
+    json keys = json::array();
+    for (const PointRow& p : r.rows) {
+      if (p.key) keys.push_back(rounded(p.arc_mm));
+    }
+    o["key_arc_mm"] = std::move(keys);
+    // The tool axes, before and after, at every N-th point: tip, axis before, axis after, the
+    // synthetic a before and after.
+    json axes = json::array();
+    for (std::size_t i = 0; i < r.rows.size(); i += axes_every) {
+      const PointRow& p = r.rows[i];
+      const Vec3d before =
+          machine.ac.forward(Posed{deg_to_rad(p.a_before_deg), deg_to_rad(p.c_before_deg)});
+      axes.push_back({i, vec_json(p.tip_mm, 3), vec_json(before, 4), vec_json(p.axis, 4),
+                      rounded(p.accel_before_deg_s2), rounded(p.accel_deg_s2)});
+    }
+    o["axes"] = std::move(axes);
+    ops.push_back(std::move(o));
+    // Markers: every point where a check fired (not_checked is the operation's, shown on the
+    // path and in the header, not a marker at every point).
+    const std::uint32_t not_checked = static_cast<std::uint32_t>(PointMark::NotChecked);
+    for (std::size_t i = 0; i < r.rows.size(); ++i) {
+      const PointRow& p = r.rows[i];
+      const std::uint32_t m = p.marks & ~not_checked;
+      if (m == 0) continue;
+      ++marker_total;
+      if (markers.size() >= budget.max_markers) continue;
+      ++marker_kinds[m];
+      const Vec3d before =
+          machine.ac.forward(Posed{deg_to_rad(p.a_before_deg), deg_to_rad(p.c_before_deg)});
+      markers.push_back({{"op", k},
+                         {"i", i},
+                         {"line", p.line},
+                         {"marks", point_marks_text(m)},
+                         {"tip", vec_json(p.tip_mm, 3)},
+                         {"arc_mm", rounded(p.arc_mm)},
+                         {"tilt_before", rounded(p.a_before_deg)},
+                         {"c_before", rounded(p.c_before_deg)},
+                         {"tilt_after", rounded(p.a_deg)},
+                         {"c_after", rounded(p.c_deg)},
+                         {"axis_before", vec_json(before, 4)},
+                         {"axis_after", vec_json(p.axis, 4)}});
+    }
+  }
+  data["operations"] = std::move(ops);
+  data["markers"] = std::move(markers);
+  data["marker_total"] = marker_total;
+  data["plotted_points"] = plotted_total;
+  json findings = json::array();
+  for (const Finding& f : result.findings) {
+    findings.push_back({{"code", to_string(f.code)},
+                        {"severity", to_string(f.severity)},
+                        {"op", f.operation ? json(*f.operation) : json(nullptr)},
+                        {"line", f.line},
+                        {"message", f.message}});
+  }
+  data["findings"] = std::move(findings);
+
+  // The page: static header and summary (readable without scripts), then the views.
+  std::ostringstream page;
+  page << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
+       << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+       << "<title>taxopt: " << escape_html(toolpath.source) << "</title>\n"
+       << "<style>" << library_inside_element(assets.dygraph_css, "dygraph.min.css") << "</style>\n"
+       << "<style>" << kHtmlPageCss << "</style>\n</head><body>\n";
+  page << "<header><h1>taxopt &mdash; " << escape_html(toolpath.source)
+       << "</h1>\n<dl class=\"run\">"
+       << "<dt>command</dt><dd><code>" << escape_html(run.command_line) << "</code></dd>"
+       << "<dt>started</dt><dd>" << escape_html(run.started_utc) << "</dd>"
+       << "<dt>machine</dt><dd>" << escape_html(machine.name)
+       << (run.machine_file.empty() ? std::string(" (built in)")
+                                    : " (" + escape_html(run.machine_file) + ")")
+       << "</dd><dt>method</dt><dd>" << to_string(options.method) << "</dd>"
+       << "<dt>part</dt><dd>"
+       << (run.part_file.empty() ? std::string("none") : escape_html(run.part_file)) << "</dd>"
+       << "<dt>verdict</dt><dd class=\"" << (result.ok() ? "ok" : "problem") << "\">"
+       << (result.ok()
+               ? "no problem found"
+               : std::to_string(result.problems.size()) + " problems: the G-code is not to be used")
+       << "</dd></dl>\n";
+  if (!result.safety_warnings.empty() || !result.problems.empty() || !result.warnings.empty()) {
+    page << "<ul class=\"findings\">";
+    for (const auto& s : result.problems)
+      page << "<li class=\"problem\">" << escape_html(s) << "</li>";
+    for (const auto& s : result.safety_warnings) {
+      page << "<li class=\"unchecked\">NOT CHECKED: " << escape_html(s) << "</li>";
+    }
+    for (const auto& s : result.warnings)
+      page << "<li class=\"warning\">" << escape_html(s) << "</li>";
+    page << "</ul>\n";
+  }
+  page << "</header>\n<section><h2>Summary</h2>" << summary_table(result)
+       << "<p class=\"note\">&omega; and a: the synthetic angular velocity and acceleration of the "
+          "rotary axes (the paper's eqs. 16&ndash;18) at the programmed feed; the cycle at the "
+          "machine's limits (the feed schedule).</p></section>\n"
+       << kHtmlPageBody << "\n<script>" << library_inside_element(assets.three_js, "three.min.js")
+       << "</script>\n"
+       << "<script>" << library_inside_element(assets.orbit_controls_js, "OrbitControls.js")
+       << "</script>\n"
+       << "<script>" << library_inside_element(assets.dygraph_js, "dygraph.min.js") << "</script>\n"
+       << "<script type=\"application/json\" id=\"taxopt-data\">"
+       << json_inside_script(data.dump(-1, ' ', false, json::error_handler_t::replace))
+       << "</script>\n<script>" << kHtmlPageScript << "</script>\n"
+       << kHtmlPageLicences << "</body></html>\n";
+  return page.str();
+}
+
+}  // namespace taxopt

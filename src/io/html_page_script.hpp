@@ -221,6 +221,11 @@ Object.keys(MARKS).forEach(kind => {
     label.querySelector('input').addEventListener('change', e => { if (markerObjects[kind]) markerObjects[kind].visible = e.target.checked; draw(); });
     box2.appendChild(label);
   });
+  const unchecked = D.operations.reduce((s, o) => s + (o.checked ? 0 : o.points), 0);
+  const nc = document.createElement('label');
+  nc.innerHTML = `<input type="checkbox" disabled ${unchecked ? 'checked' : ''}> <span class="swatch" style="background:#8a8a8a"></span>not_checked (${unchecked}): the grey dashed path`;
+  nc.title = 'no collision check judged the tool at these points';
+  box2.appendChild(nc);
   const note = [];
   if (D.marker_total > D.markers.length) note.push(`markers: the first ${D.markers.length} of ${D.marker_total} points where a check fired are drawn`);
   if (D.decimation.plot_stride > 1) note.push(`plots and toolpath decimated: every ${D.decimation.plot_stride}th point of ${D.points}, with each stride's peaks of omega and a kept (${D.plotted_points} points shown)`);

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -221,4 +222,30 @@ TEST_CASE("html page: over the budget the plots keep every stride's peaks and sa
     CHECK(v.get<double>() >= last);
     last = v.get<double>();
   }
+}
+
+TEST_CASE(
+    "html page: --html refuses a folder, an alias of another file and missing libraries "
+    "before any work, and writes nothing",
+    "[html][cli]") {
+  TempDir t;
+  const std::string in = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls";
+  RunResult r = run_taxopt("--in " + in + " --html " + t.dir() + " -q");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("is a folder"));
+  r = run_taxopt("--in " + in + " --html " + t.path("o.nc") + " --gcode " + t.path("o.nc") + " -q");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--html and --gcode name the same file"));
+  r = run_taxopt("--in " + in + " --html " + in + " -q");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("is the input file"));
+  // The child inherits this process's environment (each ctest runs its own process).
+  ::setenv("TAXOPT_JAVASCRIPT_DIR", t.path("nowhere").c_str(), 1);
+  r = run_taxopt("--in " + in + " --html " + t.path("p.html") + " --gcode " + t.path("p.nc") +
+                 " -q");
+  ::unsetenv("TAXOPT_JAVASCRIPT_DIR");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("three/three.min.js"));
+  CHECK_FALSE(file_exists(t.path("p.html")));
+  CHECK_FALSE(file_exists(t.path("p.nc")));
 }

@@ -133,6 +133,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::NotABallMill: return "not_a_ball_mill";
     case FindingCode::LocalGouge: return "local_gouge";
     case FindingCode::InputAxesKept: return "input_axes_kept";
+    case FindingCode::TcpJointLimit: return "tcp_joint_limit";
     case FindingCode::MissingFeed: return "missing_feed";
     case FindingCode::JerkLimitExceeded: return "jerk_limit_exceeded";
     case FindingCode::LongerCycle: return "longer_cycle";

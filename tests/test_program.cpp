@@ -4,6 +4,7 @@
 // rotary axes home at the end; in every dialect, on every real CL file, and through rs274.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
 
@@ -451,4 +452,56 @@ TEST_CASE(
   // what the tool's length adds is what breaks it.
   const RunResult tip = run_taxopt(args);
   CHECK(tip.err.find("G-code line " + std::to_string(line) + " ") == std::string::npos);
+}
+
+TEST_CASE(
+    "program: LinuxCNC with TCP on, the joints on its rapids as its planner moves them are in "
+    "the report, and a joint past its limit is a warning naming the line",
+    "[program][tcp]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
+  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
+                     " --out-mesh " + t.path("g.stl"))
+              .code == 0);
+  const std::string common = "--in " + t.path("g.cls") + " --part " + t.path("g.stl") +
+                             " --gauge-length 50 --method paper --feed-schedule -q --report " +
+                             t.path("r.json") + " --gcode " + t.path("o.ngc") + " --machine ";
+  // The preset (tcp): the rapid down to a pass that tilts A by 2 deg while Z falls moves joint
+  // Z = f(Y, Z, A) past its 300 mm/s^2 (LinuxCNC's controller measured 307.61 at that line).
+  auto r = run_taxopt(common + d + "machines/linuxcnc-xyzac-trt.toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  auto report = nlohmann::json::parse(read_file(t.path("r.json")));
+  const auto& peaks = report["gcode"]["tcp_rapid_joint_peaks"];
+  REQUIRE(peaks.is_object());
+  std::vector<std::string> lines;
+  {
+    std::istringstream text(read_file(t.path("o.ngc")));
+    for (std::string l; std::getline(text, l);) lines.push_back(l);
+  }
+  bool warned = false;
+  for (const auto& f : report["findings"]) warned |= f["code"] == "tcp_joint_limit";
+  bool over = false;
+  for (const char* joint : {"X", "Y", "Z", "A", "C"}) {
+    INFO(joint);
+    const auto& p = peaks[joint];
+    const int line = p["accel_line"].get<int>();
+    if (line == 0) continue;
+    // The line is a rapid, or one written at a joint-safe feed.
+    const std::string block = lines.at(static_cast<std::size_t>(line - 1));
+    CHECK((block.rfind("G0 ", 0) == 0 || block.rfind("G1 ", 0) == 0));
+    const double limit = 300.0;  // the preset's every axis: mm/s^2 and deg/s^2
+    over |= p["accel_per_s2"].get<double>() > 1.001 * limit;
+  }
+  CHECK(over == warned);
+  CHECK(peaks["Z"]["accel_per_s2"].get<double>() > 300.0);  // as the controller measured
+  CHECK(warned);
+  // Machine mode: LinuxCNC plans the joints themselves; nothing to predict.
+  std::string toml = read_file(d + "machines/linuxcnc-xyzac-trt.toml");
+  toml.replace(toml.find("mode = \"tcp\""), 12, "mode = \"machine\"");
+  write_file(t.path("m.toml"), toml);
+  r = run_taxopt(common + t.path("m.toml"));
+  REQUIRE(r.code == 0);
+  report = nlohmann::json::parse(read_file(t.path("r.json")));
+  CHECK(report["gcode"]["tcp_rapid_joint_peaks"].is_null());
 }

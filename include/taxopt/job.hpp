@@ -304,6 +304,7 @@ enum class FindingCode {
   JerkLimitExceeded,  ///< a joint's jerk above its limit (velocity and acceleration hold)
   LongerCycle,        ///< at the machine's limits the new axes take longer than the input's
   ClFileNote,         ///< what the CL reader noted (a record skipped, a frame applied, ...)
+  TcpJointLimit,      ///< LinuxCNC tcp: a rapid its planner moves drives a joint past its limit
   // Problems: the output is not to be used (JobResult::ok() is false).
   NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
   UnreachablePose,       ///< no pose within the machine's axis ranges

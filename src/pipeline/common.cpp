@@ -23,7 +23,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::MissingFeed:
     case FindingCode::JerkLimitExceeded:
     case FindingCode::LongerCycle:
-    case FindingCode::ClFileNote: return Severity::Warning;
+    case FindingCode::ClFileNote:
+    case FindingCode::TcpJointLimit: return Severity::Warning;
     default: return Severity::Problem;
   }
 }

@@ -1,6 +1,9 @@
 // The write stage: the program written, read back as a controller reads it, and scheduled at
 // the machine's limits (stages.hpp).
+#include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "pipeline/stages.hpp"
@@ -117,6 +120,67 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
   }
 }
 
+/// The joints on one tcp rapid as LinuxCNC's planner moves it (GcodeProgram::
+/// tcp_rapid_joint_peaks): `from` and `to` in the program's axes (tip X Y Z mm, A C deg), on a
+/// straight line in their space at the path velocity and acceleration that keep every axis
+/// within `limits`, rest to rest; the joints (the tip's machine position, A, C) sampled each
+/// 1 ms servo period and differenced over 10 (the window of scripts/linuxcnc_controller.py),
+/// the move extended by the rest on either side. Raises `peaks` where the move exceeds them.
+void tcp_rapid_peaks(const Machine& machine, const JointPosition& from, const JointPosition& to,
+                     const JointLimits& limits, int line, std::vector<JointPeak>& peaks) {
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  // The path u in [0, 1]: its velocity and acceleration limits from the axes that move.
+  double u_vel = std::numeric_limits<double>::infinity(), u_acc = u_vel;
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    const double d = std::abs(to[j] - from[j]);
+    if (d < 1e-12) continue;
+    if (limits[j].max_velocity_per_s > 0.0)
+      u_vel = std::min(u_vel, limits[j].max_velocity_per_s / d);
+    if (limits[j].max_accel_per_s2 > 0.0) u_acc = std::min(u_acc, limits[j].max_accel_per_s2 / d);
+  }
+  if (!std::isfinite(u_vel) || !std::isfinite(u_acc)) return;  // no move, or no limits to plan on
+  // Trapezoid (or triangle) of u.
+  double t_acc = u_vel / u_acc, cruise_s = 0.0;
+  if (u_vel * t_acc >= 1.0) {
+    t_acc = std::sqrt(1.0 / u_acc);
+  } else {
+    cruise_s = (1.0 - u_vel * t_acc) / u_vel;
+  }
+  const double top = u_acc * t_acc, total_s = 2.0 * t_acc + cruise_s;
+  const auto u_at = [&](double t) {
+    if (t <= 0.0) return 0.0;
+    if (t >= total_s) return 1.0;
+    if (t < t_acc) return 0.5 * u_acc * t * t;
+    if (t < t_acc + cruise_s) return 0.5 * u_acc * t_acc * t_acc + top * (t - t_acc);
+    const double r = total_s - t;
+    return 1.0 - 0.5 * u_acc * r * r;
+  };
+  const auto joints_at = [&](double t) {
+    const double u = u_at(t);
+    JointPosition p{};
+    for (std::size_t j = 0; j < kJointCount; ++j) p[j] = from[j] + u * (to[j] - from[j]);
+    const Posed pose{deg_to_rad(p[kA]), deg_to_rad(p[kC])};
+    const Vec3d m = machine.ac.to_machine_mm(Vec3d(p[0], p[1], p[2]), pose);
+    return JointPosition{m.x(), m.y(), m.z(), p[kA], p[kC]};
+  };
+  constexpr double kPeriodS = 1e-3, kWindowS = 10 * kPeriodS;
+  const long steps = static_cast<long>(std::ceil((total_s + 2.0 * kWindowS) / kPeriodS));
+  if (steps > 10'000'000) return;  // a rapid of hours: no controller test runs it
+  peaks.resize(kJointCount);
+  for (long i = 0; i <= steps; ++i) {
+    const double t = -kWindowS + static_cast<double>(i) * kPeriodS;
+    const JointPosition before = joints_at(t - kWindowS), here = joints_at(t),
+                        after = joints_at(t + kWindowS);
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      const double v = std::abs(after[j] - before[j]) / (2.0 * kWindowS);
+      const double a = std::abs(after[j] - 2.0 * here[j] + before[j]) / (kWindowS * kWindowS);
+      if (v > peaks[j].velocity_per_s) peaks[j].velocity_per_s = v, peaks[j].velocity_line = line;
+      if (a > peaks[j].accel_per_s2) peaks[j].accel_per_s2 = a, peaks[j].accel_line = line;
+    }
+  }
+}
+
 /// GcodeProgram::time_s: the feed blocks at their scheduled times (the operations'
 /// feed_time_s), every rapid block read back rest to rest (rapid_time_s) in the space the
 /// controller plans it in. The machine's state is followed from the end of the first retract
@@ -131,6 +195,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   double feed_s = 0.0, rapid_s = 0.0;
   for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
+  g.tcp_rapid_joint_peaks.clear();
   JointPosition q{};
   bool known = false;
   int from_line = 0;
@@ -204,6 +269,9 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
           }
         }
         rapid_s += rapid_time_s(a, b, capped);
+        if (machine.gcode.dialect == GcodeDialect::LinuxCNC) {
+          tcp_rapid_peaks(machine, a, b, capped, m.line, g.tcp_rapid_joint_peaks);
+        }
       }
     } else {
       // The joints, the written X Y Z the controlled point: the tip with the tool length
@@ -223,6 +291,40 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;
   g.time_tool_length_mm = length_mm;
+}
+
+/// A warning where a tcp rapid drives a joint past its limit as LinuxCNC moves it
+/// (GcodeProgram::tcp_rapid_joint_peaks; 0.1 % for the filter's rounding). The program cannot
+/// help it: LinuxCNC accelerates the program's axes at their [AXIS_*] limits whatever the F word
+/// (measured, issue 36).
+void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobResult& res) {
+  const std::vector<JointPeak>& peaks = res.gcode.tcp_rapid_joint_peaks;
+  std::ostringstream os;
+  os.precision(4);
+  int over = 0, first_line = 0;
+  for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
+    const std::string name = joint_name(static_cast<Joint>(j), machine.ac.tilt_letter());
+    const std::string unit = j < 3 ? "mm" : "deg";
+    const double v_max = limits[j].max_velocity_per_s, a_max = limits[j].max_accel_per_s2;
+    if (v_max > 0.0 && peaks[j].velocity_per_s > 1.001 * v_max) {
+      os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].velocity_per_s << " "
+         << unit << "/s against " << v_max << " (G-code line " << peaks[j].velocity_line << ")";
+      if (!first_line) first_line = peaks[j].velocity_line;
+    }
+    if (a_max > 0.0 && peaks[j].accel_per_s2 > 1.001 * a_max) {
+      os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].accel_per_s2 << " "
+         << unit << "/s^2 against " << a_max << " (G-code line " << peaks[j].accel_line << ")";
+      if (!first_line) first_line = peaks[j].accel_line;
+    }
+  }
+  if (!over) return;
+  add_finding(res, FindingCode::TcpJointLimit, std::nullopt, first_line,
+              "LinuxCNC plans a rapid with TCP on in the program's axes, each within its "
+              "[AXIS_*] limit, and the joints follow through the kinematics: predicted " +
+                  os.str() +
+                  ". No F word changes how hard it accelerates; [AXIS_*] MAX_ACCELERATION "
+                  "(and MAX_VELOCITY) set below the [JOINT_*] ones in the INI keep the joints "
+                  "within theirs, or post in machine mode (docs/feed-schedule.md)");
 }
 
 }  // namespace
@@ -327,6 +429,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     read_back(machine, posted, res.gcode, w);
   }
   program_time(run, w, limits, res.gcode_units, res.gcode);
+  tcp_joint_findings(machine, limits, res);
   w.write_s = seconds_since(t0);
   return w;
 }

@@ -52,6 +52,13 @@ struct PostedOperation {
 std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
                                              const std::vector<Posed>& poses);
 
+/// A joint's peak velocity and acceleration, per second (mm for X Y Z, deg for A C), and the
+/// G-code lines where they occur (0: none).
+struct JointPeak {
+  double velocity_per_s = 0.0, accel_per_s2 = 0.0;
+  int velocity_line = 0, accel_line = 0;
+};
+
 /// Written G-code and where each point went.
 struct GcodeProgram {
   std::string text;
@@ -79,6 +86,13 @@ struct GcodeProgram {
   double time_s = 0.0;
   int time_from_line = 0;
   double time_tool_length_mm = 0.0;
+  /// LinuxCNC in tcp mode: the joints (X Y Z A C) on the rapids (and the rapids written at a
+  /// joint-safe feed) as its planner moves them: a straight line in the program's axes (tip
+  /// X Y Z, A, C), rest to rest, at the largest path velocity and acceleration within every
+  /// axis's limit; the joints through the kinematics, filtered as the controller test filters
+  /// the commanded joints (central differences over 10 ms). Empty otherwise (measured only on
+  /// LinuxCNC; machine-mode rapids are planned in the joints, within their limits).
+  std::vector<JointPeak> tcp_rapid_joint_peaks;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.
   std::vector<int> verbatim_lines;

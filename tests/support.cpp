@@ -446,4 +446,21 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
   return g;
 }
 
+Heightfield wall_heightfield() {
+  Heightfield hf;
+  hf.name = "wall";
+  hf.z = [](double, double y) { return 30.0 / (1.0 + std::exp(-(y - 24.0) / 0.6)); };
+  hf.normal = [z = hf.z](double x, double y) {
+    const double e = 1e-5;
+    return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
+  };
+  return hf;
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 }  // namespace taxopt::test

@@ -65,6 +65,8 @@ struct RunResult {
 RunResult run(const std::string& command);
 /// Runs the taxopt CLI with the given arguments (already quoted as needed).
 RunResult run_taxopt(const std::string& args);
+/// Occurrences of `what` in `text` (overlapping ones too).
+std::size_t count_of(const std::string& text, const std::string& what);
 /// True when LinuxCNC's rs274 is installed.
 bool have_rs274();
 
@@ -117,6 +119,9 @@ struct Heightfield {
   std::function<double(double, double)> z;
   std::function<Vec3d(double, double)> normal;  // unit, upward
 };
+/// A wall 30 mm high rising across y = 24 mm (a logistic step 0.6 mm wide) beside a flat floor:
+/// a path along x near it leans the shank or holder into it.
+Heightfield wall_heightfield();
 /// Seeded random heightfields of the kinds a CAM user meets: a steep flank, a bump, a wall;
 /// their concave radii stay above 3 mm, so a 3 mm ball can follow them without gouging.
 std::vector<Heightfield> random_heightfields(std::mt19937& rng);

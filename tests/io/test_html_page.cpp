@@ -14,12 +14,6 @@ using namespace taxopt::test;
 
 namespace {
 
-std::size_t count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 /// The page's data: the JSON of its `taxopt-data` script element.
 nlohmann::json page_data(const std::string& page) {
   const std::string open = "<script type=\"application/json\" id=\"taxopt-data\">";
@@ -27,19 +21,6 @@ nlohmann::json page_data(const std::string& page) {
   REQUIRE(at != std::string::npos);
   const std::size_t start = at + open.size();
   return nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
-}
-
-/// The wall beside a flat path of the plots' test: with the input's vertical axes the holder
-/// (radius 14 mm) reaches the wall.
-Heightfield wall() {
-  Heightfield hf;
-  hf.name = "wall";
-  hf.z = [](double, double y) { return 30.0 / (1.0 + std::exp(-(y - 24.0) / 0.6)); };
-  hf.normal = [z = hf.z](double x, double y) {
-    const double e = 1e-5;
-    return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
-  };
-  return hf;
 }
 
 HtmlAssets tiny_assets() {
@@ -55,7 +36,7 @@ HtmlAssets tiny_assets() {
 
 TEST_CASE("html page: a mesh over the budget is clustered within it, without collapsed triangles",
           "[html]") {
-  Heightfield hf = wall();
+  Heightfield hf = wall_heightfield();
   const TriangleMesh mesh = heightfield_mesh(hf, 0.25, -20.0, 40.0, -10.0, 50.0);
   REQUIRE(mesh.faces.size() > 100000);
   double cell = -1.0;
@@ -106,7 +87,7 @@ TEST_CASE(
     "a message cannot end the data early",
     "[html][cli]") {
   TempDir t;
-  const Heightfield hf = wall();
+  const Heightfield hf = wall_heightfield();
   write_file(t.path("in.cls"), raster_cl(hf, 3.0, 0.0, 2, 1.0, 17.0, 17.0, 0.0, 20.0).text);
   write_file(t.path("part.stl"),
              format_stl_binary(heightfield_mesh(hf, 0.25, -10.0, 30.0, 0.0, 40.0)));
@@ -161,9 +142,9 @@ TEST_CASE(
   CHECK(data["points"].get<std::size_t>() == points);
   CHECK(data["collision_checked"].get<bool>());
   // The libraries are in the page, nothing is loaded from elsewhere.
-  CHECK(count(page, "<script src") == 0);
-  CHECK(count(page, "OrbitControls") > 0);
-  CHECK(count(page, "Dygraph") > 0);
+  CHECK(count_of(page, "<script src") == 0);
+  CHECK(count_of(page, "OrbitControls") > 0);
+  CHECK(count_of(page, "Dygraph") > 0);
 
   // A finding whose message holds "</script>" (a CL file's operation name can) stays inside
   // the data element, and the header shows it escaped.
@@ -181,8 +162,8 @@ TEST_CASE(
   CHECK(d["findings"][0]["message"] == "at </script> line 7 <!--");
   CHECK(d["operations"][0]["name"] == "</script><b>op");
   CHECK(d["markers"].size() == 1);
-  CHECK(count(hostile, "<b>op") == 0);
-  CHECK(count(hostile, "&lt;/script&gt;") > 0);
+  CHECK(count_of(hostile, "<b>op") == 0);
+  CHECK(count_of(hostile, "&lt;/script&gt;") > 0);
 }
 
 TEST_CASE("html page: over the budget the plots keep every stride's peaks and say how they thin",

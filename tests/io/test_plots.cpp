@@ -10,12 +10,6 @@ using namespace taxopt::test;
 
 namespace {
 
-std::size_t count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 /// The y coordinates of the points of the n-th polyline of an SVG.
 std::vector<double> polyline_y(const std::string& svg, std::size_t nth) {
   std::size_t at = 0;
@@ -47,8 +41,8 @@ TEST_CASE("plots: a line plot has its title, axis labels, legend and every serie
        {"arc length (mm)", "omega (deg/s)", ">before<", ">after<", ">segment boundaries<"}) {
     CHECK_THAT(svg, Catch::Contains(text));
   }
-  CHECK(count(svg, "<polyline") == 2);
-  CHECK(count(svg, "stroke-dasharray=\"5,3\" points=") == 1);
+  CHECK(count_of(svg, "<polyline") == 2);
+  CHECK(count_of(svg, "stroke-dasharray=\"5,3\" points=") == 1);
 }
 
 TEST_CASE("plots: a long series is reduced per pixel column and keeps its peak", "[plots]") {
@@ -77,13 +71,7 @@ TEST_CASE("plots: --plots writes A, C, omega, a and the C-space maps -- blocked 
           "[plots][cli]") {
   // A wall beside a flat path, axes leaning the shank into it (as in the wall acceptance
   // test): the map of the most constrained point must show blocked and free cells.
-  Heightfield hf;
-  hf.name = "wall";
-  hf.z = [](double, double y) { return 30.0 / (1.0 + std::exp(-(y - 24.0) / 0.6)); };
-  hf.normal = [z = hf.z](double x, double y) {
-    const double e = 1e-5;
-    return Vec3d(0.0, -(z(x, y + e) - z(x, y - e)) / (2 * e), 1.0).normalized();
-  };
+  const Heightfield hf = wall_heightfield();
   TempDir t;
   write_file(t.path("in.cls"), raster_cl(hf, 3.0, 0.0, 1, 1.0, 16.0, 16.0, 0.0, 20.0).text);
   write_file(t.path("part.stl"),
@@ -96,7 +84,7 @@ TEST_CASE("plots: --plots writes A, C, omega, a and the C-space maps -- blocked 
   for (const char* f : {"op1-angles-a.svg", "op1-angles-c.svg", "op1-omega.svg", "op1-accel.svg"}) {
     INFO(f);
     const std::string svg = read_file(t.path("plots/") + f);
-    CHECK(count(svg, "<polyline") == 2);
+    CHECK(count_of(svg, "<polyline") == 2);
     CHECK_THAT(svg, Catch::Contains("arc length along the path (mm)"));
   }
   std::size_t maps = 0, blocked = 0;
@@ -105,8 +93,8 @@ TEST_CASE("plots: --plots writes A, C, omega, a and the C-space maps -- blocked 
     if (!file_exists(path)) continue;
     ++maps;
     const std::string svg = read_file(path);
-    CHECK(count(svg, "fill=\"#bfe3b4\" stroke") > 0);  // free cells
-    blocked += count(svg, "fill=\"#d9534f\" stroke");
+    CHECK(count_of(svg, "fill=\"#bfe3b4\" stroke") > 0);  // free cells
+    blocked += count_of(svg, "fill=\"#d9534f\" stroke");
     CHECK_THAT(svg, Catch::Contains("input axis (tilt"));
     CHECK_THAT(svg, Catch::Contains("output axis (tilt"));
   }

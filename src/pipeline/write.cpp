@@ -238,9 +238,9 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (machine.gcode.mode == GcodeMode::Tcp && m.tcp && (!switched || m.length_offset)) {
       // The program's axes: the tip where the joints stand, the words given replacing it.
       Vec3d tip = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
-      const Vec3d written = m.xyz_mm;
+      const Vec3d written_tip = tip_of_written_mm(machine, m.xyz_mm, to_pose);
       for (int k = 0; k < 3; ++k) {
-        if (gives[k]) tip[k] = tip_of_written_mm(machine, written, to_pose)[k];
+        if (gives[k]) tip[k] = written_tip[k];
       }
       const Vec3d xyz = machine.ac.to_machine_mm(tip, to_pose);
       to[0] = xyz.x();

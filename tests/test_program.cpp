@@ -455,8 +455,8 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "program: LinuxCNC with TCP on, the joints on its rapids as its planner moves them are in "
-    "the report, and a joint past its limit is a warning naming the line",
+    "program: LinuxCNC with TCP on, the joints where its planner accelerates at the axes' limits "
+    "are in the report, and a joint past its limit is a warning naming the line",
     "[program][tcp]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
@@ -472,7 +472,7 @@ TEST_CASE(
   INFO(r.err);
   REQUIRE(r.code == 0);
   auto report = nlohmann::json::parse(read_file(t.path("r.json")));
-  const auto& peaks = report["gcode"]["tcp_rapid_joint_peaks"];
+  const auto& peaks = report["gcode"]["tcp_joint_peaks"];
   REQUIRE(peaks.is_object());
   std::vector<std::string> lines;
   {
@@ -487,7 +487,7 @@ TEST_CASE(
     const auto& p = peaks[joint];
     const int line = p["accel_line"].get<int>();
     if (line == 0) continue;
-    // The line is a rapid, or one written at a joint-safe feed.
+    // The line is a motion block: a rapid, a feed block that starts or ends a chain.
     const std::string block = lines.at(static_cast<std::size_t>(line - 1));
     CHECK((block.rfind("G0 ", 0) == 0 || block.rfind("G1 ", 0) == 0));
     const double limit = 300.0;  // the preset's every axis: mm/s^2 and deg/s^2
@@ -503,5 +503,5 @@ TEST_CASE(
   r = run_taxopt(common + t.path("m.toml"));
   REQUIRE(r.code == 0);
   report = nlohmann::json::parse(read_file(t.path("r.json")));
-  CHECK(report["gcode"]["tcp_rapid_joint_peaks"].is_null());
+  CHECK(report["gcode"]["tcp_joint_peaks"].is_null());
 }

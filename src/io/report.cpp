@@ -200,22 +200,22 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                 {"time_from_line", result.gcode.time_from_line},
                 {"time_tool_length_mm", result.gcode.time_tool_length_mm}};
   // LinuxCNC tcp: the joints on the rapids as its planner moves them, by joint name.
-  if (result.gcode.tcp_rapid_joint_peaks.empty()) {
-    j["gcode"]["tcp_rapid_joint_peaks"] = nullptr;
+  if (result.gcode.tcp_joint_peaks.empty()) {
+    j["gcode"]["tcp_joint_peaks"] = nullptr;
     j["gcode"]["null_reasons"] = {
-        {"tcp_rapid_joint_peaks",
+        {"tcp_joint_peaks",
          "no rapid planned in the program's axes (not LinuxCNC with TCP on, or no rapid)"}};
   } else {
     nlohmann::json peaks = nlohmann::json::object();
-    for (std::size_t q = 0; q < result.gcode.tcp_rapid_joint_peaks.size() && q < kJointCount; ++q) {
-      const JointPeak& p = result.gcode.tcp_rapid_joint_peaks[q];
+    for (std::size_t q = 0; q < result.gcode.tcp_joint_peaks.size() && q < kJointCount; ++q) {
+      const JointPeak& p = result.gcode.tcp_joint_peaks[q];
       peaks[joint_name(static_cast<Joint>(q), result.tilt_letter)] = {
           {"velocity_per_s", p.velocity_per_s},
           {"velocity_line", p.velocity_line},
           {"accel_per_s2", p.accel_per_s2},
           {"accel_line", p.accel_line}};
     }
-    j["gcode"]["tcp_rapid_joint_peaks"] = peaks;
+    j["gcode"]["tcp_joint_peaks"] = peaks;
   }
   nlohmann::json ops = nlohmann::json::array();
   for (const auto& r : result.operations) {

@@ -120,41 +120,57 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
   }
 }
 
-/// The joints on one tcp rapid as LinuxCNC's planner moves it (GcodeProgram::
-/// tcp_rapid_joint_peaks): `from` and `to` in the program's axes (tip X Y Z mm, A C deg), on a
-/// straight line in their space at the path velocity and acceleration that keep every axis
-/// within `limits`, rest to rest; the joints (the tip's machine position, A, C) sampled each
-/// 1 ms servo period and differenced over 10 (the window of scripts/linuxcnc_controller.py),
-/// the move extended by the rest on either side. Raises `peaks` where the move exceeds them.
-void tcp_rapid_peaks(const Machine& machine, const JointPosition& from, const JointPosition& to,
-                     const JointLimits& limits, int line, std::vector<JointPeak>& peaks) {
+/// One block with TCP on as LinuxCNC's planner moves it (GcodeProgram::tcp_joint_peaks): `from`
+/// and `to` in the program's axes (tip X Y Z mm, A C deg), on a straight line in their space,
+/// at the path velocity (at most `rate_per_s` of the block a second, the written F) and the
+/// path acceleration that keep every axis within `limits`; from rest and to rest where the
+/// block starts or ends a chain (LinuxCNC never blends a rapid with a feed block, measured),
+/// else at that velocity through the end. The joints (the tip's machine position, A, C) sampled
+/// each 1 ms servo period and differenced over 10 (the window of scripts/linuxcnc_controller.py),
+/// the motion before and after the block extended at its end velocities. Raises `peaks` where
+/// the block exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's
+/// first or last block shorter than its ramp: the blocks beside it are not followed).
+void tcp_block_peaks(const Machine& machine, const JointPosition& from, const JointPosition& to,
+                     const JointLimits& limits, double rate_per_s, bool start_rest, bool end_rest,
+                     int line, std::vector<JointPeak>& peaks) {
   constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   // The path u in [0, 1]: its velocity and acceleration limits from the axes that move.
-  double u_vel = std::numeric_limits<double>::infinity(), u_acc = u_vel;
+  double u_vel = rate_per_s > 0.0 ? rate_per_s : std::numeric_limits<double>::infinity();
+  double u_acc = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < kJointCount; ++j) {
     const double d = std::abs(to[j] - from[j]);
     if (d < 1e-12) continue;
-    if (limits[j].max_velocity_per_s > 0.0)
+    if (limits[j].max_velocity_per_s > 0.0) {
       u_vel = std::min(u_vel, limits[j].max_velocity_per_s / d);
+    }
     if (limits[j].max_accel_per_s2 > 0.0) u_acc = std::min(u_acc, limits[j].max_accel_per_s2 / d);
   }
   if (!std::isfinite(u_vel) || !std::isfinite(u_acc)) return;  // no move, or no limits to plan on
-  // Trapezoid (or triangle) of u.
-  double t_acc = u_vel / u_acc, cruise_s = 0.0;
-  if (u_vel * t_acc >= 1.0) {
-    t_acc = std::sqrt(1.0 / u_acc);
-  } else {
-    cruise_s = (1.0 - u_vel * t_acc) / u_vel;
+  if (!start_rest && !end_rest) return;  // the schedule's: joint rates along the chain
+  // u(t) over [0, total_s]: a ramp up from rest (start_rest), a cruise, a ramp down to rest
+  // (end_rest); v_in and v_out its velocities at the ends.
+  double t_up = start_rest ? u_vel / u_acc : 0.0, t_down = end_rest ? u_vel / u_acc : 0.0;
+  double top = u_vel;
+  const double ramps_u = 0.5 * u_acc * (t_up * t_up + t_down * t_down);
+  if (ramps_u >= 1.0) {
+    // The ramps meet: the top velocity is what the block's length allows.
+    top = std::sqrt(u_acc / ((start_rest ? 0.5 : 0.0) + (end_rest ? 0.5 : 0.0)));
+    t_up = start_rest ? top / u_acc : 0.0;
+    t_down = end_rest ? top / u_acc : 0.0;
   }
-  const double top = u_acc * t_acc, total_s = 2.0 * t_acc + cruise_s;
+  const double cruise_s =
+      std::max(0.0, (1.0 - 0.5 * u_acc * (t_up * t_up + t_down * t_down)) / std::max(top, 1e-300));
+  const double total_s = t_up + cruise_s + t_down;
+  const double v_in = start_rest ? 0.0 : top, v_out = end_rest ? 0.0 : top;
   const auto u_at = [&](double t) {
-    if (t <= 0.0) return 0.0;
-    if (t >= total_s) return 1.0;
-    if (t < t_acc) return 0.5 * u_acc * t * t;
-    if (t < t_acc + cruise_s) return 0.5 * u_acc * t_acc * t_acc + top * (t - t_acc);
+    if (t <= 0.0) return v_in * t;
+    if (t >= total_s) return 1.0 + v_out * (t - total_s);
+    if (t < t_up) return 0.5 * u_acc * t * t;
+    const double up_u = 0.5 * u_acc * t_up * t_up;
+    if (t < t_up + cruise_s) return up_u + top * (t - t_up);
     const double r = total_s - t;
-    return 1.0 - 0.5 * u_acc * r * r;
+    return end_rest ? 1.0 - 0.5 * u_acc * r * r : 1.0 - top * r;
   };
   const auto joints_at = [&](double t) {
     const double u = u_at(t);
@@ -166,7 +182,7 @@ void tcp_rapid_peaks(const Machine& machine, const JointPosition& from, const Jo
   };
   constexpr double kPeriodS = 1e-3, kWindowS = 10 * kPeriodS;
   const long steps = static_cast<long>(std::ceil((total_s + 2.0 * kWindowS) / kPeriodS));
-  if (steps > 10'000'000) return;  // a rapid of hours: no controller test runs it
+  if (steps > 10'000'000) return;  // a block of hours: no controller test runs it
   peaks.resize(kJointCount);
   for (long i = 0; i <= steps; ++i) {
     const double t = -kWindowS + static_cast<double>(i) * kPeriodS;
@@ -195,7 +211,26 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   double feed_s = 0.0, rapid_s = 0.0;
   for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
-  g.tcp_rapid_joint_peaks.clear();
+  // LinuxCNC with TCP on: the joints on its blocks (GcodeProgram::tcp_joint_peaks). A feed
+  // block waits for the next block to know whether it ends at rest.
+  g.tcp_joint_peaks.clear();
+  const bool lcnc = machine.gcode.dialect == GcodeDialect::LinuxCNC;
+  struct PendingFeed {
+    JointPosition from, to;
+    double rate_per_s;
+    bool start_rest;
+    int line;
+  };
+  std::optional<PendingFeed> pending;
+  bool after_feed = false;  // the previous block was a tcp feed block (its chain goes on)
+  const auto flush_feed = [&](bool ends_at_rest) {
+    if (pending) {
+      tcp_block_peaks(machine, pending->from, pending->to, limits, pending->rate_per_s,
+                      pending->start_rest, ends_at_rest, pending->line, g.tcp_joint_peaks);
+    }
+    pending.reset();
+    after_feed = !ends_at_rest;
+  };
   JointPosition q{};
   bool known = false;
   int from_line = 0;
@@ -213,6 +248,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (gives[4]) to[kC] = m.c_deg;
     const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
     const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
+    if (m.retract || !known) flush_feed(true);
     if (m.retract) {
       // Machine coordinates: the spindle's reference point to the retract height.
       if (gives[2]) to[2] = t.retract_z_mm - length_mm;
@@ -248,32 +284,40 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
       to[2] = xyz.z();
       const bool safe_rapid =
           std::binary_search(g.joint_safe_rapids.begin(), g.joint_safe_rapids.end(), m.line);
+      const Vec3d was = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
+      const JointPosition a{was.x(), was.y(), was.z(), q[kA], q[kC]};
+      const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
+      // The written F as a rate of the block a second: the tip's distance (the rotary one when
+      // only A and C turn) per minute, or under G93 the block's inverse time.
+      const double tip_mm = (tip - was).norm();
+      const double rot_deg = std::hypot(to[kA] - q[kA], to[kC] - q[kC]);
+      const double rate = !(m.feed > 0.0) || m.rapid ? 0.0
+                          : m.inverse_time           ? m.feed / 60.0
+                          : tip_mm > 1e-9            ? m.feed * mm_per_unit(units) / 60.0 / tip_mm
+                                          : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
       if (m.rapid || safe_rapid) {
-        const Vec3d was = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
-        const JointPosition a{was.x(), was.y(), was.z(), q[kA], q[kC]};
-        const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
         JointLimits capped = limits;
-        if (safe_rapid && m.feed > 0.0) {
-          // A rapid written at a joint-safe feed: every axis at that rate along the move.
-          const double tip_mm = (tip - was).norm();
-          const double rot_deg = std::hypot(to[kA] - q[kA], to[kC] - q[kC]);
-          const double rate = m.inverse_time  ? m.feed / 60.0
-                              : tip_mm > 1e-9 ? m.feed * mm_per_unit(units) / 60.0 / tip_mm
-                                              : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
-          for (std::size_t k = 0; k < kJointCount && rate > 0.0; ++k) {
-            const double v = rate * std::abs(b[k] - a[k]);
-            if (v > 0.0 &&
-                (capped[k].max_velocity_per_s <= 0.0 || v < capped[k].max_velocity_per_s)) {
-              capped[k].max_velocity_per_s = v;
-            }
+        // A rapid written at a joint-safe feed: every axis at that rate along the move.
+        for (std::size_t k = 0; k < kJointCount && safe_rapid && rate > 0.0; ++k) {
+          const double v = rate * std::abs(b[k] - a[k]);
+          if (v > 0.0 &&
+              (capped[k].max_velocity_per_s <= 0.0 || v < capped[k].max_velocity_per_s)) {
+            capped[k].max_velocity_per_s = v;
           }
         }
         rapid_s += rapid_time_s(a, b, capped);
-        if (machine.gcode.dialect == GcodeDialect::LinuxCNC) {
-          tcp_rapid_peaks(machine, a, b, capped, m.line, g.tcp_rapid_joint_peaks);
-        }
+        flush_feed(true);
+        if (lcnc)
+          tcp_block_peaks(machine, a, b, capped, 0.0, true, true, m.line, g.tcp_joint_peaks);
+      } else if (lcnc) {
+        // A feed block: from rest after a rapid (or as the program's first), to rest before one
+        // (known at the next block).
+        const bool start_rest = !after_feed;
+        flush_feed(false);
+        pending = PendingFeed{a, b, rate, start_rest, m.line};
       }
     } else {
+      flush_feed(true);
       // The joints, the written X Y Z the controlled point: the tip with the tool length
       // offset on, else the spindle's reference point.
       const double above = m.length_offset ? 0.0 : length_mm;
@@ -288,17 +332,18 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     q = to;
     if (known) w.spindle_mm[index] = spindle(q);
   }
+  flush_feed(true);
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;
   g.time_tool_length_mm = length_mm;
 }
 
-/// A warning where a tcp rapid drives a joint past its limit as LinuxCNC moves it
-/// (GcodeProgram::tcp_rapid_joint_peaks; 0.1 % for the filter's rounding). The program cannot
+/// A warning where a block with TCP on drives a joint past its limit as LinuxCNC moves it
+/// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding). The program cannot
 /// help it: LinuxCNC accelerates the program's axes at their [AXIS_*] limits whatever the F word
 /// (measured, issue 36).
 void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobResult& res) {
-  const std::vector<JointPeak>& peaks = res.gcode.tcp_rapid_joint_peaks;
+  const std::vector<JointPeak>& peaks = res.gcode.tcp_joint_peaks;
   std::ostringstream os;
   os.precision(4);
   int over = 0, first_line = 0;
@@ -319,8 +364,10 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobRe
   }
   if (!over) return;
   add_finding(res, FindingCode::TcpJointLimit, std::nullopt, first_line,
-              "LinuxCNC plans a rapid with TCP on in the program's axes, each within its "
-              "[AXIS_*] limit, and the joints follow through the kinematics: predicted " +
+              "LinuxCNC plans its blocks with TCP on in the program's axes, each within its "
+              "[AXIS_*] limit, and the joints follow through the kinematics; where it "
+              "accelerates at those limits (rapids, the start and end of a chain of feed "
+              "blocks) predicted " +
                   os.str() +
                   ". No F word changes how hard it accelerates; [AXIS_*] MAX_ACCELERATION "
                   "(and MAX_VELOCITY) set below the [JOINT_*] ones in the INI keep the joints "

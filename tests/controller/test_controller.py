@@ -20,7 +20,7 @@ retracts). Asserted, for each program:
 - the controller's time from the end of the first retract to the end is within 3 % of the
   report's `gcode.time_s`.
 - every joint's acceleration stays within its MAX_ACCELERATION (the same filter, 0.5 %), except
-  where the report predicts it on a tcp rapid (gcode.tcp_rapid_joint_peaks: the same line,
+  where the report predicts it (gcode.tcp_joint_peaks: the same line,
   within 2 %) and warns of it (tcp_joint_limit): in tcp mode LinuxCNC limits the accelerations
   of the program's axes, not of the joints, and no F word changes how hard it accelerates.
 
@@ -148,10 +148,10 @@ def main():
                                    p["velocity_line"]))
         # Accelerations: LinuxCNC accelerates the program's axes at their limits, and where it
         # plans a tcp rapid the joints may pass theirs. Every such overshoot must be the one the
-        # report predicts (gcode.tcp_rapid_joint_peaks: the same line, within 2 %) and warns
+        # report predicts (gcode.tcp_joint_peaks: the same line, within 2 %) and warns
         # of (tcp_joint_limit); anywhere else a joint past its limit fails.
         names = ["X", "Y", "Z", "B" if kins == "xyzbc" else "A", "C"]
-        tcp_peaks = rep["gcode"].get("tcp_rapid_joint_peaks") or {}
+        tcp_peaks = rep["gcode"].get("tcp_joint_peaks") or {}
         warned = any(f["code"] == "tcp_joint_limit" for f in rep["findings"])
         worst_predicted = 0.0
         for j, p in sorted(joints.items()):
@@ -189,7 +189,7 @@ def main():
                        ratio("max_accel", "limit_accel"), worst_predicted,
                        s.get("point_miss_mm", -1), s.get("point_miss_deg", -1)))
     print("\n| program | report s | controller s | difference | joint velocity / limit "
-          "| joint acceleration / limit | predicted on tcp rapids | point off, mm "
+          "| joint acceleration / limit | predicted (tcp) / limit | point off, mm "
           "| point off, deg |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:

@@ -86,13 +86,15 @@ struct GcodeProgram {
   double time_s = 0.0;
   int time_from_line = 0;
   double time_tool_length_mm = 0.0;
-  /// LinuxCNC in tcp mode: the joints (X Y Z A C) on the rapids (and the rapids written at a
-  /// joint-safe feed) as its planner moves them: a straight line in the program's axes (tip
-  /// X Y Z, A, C), rest to rest, at the largest path velocity and acceleration within every
-  /// axis's limit; the joints through the kinematics, filtered as the controller test filters
-  /// the commanded joints (central differences over 10 ms). Empty otherwise (measured only on
-  /// LinuxCNC; machine-mode rapids are planned in the joints, within their limits).
-  std::vector<JointPeak> tcp_rapid_joint_peaks;
+  /// LinuxCNC in tcp mode: the joints (X Y Z A C) as its planner moves them where it
+  /// accelerates at the axes' limits: on the rapids (and the rapids written at a joint-safe
+  /// feed), rest to rest, and on the feed blocks that start a chain from rest or end it at rest;
+  /// each a straight line in the program's axes (tip X Y Z, A, C) at the path velocity and
+  /// acceleration within every axis's limit, the joints through the kinematics, filtered as the
+  /// controller test filters the commanded joints (central differences over 10 ms). Empty
+  /// otherwise (measured only on LinuxCNC; machine-mode blocks are planned in the joints). The
+  /// blends inside a chain are not modelled.
+  std::vector<JointPeak> tcp_joint_peaks;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.
   std::vector<int> verbatim_lines;

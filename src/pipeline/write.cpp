@@ -129,7 +129,12 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
 /// each 1 ms servo period and differenced over 10 (the window of scripts/linuxcnc_controller.py),
 /// the motion before and after the block extended at its end velocities. Raises `peaks` where
 /// the block exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's
-/// first or last block shorter than its ramp: the blocks beside it are not followed).
+/// first or last block shorter than its ramp: the blocks beside it are not followed). A bound
+/// for a feed block: LinuxCNC halves the acceleration of a block it blends parabolically with
+/// a neighbour (tp.c, tpGetScaledAccel), which is not modelled (measured: the peening file's
+/// first feed block after its M0, joint Y 223.6 mm/s^2 against 447.2 predicted, A 150 deg/s^2
+/// against 300); a rapid and the last feed block before one run at the full acceleration
+/// (measured to 0.01 mm/s^2).
 void tcp_block_peaks(const Machine& machine, const JointPosition& from, const JointPosition& to,
                      const JointLimits& limits, double rate_per_s, bool start_rest, bool end_rest,
                      int line, std::vector<JointPeak>& peaks) {
@@ -367,9 +372,11 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobRe
               "LinuxCNC plans its blocks with TCP on in the program's axes, each within its "
               "[AXIS_*] limit, and the joints follow through the kinematics; where it "
               "accelerates at those limits (rapids, the start and end of a chain of feed "
-              "blocks) predicted " +
+              "blocks) predicted up to " +
                   os.str() +
-                  ". No F word changes how hard it accelerates; [AXIS_*] MAX_ACCELERATION "
+                  " (a feed block it blends parabolically with the next gets half its "
+                  "acceleration: then half as much). No F word changes how hard it accelerates; "
+                  "[AXIS_*] MAX_ACCELERATION "
                   "(and MAX_VELOCITY) set below the [JOINT_*] ones in the INI keep the joints "
                   "within theirs, or post in machine mode (docs/feed-schedule.md)");
 }

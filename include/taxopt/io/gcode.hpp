@@ -93,7 +93,8 @@ struct GcodeProgram {
   /// acceleration within every axis's limit, the joints through the kinematics, filtered as the
   /// controller test filters the commanded joints (central differences over 10 ms). Empty
   /// otherwise (measured only on LinuxCNC; machine-mode blocks are planned in the joints). The
-  /// blends inside a chain are not modelled.
+  /// blends inside a chain are not modelled; on a feed block the peak is a bound (LinuxCNC
+  /// halves the acceleration of a block it blends parabolically with a neighbour).
   std::vector<JointPeak> tcp_joint_peaks;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.

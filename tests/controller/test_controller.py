@@ -24,10 +24,10 @@ retracts). Asserted, for each program:
   (tcp_joint_limit): in tcp mode LinuxCNC limits the accelerations
   of the program's axes, not of the joints, and no F word changes how hard it accelerates.
 
-With `--set real` (ctest label `long`, run when TAXOPT_LONG=1: about an hour) the same runs
+With `--set real` (ctest label `long`, run when TAXOPT_LONG=1) the same runs
 and checks for the real CL files that fit the sample machine's travel (Creo's profilfraesen,
-CATIA's peening file), tcp mode, and the bundled demo (data/demo) on both samples (A/C and
-B/C), `--method paper --feed-schedule`; `--set demo` the demo alone. The others
+CATIA's peening file) and the bundled demo (data/demo), tcp mode, each on both samples (A/C
+and B/C), `--method paper --feed-schedule` (about 75 minutes); `--set demo` the demo alone. The others
 leave its travel and taxopt refuses them: NX's variable-axis ball mill at its approach (the
 spindle at Z 132 mm against 120 with the 50 mm tool; written anyway, the controller stopped
 there), the other NX file and Amorim's at their points.
@@ -78,6 +78,7 @@ def cases(exe, src, work, which):
                     f.write("\n".join("$$ " + l if l.startswith("SPINDLE/") else l
                                        for l in text))
             out.append((name, ["--in", path, "--machine", preset] + extra, "xyzac"))
+            out.append((name + ", B/C", ["--in", path, "--machine", bc] + extra, "xyzbc"))
         return out + demos
     cls, stl = os.path.join(work, "g.cls"), os.path.join(work, "g.stl")
     subprocess.run([exe, "generate", "--width", "3", "--length", "20", "--out-cls", cls,
@@ -101,7 +102,7 @@ def main():
     exe, src = sys.argv[1], sys.argv[2]
     which = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--set" else "sine"
     if which in ("real", "demo") and os.environ.get("TAXOPT_LONG") != "1":
-        print("skipped: the real files and the demo on the controller take about an hour; "
+        print("skipped: the real files and the demo on the controller take about 75 minutes; "
               "TAXOPT_LONG=1 runs them")
         return 77
     work = tempfile.mkdtemp(prefix="taxopt-controller-test-")

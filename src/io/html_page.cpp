@@ -9,9 +9,8 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
-#include <tuple>
-#include <unordered_map>
 
 #include "html_page_script.hpp"
 #include "taxopt/core/error.hpp"
@@ -216,7 +215,7 @@ TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles, 
     }
     TriangleMesh out;
     for (std::size_t c = 0; c < sum.size(); ++c) out.vertices.push_back(sum[c] / count[c]);
-    std::map<std::array<int, 3>, bool> seen;
+    std::set<std::array<int, 3>> seen;
     for (const auto& f : mesh.faces) {
       std::array<int, 3> g{cluster[static_cast<std::size_t>(f[0])],
                            cluster[static_cast<std::size_t>(f[1])],
@@ -224,7 +223,7 @@ TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles, 
       if (g[0] == g[1] || g[1] == g[2] || g[0] == g[2]) continue;
       std::array<int, 3> sorted = g;
       std::sort(sorted.begin(), sorted.end());
-      if (!seen.emplace(sorted, true).second) continue;
+      if (!seen.insert(sorted).second) continue;
       out.faces.push_back(g);
     }
     if (out.faces.size() <= max_triangles) {
@@ -287,7 +286,6 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
 
   json ops = json::array(), markers = json::array();
   std::size_t marker_total = 0, plotted_total = 0;
-  std::map<std::uint32_t, std::size_t> marker_kinds;
   for (std::size_t k = 0; k < result.operations.size(); ++k) {
     const OperationResult& r = result.operations[k];
     json o;
@@ -377,7 +375,6 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
       if (m == 0) continue;
       ++marker_total;
       if (markers.size() >= budget.max_markers) continue;
-      ++marker_kinds[m];
       const Vec3d before =
           machine.ac.forward(Posed{deg_to_rad(p.a_before_deg), deg_to_rad(p.c_before_deg)});
       markers.push_back({{"op", k},

@@ -9,7 +9,10 @@ servo thread records every joint's and axis's commanded position and the program
 servo period; halsampler writes them to a file.
 
     linuxcnc_controller.py --ngc PROGRAM [--kins xyzac|xyzbc] [--tool-length MM]
-                           [--samples FILE] [--json FILE]
+                           [--axis-accel-scale S] [--samples FILE] [--json FILE]
+
+`--axis-accel-scale S` multiplies every [AXIS_*] MAX_ACCELERATION of the copy by S (the
+[JOINT_*] ones stay): the remedy taxopt's `tcp_joint_limit` warning gives.
 
 prints (and writes with --json) a summary: whether the program ran to its end without an
 error, the controller's errors, its time from the first move to the end, every joint's peak
@@ -41,7 +44,21 @@ SAMPLES = {
 }
 
 
-def make_config(work, kins, tool_length):
+def scaled_ini_lines(lines, axis_accel_scale):
+    """The INI's lines with every [AXIS_*] MAX_ACCELERATION multiplied by axis_accel_scale."""
+    out, section = [], ""
+    for line in lines:
+        s = line.strip()
+        if s.startswith("["):
+            section = s
+        key = s.split("=")[0].strip() if "=" in s else ""
+        if axis_accel_scale != 1.0 and section.startswith("[AXIS_") and key == "MAX_ACCELERATION":
+            line = "MAX_ACCELERATION = %.10g" % (float(s.split("=", 1)[1]) * axis_accel_scale)
+        out.append(line)
+    return out
+
+
+def make_config(work, kins, tool_length, axis_accel_scale=1.0):
     src, ini_name, _ = SAMPLES[kins]
     cfg = os.path.join(work, "cfg")
     os.makedirs(cfg)
@@ -50,7 +67,7 @@ def make_config(work, kins, tool_length):
     out = []
     section = ""
     with open(os.path.join(src, ini_name)) as f:
-        for line in f.read().split("\n"):
+        for line in scaled_ini_lines(f.read().split("\n"), axis_accel_scale):
             s = line.strip()
             if s.startswith("["):
                 section = s
@@ -130,7 +147,7 @@ def run(args):
     os.makedirs(home)
     os.chmod(fifo, 0o777)
     os.chmod(home, 0o777)
-    cfg = make_config(work, args.kins, args.tool_length)
+    cfg = make_config(work, args.kins, args.tool_length, args.axis_accel_scale)
     ngc = os.path.join(cfg, "program.ngc")
     shutil.copy(args.ngc, ngc)
     env = dict(os.environ, RTAPI_FIFO_PATH=os.path.join(fifo, "rtapi"), HOME=home)
@@ -333,6 +350,8 @@ def main():
     ap.add_argument("--ngc", required=True)
     ap.add_argument("--kins", default="xyzac", choices=sorted(SAMPLES))
     ap.add_argument("--tool-length", type=float, default=50.0)
+    ap.add_argument("--axis-accel-scale", type=float, default=1.0,
+                    help="every [AXIS_*] MAX_ACCELERATION of the copy times this")
     ap.add_argument("--samples")
     ap.add_argument("--points", action="store_true",
                     help="measure how far the axis path passes from the program's points")
@@ -341,6 +360,9 @@ def main():
     ap.add_argument("--timeout", type=float, default=900.0)
     ap.add_argument("--keep", action="store_true")
     args = ap.parse_args()
+    if not 0.0 < args.axis_accel_scale <= 1.0:
+        print("linuxcnc_controller: --axis-accel-scale must be in (0, 1]", file=sys.stderr)
+        return 2
     if os.path.exists("/tmp/linuxcnc.lock"):
         print("linuxcnc_controller: /tmp/linuxcnc.lock exists: another LinuxCNC runs",
               file=sys.stderr)

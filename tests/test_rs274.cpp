@@ -3,6 +3,7 @@
 // `rs274 -g`, and its canonical moves must put the tool where the CL file says.
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -463,6 +464,28 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   CHECK(preset.gcode.program.tcp_on == imported.gcode.program.tcp_on);
   CHECK(preset.gcode.program.tcp_off == imported.gcode.program.tcp_off);
   CHECK(preset.gcode.program.retract_z_mm == imported.gcode.program.retract_z_mm);
+  // The sample's joints have their axes' accelerations: no joint limit of their own. With an
+  // axis below its joint (the remedy of tcp_joint_limit), the joint's is read too.
+  for (std::size_t j = 0; j < kJointCount; ++j) CHECK(imported.joint_max_accel_per_s2[j] == 0.0);
+  std::filesystem::copy(std::filesystem::path(ini).parent_path(), dir.path("low"),
+                        std::filesystem::copy_options::recursive);
+  std::string low = read_file(ini);
+  const std::size_t y = low.find("[AXIS_Y]");
+  REQUIRE(y != std::string::npos);
+  const std::size_t acc = low.find("MAX_ACCELERATION =  300", y);
+  REQUIRE(acc != std::string::npos);
+  low.replace(acc, 23, "MAX_ACCELERATION = 212.5");
+  write_file(dir.path("low/xyzac-trt.ini"), low);
+  const RunResult lowered =
+      run_taxopt("machine --from-linuxcnc-ini " + dir.path("low/xyzac-trt.ini") + " --out " +
+                 dir.path("low.toml"));
+  INFO(lowered.err);
+  REQUIRE(lowered.code == 0);
+  const Machine l = read_machine_file(dir.path("low.toml"));
+  CHECK(l.limits[1].max_accel_per_s2 == 212.5);
+  CHECK(l.joint_max_accel_per_s2[1] == 300.0);
+  CHECK(l.joint_max_accel_per_s2[0] == 0.0);
+  CHECK(joint_accel_limit(l, effective_limits(l), 1) == 300.0);
   // Another kinematics is refused by name and line.
   write_file(dir.path("other.ini"), "[KINS]\nKINEMATICS = maxkins\n");
   const RunResult other = run_taxopt("machine --from-linuxcnc-ini " + dir.path("other.ini"));

@@ -230,6 +230,19 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     return std::make_pair(*lo, *hi);
   };
 
+  // A joint's MAX_ACCELERATION where it differs from its axis's: with TCP on LinuxCNC plans the
+  // axes at their [AXIS_] limits and the joints follow (Machine::joint_max_accel_per_s2).
+  const auto joint_accel = [&](const std::string& axis,
+                               const std::optional<double>& axis_accel) -> std::optional<double> {
+    const std::size_t j = coordinates.find(axis);
+    if (j == std::string::npos || coordinates.find(axis, j + 1) != std::string::npos) {
+      return std::nullopt;
+    }
+    const auto a = number("JOINT_" + std::to_string(j), "MAX_ACCELERATION", false);
+    if (!a || (axis_accel && *a == *axis_accel)) return std::nullopt;
+    return a;
+  };
+
   std::ostringstream t;
   // The machine's name from the INI file's, as a TOML string: only plain characters kept.
   std::string name;
@@ -257,8 +270,10 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     if (const auto v = number(section, "MAX_VELOCITY", false)) {
       t << "max_velocity_mm_s = " << number_text(*v * unit_mm) << "\n";
     }
-    if (const auto a = number(section, "MAX_ACCELERATION", false)) {
-      t << "max_accel_mm_s2 = " << number_text(*a * unit_mm) << "\n";
+    const auto a = number(section, "MAX_ACCELERATION", false);
+    if (a) t << "max_accel_mm_s2 = " << number_text(*a * unit_mm) << "\n";
+    if (const auto ja = joint_accel(axis, a)) {
+      t << "joint_max_accel_mm_s2 = " << number_text(*ja * unit_mm) << "\n";
     }
   }
   for (const std::string& axis : {std::string(1, tilt), std::string("C")}) {
@@ -269,8 +284,10 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
     if (const auto v = number(section, "MAX_VELOCITY", false)) {
       t << "max_velocity_deg_s = " << number_text(*v) << "\n";
     }
-    if (const auto a = number(section, "MAX_ACCELERATION", false)) {
-      t << "max_accel_deg_s2 = " << number_text(*a) << "\n";
+    const auto a = number(section, "MAX_ACCELERATION", false);
+    if (a) t << "max_accel_deg_s2 = " << number_text(*a) << "\n";
+    if (const auto ja = joint_accel(axis, a)) {
+      t << "joint_max_accel_deg_s2 = " << number_text(*ja) << "\n";
     }
   }
   const double z_top = *number("AXIS_Z", "MAX_LIMIT", true) * unit_mm;

@@ -52,14 +52,15 @@ class MachineParser {
     const toml::table* c_table = table_of(*axes, "C", true, "axes.");
     parse_axis(*a_table, "axes." + tilt, m.ac.a, false);
     parse_axis(*c_table, "axes.C", m.ac.c, true);
-    parse_limits(*a_table, "axes." + tilt, "deg", m.limits[static_cast<std::size_t>(Joint::A)]);
-    parse_limits(*c_table, "axes.C", "deg", m.limits[static_cast<std::size_t>(Joint::C)]);
+    parse_limits(*a_table, "axes." + tilt, "deg", m, Joint::A);
+    parse_limits(*c_table, "axes.C", "deg", m, Joint::C);
     for (Joint j : {Joint::X, Joint::Y, Joint::Z}) {
       const std::string name = to_string(j);
       if (const toml::table* t = table_of(*axes, name, false, "axes.")) {
         check_keys(*t, "axes." + name,
-                   {"min_mm", "max_mm", "max_velocity_mm_s", "max_accel_mm_s2", "max_jerk_mm_s3"});
-        parse_limits(*t, "axes." + name, "mm", m.limits[static_cast<std::size_t>(j)]);
+                   {"min_mm", "max_mm", "max_velocity_mm_s", "max_accel_mm_s2", "max_jerk_mm_s3",
+                    "joint_max_accel_mm_s2"});
+        parse_limits(*t, "axes." + name, "mm", m, j);
         const toml::node* lo = t->get("min_mm");
         const toml::node* hi = t->get("max_mm");
         if (lo || hi) {
@@ -641,7 +642,7 @@ class MachineParser {
                   bool is_c) const {
     check_keys(t, where,
                {"min_deg", "max_deg", "continuous", "sense", "max_velocity_deg_s",
-                "max_accel_deg_s2", "max_jerk_deg_s3"});
+                "max_accel_deg_s2", "max_jerk_deg_s3", "joint_max_accel_deg_s2"});
     const int line = line_of(t);
     axis = RotaryAxis<double>{};
     if (const toml::node* n = t.get("continuous")) {
@@ -680,13 +681,17 @@ class MachineParser {
     }
   }
 
-  /// The optional max_velocity_<unit>_s, max_accel_<unit>_s2 and max_jerk_<unit>_s3 of an axis.
+  /// The optional max_velocity_<unit>_s, max_accel_<unit>_s2 and max_jerk_<unit>_s3 of an axis,
+  /// and its joint's joint_max_accel_<unit>_s2 (Machine::joint_max_accel_per_s2).
   void parse_limits(const toml::table& t, const std::string& where, const std::string& unit,
-                    JointLimit& limit) const {
+                    Machine& m, Joint joint) const {
+    const std::size_t j = static_cast<std::size_t>(joint);
+    JointLimit& limit = m.limits[j];
     const std::pair<std::string, double*> keys[] = {
         {"max_velocity_" + unit + "_s", &limit.max_velocity_per_s},
         {"max_accel_" + unit + "_s2", &limit.max_accel_per_s2},
-        {"max_jerk_" + unit + "_s3", &limit.max_jerk_per_s3}};
+        {"max_jerk_" + unit + "_s3", &limit.max_jerk_per_s3},
+        {"joint_max_accel_" + unit + "_s2", &m.joint_max_accel_per_s2[j]}};
     for (const auto& [key, value] : keys) {
       if (const toml::node* n = t.get(key)) {
         const double v = number_of(*n, where + "." + key);

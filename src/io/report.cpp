@@ -217,6 +217,13 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     }
     j["gcode"]["tcp_joint_peaks"] = peaks;
   }
+  if (result.gcode.tcp_axis_accel_scale) {
+    j["gcode"]["tcp_axis_accel_scale"] = *result.gcode.tcp_axis_accel_scale;
+  } else {
+    j["gcode"]["tcp_axis_accel_scale"] = nullptr;
+    j["gcode"]["null_reasons"]["tcp_axis_accel_scale"] =
+        "no joint passes its acceleration limit in tcp_joint_peaks";
+  }
   nlohmann::json ops = nlohmann::json::array();
   for (const auto& r : result.operations) {
     nlohmann::json o;
@@ -311,6 +318,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                         {"max_accel_" + unit + "_s2", effective[q].max_accel_per_s2}};
     if (effective[q].max_jerk_per_s3 > 0.0)
       l["max_jerk_" + unit + "_s3"] = effective[q].max_jerk_per_s3;
+    if (machine.joint_max_accel_per_s2[q] > 0.0)
+      l["joint_max_accel_" + unit + "_s2"] = machine.joint_max_accel_per_s2[q];
     limits[joint_name(static_cast<Joint>(q), machine.ac.tilt_letter())] = l;
   }
   j["axis_limits"] = limits;

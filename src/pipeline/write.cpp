@@ -1,7 +1,9 @@
 // The write stage: the program written, read back as a controller reads it, and scheduled at
 // the machine's limits (stages.hpp).
+#include <array>
 #include <cmath>
 #include <cstdlib>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -125,49 +127,60 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
 /// at the path velocity (at most `rate_per_s` of the block a second, the written F) and the
 /// path acceleration that keep every axis within `limits`; from rest and to rest where the
 /// block starts or ends a chain (LinuxCNC never blends a rapid with a feed block, measured),
-/// else at that velocity through the end. The joints (the tip's machine position, A, C) sampled
-/// each 1 ms servo period and differenced over 10 (the window of scripts/linuxcnc_controller.py),
-/// the motion before and after the block extended at its end velocities. Raises `peaks` where
-/// the block exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's
-/// first or last block shorter than its ramp: the blocks beside it are not followed). A bound
-/// for a feed block: LinuxCNC halves the acceleration of a block it blends parabolically with
-/// a neighbour (tp.c, tpGetScaledAccel), which is not modelled (measured: the peening file's
+/// else at that velocity through the end.
+struct TcpBlock {
+  JointPosition from, to;
+  JointLimits limits;
+  double rate_per_s = 0.0;
+  bool start_rest = true, end_rest = true;
+  int line = 0;
+};
+
+/// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit
+/// scaled by `accel_scale` (1: the machine's), sampled each 1 ms servo period and differenced
+/// over 10 (the window of scripts/linuxcnc_controller.py), the motion before and after the
+/// block extended at its end velocities. Raises `peaks` (kJointCount of them) where the block
+/// exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's first or
+/// last block shorter than its ramp: the blocks beside it are not followed). A bound for a
+/// feed block: LinuxCNC halves the acceleration of a block it blends parabolically with a
+/// neighbour (tp.c, tpGetScaledAccel), which is not modelled (measured: the peening file's
 /// first feed block after its M0, joint Y 223.6 mm/s^2 against 447.2 predicted, A 150 deg/s^2
 /// against 300); a rapid and the last feed block before one run at the full acceleration
 /// (measured to 0.01 mm/s^2).
-void tcp_block_peaks(const Machine& machine, const JointPosition& from, const JointPosition& to,
-                     const JointLimits& limits, double rate_per_s, bool start_rest, bool end_rest,
-                     int line, std::vector<JointPeak>& peaks) {
+void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_scale,
+                     std::vector<JointPeak>& peaks) {
   constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   // The path u in [0, 1]: its velocity and acceleration limits from the axes that move.
-  double u_vel = rate_per_s > 0.0 ? rate_per_s : std::numeric_limits<double>::infinity();
+  double u_vel = b.rate_per_s > 0.0 ? b.rate_per_s : std::numeric_limits<double>::infinity();
   double u_acc = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < kJointCount; ++j) {
-    const double d = std::abs(to[j] - from[j]);
+    const double d = std::abs(b.to[j] - b.from[j]);
     if (d < 1e-12) continue;
-    if (limits[j].max_velocity_per_s > 0.0) {
-      u_vel = std::min(u_vel, limits[j].max_velocity_per_s / d);
+    if (b.limits[j].max_velocity_per_s > 0.0) {
+      u_vel = std::min(u_vel, b.limits[j].max_velocity_per_s / d);
     }
-    if (limits[j].max_accel_per_s2 > 0.0) u_acc = std::min(u_acc, limits[j].max_accel_per_s2 / d);
+    if (b.limits[j].max_accel_per_s2 > 0.0) {
+      u_acc = std::min(u_acc, accel_scale * b.limits[j].max_accel_per_s2 / d);
+    }
   }
   if (!std::isfinite(u_vel) || !std::isfinite(u_acc)) return;  // no move, or no limits to plan on
-  if (!start_rest && !end_rest) return;  // the schedule's: joint rates along the chain
+  if (!b.start_rest && !b.end_rest) return;  // the schedule's: joint rates along the chain
   // u(t) over [0, total_s]: a ramp up from rest (start_rest), a cruise, a ramp down to rest
   // (end_rest); v_in and v_out its velocities at the ends.
-  double t_up = start_rest ? u_vel / u_acc : 0.0, t_down = end_rest ? u_vel / u_acc : 0.0;
+  double t_up = b.start_rest ? u_vel / u_acc : 0.0, t_down = b.end_rest ? u_vel / u_acc : 0.0;
   double top = u_vel;
   const double ramps_u = 0.5 * u_acc * (t_up * t_up + t_down * t_down);
   if (ramps_u >= 1.0) {
     // The ramps meet: the top velocity is what the block's length allows.
-    top = std::sqrt(u_acc / ((start_rest ? 0.5 : 0.0) + (end_rest ? 0.5 : 0.0)));
-    t_up = start_rest ? top / u_acc : 0.0;
-    t_down = end_rest ? top / u_acc : 0.0;
+    top = std::sqrt(u_acc / ((b.start_rest ? 0.5 : 0.0) + (b.end_rest ? 0.5 : 0.0)));
+    t_up = b.start_rest ? top / u_acc : 0.0;
+    t_down = b.end_rest ? top / u_acc : 0.0;
   }
   const double cruise_s =
       std::max(0.0, (1.0 - 0.5 * u_acc * (t_up * t_up + t_down * t_down)) / std::max(top, 1e-300));
   const double total_s = t_up + cruise_s + t_down;
-  const double v_in = start_rest ? 0.0 : top, v_out = end_rest ? 0.0 : top;
+  const double v_in = b.start_rest ? 0.0 : top, v_out = b.end_rest ? 0.0 : top;
   const auto u_at = [&](double t) {
     if (t <= 0.0) return v_in * t;
     if (t >= total_s) return 1.0 + v_out * (t - total_s);
@@ -175,31 +188,49 @@ void tcp_block_peaks(const Machine& machine, const JointPosition& from, const Jo
     const double up_u = 0.5 * u_acc * t_up * t_up;
     if (t < t_up + cruise_s) return up_u + top * (t - t_up);
     const double r = total_s - t;
-    return end_rest ? 1.0 - 0.5 * u_acc * r * r : 1.0 - top * r;
+    return b.end_rest ? 1.0 - 0.5 * u_acc * r * r : 1.0 - top * r;
   };
   const auto joints_at = [&](double t) {
     const double u = u_at(t);
     JointPosition p{};
-    for (std::size_t j = 0; j < kJointCount; ++j) p[j] = from[j] + u * (to[j] - from[j]);
+    for (std::size_t j = 0; j < kJointCount; ++j) p[j] = b.from[j] + u * (b.to[j] - b.from[j]);
     const Posed pose{deg_to_rad(p[kA]), deg_to_rad(p[kC])};
     const Vec3d m = machine.ac.to_machine_mm(Vec3d(p[0], p[1], p[2]), pose);
     return JointPosition{m.x(), m.y(), m.z(), p[kA], p[kC]};
   };
-  constexpr double kPeriodS = 1e-3, kWindowS = 10 * kPeriodS;
-  const long steps = static_cast<long>(std::ceil((total_s + 2.0 * kWindowS) / kPeriodS));
+  // The joints once per servo period from two windows before the block to two after it, the
+  // last 2 kWindow + 1 of them kept (a ring), differenced by index about the middle one.
+  constexpr double kPeriodS = 1e-3;
+  constexpr long kWindow = 10;
+  constexpr double kWindowS = static_cast<double>(kWindow) * kPeriodS;
+  const long steps = static_cast<long>(std::ceil((total_s + 4.0 * kWindowS) / kPeriodS));
   if (steps > 10'000'000) return;  // a block of hours: no controller test runs it
+  std::array<JointPosition, 2 * kWindow + 1> ring{};
+  const auto at = [&](long i) -> const JointPosition& {
+    return ring[static_cast<std::size_t>(i % static_cast<long>(ring.size()))];
+  };
   peaks.resize(kJointCount);
   for (long i = 0; i <= steps; ++i) {
-    const double t = -kWindowS + static_cast<double>(i) * kPeriodS;
-    const JointPosition before = joints_at(t - kWindowS), here = joints_at(t),
-                        after = joints_at(t + kWindowS);
+    ring[static_cast<std::size_t>(i % static_cast<long>(ring.size()))] =
+        joints_at(-2.0 * kWindowS + static_cast<double>(i) * kPeriodS);
+    if (i < 2 * kWindow) continue;
+    const JointPosition &before = at(i - 2 * kWindow), &here = at(i - kWindow), &after = at(i);
     for (std::size_t j = 0; j < kJointCount; ++j) {
       const double v = std::abs(after[j] - before[j]) / (2.0 * kWindowS);
       const double a = std::abs(after[j] - 2.0 * here[j] + before[j]) / (kWindowS * kWindowS);
-      if (v > peaks[j].velocity_per_s) peaks[j].velocity_per_s = v, peaks[j].velocity_line = line;
-      if (a > peaks[j].accel_per_s2) peaks[j].accel_per_s2 = a, peaks[j].accel_line = line;
+      if (v > peaks[j].velocity_per_s) peaks[j].velocity_per_s = v, peaks[j].velocity_line = b.line;
+      if (a > peaks[j].accel_per_s2) peaks[j].accel_per_s2 = a, peaks[j].accel_line = b.line;
     }
   }
+}
+
+/// GcodeProgram::tcp_joint_peaks of `blocks` with the axes' accelerations scaled by
+/// `accel_scale`.
+std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector<TcpBlock>& blocks,
+                                       double accel_scale) {
+  std::vector<JointPeak> peaks;
+  for (const TcpBlock& b : blocks) tcp_block_peaks(machine, b, accel_scale, peaks);
+  return peaks;
 }
 
 /// GcodeProgram::time_s: the feed blocks at their scheduled times (the operations'
@@ -208,7 +239,7 @@ void tcp_block_peaks(const Machine& machine, const JointPosition& from, const Jo
 /// as joints referred to the tip (kinematics/machine.hpp); the spindle's reference point is the
 /// tool length above it.
 void program_time(const Run& run, Written& w, const JointLimits& limits, LengthUnit units,
-                  GcodeProgram& g) {
+                  GcodeProgram& g, std::vector<TcpBlock>& tcp_blocks) {
   const Machine& machine = run.machine;
   const ProgramTemplate& t = machine.gcode.program;
   const double length_mm = run.options.tool.gauge_length_mm.value_or(0.0);
@@ -216,22 +247,16 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   double feed_s = 0.0, rapid_s = 0.0;
   for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
-  // LinuxCNC with TCP on: the joints on its blocks (GcodeProgram::tcp_joint_peaks). A feed
-  // block waits for the next block to know whether it ends at rest.
-  g.tcp_joint_peaks.clear();
+  // LinuxCNC with TCP on: its blocks, for the joints on them (GcodeProgram::tcp_joint_peaks).
+  // A feed block waits for the next block to know whether it ends at rest.
+  tcp_blocks.clear();
   const bool lcnc = machine.gcode.dialect == GcodeDialect::LinuxCNC;
-  struct PendingFeed {
-    JointPosition from, to;
-    double rate_per_s;
-    bool start_rest;
-    int line;
-  };
-  std::optional<PendingFeed> pending;
+  std::optional<TcpBlock> pending;
   bool after_feed = false;  // the previous block was a tcp feed block (its chain goes on)
   const auto flush_feed = [&](bool ends_at_rest) {
     if (pending) {
-      tcp_block_peaks(machine, pending->from, pending->to, limits, pending->rate_per_s,
-                      pending->start_rest, ends_at_rest, pending->line, g.tcp_joint_peaks);
+      pending->end_rest = ends_at_rest;
+      tcp_blocks.push_back(*pending);
     }
     pending.reset();
     after_feed = !ends_at_rest;
@@ -312,14 +337,13 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
         }
         rapid_s += rapid_time_s(a, b, capped);
         flush_feed(true);
-        if (lcnc)
-          tcp_block_peaks(machine, a, b, capped, 0.0, true, true, m.line, g.tcp_joint_peaks);
+        if (lcnc) tcp_blocks.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line});
       } else if (lcnc) {
         // A feed block: from rest after a rapid (or as the program's first), to rest before one
         // (known at the next block).
         const bool start_rest = !after_feed;
         flush_feed(false);
-        pending = PendingFeed{a, b, rate, start_rest, m.line};
+        pending = TcpBlock{a, b, limits, rate, start_rest, true, m.line};
       }
     } else {
       flush_feed(true);
@@ -338,36 +362,102 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (known) w.spindle_mm[index] = spindle(q);
   }
   flush_feed(true);
+  g.tcp_joint_peaks = tcp_joint_peaks(machine, tcp_blocks, 1.0);
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;
   g.time_tool_length_mm = length_mm;
 }
 
+/// The largest share of the axes' acceleration limits (0.001 steps, rounded down) at which
+/// `blocks` keep every joint within its own (joint_accel_limit); 0 where none down to 0.05
+/// does (the joints' speed, not the axes' acceleration, drives them). The peaks fall as the
+/// share does (the ramps' slope with it; a short block's top speed too), so a bisection finds
+/// it; only the blocks past a limit at the full share are followed.
+double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
+                            const std::vector<TcpBlock>& blocks) {
+  const auto worst = [&](const std::vector<TcpBlock>& of, double scale) {
+    const std::vector<JointPeak> peaks = tcp_joint_peaks(machine, of, scale);
+    double r = 0.0;
+    for (std::size_t j = 0; j < peaks.size(); ++j) {
+      const double a_max = joint_accel_limit(machine, limits, j);
+      if (a_max > 0.0) r = std::max(r, peaks[j].accel_per_s2 / a_max);
+    }
+    return r;
+  };
+  std::vector<TcpBlock> over;
+  for (const TcpBlock& b : blocks) {
+    if (worst({b}, 1.0) > 1.0) over.push_back(b);
+  }
+  if (over.empty()) return 1.0;
+  constexpr double kLeast = 0.05;
+  if (worst(over, kLeast) > 1.0) return 0.0;
+  double lo = kLeast, hi = 1.0;  // lo keeps the joints within, hi does not
+  while (hi - lo > 1e-4) {
+    const double mid = 0.5 * (lo + hi);
+    (worst(over, mid) > 1.0 ? hi : lo) = mid;
+  }
+  const double scale = std::floor(lo * 1000.0) / 1000.0;
+  return worst(over, scale) > 1.0 ? 0.0 : scale;
+}
+
 /// A warning where a block with TCP on drives a joint past its limit as LinuxCNC moves it
-/// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding). The program cannot
-/// help it: LinuxCNC accelerates the program's axes at their [AXIS_*] limits whatever the F word
-/// (measured, issue 36).
-void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobResult& res) {
+/// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding): velocities against the
+/// axes' limits (the feed schedule and the joint-safe rapids keep them), accelerations against
+/// the joints' own (joint_accel_limit). No F word helps an acceleration: LinuxCNC accelerates
+/// the program's axes at their [AXIS_*] limits whatever the F word (measured, issue 36); the
+/// warning gives the share of those limits that keeps the joints within theirs
+/// (GcodeProgram::tcp_axis_accel_scale).
+void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
+                        const std::vector<TcpBlock>& blocks, JobResult& res) {
   const std::vector<JointPeak>& peaks = res.gcode.tcp_joint_peaks;
+  res.gcode.tcp_axis_accel_scale.reset();
   std::ostringstream os;
   os.precision(4);
   int over = 0, first_line = 0;
+  bool accel_over = false, velocity_over = false;
   for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
     const std::string name = joint_name(static_cast<Joint>(j), machine.ac.tilt_letter());
     const std::string unit = j < 3 ? "mm" : "deg";
-    const double v_max = limits[j].max_velocity_per_s, a_max = limits[j].max_accel_per_s2;
+    const double v_max = limits[j].max_velocity_per_s;
+    const double a_max = joint_accel_limit(machine, limits, j);
     if (v_max > 0.0 && peaks[j].velocity_per_s > 1.001 * v_max) {
       os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].velocity_per_s << " "
          << unit << "/s against " << v_max << " (G-code line " << peaks[j].velocity_line << ")";
       if (!first_line) first_line = peaks[j].velocity_line;
+      velocity_over = true;
     }
     if (a_max > 0.0 && peaks[j].accel_per_s2 > 1.001 * a_max) {
       os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].accel_per_s2 << " "
          << unit << "/s^2 against " << a_max << " (G-code line " << peaks[j].accel_line << ")";
       if (!first_line) first_line = peaks[j].accel_line;
+      accel_over = true;
     }
   }
   if (!over) return;
+  std::ostringstream remedy;
+  remedy << std::fixed;
+  if (accel_over) {
+    const double scale = tcp_axis_accel_scale(machine, limits, blocks);
+    res.gcode.tcp_axis_accel_scale = scale;
+    if (scale > 0.0) {
+      remedy << "every [AXIS_*] MAX_ACCELERATION at " << std::setprecision(3) << scale
+             << " of its present value (" << std::setprecision(1);
+      for (std::size_t j = 0; j < kJointCount; ++j) {
+        remedy << (j ? ", " : "") << joint_name(static_cast<Joint>(j), machine.ac.tilt_letter())
+               << " " << std::floor(scale * limits[j].max_accel_per_s2 * 10.0) / 10.0
+               << (j < 3 ? " mm/s^2" : " deg/s^2");
+      }
+      remedy << "), the [JOINT_*] ones left as they are (predicted on this program; `taxopt "
+                "machine --from-linuxcnc-ini` then reads both)";
+    } else {
+      remedy << "no share of the [AXIS_*] accelerations down to 0.05 (their speed drives "
+                "them)";
+    }
+  }
+  if (velocity_over) {
+    remedy << (accel_over ? "; " : "")
+           << "[AXIS_*] MAX_VELOCITY set below the [JOINT_*] ones (for their speed)";
+  }
   add_finding(res, FindingCode::TcpJointLimit, std::nullopt, first_line,
               "LinuxCNC plans its blocks with TCP on in the program's axes, each within its "
               "[AXIS_*] limit, and the joints follow through the kinematics; where it "
@@ -375,10 +465,9 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits, JobRe
               "blocks) predicted up to " +
                   os.str() +
                   " (a feed block it blends parabolically with the next gets half its "
-                  "acceleration: then half as much). No F word changes how hard it accelerates; "
-                  "[AXIS_*] MAX_ACCELERATION "
-                  "(and MAX_VELOCITY) set below the [JOINT_*] ones in the INI keep the joints "
-                  "within theirs, or post in machine mode (docs/feed-schedule.md)");
+                  "acceleration: then half as much); no F word changes how hard it "
+                  "accelerates. What keeps the joints within theirs: " +
+                  remedy.str() + "; or posting in machine mode (docs/feed-schedule.md)");
 }
 
 }  // namespace
@@ -482,8 +571,9 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
     read_back(machine, posted, res.gcode, w);
   }
-  program_time(run, w, limits, res.gcode_units, res.gcode);
-  tcp_joint_findings(machine, limits, res);
+  std::vector<TcpBlock> tcp_blocks;
+  program_time(run, w, limits, res.gcode_units, res.gcode, tcp_blocks);
+  tcp_joint_findings(machine, limits, tcp_blocks, res);
   w.write_s = seconds_since(t0);
   return w;
 }

@@ -23,11 +23,17 @@ retracts). Asserted, for each program:
   where the report predicts it (gcode.tcp_joint_peaks covers it within 2 %) and warns of it
   (tcp_joint_limit): in tcp mode LinuxCNC limits the accelerations
   of the program's axes, not of the joints, and no F word changes how hard it accelerates.
+- the warning's remedy works: the sample configuration with every [AXIS_*] MAX_ACCELERATION at
+  the share the report of the first program gives (gcode.tcp_axis_accel_scale), imported by
+  `taxopt machine --from-linuxcnc-ini` (which then reads the joints' own limits), posts the
+  same part with no tcp_joint_limit warning, and on the controller so configured every joint
+  stays within its MAX_ACCELERATION (0.5 %).
 
 With `--set real` (ctest label `long`, run when TAXOPT_LONG=1) the same runs
 and checks for the real CL files that fit the sample machine's travel (Creo's profilfraesen,
 CATIA's peening file) and the bundled demo (data/demo), tcp mode, each on both samples (A/C
-and B/C), `--method paper --feed-schedule` (about 75 minutes); `--set demo` the demo alone. The others
+and B/C), and the demo on the A/C sample with its axes' accelerations at its report's share,
+`--method paper --feed-schedule` (about 95 minutes); `--set demo` the demo alone. The others
 leave its travel and taxopt refuses them: NX's variable-axis ball mill at its approach (the
 spindle at Z 132 mm against 120 with the 50 mm tool; written anyway, the controller stopped
 there), the other NX file and Amorim's at their points.
@@ -56,16 +62,53 @@ REAL = [
 ]
 
 
+def remedy_case(exe, src, work, label, common, preset):
+    """The "[AXIS_*] accelerations at the report's share" case of the program `label` posts
+    with `common`: (name, arguments, kins, share), or a failure text."""
+    report = os.path.join(work, "share.json")
+    r = subprocess.run([exe] + common + ["--machine", preset, "--method", "paper", "-q",
+                                         "--feed-schedule", "--report", report],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        return "the share's run: taxopt exit %d: %s" % (r.returncode, r.stderr)
+    share = json.load(open(report))["gcode"].get("tcp_axis_accel_scale")
+    if not share or not 0.0 < share < 1.0:
+        return "the %s program's report gives no share of the axes' accelerations: %s" % (
+            label, share)
+    sys.path.insert(0, os.path.join(src, "scripts"))
+    import linuxcnc_controller
+    sample, ini_name, _ = linuxcnc_controller.SAMPLES["xyzac"]
+    folder = os.path.join(work, "scaled-sample-" + label)
+    shutil.copytree(sample, folder)
+    ini = os.path.join(folder, ini_name)
+    with open(ini) as f:
+        lines = linuxcnc_controller.scaled_ini_lines(f.read().split("\n"), share)
+    with open(ini, "w") as f:
+        f.write("\n".join(lines))
+    machine = os.path.join(work, "scaled-%s.toml" % label)
+    r = subprocess.run([exe, "machine", "--from-linuxcnc-ini", ini, "--out", machine],
+                       capture_output=True, text=True)
+    if r.returncode != 0 or "joint_max_accel_mm_s2 = 300" not in open(machine).read():
+        return "the scaled sample's import: exit %d: %s" % (r.returncode, r.stderr)
+    return ("%s, A/C, tcp, G94, [AXIS_*] accelerations at %.3f" % (label, share),
+            common + ["--machine", machine], "xyzac", share)
+
+
 def cases(exe, src, work, which):
-    """(name, taxopt arguments) of every program to run."""
+    """(name, taxopt arguments, kinematics, [AXIS_*] acceleration share) of every program to
+    run, and the failures met making them."""
     preset = os.path.join(src, "data/machines/linuxcnc-xyzac-trt.toml")
     bc = os.path.join(src, "data/machines/linuxcnc-xyzbc-trt-sample.toml")
     demo = ["--in", os.path.join(src, "data/demo/sine.cls"), "--part",
             os.path.join(src, "data/demo/sine.stl"), "--gauge-length", "50"]
-    demos = [("demo, A/C", demo + ["--machine", preset], "xyzac"),
-             ("demo, B/C", demo + ["--machine", bc], "xyzbc")]
+    demos = [("demo, A/C", demo + ["--machine", preset], "xyzac", 1.0),
+             ("demo, B/C", demo + ["--machine", bc], "xyzbc", 1.0)]
+    remedy = remedy_case(exe, src, work, "demo", demo, preset)
+    failures = [remedy] if isinstance(remedy, str) else []
+    if not failures:
+        demos.append(remedy)
     if which == "demo":
-        return demos
+        return demos, failures
     if which == "real":
         real = os.path.join(src, "tests", "data", "real")  # the project's copies
         out = []
@@ -77,9 +120,9 @@ def cases(exe, src, work, which):
                 with open(path, "w") as f:
                     f.write("\n".join("$$ " + l if l.startswith("SPINDLE/") else l
                                        for l in text))
-            out.append((name, ["--in", path, "--machine", preset] + extra, "xyzac"))
-            out.append((name + ", B/C", ["--in", path, "--machine", bc] + extra, "xyzbc"))
-        return out + demos
+            out.append((name, ["--in", path, "--machine", preset] + extra, "xyzac", 1.0))
+            out.append((name + ", B/C", ["--in", path, "--machine", bc] + extra, "xyzbc", 1.0))
+        return out + demos, failures
     cls, stl = os.path.join(work, "g.cls"), os.path.join(work, "g.stl")
     subprocess.run([exe, "generate", "--width", "3", "--length", "20", "--out-cls", cls,
                     "--out-mesh", stl], check=True, capture_output=True)
@@ -90,24 +133,29 @@ def cases(exe, src, work, which):
     with open(preset) as f, open(inverse_time, "w") as g:
         g.write(f.read().replace('feed_mode = "units-per-minute"', 'feed_mode = "inverse-time"'))
     common = ["--in", cls, "--part", stl, "--gauge-length", "50"]
-    return [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac"),
-            ("sine, A/C, machine mode, G94", common + ["--machine", machine_mode], "xyzac"),
-            ("sine, A/C, tcp, G93", common + ["--machine", inverse_time], "xyzac"),
-            ("sine, B/C, tcp, G94", common + ["--machine", bc], "xyzbc"),
-            ("sine, A/C, tcp, G94, programmed feeds", common + ["--machine", preset, "--no-schedule"],
-             "xyzac")]
+    out = [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac", 1.0),
+           ("sine, A/C, machine mode, G94", common + ["--machine", machine_mode], "xyzac", 1.0),
+           ("sine, A/C, tcp, G93", common + ["--machine", inverse_time], "xyzac", 1.0),
+           ("sine, B/C, tcp, G94", common + ["--machine", bc], "xyzbc", 1.0),
+           ("sine, A/C, tcp, G94, programmed feeds",
+            common + ["--machine", preset, "--no-schedule"], "xyzac", 1.0)]
+    remedy = remedy_case(exe, src, work, "sine", common, preset)
+    if isinstance(remedy, str):
+        return out, [remedy]
+    return out + [remedy], []
 
 
 def main():
     exe, src = sys.argv[1], sys.argv[2]
     which = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--set" else "sine"
     if which in ("real", "demo") and os.environ.get("TAXOPT_LONG") != "1":
-        print("skipped: the real files and the demo on the controller take about 75 minutes; "
+        print("skipped: the real files and the demo on the controller take about 95 minutes; "
               "TAXOPT_LONG=1 runs them")
         return 77
     work = tempfile.mkdtemp(prefix="taxopt-controller-test-")
-    failures, rows = [], []
-    for k, (name, args, kins) in enumerate(cases(exe, src, work, which)):
+    rows = []
+    programs, failures = cases(exe, src, work, which)
+    for k, (name, args, kins, share) in enumerate(programs):
         ngc, report = os.path.join(work, "%d.ngc" % k), os.path.join(work, "%d.json" % k)
         # Scheduled feeds unless the case says --no-schedule (the CL file's feeds, which
         # taxopt verifies at the machine's limits and refuses where they exceed them).
@@ -122,7 +170,7 @@ def main():
         out = os.path.join(work, "%d-controller.json" % k)
         c = subprocess.run(["/usr/bin/python3", os.path.join(src, "scripts/linuxcnc_controller.py"),
                             "--ngc", ngc, "--kins", kins, "--points", "--json", out,
-                            "--timeout", "1800"],
+                            "--timeout", "1800", "--axis-accel-scale", repr(share)],
                            capture_output=True, text=True)
         if not os.path.exists(out):
             failures.append("%s: the controller run gave no summary: %s" % (name, c.stderr[-2000:]))
@@ -154,6 +202,10 @@ def main():
         names = ["X", "Y", "Z", "B" if kins == "xyzbc" else "A", "C"]
         tcp_peaks = rep["gcode"].get("tcp_joint_peaks") or {}
         warned = any(f["code"] == "tcp_joint_limit" for f in rep["findings"])
+        if share != 1.0 and warned:
+            failures.append("%s: the axes' accelerations at the report's share still warn: %s"
+                            % (name, [f["message"] for f in rep["findings"]
+                                      if f["code"] == "tcp_joint_limit"]))
         worst_predicted = 0.0
         for j, p in sorted(joints.items()):
             pred = tcp_peaks.get(names[int(j)], {})

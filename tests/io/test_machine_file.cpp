@@ -75,6 +75,23 @@ TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]
   CHECK(default_machine().gcode.feed_reference == FeedReference::CutterPath);
 }
 
+TEST_CASE("machine file: the example docs/cli.md shows users reads as it is, every key in it",
+          "[io][machine]") {
+  const std::string doc = taxopt::test::read_file(std::string(TAXOPT_SOURCE_DIR) + "/docs/cli.md");
+  const std::size_t section = doc.find("## Machine file (TOML)");
+  REQUIRE(section != std::string::npos);
+  const std::size_t begin = doc.find("```toml\n", section);
+  REQUIRE(begin != std::string::npos);
+  const std::size_t end = doc.find("```", begin + 8);
+  REQUIRE(end != std::string::npos);
+  const std::string example = doc.substr(begin + 8, end - begin - 8);
+  INFO(example);
+  const Machine m = parse_machine_toml(example, "docs/cli.md");
+  CHECK(m.limits[0].max_accel_per_s2 == 3000.0);
+  CHECK(m.joint_max_accel_per_s2[0] == 3000.0);
+  CHECK(m.gcode.program.tcp_on == std::vector<std::string>{"M428"});
+}
+
 TEST_CASE("machine file: X Y Z limits and jerk, and the defaults where none is given",
           "[io][machine][feed]") {
   const Machine m =
@@ -98,6 +115,25 @@ TEST_CASE("machine file: X Y Z limits and jerk, and the defaults where none is g
   expect_error(replace(kFull, "[pivot]", "[axes.Y]\nmax_accel_mm_s2 = 0\n[pivot]"), 18,
                "axes.Y.max_accel_mm_s2 must be positive");
   expect_error(replace(kFull, "[pivot]", "[axes.Q]\n[pivot]"), 17, "unknown key 'axes.Q'");
+  // The joints' own accelerations (LinuxCNC's [JOINT_n] with TCP on): where not given, the
+  // axis's; given, in the axis's unit.
+  const Machine j = parse_machine_toml(
+      replace(replace(kFull, "[pivot]", "[axes.Y]\njoint_max_accel_mm_s2 = 320\n[pivot]"),
+              "max_accel_deg_s2 = 36000.0",
+              "max_accel_deg_s2 = 36000.0\njoint_max_accel_deg_s2 = 4e4"),
+      "m.toml");
+  CHECK(joint_accel_limit(j, effective_limits(j), 1) == 320.0);
+  CHECK(joint_accel_limit(j, effective_limits(j), 3) == 40000.0);
+  CHECK(joint_accel_limit(j, effective_limits(j), 0) == effective_limits(j)[0].max_accel_per_s2);
+  CHECK(joint_accel_limit(m, e, 3) == 36000.0);
+  for (const char* bad : {"0", "-300", "nan", "inf", "\"fast\""}) {
+    INFO(bad);
+    expect_error(replace(kFull, "[pivot]",
+                         std::string("[axes.Y]\njoint_max_accel_mm_s2 = ") + bad + "\n[pivot]"),
+                 18, "axes.Y.joint_max_accel_mm_s2 must be");
+  }
+  expect_error(replace(kFull, "[pivot]", "[axes.Y]\njoint_max_accel_deg_s2 = 300\n[pivot]"), 18,
+               "unknown key 'axes.Y.joint_max_accel_deg_s2'");
 }
 
 TEST_CASE("machine file: every shipped machine file reads", "[io][machine]") {

@@ -96,6 +96,11 @@ struct GcodeProgram {
   /// blends inside a chain are not modelled; on a feed block the peak is a bound (LinuxCNC
   /// halves the acceleration of a block it blends parabolically with a neighbour).
   std::vector<JointPeak> tcp_joint_peaks;
+  /// Where a joint passes its acceleration limit in tcp_joint_peaks (the joint's own,
+  /// Machine::joint_accel_limit): the largest share of the axes' acceleration limits
+  /// (LinuxCNC's [AXIS_*] MAX_ACCELERATION) at which the same model keeps every joint within
+  /// it, rounded down to 0.001; 0 where none down to 0.05 does. Empty where no joint passes.
+  std::optional<double> tcp_axis_accel_scale;
   /// Lines of the program template written as they are (header, footer, a tool change or
   /// kinematics switch of the machine file's): the reader steps over them.
   std::vector<int> verbatim_lines;

@@ -124,6 +124,12 @@ struct Machine {
   /// Velocity, acceleration and jerk limits of X Y Z (mm) and A C (deg) as the machine file
   /// gives them; 0: not given (effective_limits fills in the defaults).
   JointLimits limits{};
+  /// The joints' own acceleration limits (mm/s^2 for X Y Z, deg/s^2 for A C) where a
+  /// controller plans the program's axes and lets the joints follow: LinuxCNC with TCP on
+  /// holds X Y Z A C to its [AXIS_*] limits (`limits`) and the joints to nothing, so its
+  /// [JOINT_n] MAX_ACCELERATION may be above them ([axes.*] joint_max_accel_*). 0: the axis's
+  /// own. They judge GcodeProgram::tcp_joint_peaks only (joint_accel_limit).
+  std::array<double, kJointCount> joint_max_accel_per_s2{};
   /// Travel of X, Y, Z in machine coordinates (the machine-mode convention of CLI.md), mm:
   /// [axes.X] min_mm/max_mm; unbounded where the file gives none.
   struct LinearRange {
@@ -168,6 +174,14 @@ JointLimits default_joint_limits();
 
 /// The machine's limits where its file gives them, else default_joint_limits().
 JointLimits effective_limits(const Machine& machine);
+
+/// Joint `j`'s own acceleration limit: machine.joint_max_accel_per_s2 where given, else the
+/// axis's (`effective`, from effective_limits).
+inline double joint_accel_limit(const Machine& machine, const JointLimits& effective,
+                                std::size_t j) {
+  return machine.joint_max_accel_per_s2[j] > 0.0 ? machine.joint_max_accel_per_s2[j]
+                                                 : effective[j].max_accel_per_s2;
+}
 
 /// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
 Machine default_machine();

@@ -127,13 +127,15 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
 /// at the path velocity (at most `rate_per_s` of the block a second, the written F) and the
 /// path acceleration that keep every axis within `limits`; from rest and to rest where the
 /// block starts or ends a chain (LinuxCNC never blends a rapid with a feed block, measured),
-/// else at that velocity through the end.
+/// else at that velocity through the end. `accel_share`: of that acceleration, the share
+/// LinuxCNC gives the block (tcp_block_peaks).
 struct TcpBlock {
   JointPosition from, to;
   JointLimits limits;
   double rate_per_s = 0.0;
   bool start_rest = true, end_rest = true;
   int line = 0;
+  double accel_share = 1.0;
 };
 
 /// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit
@@ -141,12 +143,11 @@ struct TcpBlock {
 /// over 10 (the window of scripts/linuxcnc_controller.py), the motion before and after the
 /// block extended at its end velocities. Raises `peaks` (kJointCount of them) where the block
 /// exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's first or
-/// last block shorter than its ramp: the blocks beside it are not followed). A bound for a
-/// feed block: LinuxCNC halves the acceleration of a block it blends parabolically with a
-/// neighbour (tp.c, tpGetScaledAccel), which is not modelled (measured: the peening file's
-/// first feed block after its M0, joint Y 223.6 mm/s^2 against 447.2 predicted, A 150 deg/s^2
-/// against 300); a rapid and the last feed block before one run at the full acceleration
-/// (measured to 0.01 mm/s^2).
+/// last block shorter than its ramp: the blocks beside it are not followed). The block's
+/// acceleration is its `accel_share` of the path's (a chain's first block LinuxCNC blends
+/// parabolically with the next: half, program_time); a rapid and the last feed block before
+/// one run at the full acceleration (measured to 0.01 mm/s^2). A bound on a chain's first
+/// block of X Y Z alone: LinuxCNC may blend it parabolically too (at half).
 void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_scale,
                      std::vector<JointPeak>& peaks) {
   constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
@@ -161,7 +162,7 @@ void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_sca
       u_vel = std::min(u_vel, b.limits[j].max_velocity_per_s / d);
     }
     if (b.limits[j].max_accel_per_s2 > 0.0) {
-      u_acc = std::min(u_acc, accel_scale * b.limits[j].max_accel_per_s2 / d);
+      u_acc = std::min(u_acc, accel_scale * b.accel_share * b.limits[j].max_accel_per_s2 / d);
     }
   }
   if (!std::isfinite(u_vel) || !std::isfinite(u_acc)) return;  // no move, or no limits to plan on
@@ -253,9 +254,23 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   const bool lcnc = machine.gcode.dialect == GcodeDialect::LinuxCNC;
   std::optional<TcpBlock> pending;
   bool after_feed = false;  // the previous block was a tcp feed block (its chain goes on)
-  const auto flush_feed = [&](bool ends_at_rest) {
+  // A block that turns A or C (LinuxCNC's tcRotaryMotionCheck).
+  const auto turns = [](const TcpBlock& b) {
+    return std::abs(b.to[kA] - b.from[kA]) > 1e-9 || std::abs(b.to[kC] - b.from[kC]) > 1e-9;
+  };
+  // The pending feed block ends at rest, or goes on into `next`. LinuxCNC (tp.c) blends two
+  // feed blocks of which one turns A or C parabolically (no tangency or blend arc is tried
+  // where rotary axes move), and a block it blends parabolically with the next runs at half
+  // its acceleration (tcGetOverallMaxAccel): a chain's first block so blended starts from rest
+  // at half (measured: the peening file's line 33, joint Y 223.6 mm/s^2 and A 150 deg/s^2
+  // against 447.2 and 300 at the full acceleration). Its last block stops at the full one
+  // (measured: the demo's line 87, 327.53 as predicted at full).
+  const auto flush_feed = [&](bool ends_at_rest, const TcpBlock* next) {
     if (pending) {
       pending->end_rest = ends_at_rest;
+      if (!ends_at_rest && pending->start_rest && next && (turns(*pending) || turns(*next))) {
+        pending->accel_share = 0.5;
+      }
       tcp_blocks.push_back(*pending);
     }
     pending.reset();
@@ -278,7 +293,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (gives[4]) to[kC] = m.c_deg;
     const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
     const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
-    if (m.retract || !known) flush_feed(true);
+    if (m.retract || !known) flush_feed(true, nullptr);
     if (m.retract) {
       // Machine coordinates: the spindle's reference point to the retract height.
       if (gives[2]) to[2] = t.retract_z_mm - length_mm;
@@ -336,17 +351,17 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
           }
         }
         rapid_s += rapid_time_s(a, b, capped);
-        flush_feed(true);
+        flush_feed(true, nullptr);
         if (lcnc) tcp_blocks.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line});
       } else if (lcnc) {
         // A feed block: from rest after a rapid (or as the program's first), to rest before one
         // (known at the next block).
-        const bool start_rest = !after_feed;
-        flush_feed(false);
-        pending = TcpBlock{a, b, limits, rate, start_rest, true, m.line};
+        const TcpBlock block{a, b, limits, rate, !after_feed, true, m.line};
+        flush_feed(false, &block);
+        pending = block;
       }
     } else {
-      flush_feed(true);
+      flush_feed(true, nullptr);
       // The joints, the written X Y Z the controlled point: the tip with the tool length
       // offset on, else the spindle's reference point.
       const double above = m.length_offset ? 0.0 : length_mm;
@@ -361,7 +376,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     q = to;
     if (known) w.spindle_mm[index] = spindle(q);
   }
-  flush_feed(true);
+  flush_feed(true, nullptr);
   g.tcp_joint_peaks = tcp_joint_peaks(machine, tcp_blocks, 1.0);
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;
@@ -464,8 +479,8 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
               "accelerates at those limits (rapids, the start and end of a chain of feed "
               "blocks) predicted up to " +
                   os.str() +
-                  " (a feed block it blends parabolically with the next gets half its "
-                  "acceleration: then half as much); no F word changes how hard it "
+                  " (on a chain's first block of X Y Z alone a bound: LinuxCNC may blend it "
+                  "parabolically, at half its acceleration); no F word changes how hard it "
                   "accelerates. What keeps the joints within theirs: " +
                   remedy.str() + "; or posting in machine mode (docs/feed-schedule.md)");
 }

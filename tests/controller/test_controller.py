@@ -214,9 +214,10 @@ def main():
                                       pred.get("accel_per_s2", 0.0) / p["limit_accel"])
             if not p["limit_accel"] or p["max_accel"] <= 1.005 * p["limit_accel"]:
                 continue
-            # The report's peak is exact on rapids and on a chain's last feed block, a bound on
-            # a chain's first (LinuxCNC halves the acceleration of a block it blends
-            # parabolically): it must cover what was measured.
+            # The report's peak is exact on rapids, on a chain's last feed block and on a first
+            # one that turns A or C or goes on into one that does (LinuxCNC blends those
+            # parabolically, at half the acceleration); a bound on a first block of X Y Z
+            # alone: it must cover what was measured.
             if not (pred and warned and pred["accel_per_s2"] >= 0.98 * p["max_accel"]):
                 failures.append("%s: joint %s accelerated at %.1f against its %g (line %s), "
                                 "not as the report predicts (%s)"

@@ -93,8 +93,10 @@ struct GcodeProgram {
   /// acceleration within every axis's limit, the joints through the kinematics, filtered as the
   /// controller test filters the commanded joints (central differences over 10 ms). Empty
   /// otherwise (measured only on LinuxCNC; machine-mode blocks are planned in the joints). The
-  /// blends inside a chain are not modelled; on a feed block the peak is a bound (LinuxCNC
-  /// halves the acceleration of a block it blends parabolically with a neighbour).
+  /// blends inside a chain are not modelled; a chain's first block LinuxCNC blends
+  /// parabolically with the next (one of the two turns A or C) at half its acceleration, as
+  /// it runs it; on a first block of X Y Z alone the peak is a bound (LinuxCNC may blend it
+  /// parabolically too).
   std::vector<JointPeak> tcp_joint_peaks;
   /// Where a joint passes its acceleration limit in tcp_joint_peaks (the joint's own,
   /// Machine::joint_accel_limit): the largest share of the axes' acceleration limits

@@ -25,9 +25,10 @@ struct Peaks {
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
 };
 
-/// Peak synthetic omega and a of the paper's eq. 16-18 (eq. 18 corrected), per pass of
-/// consecutive contact points, at feed v: omega_i = v (th_{i+1} - th_i) / L_i,
-/// a_i = 2 v (omega_{i+1} - omega_i) / (L_i + L_{i+1}), per axis, then sqrt(A^2 + C^2).
+/// Peak synthetic omega and a, per pass, of eq. 16-18 (eq. 18 corrected) with L_i the tip's
+/// path of each move as rs274 read it (the time the controller gives the move at feed v):
+/// omega_i = v (th_{i+1} - th_i) / L_i, a_i = 2 v (omega_{i+1} - omega_i) / (L_i + L_{i+1}),
+/// per axis, then sqrt(A^2 + C^2).
 Peaks peaks(const std::vector<CanonMove>& moves, const GeneratedCl& g, double feed_mm_s) {
   Peaks p;
   std::size_t i = 0;
@@ -40,7 +41,10 @@ Peaks peaks(const std::vector<CanonMove>& moves, const GeneratedCl& g, double fe
     while (e < moves.size() && !g.rapid[e]) ++e;
     std::vector<double> wa, wc, len;
     for (std::size_t j = i; j + 1 < e; ++j) {
-      const double l = (g.cc_mm[j + 1] - g.cc_mm[j]).norm();
+      // Each move as the controller times it from the words rs274 read: the tip's path at the
+      // feed (the written tips, not the generator's contacts: the machine's own timing).
+      const double l = std::hypot(moves[j + 1].x - moves[j].x, moves[j + 1].y - moves[j].y,
+                                  moves[j + 1].z - moves[j].z);
       len.push_back(l);
       wa.push_back(feed_mm_s * (moves[j + 1].a - moves[j].a) / l);
       wc.push_back(feed_mm_s * (moves[j + 1].c - moves[j].c) / l);

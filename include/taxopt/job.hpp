@@ -249,7 +249,14 @@ struct OperationResult {
   std::size_t points = 0;
   /// Feed used for the metrics (the first feed move's), mm/min.
   double feed_mm_min = 0.0;
+  /// The rotary rates of the input axes and of the program as the machine runs them: each
+  /// feed move at the time the controller takes from the words written (tip path / F, the
+  /// block's kept time, or with --feed-schedule the scheduled one), the input's likewise.
   RotarySummary before, after;
+  /// The paper's metric (eq. 16-18): the angles over the contact points' arc lengths at the
+  /// metric feed. For comparison with the paper only: on a meshed part the contact points
+  /// carry the facets, and no optimiser or guard judges by it.
+  RotarySummary paper_before, paper_after;
   /// Feed schedules of the input axes and of the written G-code.
   FeedSummary feed_before, feed_after;
   /// CL points whose tool intersects the part (shank and holder above the ball; the ball too

@@ -232,6 +232,17 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     o["feed_mm_min"] = r.feed_mm_min;
     o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
     o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
+    const auto paper_json = [](const RotarySummary& p) {
+      return nlohmann::json{{"max_omega_deg_s", p.max_omega_deg_s},
+                            {"max_accel_deg_s2", p.max_accel_deg_s2},
+                            {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
+    };
+    o["paper_metric"] = {{"before", paper_json(r.paper_before)},
+                         {"after", paper_json(r.paper_after)},
+                         {"what",
+                          "eq. 16-18 over contact-point arc lengths at the metric feed "
+                          "(the paper's comparison; before/after are the program's "
+                          "own timing)"}};
     o["feed_schedule_written"] = options.feed_schedule;
     const std::size_t k = static_cast<std::size_t>(&r - result.operations.data());
     if (k < toolpath.operations.size()) o["tool"] = tool_json(toolpath.operations[k].tool, options);

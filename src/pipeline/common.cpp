@@ -100,45 +100,64 @@ std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const Ind
                              metric_feed.begin() + static_cast<long>(pass.end));
 }
 
-/// The paper's L_i of a pass, from point i to i + 1: between contact points where both ends
-/// touch the part, else between reference points. The metrics and the optimiser share them.
-std::vector<double> segment_lengths_mm(const Operationd& op,
-                                       const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const IndexRange& pass) {
+std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_mm,
+                                       const IndexRange& pass) {
   std::vector<double> len;
   for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
-    const bool cc = !contacts.empty() && contacts[i].state == ContactState::Touching &&
-                    contacts[i + 1].state == ContactState::Touching;
-    len.push_back(cc ? (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm()
-                     : (reference_point(op.points[i + 1], ball_radius_mm) -
-                        reference_point(op.points[i], ball_radius_mm))
-                           .norm());
+    len.push_back((reference_point(op.points[i + 1], ball_radius_mm) -
+                   reference_point(op.points[i], ball_radius_mm))
+                      .norm());
   }
   return len;
 }
 
-/// Rotary kinematics of every pass of an operation; fills rows' omega/accel/arc when given.
-/// Segment lengths are the paper's L_i between contact points where both ends touch the
-/// part, else between reference points.
-RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                        double ball_radius_mm, const std::vector<double>& a_deg,
-                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
-                        std::vector<PointRow>* rows, bool rows_before) {
+std::vector<double> contact_lengths_mm(const Operationd& op,
+                                       const std::vector<ContactPoint>& contacts,
+                                       double ball_radius_mm, const IndexRange& pass) {
+  std::vector<double> len = segment_lengths_mm(op, ball_radius_mm, pass);
+  for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
+    if (!contacts.empty() && contacts[i].state == ContactState::Touching &&
+        contacts[i + 1].state == ContactState::Touching) {
+      len[i - pass.begin] = (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm();
+    }
+  }
+  return len;
+}
+
+std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
+                                 const std::vector<Posed>& poses,
+                                 const std::vector<double>& metric_feed, const IndexRange& range) {
+  std::vector<double> t;
+  Vec3d from = Vec3d::Zero();
+  for (std::size_t i = range.begin; i < range.end; ++i) {
+    const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, ac.forward(poses[i]));
+    if (i > range.begin) {
+      t.push_back(metric_feed[i] > 0.0
+                      ? programmed_move_time_s(from, poses[i - 1], tip, poses[i], metric_feed[i])
+                      : 0.0);
+    }
+    from = tip;
+  }
+  return t;
+}
+
+namespace {
+
+/// Adds the passes of `op` to a summary with each move's time from `time_of(pass)`; fills the
+/// rows' omega and accel (before or after) and, with `arc_mm`, their arc length.
+template <class TimeOf>
+RotarySummary summarise_passes(const Operationd& op, const std::vector<double>& a_deg,
+                               const std::vector<double>& c_deg, const TimeOf& time_of,
+                               std::vector<PointRow>* rows, bool rows_before) {
   RotarySummary summary;
-  double arc = 0.0;
   for (const IndexRange& pass : feed_passes(op)) {
-    std::vector<double> a(a_deg.begin() + static_cast<long>(pass.begin),
-                          a_deg.begin() + static_cast<long>(pass.end));
-    std::vector<double> c(c_deg.begin() + static_cast<long>(pass.begin),
-                          c_deg.begin() + static_cast<long>(pass.end));
-    const std::vector<double> len = segment_lengths_mm(op, contacts, ball_radius_mm, pass);
-    const RotaryKinematics k = rotary_kinematics(a, c, len, pass_feeds(metric_feed, pass));
+    const std::vector<double> a = slice(a_deg, pass.begin, pass.end);
+    const std::vector<double> c = slice(c_deg, pass.begin, pass.end);
+    const RotaryKinematics k = rotary_kinematics_from_times(a, c, time_of(pass));
     accumulate(summary, k, c);
     if (rows) {
       for (std::size_t j = 0; j < pass.size(); ++j) {
         PointRow& r = (*rows)[pass.begin + j];
-        if (j > 0) arc += len[j - 1];
-        r.arc_mm = arc;
         (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
         (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
         // A flip as RotarySummary::c_jumps counts it (metrics.cpp).
@@ -149,6 +168,40 @@ RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& c
     }
   }
   return summary;
+}
+
+}  // namespace
+
+RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& a_deg,
+                              const std::vector<double>& c_deg,
+                              const std::vector<double>& time_into_s, std::vector<PointRow>* rows,
+                              bool rows_before) {
+  return summarise_passes(
+      op, a_deg, c_deg,
+      [&](const IndexRange& pass) { return slice(time_into_s, pass.begin + 1, pass.end); }, rows,
+      rows_before);
+}
+
+RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                              double ball_radius_mm, const std::vector<double>& a_deg,
+                              const std::vector<double>& c_deg,
+                              const std::vector<double>& metric_feed, std::vector<PointRow>* rows) {
+  double arc = 0.0;
+  return summarise_passes(
+      op, a_deg, c_deg,
+      [&](const IndexRange& pass) {
+        const std::vector<double> len = contact_lengths_mm(op, contacts, ball_radius_mm, pass);
+        if (rows) {
+          for (std::size_t j = 0; j < pass.size(); ++j) {
+            if (j > 0) arc += len[j - 1];
+            (*rows)[pass.begin + j].arc_mm = arc;
+          }
+        }
+        const std::vector<double> a = slice(a_deg, pass.begin, pass.end);
+        const std::vector<double> c = slice(c_deg, pass.begin, pass.end);
+        return segment_times_s(len, pass_feeds(metric_feed, pass), a, c);
+      },
+      nullptr, false);
 }
 
 /// Joint positions (X Y Z mm, A C deg) of tips and poses: the machine-mode convention of

@@ -174,7 +174,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   std::vector<std::size_t> pole_stretches(plans.size(), 0);
   const auto plan_pass = [&](std::size_t q, const IndexRange& pass) {
     PassProblem problem;
-    problem.segment_mm = segment_lengths_mm(op, contacts, R, pass);
+    problem.segment_mm = segment_lengths_mm(op, R, pass);
     Vec3d mean = Vec3d::Zero();
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       problem.input_axes.push_back(op.points[i].axis);
@@ -323,8 +323,8 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
       a.push_back(rad_to_deg(poses[i].a_rad));
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
-    PassRates r{rotary_kinematics(a, c, segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                                  pass_feeds(metric_feed, pass)),
+    PassRates r{rotary_kinematics_from_times(
+                    a, c, move_times_s(op, ball_radius_mm, machine.ac, poses, metric_feed, pass)),
                 {}};
     accumulate(r.summary, r.k, c);
     return r;
@@ -449,9 +449,10 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
       a_deg.push_back(rad_to_deg(warm.poses[i].a_rad));
       c_deg.push_back(rad_to_deg(warm.poses[i].c_rad));
     }
-    // The metrics' segment times; a move too short to time gets a floor (it would divide).
-    problem.segment_time_s = segment_times_s(segment_lengths_mm(op, contacts, ball_radius_mm, pass),
-                                             pass_feeds(metric_feed, pass), a_deg, c_deg);
+    // The program's own timing with the warm start's tips (move_times_s: the report's and the
+    // guard's); a move too short to time gets a floor (it would divide).
+    problem.segment_time_s =
+        move_times_s(op, ball_radius_mm, machine.ac, warm.poses, metric_feed, pass);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
@@ -755,7 +756,8 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
       input_s = std::numeric_limits<double>::infinity();
     }
   }
-  // The peak a of a plan's passes (eq. 16-18 at the metric feeds), as the report measures it.
+  // The peak a of a plan's passes, each move timed as the controller takes it from the words
+  // (move_times_s), as the report measures it.
   const auto peak_a = [&](const OptimisedOperation& o) {
     const PosePlan pp = plan_poses(machine.ac, o.axes, rapid_into, {}, pose_options, o.preferred);
     if (!pp.ok()) return std::numeric_limits<double>::infinity();
@@ -764,7 +766,12 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
       a.push_back(rad_to_deg(q.a_rad));
       c.push_back(rad_to_deg(q.c_rad));
     }
-    return summarise(op, contacts, ball_radius_mm, a, c, metric_feed).max_accel_deg_s2;
+    std::vector<double> into = {0.0};
+    for (double t : move_times_s(op, ball_radius_mm, machine.ac, pp.poses, metric_feed,
+                                 IndexRange{0, op.points.size()})) {
+      into.push_back(t);
+    }
+    return summarise_timed(op, a, c, into).max_accel_deg_s2;
   };
   struct Plan {
     const char* name;

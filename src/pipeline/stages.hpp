@@ -153,6 +153,11 @@ struct Written {
   std::vector<std::vector<const GcodeMove*>> point_moves;
   std::vector<std::vector<std::vector<WayPoint>>> way_points;
   std::vector<OperationSchedule> schedule_after, schedule_before;
+  /// Per operation and point, the time of the move into it as the controller runs the program
+  /// (0 for rapids and the first point): the programmed time of the words written (tip path /
+  /// F, or the block's kept time), with --feed-schedule the scheduled one; the input's the same
+  /// way. The report's rotary rates are computed with them.
+  std::vector<std::vector<double>> time_into_after, time_into_before;
   /// Per read-back move, the machine's linear joints at its end referred to the spindle (the
   /// tip's plus the tool length along the machine's Z, GcodeProgram::time_tool_length_mm), as
   /// program_time follows them; empty before the first retract (where the machine stands is
@@ -242,16 +247,39 @@ std::vector<double> metric_feeds_of(const Operationd& op, const JobOptions& opti
                                     double fallback_mm_min);
 /// The metric feeds of a pass's moves: the move from point i to i + 1 runs at point i + 1's.
 std::vector<double> pass_feeds(const std::vector<double>& metric_feed, const IndexRange& pass);
-/// The paper's L_i of a pass (contact points where both ends touch, else reference points).
-std::vector<double> segment_lengths_mm(const Operationd& op,
+/// The path lengths of a pass's moves between the ball centres (the tips elsewhere): what the
+/// machine's timing follows whatever the axes (the centre does not move when the axis turns),
+/// free of the mesh's facets. The optimisers' segment lengths.
+std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_mm,
+                                       const IndexRange& pass);
+/// The paper's L_i of a pass (eq. 16-18): between contact points where both ends touch, else
+/// between ball centres. Only the paper's metric (OperationResult::paper_before/after) uses
+/// them: on a mesh a contact point sticks on a facet or jumps between facets while the ball
+/// moves on, so they carry the tessellation.
+std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const IndexRange& pass);
-/// Rotary kinematics (eq. 16-18) of every pass of an operation for the axis angles a_deg,
-/// c_deg of its points, at the metric feeds; fills the rows' omega, accel and arc when given.
-RotarySummary summarise(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                        double ball_radius_mm, const std::vector<double>& a_deg,
-                        const std::vector<double>& c_deg, const std::vector<double>& metric_feed,
-                        std::vector<PointRow>* rows = nullptr, bool rows_before = false);
+/// The time of each move from point i to i + 1 in `range` (range.size() - 1 of them) as the
+/// controller takes it from the written words under TCP (programmed_move_time_s), with the
+/// tool along `poses` (of the whole operation) and the ball centres where the CL file has
+/// them, at the metric feeds: the program's own timing.
+std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
+                                 const std::vector<Posed>& poses,
+                                 const std::vector<double>& metric_feed, const IndexRange& range);
+/// Rotary kinematics of every pass of an operation for the axis angles a_deg, c_deg of its
+/// points, each move taking `time_into_s` (per point, the move into it: the program's own
+/// timing); fills the rows' omega and accel (before or after) when given.
+RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& a_deg,
+                              const std::vector<double>& c_deg,
+                              const std::vector<double>& time_into_s,
+                              std::vector<PointRow>* rows = nullptr, bool rows_before = false);
+/// The paper's metric (eq. 16-18 over contact_lengths_mm at the metric feeds): the paper's
+/// comparison, never the headline; fills the rows' arc lengths when given.
+RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                              double ball_radius_mm, const std::vector<double>& a_deg,
+                              const std::vector<double>& c_deg,
+                              const std::vector<double>& metric_feed,
+                              std::vector<PointRow>* rows = nullptr);
 /// Joint positions (X Y Z mm, A C deg) of tips and poses, in machine coordinates.
 std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
                                      const std::vector<Posed>& poses);

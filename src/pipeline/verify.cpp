@@ -686,8 +686,12 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       cspace_rows(run, o, checking, r);
     }
   }
-  r.before = summarise(op, o.contacts, o.ball_radius_mm, a_in, c_in, o.metric_feed_mm_per_min,
-                       &r.rows, true);
+  // The rates as the machine runs the program: each move at the time the controller gives the
+  // words written (Written::time_into_after), the input's likewise; the paper's eq. 16-18 over
+  // the contacts beside them, for the paper's comparison.
+  r.before = summarise_timed(op, a_in, c_in, w.time_into_before[k], &r.rows, true);
+  r.paper_before =
+      summarise_paper(op, o.contacts, o.ball_radius_mm, a_in, c_in, o.metric_feed_mm_per_min);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     r.rows[i].a_before_deg = a_in[i];
     r.rows[i].c_before_deg = c_in[i];
@@ -695,8 +699,9 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   if (o.optimised) {
     for (std::size_t i : o.optimised->keys) r.rows[i].key = true;
   }
-  r.after =
-      summarise(op, o.contacts, o.ball_radius_mm, a_w, c_w, o.metric_feed_mm_per_min, &r.rows);
+  r.after = summarise_timed(op, a_w, c_w, w.time_into_after[k], &r.rows);
+  r.paper_after = summarise_paper(op, o.contacts, o.ball_radius_mm, a_w, c_w,
+                                  o.metric_feed_mm_per_min, &r.rows);
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   // A longer cycle is worth a warning above 0.1 % and 10 ms (below that it is rounding and the

@@ -558,11 +558,12 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     const std::vector<Posed>& input_poses = ops[k].input_poses;
     const std::vector<Linearised> via =
         linearised_blocks(machine, po, w.point_moves[k], w.moves, res.gcode_units);
+    w.time_into_after.push_back(po.programmed_time_s.empty()
+                                    ? programmed_block_times_s(po.points, po.poses)
+                                    : po.programmed_time_s);
     w.schedule_after.push_back(schedule_operation(
-        po.points, written_joints(machine, w.point_moves[k]),
-        po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)
-                                     : po.programmed_time_s,
-        limits, machine.ac, &via, tcp ? &po.poses : nullptr));
+        po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
+        machine.ac, &via, tcp ? &po.poses : nullptr));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -570,12 +571,21 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
       in_points[i].axis = op.points[i].axis;
       in_tips.push_back(in_points[i].tip_mm);
     }
+    w.time_into_before.push_back(input_poses.empty()
+                                     ? w.time_into_after.back()
+                                     : programmed_block_times_s(in_points, input_poses));
     w.schedule_before.push_back(
         input_poses.empty()
             ? w.schedule_after.back()
             : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses),
-                                 programmed_block_times_s(in_points, input_poses), limits,
-                                 machine.ac, nullptr, tcp ? &input_poses : nullptr));
+                                 w.time_into_before.back(), limits, machine.ac, nullptr,
+                                 tcp ? &input_poses : nullptr));
+  }
+  if (run.options.feed_schedule) {
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      w.time_into_after[k] = w.schedule_after[k].time_s;
+      w.time_into_before[k] = w.schedule_before[k].time_s;
+    }
   }
   count_table_turns(run, ops, posted, limits, w);
   if (run.options.feed_schedule) {

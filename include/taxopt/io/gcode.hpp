@@ -45,6 +45,12 @@ struct PostedOperation {
   std::vector<std::vector<double>> linearised_time_s = {};
 };
 
+/// Time of one feed move at `feed_mm_per_min`, s, as a controller times it under TCP: the tip
+/// distance over the feed, or the rotary distance (deg) over the feed read as deg/min when
+/// only A and C turn (1e-9 of either at the least: a move too small to time still takes time).
+double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from, const Vec3d& to_tip_mm,
+                              const Posed& to, double feed_mm_per_min);
+
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it
 /// under TCP: the tip distance over the feed, or the rotary distance (deg) over the feed read
 /// as deg/min when only A and C turn. 0 for the first point, rapids and feed moves without a

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -412,4 +413,104 @@ TEST_CASE(
   const pipeline::Written w = pipeline::write_program(run, ops, *posted, res);
   pipeline::verify_operations(run, ops, *posted, w, res);
   for (const OperationResult& r : res.operations) CHECK(r.verification.collision_free);
+}
+
+TEST_CASE(
+    "pipeline: every block of the program is swept against the part -- the blocks taxopt adds "
+    "to approach an operation, moved into the part, fail the verification naming their G-code "
+    "line, and the untouched program passes",
+    "[pipeline][stages][safety]") {
+  std::mt19937 rng(77);
+  const Heightfield hf = random_heightfields(rng)[0];
+  const GeneratedCl g = raster_cl(hf, 3.0, 10.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
+  Toolpath tp = parse_cl(g.text, "p.cls");
+  REQUIRE(tp.operations.size() == 1);
+  // Two operations: the blocks between them (retract, turn, descent, XY) are the writer's own.
+  tp.operations.push_back(tp.operations.front());
+  tp.operations.back().name = "SECOND";
+  const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+  const Machine machine = default_machine();
+  REQUIRE(machine.gcode.dialect == GcodeDialect::LinuxCNC);
+  JobOptions given;
+  given.part = &part;
+  given.method = Method::None;
+  JobResult clean;
+  pipeline::Run run = pipeline::validate(tp, machine, given, clean);
+  std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
+  pipeline::recover_contacts(run, ops, clean);
+  pipeline::plan_operations(run, ops, clean);
+  std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, clean);
+  REQUIRE(posted);
+  pipeline::Written w = pipeline::write_program(run, ops, *posted, clean);
+  const JobResult written = clean;
+  pipeline::verify_operations(run, ops, *posted, w, clean);
+  for (const Finding& f : clean.findings) UNSCOPED_INFO(f.message);
+  CHECK_FALSE(clean.has(FindingCode::MoveCollision));
+  long swept = 0;
+  for (const OperationResult& r : clean.operations) {
+    CHECK(r.verification.colliding_blocks == 0);
+    swept += r.verification.blocks_swept;
+  }
+  CHECK(swept >= 2);  // each operation's approach to its first point, the second's XY move
+
+  std::vector<std::string> lines;
+  {
+    std::istringstream text(written.gcode.text);
+    for (std::string l; std::getline(text, l);) lines.push_back(l);
+  }
+  const auto line_of = [&](const std::string& prefix, std::size_t after) {
+    for (std::size_t i = after; i < lines.size(); ++i) {
+      if (lines[i].rfind(prefix, 0) == 0) return i + 1;
+    }
+    return std::size_t{0};
+  };
+  const std::size_t second = line_of("(operation SECOND)", 0);
+  REQUIRE(second > 0);
+  // The second operation's approach: the XY move at the clearance height, then the block down
+  // to its first point (both written in the workpiece with TCP on).
+  const std::size_t xy = line_of("G0 X", second);
+  REQUIRE(xy > 0);
+  const std::size_t down = xy + 1;
+  // A tip 5 mm under the lowest tip the CL file has: the shank crosses the part's surface.
+  double lowest = 1e9;
+  for (const CLPointd& p : tp.operations.front().points) lowest = std::min(lowest, p.tip_mm.z());
+  std::ostringstream z;
+  z << std::fixed << std::setprecision(4) << " Z" << lowest - 5.0;
+  const auto with_z = [&](std::size_t line) {
+    std::string block = lines.at(line - 1);
+    const std::size_t at = block.find(" Z");
+    if (at == std::string::npos) return block + z.str();
+    const std::size_t end = block.find(' ', at + 1);
+    return block.substr(0, at) + z.str() + (end == std::string::npos ? "" : block.substr(end));
+  };
+  struct Tamper {
+    const char* what;
+    std::size_t line;  // 1-based
+    std::string block;
+  };
+  const std::vector<Tamper> tampers = {
+      {"the approach's XY move at the clearance height", xy, with_z(xy)},
+      {"the approach's block down to the first point", down, with_z(down)},
+  };
+  for (const Tamper& t : tampers) {
+    INFO(t.what << ": G-code line " << t.line << " '" << lines.at(t.line - 1) << "' -> '" << t.block
+                << "'");
+    REQUIRE(t.line > 0);
+    JobResult res = written;
+    std::vector<std::string> changed = lines;
+    changed[t.line - 1] = t.block;
+    res.gcode.text.clear();
+    for (const std::string& l : changed) res.gcode.text += l + "\n";
+    pipeline::read_program_again(run, *posted, w, res);
+    pipeline::verify_operations(run, ops, *posted, w, res);
+    bool named = false;
+    for (const Finding& f : res.findings) {
+      INFO(f.message);
+      named = named ||
+              (f.code == FindingCode::MoveCollision &&
+               f.message.find("G-code line " + std::to_string(t.line) + " ") != std::string::npos);
+    }
+    CHECK(named);
+    CHECK_FALSE(res.problems.empty());
+  }
 }

@@ -107,6 +107,17 @@ struct Verification {
   /// Moves between consecutive CL points (sampled as the machine moves them, linear in its
   /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; -1: not checked.
   long colliding_moves = -1;
+  /// The blocks of the program the operation's point and move checks do not cover (the
+  /// approach, the descent and the XY move to it, index moves, retracts, the end moves: the
+  /// blocks taxopt adds), swept against the part with the whole tool in the air as the
+  /// controller runs them, and those where it hits (check_every_block); -1: not checked.
+  long blocks_swept = -1, colliding_blocks = -1;
+  /// Of those blocks, the ones whose end is not known relative to the part: a retract in
+  /// machine coordinates (G53 and the like) and the blocks after it until one gives the tool's
+  /// X Y Z in the workpiece again (the table's turn at the retract height, a descent): where
+  /// they put the tool depends on the work offset and the tool length, which the program does
+  /// not hold. Not checked; -1 without a part.
+  long blocks_not_checked = -1;
   /// A guaranteed lower bound (true value within a factor sqrt 2 above it) of the least
   /// distance between the part and the tool's bodies that do not cut (shank and holder, past
   /// the flutes) at the written CL points, mm, capped at 10 mm; and the point where it

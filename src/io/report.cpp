@@ -273,6 +273,15 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     v["within_axis_limits"] = r.verification.within_axis_limits;
     v["tool_length_active"] = r.verification.tool_length_active;
     v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
+    v["blocks_swept"] = r.verification.blocks_swept >= 0
+                            ? nlohmann::json(r.verification.blocks_swept)
+                            : nlohmann::json(nullptr);
+    v["blocks_not_checked"] = r.verification.blocks_not_checked >= 0
+                                  ? nlohmann::json(r.verification.blocks_not_checked)
+                                  : nlohmann::json(nullptr);
+    v["colliding_blocks"] = r.verification.colliding_blocks >= 0
+                                ? nlohmann::json(r.verification.colliding_blocks)
+                                : nlohmann::json(nullptr);
     v["colliding_moves"] = r.verification.colliding_moves >= 0
                                ? nlohmann::json(r.verification.colliding_moves)
                                : nlohmann::json(nullptr);
@@ -283,6 +292,9 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     const std::string unchecked = result.collision_checked ? no_ball : no_part;
     if (!r.verification.collision_free) why["collision_free"] = unchecked;
     if (r.verification.colliding_moves < 0) why["colliding_moves"] = unchecked;
+    if (r.verification.blocks_swept < 0) why["blocks_swept"] = unchecked;
+    if (r.verification.colliding_blocks < 0) why["colliding_blocks"] = unchecked;
+    if (r.verification.blocks_not_checked < 0) why["blocks_not_checked"] = unchecked;
     if (r.verification.flute_gouge_points < 0) why["flute_gouge_points"] = unchecked;
     if (!r.verification.min_clearance_mm) {
       why["min_clearance_mm"] =

@@ -163,6 +163,13 @@ struct Written {
   /// program_time follows them; empty before the first retract (where the machine stands is
   /// not known there). check_program holds them to the machine's travel.
   std::vector<std::optional<Vec3d>> spindle_mm;
+  /// Per read-back move, the joints at its end referred to the tip (X Y Z mm in machine
+  /// coordinates, A C deg) where every one of them is known (a block has set each since the
+  /// start), and whether the controller ran it with TCP (the tip on a straight line in the
+  /// workpiece; else the joints on a straight line): check_every_block sweeps the tool along
+  /// each block so.
+  std::vector<std::optional<JointPosition>> joints_after;
+  std::vector<char> tip_linear;
   double write_s = 0.0;
 };
 
@@ -206,10 +213,26 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
 Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                       std::vector<PostedOperation>& posted, JobResult& res);
 
+/// Reads res.gcode.text back into `w` again (its moves, the points' moves, the machine's state
+/// after each block) as write_program does: a program changed after writing (the tests' tampered
+/// programs; the same number of lines) is then verified as it stands.
+void read_program_again(const Run& run, const std::vector<PostedOperation>& posted, Written& w,
+                        JobResult& res);
+
 /// Verifies every operation as written (read back, axis ranges, deviation, collisions of the
 /// points and moves, clearances, dynamic limits), fills the report rows and the CL output.
 void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,
+                       JobResult& res);
+
+/// Every motion block of the program read back that the operations' own checks do not sweep
+/// (the approach, the descent and the XY move to it, index moves, the retracts and the end
+/// moves: the blocks taxopt adds), swept against the part as the controller runs it (the tip
+/// on a straight line with TCP, else the joints), with the whole tool in the air; a hit is a
+/// problem (MoveCollision) naming the G-code line. Verification::blocks_swept and
+/// colliding_blocks per operation. Without a part nothing is checked (NOT CHECKED says so).
+void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& w,
                        JobResult& res);
 
 /// The program as a machinist checks it, on the read-back (issue 33; verify_operations runs

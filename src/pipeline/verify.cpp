@@ -908,6 +908,141 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   }
 }
 
+void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& w,
+                       JobResult& res) {
+  const std::vector<GcodeMove>& moves = w.moves;
+  if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
+    return;
+  // The operation a block belongs to: the first whose last point is at or after it (the
+  // approach to its first point is its own, the moves after the last point the last's).
+  std::vector<int> last_line(posted.size(), 0);
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    for (const GcodeMove* m : w.point_moves[k]) last_line[k] = std::max(last_line[k], m->line);
+  }
+  const auto op_of = [&](int line) {
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      if (last_line[k] >= line) return k;
+    }
+    return posted.size() - 1;
+  };
+  // The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
+  // point with its linearisation blocks, a rapid written as one block. Every other block (the
+  // approach, the descent and the XY move to it, an index move's retract, turn and way back,
+  // the retract at the end and the unwinding) is swept here, with the whole tool in the air.
+  std::vector<char> swept(moves.size(), 0);
+  std::vector<char> touching_end(moves.size(), 0);
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const OperationContext& o = ops[k];
+    const std::vector<const GcodeMove*>& at = w.point_moves[k];
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      const std::ptrdiff_t to = move_index(moves, at[i]);
+      if (to < 0) continue;
+      if (!o.contacts.empty() && o.contacts[i].state == ContactState::Touching) {
+        touching_end[static_cast<std::size_t>(to)] = 1;
+      }
+      if (i == 0 || !o.judged_tool()) continue;
+      const std::ptrdiff_t from = move_index(moves, at[i - 1]);
+      if (from < 0 || to <= from) continue;
+      if (posted[k].points[i].motion == Motion::Feed || to == from + 1) {
+        for (std::ptrdiff_t j = from + 1; j <= to; ++j) swept[static_cast<std::size_t>(j)] = 1;
+      }
+    }
+  }
+  struct Hit {
+    std::size_t count = 0;
+    int line = 0;
+  };
+  std::vector<Hit> hits(posted.size());
+  std::vector<std::size_t> candidates;
+  std::vector<long> unknown(posted.size(), 0);
+  for (std::size_t j = 1; j < moves.size(); ++j) {
+    if (swept[j]) continue;
+    const OperationContext& o = ops[op_of(moves[j].line)];
+    if (!o.judged_tool()) continue;
+    if (w.joints_after[j]) {
+      candidates.push_back(j);
+    } else {
+      ++unknown[op_of(moves[j].line)];
+    }
+  }
+  const Machine& machine = run.machine;
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  const std::vector<std::size_t> hit =
+      detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
+        const std::size_t j = candidates[c];
+        const OperationContext& o = ops[op_of(moves[j].line)];
+        const ToolModel& tool = *o.tool;
+        const double R = tool.ball_radius_mm;
+        // In the air the ball counts as a body too, within the flutes' tolerance of the part
+        // (a block that ends at a contact point touches it there by design).
+        ToolModel air = tool;
+        air.ball_radius_mm = std::max(0.5 * R, R - margins_of(run.options).flute_tolerance_mm);
+        // A block whose start is not known (the first after a retract in machine
+        // coordinates): its end, where the tool stands.
+        const JointPosition& q1 = *w.joints_after[j];
+        const JointPosition& q0 = w.joints_after[j - 1] ? *w.joints_after[j - 1] : q1;
+        const Posed p0{deg_to_rad(q0[kA]), deg_to_rad(q0[kC])};
+        const Posed p1{deg_to_rad(q1[kA]), deg_to_rad(q1[kC])};
+        const Vec3d m0(q0[0], q0[1], q0[2]), m1(q1[0], q1[1], q1[2]);
+        const Vec3d t0 = machine.ac.from_machine_mm(m0, p0),
+                    t1 = machine.ac.from_machine_mm(m1, p1);
+        const bool tip_linear = w.tip_linear[j] != 0;
+        // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
+        // thinnest body's radius (a wall the body could pass between two samples is thinner
+        // than the body is wide).
+        double thinnest = R > 0.0 ? R : 1.0;
+        for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
+        const double step_mm = std::max(0.05, 0.5 * thinnest);
+        const double travel = std::max((t1 - t0).norm(), (m1 - m0).norm());
+        const int steps = static_cast<int>(
+            std::ceil(std::max({std::abs(q1[kA] - q0[kA]) / 0.5, std::abs(q1[kC] - q0[kC]) / 0.5,
+                                travel / step_mm, 1.0})));
+        for (int s = 1; s <= steps; ++s) {
+          const double u = static_cast<double>(s) / steps;
+          const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad),
+                           p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+          const Vec3d tip = tip_linear ? Vec3d(t0 + u * (t1 - t0))
+                                       : machine.ac.from_machine_mm(m0 + u * (m1 - m0), pose);
+          const Vec3d axis = machine.ac.forward(pose);
+          // The block's end at a contact point: the flutes judged as at every CL point.
+          const bool at_contact = s == steps && touching_end[j];
+          if (run.collision->collides(at_contact ? tool : air, tip + R * axis, axis, !at_contact)) {
+            return true;
+          }
+        }
+        return false;
+      });
+  for (std::size_t c : hit) {
+    const std::size_t j = candidates[c];
+    Hit& h = hits[op_of(moves[j].line)];
+    if (h.count++ == 0) h.line = moves[j].line;
+  }
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    res.operations[k].verification.blocks_swept = 0;
+    res.operations[k].verification.blocks_not_checked = unknown[k];
+  }
+  for (std::size_t j : candidates) ++res.operations[op_of(moves[j].line)].verification.blocks_swept;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    OperationResult& r = res.operations[k];
+    r.verification.colliding_blocks = static_cast<long>(hits[k].count);
+    if (!hits[k].count) continue;
+    r.verification.collision_free = false;
+    const GcodeMove& m = moves[static_cast<std::size_t>(
+        std::find_if(moves.begin(), moves.end(),
+                     [&](const GcodeMove& x) { return x.line == hits[k].line; }) -
+        moves.begin())];
+    add_finding(res, FindingCode::MoveCollision, k, 0,
+                "operation " + posted[k].name + ": " + std::to_string(hits[k].count) +
+                    " blocks the program adds between CL points (approach, retract, index or "
+                    "end moves) where the tool hits the part as the machine moves it, first G-code "
+                    "line " +
+                    std::to_string(hits[k].line) + " (" + (m.rapid ? "a rapid" : "a feed block") +
+                    (m.retract ? " in machine coordinates" : "") + ")");
+  }
+}
+
 void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& written,
                        JobResult& res) {
@@ -931,6 +1066,8 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
       out_ops[k].points[i].tip_mm = posted[k].points[i].tip_mm;
     }
   }
+  // Every block the program holds, whoever wrote it, swept against the part.
+  check_every_block(run, ops, posted, written, res);
   // The program as a whole after its points: a point's own finding names its CL line first.
   check_program(run, posted, written, res);
   res.out_cls = format_cl(run.tp, out_ops);

@@ -1,5 +1,6 @@
 // The write stage: the program written, read back as a controller reads it, and scheduled at
 // the machine's limits (stages.hpp).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -280,6 +281,16 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   bool known = false;
   int from_line = 0;
   w.spindle_mm.assign(w.moves.size(), std::nullopt);
+  w.joints_after.assign(w.moves.size(), std::nullopt);
+  w.tip_linear.assign(w.moves.size(), 0);
+  // Which joints some block has set since the start (where the machine stands before is not
+  // known): a block's end is known where all five are.
+  std::array<bool, kJointCount> set{};
+  // With TCP on, which of the tip's X Y Z some block has given since a block without it.
+  std::array<bool, 3> tip_set{};
+  const auto record = [&](std::size_t index) {
+    if (std::all_of(set.begin(), set.end(), [](bool b) { return b; })) w.joints_after[index] = q;
+  };
   std::size_t at = 0;
   const auto spindle = [&](const JointPosition& j) {
     return std::optional<Vec3d>(Vec3d(j[0], j[1], j[2] + length_mm));
@@ -294,14 +305,21 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
     const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
     if (m.retract || !known) flush_feed(true, nullptr);
+    if (gives[3]) set[kA] = true;
+    if (gives[4]) set[kC] = true;
     if (m.retract) {
       // Machine coordinates: the spindle's reference point to the retract height.
       if (gives[2]) to[2] = t.retract_z_mm - length_mm;
+      // In machine coordinates: where it leaves the tool relative to the part depends on the
+      // work offset and the tool length, which the program does not hold.
+      set[0] = set[1] = set[2] = false;
+      tip_set.fill(false);
       if (known && m.rapid) rapid_s += rapid_time_s(q, to, limits);
       if (!known) from_line = m.line;
       known = true;
       q = to;
       w.spindle_mm[index] = spindle(q);
+      record(index);
       continue;
     }
     if (!known && !from_line) {
@@ -311,6 +329,8 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
       known = true;
       from_line = m.line;
       w.spindle_mm[index] = spindle(q);
+      set.fill(true);
+      record(index);
       continue;
     }
     // The reader takes LinuxCNC's kinematics as always on; a configuration that switches them
@@ -327,6 +347,10 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
       to[0] = xyz.x();
       to[1] = xyz.y();
       to[2] = xyz.z();
+      // The tip on a straight line in the workpiece, the joints through the kinematics.
+      w.tip_linear[index] = 1;
+      for (std::size_t k = 0; k < 3; ++k) tip_set[k] = tip_set[k] || gives[k];
+      if (tip_set[0] && tip_set[1] && tip_set[2]) set[0] = set[1] = set[2] = true;
       const bool safe_rapid =
           std::binary_search(g.joint_safe_rapids.begin(), g.joint_safe_rapids.end(), m.line);
       const Vec3d was = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
@@ -370,11 +394,14 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
                             : Vec3d(m.xyz_mm.x(), m.xyz_mm.y(), m.xyz_mm.z() - above);
       for (int k = 0; k < 3; ++k) {
         if (gives[k]) to[static_cast<std::size_t>(k)] = xyz[k];
+        if (gives[k]) set[static_cast<std::size_t>(k)] = true;
       }
+      tip_set.fill(false);
       if (m.rapid) rapid_s += rapid_time_s(q, to, limits);
     }
     q = to;
     if (known) w.spindle_mm[index] = spindle(q);
+    if (known) record(index);
   }
   flush_feed(true, nullptr);
   g.tcp_joint_peaks = tcp_joint_peaks(machine, tcp_blocks, 1.0);
@@ -601,6 +628,13 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
   tcp_joint_findings(machine, limits, tcp_blocks, res);
   w.write_s = seconds_since(t0);
   return w;
+}
+
+void read_program_again(const Run& run, const std::vector<PostedOperation>& posted, Written& w,
+                        JobResult& res) {
+  read_back(run.machine, posted, res.gcode, w);
+  std::vector<TcpBlock> tcp_blocks;
+  program_time(run, w, effective_limits(run.machine), res.gcode_units, res.gcode, tcp_blocks);
 }
 
 }  // namespace taxopt::pipeline

@@ -29,6 +29,10 @@ retracts). Asserted, for each program:
   same part with no tcp_joint_limit warning, and on the controller so configured every joint
   stays within its MAX_ACCELERATION (0.5 %).
 
+By default (ctest label `controller`) the A/C tcp G94 program and the remedy run (about 4
+minutes); `--set sine-more` (label `long`, TAXOPT_LONG=1) the machine-mode, G93, B/C and
+programmed-feed programs (about 7 minutes).
+
 With `--set real` (ctest label `long`, run when TAXOPT_LONG=1) the same runs
 and checks for the real CL files that fit the sample machine's travel (Creo's profilfraesen,
 CATIA's peening file) and the bundled demo (data/demo), tcp mode, each on both samples (A/C
@@ -40,7 +44,7 @@ there), the other NX file and Amorim's at their points.
 
 Each program prints a row of the table in docs/feed-schedule.md "On LinuxCNC's controller".
 
-    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|real|demo]
+    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|sine-more|real|demo]
 """
 import json
 import os
@@ -133,12 +137,14 @@ def cases(exe, src, work, which):
     with open(preset) as f, open(inverse_time, "w") as g:
         g.write(f.read().replace('feed_mode = "units-per-minute"', 'feed_mode = "inverse-time"'))
     common = ["--in", cls, "--part", stl, "--gauge-length", "50"]
-    out = [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac", 1.0),
-           ("sine, A/C, machine mode, G94", common + ["--machine", machine_mode], "xyzac", 1.0),
-           ("sine, A/C, tcp, G93", common + ["--machine", inverse_time], "xyzac", 1.0),
-           ("sine, B/C, tcp, G94", common + ["--machine", bc], "xyzbc", 1.0),
-           ("sine, A/C, tcp, G94, programmed feeds",
-            common + ["--machine", preset, "--no-schedule"], "xyzac", 1.0)]
+    more = [("sine, A/C, machine mode, G94", common + ["--machine", machine_mode], "xyzac", 1.0),
+            ("sine, A/C, tcp, G93", common + ["--machine", inverse_time], "xyzac", 1.0),
+            ("sine, B/C, tcp, G94", common + ["--machine", bc], "xyzbc", 1.0),
+            ("sine, A/C, tcp, G94, programmed feeds",
+             common + ["--machine", preset, "--no-schedule"], "xyzac", 1.0)]
+    if which == "sine-more":
+        return more, []
+    out = [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac", 1.0)]
     remedy = remedy_case(exe, src, work, "sine", common, preset)
     if isinstance(remedy, str):
         return out, [remedy]
@@ -148,9 +154,9 @@ def cases(exe, src, work, which):
 def main():
     exe, src = sys.argv[1], sys.argv[2]
     which = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--set" else "sine"
-    if which in ("real", "demo") and os.environ.get("TAXOPT_LONG") != "1":
-        print("skipped: the real files and the demo on the controller take about 95 minutes; "
-              "TAXOPT_LONG=1 runs them")
+    if which in ("real", "demo", "sine-more") and os.environ.get("TAXOPT_LONG") != "1":
+        print("skipped: the real files and the demo on the controller take about 95 minutes, "
+              "the sine in its other modes about 7; TAXOPT_LONG=1 runs them")
         return 77
     work = tempfile.mkdtemp(prefix="taxopt-controller-test-")
     rows = []

@@ -31,9 +31,12 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --preset asan -j "$jobs"
 
 echo "== ThreadSanitizer (the parallel loops run on std::threads here: src/util/parallel.hpp)"
+# What it adds is on the parallel stages: the tests that run every one of them (contacts, the
+# C-space raster, the optimisers, the verification) in-process, and the CLI's 1-against-2-thread
+# byte comparisons. The rest of the suite runs under ASan + UBSan above.
 cmake --preset tsan
 cmake --build --preset tsan -j "$jobs"
-TSAN_OPTIONS=halt_on_error=1 ctest --preset tsan -j "$jobs"
+TSAN_OPTIONS=halt_on_error=1 ctest --preset tsan -j "$jobs" -R "threads|pipeline:|cspace"
 
 echo "== fuzzing (libFuzzer, bounded)"
 bash scripts/fuzz.sh 30

@@ -757,6 +757,27 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   return r;
 }
 
+/// The operation a block of the program belongs to: the first whose last point is at or after
+/// it (the approach to its first point is its own, the moves after the last point the last's).
+class BlockOwner {
+ public:
+  BlockOwner(const std::vector<PostedOperation>& posted, const Written& w)
+      : last_line_(posted.size(), 0) {
+    for (std::size_t k = 0; k < posted.size(); ++k) {
+      for (const GcodeMove* m : w.point_moves[k]) last_line_[k] = std::max(last_line_[k], m->line);
+    }
+  }
+  std::size_t operator()(int line) const {
+    for (std::size_t k = 0; k < last_line_.size(); ++k) {
+      if (last_line_[k] >= line) return k;
+    }
+    return last_line_.size() - 1;
+  }
+
+ private:
+  std::vector<int> last_line_;
+};
+
 }  // namespace
 
 void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
@@ -765,17 +786,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   const ProgramTemplate& t = machine.gcode.program;
   const std::vector<GcodeMove>& moves = w.moves;
   if (moves.empty() || posted.empty()) return;
-  // The operation a move belongs to: the first whose last point is at or after it.
-  std::vector<int> last_line(posted.size(), 0);
-  for (std::size_t k = 0; k < posted.size(); ++k) {
-    for (const GcodeMove* m : w.point_moves[k]) last_line[k] = std::max(last_line[k], m->line);
-  }
-  const auto op_of = [&](int line) {
-    for (std::size_t k = 0; k < posted.size(); ++k) {
-      if (last_line[k] >= line) return k;
-    }
-    return posted.size() - 1;
-  };
+  const BlockOwner op_of(posted, w);
   struct Breach {
     std::size_t count = 0;
     int line = 0;
@@ -914,18 +925,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   const std::vector<GcodeMove>& moves = w.moves;
   if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
     return;
-  // The operation a block belongs to: the first whose last point is at or after it (the
-  // approach to its first point is its own, the moves after the last point the last's).
-  std::vector<int> last_line(posted.size(), 0);
-  for (std::size_t k = 0; k < posted.size(); ++k) {
-    for (const GcodeMove* m : w.point_moves[k]) last_line[k] = std::max(last_line[k], m->line);
-  }
-  const auto op_of = [&](int line) {
-    for (std::size_t k = 0; k < posted.size(); ++k) {
-      if (last_line[k] >= line) return k;
-    }
-    return posted.size() - 1;
-  };
+  const BlockOwner op_of(posted, w);
   // The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
   // point with its linearisation blocks, a rapid written as one block. Every other block (the
   // approach, the descent and the XY move to it, an index move's retract, turn and way back,

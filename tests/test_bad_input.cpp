@@ -214,7 +214,7 @@ TEST_CASE("bad input: --force never writes an empty program", "[cli][bad-input]"
 }
 
 TEST_CASE("bad input: a signal during the run or the write leaves no temporary file",
-          "[cli][bad-input][signals]") {
+          "[cli][bad-input][signals][slow]") {
   // A run long enough to be cut at many moments: the demo part, the paper method.
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
@@ -259,7 +259,7 @@ TEST_CASE("bad input: a signal during the run or the write leaves no temporary f
 TEST_CASE(
     "safe by default: without a part no real file's axis turns more than 1 deg, and "
     "the user is told nothing was checked",
-    "[cli][safety]") {
+    "[cli][safety][slow]") {
   TempDir t;
   for (const char* f :
        {"mech491-variable-axis-ballmill.cls", "mech491-project2-multiop.cls",
@@ -338,7 +338,7 @@ TEST_CASE(
 TEST_CASE(
     "safe by default: the machine file's usual holder and clearances apply where the "
     "command line gives none",
-    "[cli][safety]") {
+    "[cli][safety][slow]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   write_file(t.path("m.toml"), read_file(d + "machines/paper-ac.toml") +
@@ -558,7 +558,7 @@ TEST_CASE("hostile input, round 3: a FIFO or /dev/zero as the CL or machine file
 TEST_CASE(
     "hostile input, round 3: a mill that is no ball end, with a part, has its shank and holder "
     "checked: the collisions the ball-end run refuses are refused for it too",
-    "[cli][bad-input][collision]") {
+    "[cli][bad-input][collision][slow]") {
   TempDir t;
   const std::string demo = read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls");
   const std::string part = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl";

@@ -214,7 +214,7 @@ TEST_CASE("cli: generate refuses impossible settings with exit 2", "[cli][genera
 }
 
 TEST_CASE("cli: an input path whose shank hits the part exits 1, names the lines, writes nothing",
-          "[cli][collision]") {
+          "[cli][collision][slow]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   // The tool's exact bodies first (no clearances): 60 points.
@@ -253,7 +253,7 @@ TEST_CASE("cli: an input path whose shank hits the part exits 1, names the lines
   CHECK(j2["operations"][0]["verification"]["collision_free"] == true);
 }
 
-TEST_CASE("cli: with a part, 1 and 2 threads give the same bytes", "[cli][collision]") {
+TEST_CASE("cli: with a part, 1 and 2 threads give the same bytes", "[cli][collision][slow]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
   for (int n : {1, 2}) {
@@ -631,7 +631,7 @@ TEST_CASE("cli: the report's clearance bound of shank and holder matches the clo
             .is_null());
 }
 
-TEST_CASE("cli: the report can be reproduced from itself, its numbers tidy", "[cli]") {
+TEST_CASE("cli: the report can be reproduced from itself, its numbers tidy", "[cli][slow]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   // Global options after the subcommand, as a user types them.
@@ -807,7 +807,7 @@ TEST_CASE("cli: every operation's first feed block carries its F", "[cli][gcode]
   CHECK(operations == 15);
 }
 
-TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "[cli][feed]") {
+TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "[cli][feed][slow]") {
   TempDir t;
   REQUIRE(run_taxopt("generate --surface sine --height 10 --tilt 15 --yaw 10 --out-cls " +
                      t.path("s.cls") + " --out-mesh " + t.path("s.stl"))
@@ -831,7 +831,7 @@ TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "
 }
 
 TEST_CASE("cli: the LinuxCNC preset turns the tool length on before the TCP kinematics",
-          "[cli][gcode][linuxcnc]") {
+          "[cli][gcode][linuxcnc][slow]") {
   // LinuxCNC's motion controller jumps its joints when M428 switches to the TCP kinematics with
   // the table tilted and G43 follows (issue 36): G43 first.
   TempDir t;

@@ -163,7 +163,7 @@ Measured read_and_measure(const std::string& program, bool machine_mode, const d
 TEST_CASE(
     "feed schedule: on unseen parts rs274 reads the scheduled G-code in both feed modes, "
     "within every limit, and the optimised path is no slower",
-    "[feed][rs274][integration]") {
+    "[feed][rs274][integration][slow]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(4242);
   const Limits lim{{40, 40, 40, 10, 15}, {400, 400, 400, 50, 75}};
@@ -318,7 +318,7 @@ TEST_CASE(
     "objective time: on unseen parts at limits that bind, the cycle is no longer than the "
     "input's, the paper method's or the global method's, and rs274 reads it in G94 and G93 "
     "within every limit",
-    "[feed][rs274][integration][global]") {
+    "[feed][rs274][integration][global][slow]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(5151);
   const Limits lim{{40, 40, 40, 10, 15}, {400, 400, 400, 50, 75}};
@@ -384,7 +384,7 @@ TEST_CASE(
     "feed schedule: every real CL file at LinuxCNC's sample rates exits 0 in tcp and machine "
     "mode, and rs274's reading of every block, linearisation and arc chords included, stays "
     "within the limits",
-    "[feed][real][rs274][integration]") {
+    "[feed][real][rs274][integration][slow]") {
   REQUIRE(have_rs274());
   // The sample configuration's rates (data/machines/linuxcnc-xyzac-trt.toml), with its travel
   // left out: the real parts do not fit its 200 mm cube, which is a finding of its own.

@@ -36,7 +36,7 @@ void check_lists(const JobResult& r) {
 TEST_CASE(
     "findings: a caller tells no part, an unreachable pose and a dynamic limit apart by "
     "code, with the operation and the CL line",
-    "[findings][io]") {
+    "[findings][io][slow]") {
   std::mt19937 rng(2027);
   const Heightfield hf = random_heightfields(rng).front();
   const GeneratedCl g = raster_cl(hf, 3.0, 20.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);

@@ -164,11 +164,13 @@ TEST_CASE(
   CHECK(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'B').size() >= 348);
   CHECK_THROWS_AS(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'A'), InputError);
   std::vector<Position> ours = positions(ours_text, "G234");
-  // taxopt comes down from the retract to the clearance height, then XY, then Z (issues 33,
-  // 36); the post's first block goes there diagonally. The descent and the XY block are ours.
+  // taxopt comes down from the retract to the clearance height, then XY to above the first
+  // point on its tool axis, then along the axis (as CAM links an approach); the post's first
+  // block goes there diagonally. The descent and the XY block are ours.
   REQUIRE(ours.size() == post.size() + 2);
-  CHECK(ours[1].x == ours[2].x);
-  CHECK(ours[1].y == ours[2].y);
+  const double tilt_rad = std::abs(ours[2].b) * M_PI / 180.0;
+  CHECK(std::hypot(ours[1].x - ours[2].x, ours[1].y - ours[2].y) ==
+        Approx((ours[1].z - ours[2].z) * std::tan(tilt_rad)).margin(3e-4));
   CHECK(ours[0].z >= ours[2].z);
   ours.erase(ours.begin(), ours.begin() + 2);
   REQUIRE(ours.size() == post.size());

@@ -278,7 +278,7 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
 TEST_CASE(
     "paper and global methods: on unseen sine-like and bump parts the peaks fall by the "
     "paper's margins, and the global method's peak a is no higher than the paper's, safely",
-    "[paper-done-when][integration]") {
+    "[paper-done-when][integration][slow]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(9001);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -333,7 +333,7 @@ TEST_CASE(
 TEST_CASE(
     "paper and global methods: a steep wall beside the path, input axes leaning into it, comes "
     "out collision-free",
-    "[wall-done-when][integration]") {
+    "[wall-done-when][integration][slow]") {
   REQUIRE(have_rs274());
   std::mt19937 rng(4242);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -360,7 +360,7 @@ TEST_CASE(
 TEST_CASE(
     "paper method: walls the input hits, at shank and holder clearances from 0.5/0.5 to 1/3 mm, "
     "give a verified program",
-    "[paper][wall][clearance][integration]") {
+    "[paper][wall][clearance][integration][slow]") {
   TempDir dir;
   // One seed here (a run under the sanitizers takes minutes); 16 seeds at four clearances were
   // run by hand (issue 34's note): all verified where the generator did not gouge.

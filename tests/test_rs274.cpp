@@ -63,7 +63,14 @@ Checked check_against(const std::string& ngc, const GeneratedCl& g, const Machin
       continue;
     }
     REQUIRE(i < g.tips_mm.size());
-    REQUIRE(cm.feed == !g.rapid[i]);
+    // On LinuxCNC in tcp mode a rapid may be written at a joint-safe feed (docs/gcode-dialects.md):
+    // the approach's last leg along a tilted tool axis (an operation's first point, or the
+    // point after an index move), which its planner would run with the spindle's Z past its
+    // limit.
+    const bool joint_safe_rapid =
+        g.rapid[i] && cm.feed && m.gcode.dialect == GcodeDialect::LinuxCNC && !machine;
+    INFO("point " << i << " of " << g.tips_mm.size());
+    REQUIRE((cm.feed == !g.rapid[i] || joint_safe_rapid));
     out.max_tip_mm = std::max(out.max_tip_mm, off);
     out.max_axis_deg =
         std::max(out.max_axis_deg, rad_to_deg(angle_between(m.ac.forward(pose), g.axes[i])));
@@ -243,7 +250,7 @@ TEST_CASE("rs274: inch output of a millimetre file", "[rs274][integration]") {
 }
 
 TEST_CASE("rs274: taxopt demo writes G-code rs274 accepts, with the paper's C flips counted",
-          "[rs274][integration]") {
+          "[rs274][integration][slow]") {
   REQUIRE(have_rs274());
   TempDir dir;
   const RunResult r = run_taxopt("demo --out " + dir.path("demo"));
@@ -547,7 +554,7 @@ TEST_CASE(
 TEST_CASE(
     "rs274: the demo in machine mode with its part: linearisation keeps the tip on the path, "
     "no move between points hits the part",
-    "[rs274][integration]") {
+    "[rs274][integration][slow]") {
   REQUIRE(have_rs274());
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   TempDir dir;

@@ -218,6 +218,16 @@ class Dialect {
 
 }  // namespace
 
+Vec3d approach_tip_mm(const Vec3d& tip_mm, const Vec3d& axis, double clearance_z_mm,
+                      double safe_distance_mm) {
+  // Along the axis up to the clearance height where the axis rises steeply enough (within 60
+  // deg of the vertical: at most twice the height to go), else the safe distance along it.
+  const double rise_mm = clearance_z_mm - tip_mm.z();
+  const double along_mm =
+      axis.z() >= 0.5 && rise_mm > 0.0 ? rise_mm / axis.z() : std::max(0.0, safe_distance_mm);
+  return tip_mm + along_mm * axis;
+}
+
 std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
                                              const std::vector<Posed>& poses) {
   if (poses.size() != points.size()) {
@@ -330,10 +340,10 @@ std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const J
 
 std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
                                             const Vec3d& from_tip_mm, const Posed& from,
-                                            const Vec3d& to_tip_mm, const Posed& to) {
+                                            const Vec3d& to_tip_mm, const Posed& to,
+                                            bool held_pose) {
   const double da_deg = rad_to_deg(to.a_rad - from.a_rad);
   const double dc_deg = rad_to_deg(to.c_rad - from.c_rad);
-  if (da_deg == 0.0 && dc_deg == 0.0) return std::nullopt;  // the joints move as the axes
   const Vec3d d = to_tip_mm - from_tip_mm;
   const double axis_delta[kJointCount] = {d.x(), d.y(), d.z(), da_deg, dc_deg};
   // The rapid's own rate: every axis within its velocity limit.
@@ -344,8 +354,22 @@ std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLim
       axis_rate = std::min(axis_rate, v / std::abs(axis_delta[k]));
   }
   if (!std::isfinite(axis_rate)) return std::nullopt;
-  const double joint_rate =
-      joint_velocity_rate_per_s(ac, limits, from_tip_mm, from, to_tip_mm, to).first;
+  double joint_rate = joint_velocity_rate_per_s(ac, limits, from_tip_mm, from, to_tip_mm, to).first;
+  if (da_deg == 0.0 && dc_deg == 0.0) {
+    if (!held_pose) return std::nullopt;  // the joints move as the axes (tcp_joint_peaks warns)
+    // A and C held: the joints are the tip turned with the table, each a straight line, which
+    // the axes' limits do not bound where the table is tilted (a rapid along a tilted tool axis
+    // is the spindle's Z alone, up to 1/cos A faster than the program's Z).
+    const Vec3d dq = ac.to_machine_mm(to_tip_mm, to) - ac.to_machine_mm(from_tip_mm, from);
+    for (std::size_t j = 0; j < 3; ++j) {
+      const double v = limits[j].max_velocity_per_s;
+      const double q = std::abs(dq[static_cast<Eigen::Index>(j)]);
+      if (v > 0.0 && q > 0.0) joint_rate = std::min(joint_rate, v / q);
+    }
+    // Within the axes' own rate (a table not tilted: the joints are the axes): a rapid.
+    if (!(joint_rate < axis_rate * (1.0 - 1e-6))) return std::nullopt;
+    joint_rate *= 1.0 - 1e-3;
+  }
   if (!(joint_rate < axis_rate)) return std::nullopt;
   return joint_rate;
 }
@@ -526,7 +550,11 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     // controller, issue 36). So the tool first comes straight down to a clearance height, the
     // operation's highest tip plus approach_clearance_mm, then XY, then down. Not on Fanuc,
     // whose G43.4 comes on with the block down: before it, Z would place the spindle nose.
-    double clearance_z_mm = -std::numeric_limits<double>::infinity();
+    // With a part model the clearance height stands above the part too (its highest point in
+    // the workpiece, PostedOperation::part_top_z_mm), not only above the operation's tips: an
+    // operation low on a tall part came down inside it (a Haas part's approach at Z1.5987 in,
+    // its top at Z3.0).
+    double clearance_z_mm = op.part_top_z_mm.value_or(-std::numeric_limits<double>::infinity());
     for (const CLPointd& q : op.points) clearance_z_mm = std::max(clearance_z_mm, q.tip_mm.z());
     clearance_z_mm += g.program.approach_clearance_mm;
     const bool descend = tcp && !dialect.length_on_first_move();
@@ -542,6 +570,8 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     // A and C (0.12 deg measured at the end of a pass), so a dwell G4 P0 (the controller runs
     // its queue to a stop) stands between such a rapid and a feed block.
     bool last_feed_block = false, last_joint_safe = false;
+    // The block written next is an approach's last leg, along the tool axis.
+    bool along_axis_leg = false;
     const auto out_xyz = [&](const Vec3d& tip, const Posed& pose) {
       return written_xyz_mm(machine, tip, pose);
     };
@@ -672,6 +702,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       const Vec3d xyz = out_xyz(p.tip_mm, pose);
       const std::string words = xyz_words(xyz) + angle_words(pose);
       if (words == last_words) continue;  // nothing would move
+      along_axis_leg = false;
       // An index move: a rapid that turns the table by more than the threshold goes up to the
       // retract, turns there and comes down XY first (docs/gcode-dialects.md "Index moves").
       // With a part model the turns stay in the air: the check verifies their swept moves.
@@ -694,16 +725,40 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
           line(prefix + dialect.rapid() + " Z" + dialect.number(clearance_z_mm * scale, d));
           prefix.clear();
         }
-        std::string xy = dialect.rapid() + " X" + dialect.number(xyz.x() * scale, d) + " Y" +
-                         dialect.number(xyz.y() * scale, d);
+        // Under TCP the last leg comes down along the tool axis, as CAM links an approach:
+        // XY to above the point on its axis, then along it (a tool tilted 90 deg that came
+        // straight down in the workpiece's Z swept through a wall, issue 45). In machine mode
+        // the machine's Z is the tool axis already.
+        // Not on Fanuc, whose TCP comes on with the block down from the retract height (left as
+        // it was: straight down to the point).
+        const Vec3d above = descend ? out_xyz(approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm,
+                                                              g.program.approach_clearance_mm),
+                                              pose)
+                                    : xyz;
+        std::string xy = dialect.rapid() + " X" + dialect.number(above.x() * scale, d) + " Y" +
+                         dialect.number(above.y() * scale, d);
         if (dialect.length_on_first_move()) {
           line(xy);  // Fanuc: its length and TCP come on with the Z block below
         } else {
           line(prefix + xy);
           prefix.clear();
         }
+        if (descend && std::abs(above.z() - clearance_z_mm) * scale > 0.5 * std::pow(10.0, -d)) {
+          // A tool within 30 deg of the horizontal: straight down to the safe distance on its
+          // axis, then along it.
+          line(dialect.rapid() + " Z" + dialect.number(above.z() * scale, d));
+        }
         approach = false;
-        have_prev = false;  // the tool comes from the retract: no move to schedule or split
+        // The tool comes from the retract: no move to schedule or split; under TCP a rapid to
+        // the point comes from `above` along the axis (at a joint-safe feed on LinuxCNC).
+        have_prev = descend && p.motion == Motion::Rapid;
+        along_axis_leg = have_prev;
+        if (have_prev) {
+          prev_tip =
+              approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm, g.program.approach_clearance_mm);
+          prev_pose = pose;
+          prev_xyz = above;
+        }
       }
       std::string block;
       bool restore_inverse_time = false;
@@ -725,8 +780,8 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         }
         block = dialect.rapid() + " " + words;
         if (joint_safe && have_prev) {
-          const std::optional<double> rate =
-              joint_safe_rate_per_s(machine.ac, limits, prev_tip, prev_pose, p.tip_mm, pose);
+          const std::optional<double> rate = joint_safe_rate_per_s(
+              machine.ac, limits, prev_tip, prev_pose, p.tip_mm, pose, along_axis_leg);
           if (rate) {
             // A feed block at the rate that keeps the joints within their limits: F is the
             // tip's distance (the rotary one when only A and C turn) per minute, or under G93

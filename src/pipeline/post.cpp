@@ -36,6 +36,11 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       po.spindle_clockwise = true;
     }
     po.swept_moves_checked = run.collision.has_value() && o.contact.recovered;
+    if (run.options.part) {
+      double top = -std::numeric_limits<double>::infinity();
+      for (const Vec3d& v : run.options.part->mesh().vertices) top = std::max(top, v.z());
+      if (std::isfinite(top)) po.part_top_z_mm = top;
+    }
     if (o.optimised) {
       for (std::size_t i = 0; i < po.points.size(); ++i) {
         po.points[i].axis = o.optimised->axes[i];

@@ -844,7 +844,10 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
                    std::to_string(po.tool.number));
       }
     }
-    if (!m.rapid && !m.spindle_on) {
+    // A rapid written at a joint-safe feed (LinuxCNC, tcp) cuts nothing: a rapid still.
+    const bool joint_safe_rapid = std::binary_search(res.gcode.joint_safe_rapids.begin(),
+                                                     res.gcode.joint_safe_rapids.end(), m.line);
+    if (!m.rapid && !m.spindle_on && !joint_safe_rapid) {
       breach(FindingCode::SpindleOff, m, "moves at feed with the spindle stopped");
     }
     if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
@@ -868,7 +871,16 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
         xy[0] = m.xyz_mm.x();
         xy[1] = m.xyz_mm.y();
       } else if (gives_z) {
-        if (!xy_set || m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1] ||
+        // Down from there: straight down, or under TCP along the tool axis (as CAM links an
+        // approach: the writer comes down so where the axis is not vertical).
+        const auto along_axis = [&] {
+          if (!prev || !m.tcp || !prev->tcp) return false;
+          const Vec3d d = m.xyz_mm - prev->xyz_mm;
+          if (d.norm() < 1e-9) return false;
+          const Vec3d axis = machine.ac.forward(Posed{deg_to_rad(m.a_deg), deg_to_rad(m.c_deg)});
+          return std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
+        };
+        if (!xy_set || ((m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1]) && !along_axis()) ||
             (prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
           breach(FindingCode::DiagonalApproach, m,
                  "leaves the retract height otherwise than XY first, then down");

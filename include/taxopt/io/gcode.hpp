@@ -35,6 +35,10 @@ struct PostedOperation {
   std::optional<ClCoolant> coolant;
   /// Stops, dwells, spindle and coolant changes where they stand (Operation::events).
   std::vector<ProgramEvent> events;
+  /// The part model's highest point in the workpiece (its bounding box's top), mm: the
+  /// approach's clearance height stands above it as above the operation's tips (ProgramTemplate::
+  /// approach_clearance_mm); empty without a part.
+  std::optional<double> part_top_z_mm = {};
   /// The moves are checked against a part model, swept (the verification's move check): the
   /// turns of the table stay in the air; false: a rapid turning more than the machine's
   /// index threshold is an index move (up, turn, XY, down).
@@ -44,6 +48,13 @@ struct PostedOperation {
   /// blocks written, else the point's time is shared in proportion to the blocks' lengths.
   std::vector<std::vector<double>> linearised_time_s = {};
 };
+
+/// Where an approach under TCP comes down to before the last leg along the tool axis to
+/// `tip_mm`: on the axis at the clearance height where the axis rises within 60 deg of the
+/// vertical, else `safe_distance_mm` along it (below the clearance height: the writer comes
+/// straight down to it first).
+Vec3d approach_tip_mm(const Vec3d& tip_mm, const Vec3d& axis, double clearance_z_mm,
+                      double safe_distance_mm);
 
 /// Time of one feed move at `feed_mm_per_min`, s, as a controller times it under TCP: the tip
 /// distance over the feed, or the rotary distance (deg) over the feed read as deg/min when
@@ -132,10 +143,14 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
 /// keeps every joint's velocity within its limit, from the joints' largest rate of change
 /// along the move (sampled in steps of at most 0.25 deg of turn, up to 64, less 0.1 % and the
 /// step's turn in rad for what falls between them); nullopt when the axes' own limits keep
-/// them there already.
+/// them there already. Where A and C are held, nullopt (tcp_joint_peaks predicts and warns of
+/// what the tilted table does to the joints) unless `held_pose`: then the rate that keeps the
+/// joints' straight lines within their limits (an approach's last leg along a tilted tool
+/// axis, which is the spindle's Z alone).
 std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
                                             const Vec3d& from_tip_mm, const Posed& from,
-                                            const Vec3d& to_tip_mm, const Posed& to);
+                                            const Vec3d& to_tip_mm, const Posed& to,
+                                            bool held_pose = false);
 
 /// The same bound for any tcp move, with the joint that sets it: the largest rate along the
 /// move (fraction per second, the tip on its line and A, C in proportion, as a tcp controller

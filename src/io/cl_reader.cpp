@@ -77,6 +77,19 @@ std::vector<std::string> split_args(const std::string& args) {
   return out;
 }
 
+/// Whether a physical line starts a record of its own: a `$$` comment, or a word followed by
+/// a slash (GOTO/..., PPRINT/...).
+bool starts_record(const std::string& physical) {
+  std::size_t k = 0;
+  while (k < physical.size() && std::isspace(static_cast<unsigned char>(physical[k]))) ++k;
+  if (physical.compare(k, 2, "$$") == 0) return true;
+  const std::size_t word = k;
+  while (k < physical.size() && std::isalnum(static_cast<unsigned char>(physical[k]))) ++k;
+  if (k == word || !std::isalpha(static_cast<unsigned char>(physical[word]))) return false;
+  while (k < physical.size() && (physical[k] == ' ' || physical[k] == '\t')) ++k;
+  return k < physical.size() && physical[k] == '/';
+}
+
 /// A logical line: physical lines joined over `$` continuations.
 struct LogicalLine {
   std::string raw;   // physical lines joined by '\n'
@@ -169,10 +182,14 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
       continue;
     }
     if (first.rfind("$$", 0) == 0) {
-      // A comment; a comment ending in `$` continues on the next line (Creo's `$$->`).
+      // A comment; one ending in `$` continues on the next line (Creo's `$$-> CSYS / 1.0,
+      // 0.0,  $` and its numbers below) unless that line is a record or a comment of its own:
+      // a banner of `$$$$$$$$` or a sentence ending in `US$` before a GOTO joined the GOTO to
+      // the comment, and it vanished.
       ll.kind = RecordKind::Comment;
       std::string cur = first;
-      while (cur.size() > 2 && cur.back() == '$' && i + 1 < physical.size()) {
+      while (cur.size() > 2 && cur.back() == '$' && i + 1 < physical.size() &&
+             !starts_record(physical[i + 1])) {
         ++i;
         ll.raw += "\n" + physical[i];
         cur = trim(physical[i]);
@@ -183,12 +200,26 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
     }
     std::string code;
     std::string piece = physical[i];
+    // Text records (PPRINT, PARTNO, INSERT): `$$` in their text is text; a `$` at the end
+    // continues them (CATIA's `PPRINT/(=====$` then `=====)`) unless the next line is a record
+    // of its own (`PPRINT/TOOL COST 12 US$` then `GOTO/50,0,5`: the GOTO vanished).
+    const bool text_record = [&] {
+      std::string word;
+      for (char ch : first) {
+        if (!std::isalpha(static_cast<unsigned char>(ch))) break;
+        word += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      }
+      const std::size_t after = first.find_first_not_of(" \t", word.size());
+      return (word == "PPRINT" || word == "PARTNO" || word == "INSERT") &&
+             (after == std::string::npos || first[after] == '/' || word == "PARTNO");
+    }();
     for (;;) {
-      const std::size_t comment = piece.find("$$");
+      const std::size_t comment = text_record ? std::string::npos : piece.find("$$");
       if (comment != std::string::npos) piece = piece.substr(0, comment);
       std::string t = piece;
       while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
-      if (!t.empty() && t.back() == '$') {
+      if (!t.empty() && t.back() == '$' &&
+          !(text_record && i + 1 < physical.size() && starts_record(physical[i + 1]))) {
         // `$` continuation: the next line follows with no separator (it may split a number).
         t.pop_back();
         code += t;
@@ -277,6 +308,10 @@ ArcDirection documented_arc_direction(ClDialect dialect) {
   }
   return ArcDirection::Auto;
 }
+
+/// How far an arc's end may lie off its circle, in the CL file's unit (mm or inch): the
+/// rounding of its numbers (MOVARC's and CIRCLE's ends alike).
+constexpr double kArcEndTolerance = 0.002;
 
 /// A CIRCLE whose end GOTO has been read: its chords go between points `start` and
 /// `start + 1` of operation `op` once the file's arc sense is decided.
@@ -607,11 +642,16 @@ class Reader {
     if (rs < 1e-9 || re < 1e-9) fail(c.line, "CIRCLE: start or end point lies on its axis");
     const double r_given = c.radius_mm > 0.0 ? c.radius_mm : rs;
     const double mismatch = std::max(std::abs(rs - r_given), std::abs(re - r_given));
-    if (mismatch > 0.01 * r_given + 0.01) {
+    // As MOVARC's ends are held (check_movarcs): a CIRCLE is an arc, and an end GOTO off its
+    // circle is no arc a CAM system wrote (a 5 mm miss was posted as a spiral from radius 10
+    // to 15). The allowance covers the CL file's rounding of its numbers.
+    const double allowed_mm = kArcEndTolerance * scale_;
+    if (mismatch > allowed_mm + 1e-6 * r_given) {
       std::ostringstream os;
       os << "CIRCLE radius " << r_given << " mm but the arc's ends lie at " << rs << " and " << re
-         << " mm from its axis; interpolated as a spiral";
-      tp_.warnings.push_back(format_location(source_, c.line, os.str()));
+         << " mm from its axis (more than " << allowed_mm
+         << " mm apart): not an arc; the end GOTO is not on the circle";
+      fail(c.line, os.str());
     }
     // TIMES,n: n revolutions in all, the last one ending at the GOTO (docs/cl-files.md).
     const double phi = arc_sweep_rad(c, start, end_mm);
@@ -1249,11 +1289,25 @@ class Reader {
       rapid_next_ = false;
       add_point(from + delta, m, index, line);
     } else if (major == "GOHOME") {
-      if (!home_) fail(line, "GOHOME: no FROM point to return to");
-      axis_ = home_->second;
+      // APT's GOHOME returns to the FROM point; NX's CLSF writes its Gohome point in the record
+      // (GOHOME/x,y,z[,i,j,k]): that point, as NX's posts move to it (read as the FROM point,
+      // the program lost its end point and ran an 811.6 mm diagonal rising from 7 mm above
+      // the holes).
       ++tp_.reading.motion_records;
       rapid_next_ = false;
-      add_point(home_->first, Motion::Rapid, index, line);
+      if (args.empty()) {
+        if (!home_) fail(line, "GOHOME: no FROM point to return to");
+        axis_ = home_->second;
+        add_point(home_->first, Motion::Rapid, index, line);
+      } else {
+        if (args.size() != 3 && args.size() != 6) {
+          fail(line, "GOHOME expects no numbers (the FROM point) or x,y,z[,i,j,k], got " +
+                         std::to_string(args.size()) + " fields");
+        }
+        const auto v = numbers(args, 0, args.size(), major, line);
+        if (v.size() == 6) axis_ = to_mcs_vector(parse_axis(v, 3, major, line));
+        add_point(to_mcs_point(Vec3d(v[0], v[1], v[2])), Motion::Rapid, index, line);
+      }
     } else if (major == "CIRCLE") {
       std::size_t nnum = 0;
       while (nnum < args.size() && is_number_like(args[nnum])) ++nnum;

@@ -27,8 +27,10 @@ const std::vector<ClWord>& cl_words() {
        "NX, CATIA, generic APT", kApt, false},
       {"GODLTA", M::Motion, "a move by dx,dy,dz, or by d along the tool axis", "generic APT", kApt,
        false},
-      {"GOHOME", M::Motion, "a rapid move back to the FROM point and axis", "CATIA, generic APT",
-       kApt, false},
+      {"GOHOME", M::Motion,
+       "a rapid move back to the FROM point and axis; with x,y,z[,i,j,k] (NX's Gohome point) to "
+       "that point",
+       "CATIA, NX, generic APT", kApt, false},
       {"CIRCLE", M::Motion,
        "an arc to the next GOTO about (i,j,k), in the CAM system's sense, checked against the "
        "tangents of the moves beside it",

@@ -292,3 +292,66 @@ TEST_CASE("cl writer: changed points become GOTOs in the file's units", "[io][cl
   const Toolpath back = parse_cl(out, "back");
   CHECK((back.operations[0].points[1].axis - ops[0].points[1].axis).norm() < 1e-9);
 }
+
+TEST_CASE(
+    "cl reader: a `$` at the end of a comment or a text record is text, not a continuation -- "
+    "the record after it is read (a banner, a price in a PPRINT), while a commented-out list "
+    "goes on as Creo writes it",
+    "[io][cl][hostile]") {
+  const std::string head = "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\n";
+  const std::string tail = "GOTO/0,0,5\nGOTO/50,0,5\nGOTO/50,50,5\n";
+  for (const std::string& trap :
+       {std::string("PPRINT/TOOL COST 12 US$\n"), std::string("PARTNO BRACKET $\n"),
+        std::string("$$$$$$$$$$$$$$$$$$$$\n"), std::string("$$ price in US$\n")}) {
+    INFO(trap);
+    const Toolpath tp = parse_cl(head + trap + tail, "t.cls");
+    std::size_t points = 0;
+    for (const Operationd& op : tp.operations) points += op.points.size();
+    CHECK(points == 3);
+  }
+  // Creo: `$$-> CSYS / 1, 0, 0, 0,  $` continues its list on the next line, in the comment.
+  const Toolpath creo =
+      parse_cl(head + "$$-> CSYS / 1.0, 0.0, 0.0, 0.0,  $\n            0.0, 1.0, 0.0, 0.0\n" + tail,
+               "c.cls");
+  std::size_t points = 0;
+  for (const Operationd& op : creo.operations) points += op.points.size();
+  CHECK(points == 3);
+}
+
+TEST_CASE("cl reader: GOHOME with NX's Gohome point goes there, without it to the FROM point",
+          "[io][cl][hostile]") {
+  const std::string head =
+      "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nFROM/0,0,100\nGOTO/10,10,5\n"
+      "GOTO/20,10,5\n";
+  const auto last_tip = [](const Toolpath& tp) {
+    return tp.operations.back().points.back().tip_mm;
+  };
+  const Toolpath nx = parse_cl(head + "GOHOME/20.0,10.0,50.0,0.0,0.0,1.0\n", "nx.cls");
+  CHECK(last_tip(nx).isApprox(Vec3d(20, 10, 50)));
+  CHECK(nx.operations.back().points.back().motion == Motion::Rapid);
+  const Toolpath apt = parse_cl(head + "GOHOME\n", "apt.cls");
+  CHECK(last_tip(apt).isApprox(Vec3d(0, 0, 100)));
+  CHECK_THROWS_AS(parse_cl(head + "GOHOME/1,2\n", "bad.cls"), InputError);
+}
+
+TEST_CASE(
+    "cl reader: a CIRCLE whose end GOTO is off its circle is refused naming its line, "
+    "not posted as a spiral",
+    "[io][cl][hostile][arcs]") {
+  const std::string head = "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/10,0,0\n";
+  // On the circle: read, with its chords.
+  const Toolpath ok =
+      parse_cl(head + "CIRCLE/0,0,0,0,0,1,10\nGOTO/0,10,0\nGOTO/0,20,0\n", "ok.cls");
+  CHECK(ok.operations.front().points.size() > 4);
+  // 5 mm off (radius 10 to 15), and 0.01 mm off: refused, the CIRCLE's line named.
+  for (const char* end : {"GOTO/0,15,0\n", "GOTO/0,10.01,0\n"}) {
+    INFO(end);
+    try {
+      parse_cl(head + "CIRCLE/0,0,0,0,0,1,10\n" + end + "GOTO/0,20,0\n", "bad.cls");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == 4);
+      CHECK_THAT(e.what(), Catch::Contains("not on the circle"));
+    }
+  }
+}

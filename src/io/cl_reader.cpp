@@ -198,6 +198,15 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
       ++i;
       continue;
     }
+    if (first.size() >= 6 && upper(first.substr(0, 6)) == "REMARK" &&
+        (first.size() == 6 || std::isspace(static_cast<unsigned char>(first[6])))) {
+      // APT's comment statement (ANSI X3.37: REMARK and its text are not processed); Creo's
+      // GPOST writes it on line 2.
+      ll.kind = RecordKind::Comment;
+      out.push_back(ll);
+      ++i;
+      continue;
+    }
     std::string code;
     std::string piece = physical[i];
     // Text records (PPRINT, PARTNO, INSERT): `$$` in their text is text; a `$` at the end
@@ -1484,6 +1493,21 @@ class Reader {
                        ": cutter compensation in the control is not posted (taxopt writes the "
                        "tool centre path the file gives, without G41/G42); --skip-record CUTCOM "
                        "posts that path as it is, without the control's wear compensation");
+      }
+      skipped(major);
+    } else if (major == "SET") {
+      if (args.size() != 2 || upper(args[0]) != "MODE" || upper(args[1]) != "ABSOL") {
+        fail(line, "SET/" + args_text +
+                       ": only SET/MODE,ABSOL is read (absolute coordinates); incremental or "
+                       "other settings change what the moves mean");
+      }
+      skipped(major);
+    } else if (major == "MODE") {
+      // MODE/MILL says what taxopt posts anyway; any other mode changes what the moves mean.
+      if (args.size() != 1 || upper(args[0]) != "MILL") {
+        fail(line, "MODE/" + args_text +
+                       ": a machine mode taxopt does not post (only MODE/MILL is read); a "
+                       "turning or other mode changes what the moves mean");
       }
       skipped(major);
     } else if (major == "MACHIN") {

@@ -124,6 +124,14 @@ const std::vector<ClWord>& cl_words() {
       {"MACHIN", M::Information,
        "the post-processor's name; a turning machine (MACHIN/...,TURN) is refused", "Creo, CATIA",
        kApt, true},
+      {"SET", M::Information,
+       "SET/MODE,ABSOL: the coordinates are absolute, as taxopt reads every CL file; "
+       "SET/MODE,INCR and every other SET are refused",
+       "Makino FFCAM", "steptools/STEPNode examples/data/Plane_2.cldata (Makino FF APT-CL)", false},
+      {"MODE", M::Information,
+       "MODE/MILL: the machine mills (line 1 of Fusion 360's APT files); MODE/TURN and every "
+       "other mode are refused",
+       "Fusion 360, CATIA, Pro/E", kApt, false},
       // Refused: they move the tool or its frame, or change what the moves mean.
       {"DEFSUB", M::Refused, kSubroutine, "Pro/E, generic APT", kApt, false},
       {"ENDSUB", M::Refused, kSubroutine, "Pro/E, generic APT", kApt, false},
@@ -142,7 +150,6 @@ const std::vector<ClWord>& cl_words() {
       {"INVERSE", M::Refused, "INVERSE/ON: the feeds that follow are not units per minute", "CATIA",
        kApt, false},
       {"OP", M::Refused, "a machining cycle of the post (OP/THREAD ...)", "Pro/E", kApt, false},
-      {"MODE", M::Refused, "MODE/TURN and other machine modes", "CATIA, Pro/E", kApt, false},
       {"TURRET", M::Refused, "a lathe turret: a turning file", "generic APT", kApt, false},
       {"GO", M::Refused, "APT part-program motion (not CL data)", "APT source", kApt, false},
       {"GOFWD", M::Refused, "APT part-program motion (not CL data)", "APT source", kApt, false},

@@ -355,3 +355,33 @@ TEST_CASE(
     }
   }
 }
+
+TEST_CASE(
+    "cl reader: the words production posts read every day -- MODE/MILL, SET/MODE,ABSOL and "
+    "APT's REMARK -- are read, and the modes that change what the moves mean are refused by name",
+    "[io][cl][words]") {
+  const std::string body =
+      "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
+  const auto points = [](const Toolpath& tp) {
+    std::size_t n = 0;
+    for (const Operationd& op : tp.operations) n += op.points.size();
+    return n;
+  };
+  // Fusion 360's APT line 1, Makino FFCAM's DEFINE section, Creo GPOST's line 2.
+  CHECK(points(parse_cl("MODE/MILL\n" + body, "fusion.apt")) == 2);
+  CHECK(points(parse_cl("UNITS/MM\nSET/MODE,ABSOL\n" + body, "makino.cldata")) == 2);
+  CHECK(points(parse_cl("PARTNO PART1\nREMARK created by GPOST\nREMARK\n" + body, "creo.ncl")) ==
+        2);
+  for (const char* refused :
+       {"MODE/TURN\n", "MODE/MILL,TURN\n", "SET/MODE,INCR\n", "SET/TOOL,3\n"}) {
+    INFO(refused);
+    try {
+      parse_cl(std::string(refused) + body, "r.cls");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == 1);
+    }
+  }
+  // A word that starts like REMARK is no comment.
+  CHECK_THROWS_AS(parse_cl("REMARKABLE/1\n" + body, "x.cls"), InputError);
+}

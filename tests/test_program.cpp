@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iomanip>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <tuple>
 
@@ -576,4 +577,49 @@ TEST_CASE(
   REQUIRE(r.code == 0);
   report = nlohmann::json::parse(read_file(t.path("r.json")));
   CHECK(report["gcode"]["tcp_joint_peaks"].is_null());
+}
+
+TEST_CASE(
+    "program: operations that keep the tool, the spindle speed and the coolant run on without "
+    "M5 / M9 and a restart between them, in every dialect; a tool change stops the spindle",
+    "[program][real]") {
+  const std::string f = "mech491-project2-multiop.cls";  // 15 operations, 3 tools
+  for (const char* dialect : kDialects) {
+    INFO(dialect);
+    TempDir dir;
+    const RunResult r =
+        run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --dialect " + dialect +
+                   " --gcode " + dir.path("o.nc") + " --method none -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::istringstream text(read_file(dir.path("o.nc")));
+    std::string last_s;  // the last spindle start written
+    bool stopped = false, changed_tool = false;
+    int pointless = 0, stops = 0, changes = 0;
+    for (std::string l; std::getline(text, l);) {
+      const std::size_t s = l.find('S');
+      const bool start = s != std::string::npos && s + 1 < l.size() &&
+                         std::isdigit(static_cast<unsigned char>(l[s + 1])) &&
+                         (l.find("M3") != std::string::npos || l.find("M4") != std::string::npos);
+      // A tool change: a T word (T1 M6, Heidenhain's T2 G17, a TNC's TOOL CALL).
+      if (std::regex_search(l, std::regex(R"((^|\s)T=?\d)")) ||
+          l.find("TOOL CALL") != std::string::npos) {
+        changed_tool = true;
+        ++changes;
+      }
+      if (std::regex_search(l, std::regex(R"((^|\s)M0?5(\s|$))"))) {
+        stopped = true;
+        ++stops;
+      }
+      if (start) {
+        const std::string words = l.substr(s);
+        if (stopped && !changed_tool && words == last_s) ++pointless;
+        last_s = words;
+        stopped = changed_tool = false;
+      }
+    }
+    CHECK(pointless == 0);
+    CHECK(stops >= 1);
+    CHECK(stops <= changes + 1);
+  }
 }

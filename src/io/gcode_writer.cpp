@@ -432,7 +432,13 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   int current_tool = -1;
   std::string last_words;
   std::string last_feed;
-  for (const auto& op : operations) {
+  // The spindle's and the coolant's words left running from the operation before (empty:
+  // stopped): an operation that keeps the same tool, speed and coolant goes on without a stop
+  // and a restart between them (a machinist's read of a real NX program: 11 pointless M5 / S M3
+  // pairs in 12 operations).
+  std::string running_spindle, running_coolant;
+  for (std::size_t op_index = 0; op_index < operations.size(); ++op_index) {
+    const PostedOperation& op = operations[op_index];
     if (op.poses.size() != op.points.size()) {
       throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
     }
@@ -455,8 +461,12 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
       }
       current_tool = op.tool.number;
     }
-    if (op.spindle_rpm > 0.0) {
-      line("S" + fmt(op.spindle_rpm, 0) + (op.spindle_clockwise ? " M3" : " M4"));
+    const auto spindle_words = [](double rpm, bool clockwise) {
+      return "S" + fmt(rpm, 0) + (clockwise ? " M3" : " M4");
+    };
+    if (op.spindle_rpm > 0.0 &&
+        spindle_words(op.spindle_rpm, op.spindle_clockwise) != running_spindle) {
+      line(spindle_words(op.spindle_rpm, op.spindle_clockwise));
     }
     // Coolant as the CL file asks (COOLNT), else as the machine file's default.
     const auto coolant_code = [](ClCoolant c) {
@@ -464,13 +474,15 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
              : c == ClCoolant::Mist ? std::string("M7")
                                     : std::string();
     };
-    bool coolant_on = false;
-    {
-      const std::string coolant = op.coolant ? coolant_code(*op.coolant) : dialect.coolant_on();
-      if (!coolant.empty()) line(coolant);
-      coolant_on = !coolant.empty();
-    }
+    const auto coolant_of = [&](const PostedOperation& o) {
+      return o.coolant ? coolant_code(*o.coolant) : dialect.coolant_on();
+    };
+    std::string coolant = coolant_of(op);
+    if (!coolant.empty() && coolant != running_coolant) line(coolant);
+    bool coolant_on = !coolant.empty();
     bool spindle_on = op.spindle_rpm > 0.0;
+    std::string spindle =
+        spindle_on ? spindle_words(op.spindle_rpm, op.spindle_clockwise) : std::string();
     // The file's stops, dwells, spindle and coolant changes before point i.
     std::size_t next_event = 0;
     const auto events_before = [&](std::size_t i) {
@@ -494,8 +506,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
             break;
           case ProgramEvent::Kind::Spindle:
             if (e.spindle_rpm > 0.0) {
-              line("S" + fmt(e.spindle_rpm, 0) + (e.spindle_clockwise ? " M3" : " M4"));
+              spindle = spindle_words(e.spindle_rpm, e.spindle_clockwise);
+              line(spindle);
             } else {
+              spindle.clear();
               line("M5");
             }
             spindle_on = e.spindle_rpm > 0.0;
@@ -504,6 +518,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
             const std::string c = coolant_code(e.coolant);
             line(c.empty() ? "M9" : c);
             coolant_on = !c.empty();
+            coolant = c;
             break;
           }
         }
@@ -928,8 +943,18 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     events_before(op.points.size());
     prog.emitted.push_back(std::move(emitted));
     length_and_tcp_off();
-    if (coolant_on) line("M9");
-    if (spindle_on) line("M5");
+    // Left running into the next operation where it starts with the same tool, spindle and
+    // coolant (before its first point: its events may change them after that).
+    const PostedOperation* next =
+        op_index + 1 < operations.size() ? &operations[op_index + 1] : nullptr;
+    const bool same_tool = next && (next->tool.number <= 0 || next->tool.number == current_tool);
+    const bool keep_spindle = same_tool && spindle_on && next->spindle_rpm > 0.0 &&
+                              spindle_words(next->spindle_rpm, next->spindle_clockwise) == spindle;
+    const bool keep_coolant = same_tool && coolant_on && coolant_of(*next) == coolant;
+    if (coolant_on && !keep_coolant) line("M9");
+    if (spindle_on && !keep_spindle) line("M5");
+    running_spindle = keep_spindle ? spindle : std::string();
+    running_coolant = keep_coolant ? coolant : std::string();
     last_words.clear();
   }
   lines(dialect.retract(retract_z));

@@ -581,7 +581,7 @@ TEST_CASE(
 
 TEST_CASE(
     "program: operations that keep the tool, the spindle speed and the coolant run on without "
-    "M5 / M9 and a restart between them, in every dialect; a tool change stops the spindle",
+    "M5 / M9 and a restart between them, in every dialect, and a tool change stops the spindle",
     "[program][real]") {
   const std::string f = "mech491-project2-multiop.cls";  // 15 operations, 3 tools
   for (const char* dialect : kDialects) {

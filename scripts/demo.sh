@@ -3,7 +3,8 @@
 # bundled demo case in data/ (the paper's sine-surface part), writing taxopt-demo/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
-cmake --preset release
-cmake --build --preset release -j "$(nproc)"
-./build/release/taxopt demo --out taxopt-demo
+# Only what the demo needs: its packages, and the library and CLI (no tests, no benchmarks).
+bash scripts/setup.sh --demo
+cmake --preset demo
+cmake --build --preset demo -j "$(nproc)"
+./build/demo/taxopt demo --out taxopt-demo

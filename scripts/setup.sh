@@ -3,23 +3,29 @@
 # Idempotent: packages already present are left alone; safe to run any number of times.
 set -euo pipefail
 
+# `setup.sh --demo` installs what building taxopt and running its demo need (scripts/demo.sh);
+# without it, everything the tests need too (scripts/test.sh).
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev          # maths (templated on Scalar)
   libfcl-dev libccd-dev  # tool-vs-part collision
   libcgal-dev            # mesh I/O, AABB tree, jet fitting
-  catch2                 # tests (v2)
   libcli11-dev           # command line
   libtbb-dev             # parallel over contact points
   libtomlplusplus-dev    # machine file (TOML, with source positions for errors)
   nlohmann-json3-dev     # JSON report
-  linuxcnc-uspace        # rs274 and the motion controller the integration tests run
-  python3-numpy          # the controller test: the commanded path against the points
-  clang clang-format libclang-rt-14-dev  # fuzzing, sanitizers, formatting
-  librsvg2-bin           # render SVG plots to PNG for inspection
   libjs-three libjs-dygraphs  # the HTML page (--html): 3D view and plots, embedded at write time
-  chromium fonts-liberation   # the page's tests: headless Chromium loads it, offline
 )
+if [ "${1:-}" != "--demo" ]; then
+  PACKAGES+=(
+    catch2                 # tests (v2)
+    linuxcnc-uspace        # rs274 and the motion controller the integration tests run
+    python3-numpy          # the controller test: the commanded path against the points
+    clang clang-format libclang-rt-14-dev  # fuzzing, sanitizers, formatting
+    librsvg2-bin           # render SVG plots to PNG for inspection
+    chromium fonts-liberation   # the page's tests: headless Chromium loads it, offline
+  )
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -643,3 +643,38 @@ TEST_CASE(
   // Without --plots the same file posts.
   CHECK(run_taxopt("--in " + t.path("many.cls") + " --gcode " + t.path("o.nc") + " -q").code == 0);
 }
+
+TEST_CASE(
+    "hostile input, round 4: a program whose rounding moves the tips past a finishing tolerance "
+    "(decimals = 0), or whose feed rounds to F0, is no verified program -- exit 1 naming why",
+    "[hostile][gcode]") {
+  TempDir dir;
+  const std::string machine =
+      read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/generic-ac-trt.toml");
+  REQUIRE(machine.find("decimals = 4") != std::string::npos);
+  const auto with = [&](const std::string& from, const std::string& to) {
+    std::string m = machine;
+    m.replace(m.find(from), from.size(), to);
+    return m;
+  };
+  write_file(dir.path("coarse.toml"), with("decimals = 4", "decimals = 0"));
+  write_file(dir.path("in.cls"),
+             "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nLOADTL/1\nSPINDL/3000\nFEDRAT/MMPM,500\n"
+             "GOTO/0,3.555,8.4996\nGOTO/10,3.555,8.4996\n");
+  RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --machine " + dir.path("coarse.toml") +
+                           " --method none -q --gcode " + dir.path("o.nc"));
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("gcode.decimals = 0"));
+  CHECK_FALSE(file_exists(dir.path("o.nc")));
+  // A feed of 0.01 mm/min written with no decimals: F0.
+  write_file(dir.path("f.toml"), with("decimals = 4", "decimals = 4\nfeed_decimals = 0"));
+  write_file(dir.path("slow.cls"),
+             "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nLOADTL/1\nSPINDL/3000\nFEDRAT/MMPM,0.01\n"
+             "GOTO/0,0,5\nGOTO/10,0,5\n");
+  r = run_taxopt("--in " + dir.path("slow.cls") + " --machine " + dir.path("f.toml") +
+                 " --method none -q --gcode " + dir.path("s.nc"));
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("F0"));
+}

@@ -882,6 +882,14 @@ int main(int argc, char** argv) {
     }
     tx.commit();
     if (!a.quiet) print_summary(result);
+    if (*demo && !a.quiet) {
+      // What it wrote, and what to look at first.
+      std::printf(
+          "\ntaxopt demo wrote %s/: demo.nc (the G-code), report.json, points.csv, plots/ "
+          "and demo.html.\nOpen %s/demo.html first: the part, the tool axes before and "
+          "after, and the rotary axes' plots.\n",
+          demo_out.c_str(), demo_out.c_str());
+    }
     return result.ok() ? 0 : 1;
   } catch (const taxopt::InputError& e) {
     return error(e.what(), 2);

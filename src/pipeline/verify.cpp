@@ -609,9 +609,19 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
                                  (machine.ac.c_axis_point_mm - machine.ac.a_axis_point_mm).norm());
     }
   }
+  // 10 nm for the arithmetic of unit conversions (a Fusion inch file's arc missed by 3 nm).
   const double pos_tol = std::sqrt(3.0) * half_unit * mm_per_unit(res.gcode_units) +
-                         2.0 * lever_mm * deg_to_rad(ang_tol) + 1e-9;
-  if (r.verification.roundtrip_max_mm > pos_tol) {
+                         2.0 * lever_mm * deg_to_rad(ang_tol) + 1e-5;
+  // The rounding itself must keep the tips within a finishing tolerance: `decimals = 0` wrote
+  // G1 X0 Y4 Z8 for GOTO/0,3.555,8.4996 and the round trip "held" within its 0.87 mm.
+  constexpr double kProgramToleranceMm = 0.005;
+  if (pos_tol > kProgramToleranceMm) {
+    add_finding(res, FindingCode::ReadBackMismatch, k, 0,
+                "operation " + op.name + ": gcode.decimals = " + std::to_string(decimals) +
+                    " rounds the written tips by up to " + std::to_string(pos_tol) +
+                    " mm, more than the " + std::to_string(kProgramToleranceMm) +
+                    " mm a finishing program holds (write more decimals)");
+  } else if (r.verification.roundtrip_max_mm > pos_tol) {
     add_finding(res, FindingCode::ReadBackMismatch, k, 0,
                 "operation " + op.name + ": G-code read back is " +
                     std::to_string(r.verification.roundtrip_max_mm) +
@@ -849,6 +859,12 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
                                                      res.gcode.joint_safe_rapids.end(), m.line);
     if (!m.rapid && !m.spindle_on && !joint_safe_rapid) {
       breach(FindingCode::SpindleOff, m, "moves at feed with the spindle stopped");
+    }
+    if (!m.rapid && !(m.feed > 0.0)) {
+      // A feed that rounds to F0 at gcode.feed_decimals: no controller runs it (rs274: "Cannot
+      // do g1 with zero feed rate").
+      breach(FindingCode::ReadBackMismatch, m,
+             "moves at feed F0 (the feed rounds to zero at gcode.feed_decimals)");
     }
     if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
         t.retract != SafeRetract::None &&

@@ -483,33 +483,21 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
     res.gcode.tcp_axis_accel_scale = scale;
     if (scale > 0.0) {
       remedy << "every [AXIS_*] MAX_ACCELERATION at " << std::setprecision(3) << scale
-             << " of its present value (" << std::setprecision(1);
-      for (std::size_t j = 0; j < kJointCount; ++j) {
-        remedy << (j ? ", " : "") << joint_name(static_cast<Joint>(j), machine.ac.tilt_letter())
-               << " " << std::floor(scale * limits[j].max_accel_per_s2 * 10.0) / 10.0
-               << (j < 3 ? " mm/s^2" : " deg/s^2");
-      }
-      remedy << "), the [JOINT_*] ones left as they are (predicted on this program; `taxopt "
-                "machine --from-linuxcnc-ini` then reads both)";
+             << " of its value";
     } else {
-      remedy << "no share of the [AXIS_*] accelerations down to 0.05 (their speed drives "
-                "them)";
+      remedy << "no share of the [AXIS_*] accelerations down to 0.05 (their speed drives them)";
     }
   }
   if (velocity_over) {
-    remedy << (accel_over ? "; " : "")
-           << "[AXIS_*] MAX_VELOCITY set below the [JOINT_*] ones (for their speed)";
+    remedy << (accel_over ? "; " : "") << "[AXIS_*] MAX_VELOCITY below the [JOINT_*] ones";
   }
+  // One line: what, where, the remedy's name; the report (gcode.tcp_joint_peaks,
+  // gcode.tcp_axis_accel_scale) and docs/feed-schedule.md explain it.
   add_finding(res, FindingCode::TcpJointLimit, std::nullopt, first_line,
-              "LinuxCNC plans its blocks with TCP on in the program's axes, each within its "
-              "[AXIS_*] limit, and the joints follow through the kinematics; where it "
-              "accelerates at those limits (rapids, the start and end of a chain of feed "
-              "blocks) predicted up to " +
-                  os.str() +
-                  " (on a chain's first block of X Y Z alone a bound: LinuxCNC may blend it "
-                  "parabolically, at half its acceleration); no F word changes how hard it "
-                  "accelerates. What keeps the joints within theirs: " +
-                  remedy.str() + "; or posting in machine mode (docs/feed-schedule.md)");
+              "LinuxCNC with TCP on accelerates the program's axes at their [AXIS_*] limits and "
+              "drives " +
+                  os.str() + "; remedy: " + remedy.str() +
+                  " (gcode.tcp_axis_accel_scale; docs/feed-schedule.md), or machine mode");
 }
 
 }  // namespace

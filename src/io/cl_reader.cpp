@@ -175,7 +175,9 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
     ll.line = static_cast<int>(i) + 1;
     ll.raw = physical[i];
     const std::string first = trim(physical[i]);
-    if (first.empty()) {
+    // A DOS end-of-file mark (Ctrl-Z) alone on the last line: nothing to read, kept for the
+    // round trip.
+    if (first.empty() || (first == "\x1a" && i + 1 == physical.size())) {
       ll.kind = RecordKind::Blank;
       out.push_back(ll);
       ++i;
@@ -1109,11 +1111,19 @@ class Reader {
     c.kind = upper(args[0]);
     c.line = line;
     static const std::set<std::string> kinds = {"DRILL",  "FACE", "DEEP", "DEEP2",
-                                                "BRKCHP", "BORE", "REAM", "TAP"};
+                                                "BRKCHP", "BORE", "REAM"};
+    if (c.kind == "TAP") {
+      // A tap goes in and out at the feed of its pitch with the spindle reversing at the
+      // bottom (the dialects' G84); posted as a feed in and out with the spindle turning
+      // forward both ways, it would strip the thread.
+      fail(line,
+           "CYCLE/TAP: a tapping cycle is not posted (it needs the dialect's tapping cycle, "
+           "pitch and spindle reversal); post the holes with the CAM system's own post");
+    }
     if (!kinds.count(c.kind)) {
       fail(line, "CYCLE/" + c.kind +
                      ": drilling cycle not interpreted (DRILL, FACE, DEEP, DEEP2, BRKCHP, BORE, "
-                     "REAM, TAP are)");
+                     "REAM are)");
     }
     c.feed_out = c.kind == "BORE" || c.kind == "REAM" || c.kind == "TAP";
     bool depth = false;
@@ -1464,6 +1474,24 @@ class Reader {
       const auto v = numbers(args, at, at + 1, major, line);
       if (!(v[0] >= 0.0 && v[0] <= 1e6 && v[0] == std::floor(v[0]))) {
         fail(line, major + ": tool number must be a whole number from 0 to 1000000");
+      }
+      // NX: LOAD/TOOL,n,ADJUST,h (its real files: h = n). taxopt writes the length offset of
+      // the tool's own register (H n): another register is refused, not dropped (the machine
+      // would run with another tool's length).
+      for (std::size_t k = at + 1; k < args.size(); ++k) {
+        const std::string w = upper(args[k]);
+        double h = 0.0;
+        if (w == "ADJUST" && k + 1 < args.size() && parse_number(args[k + 1], h)) {
+          if (h != v[0]) {
+            fail(line, major + "/" + args_text + ": the length offset register " + args[k + 1] +
+                           " is not the tool's number; taxopt writes the tool's own (H" + args[at] +
+                           "): give the tool its own register in the CAM system");
+          }
+          ++k;
+          continue;
+        }
+        fail(line, major + "/" + args_text + ": '" + args[k] +
+                       "' not interpreted (only ADJUST,n with the tool's own number may follow)");
       }
       tool_.number = static_cast<int>(v[0]);
       tool_changed();

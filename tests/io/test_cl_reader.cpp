@@ -385,3 +385,27 @@ TEST_CASE(
   // A word that starts like REMARK is no comment.
   CHECK_THROWS_AS(parse_cl("REMARKABLE/1\n" + body, "x.cls"), InputError);
 }
+
+TEST_CASE(
+    "cl reader: hostile input, round 4 -- a DOS Ctrl-Z at the end is read past, CYCLE/TAP and a "
+    "length register other than the tool's (LOAD/TOOL,5,ADJUST,7) are refused naming the line",
+    "[io][cl][hostile]") {
+  const std::string body =
+      "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
+  const Toolpath z = parse_cl(body + "FINI\n\x1a", "dos.cls");
+  CHECK(z.operations.front().points.size() == 2);
+  CHECK(format_cl(z, z.operations) == body + "FINI\n\x1a");
+  const Toolpath nx = parse_cl("LOAD/TOOL,5,ADJUST,5\n" + body, "nx.cls");
+  CHECK(nx.operations.front().tool.number == 5);
+  for (const std::string& bad :
+       {std::string("LOAD/TOOL,5,ADJUST,7\n"), std::string("LOAD/TOOL,5,LENGTH,7\n"),
+        std::string("CYCLE/TAP,FEDTO,10,RAPTO,2,MMPM,100\n")}) {
+    INFO(bad);
+    try {
+      parse_cl(bad + body, "bad.cls");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == 1);
+    }
+  }
+}

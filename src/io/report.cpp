@@ -267,24 +267,16 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     if (r.verification.min_clearance_mm) {
       v["min_clearance_point"] = r.verification.min_clearance_index;
     }
-    v["flute_gouge_points"] = r.verification.flute_gouge_points >= 0
-                                  ? nlohmann::json(r.verification.flute_gouge_points)
-                                  : nlohmann::json(nullptr);
+    // A count, or null where it was not checked (-1).
+    const auto count = [](long n) { return n >= 0 ? nlohmann::json(n) : nlohmann::json(nullptr); };
+    v["flute_gouge_points"] = count(r.verification.flute_gouge_points);
     v["within_axis_limits"] = r.verification.within_axis_limits;
     v["tool_length_active"] = r.verification.tool_length_active;
     v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
-    v["blocks_swept"] = r.verification.blocks_swept >= 0
-                            ? nlohmann::json(r.verification.blocks_swept)
-                            : nlohmann::json(nullptr);
-    v["blocks_not_checked"] = r.verification.blocks_not_checked >= 0
-                                  ? nlohmann::json(r.verification.blocks_not_checked)
-                                  : nlohmann::json(nullptr);
-    v["colliding_blocks"] = r.verification.colliding_blocks >= 0
-                                ? nlohmann::json(r.verification.colliding_blocks)
-                                : nlohmann::json(nullptr);
-    v["colliding_moves"] = r.verification.colliding_moves >= 0
-                               ? nlohmann::json(r.verification.colliding_moves)
-                               : nlohmann::json(nullptr);
+    v["blocks_swept"] = count(r.verification.blocks_swept);
+    v["blocks_not_checked"] = count(r.verification.blocks_not_checked);
+    v["colliding_blocks"] = count(r.verification.colliding_blocks);
+    v["colliding_moves"] = count(r.verification.colliding_moves);
     // Why a value is null.
     nlohmann::json why = nlohmann::json::object();
     const std::string no_part = "no part given (--part): not checked";

@@ -678,3 +678,48 @@ TEST_CASE(
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("F0"));
 }
+
+TEST_CASE(
+    "hostile input, round 4: outputs that are symbolic links are refused, not replaced, and "
+    "generate checks its outputs as the main job does",
+    "[hostile][outputs]") {
+  TempDir dir;
+  write_file(dir.path("target.nc"), "keep\n");
+  std::filesystem::create_symlink(dir.path("target.nc"), dir.path("link.nc"));
+  RunResult r = run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) +
+                           "/data/demo/sine.cls --method none -q --gcode " + dir.path("link.nc"));
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("symbolic link"));
+  CHECK(std::filesystem::is_symlink(dir.path("link.nc")));
+  CHECK(read_file(dir.path("target.nc")) == "keep\n");
+  // generate: one file named twice, a link, a read-only file.
+  r = run_taxopt("generate --out-cls " + dir.path("x") + " --out-mesh " + dir.path("./x"));
+  CHECK(r.code == 2);
+  CHECK_FALSE(file_exists(dir.path("x")));
+  r = run_taxopt("generate --out-cls " + dir.path("link.nc"));
+  CHECK(r.code == 2);
+  CHECK(read_file(dir.path("target.nc")) == "keep\n");
+}
+
+TEST_CASE(
+    "hostile input, round 4: --dialect over a machine file whose work offset is another "
+    "dialect's word is refused before any work",
+    "[hostile][gcode]") {
+  TempDir dir;
+  std::string m = read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/generic-ac-trt.toml");
+  const std::string from = "dialect = \"linuxcnc\"";
+  REQUIRE(m.find(from) != std::string::npos);
+  m.replace(m.find(from), from.size(), "dialect = \"siemens\"\nwork_offset = \"G505\"");
+  write_file(dir.path("s.toml"), m);
+  const std::string common = "--in " + std::string(TAXOPT_SOURCE_DIR) +
+                             "/data/demo/sine.cls --method none -q --machine " +
+                             dir.path("s.toml") + " --gcode " + dir.path("o.nc");
+  RunResult r = run_taxopt(common);
+  INFO(r.err);
+  CHECK(r.code == 0);  // G505 is Sinumerik's
+  r = run_taxopt(common + " --dialect linuxcnc");
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("work_offset"));
+}

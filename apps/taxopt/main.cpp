@@ -152,6 +152,18 @@ int run_generate(const GenerateArgs& g) {
   if (g.surface != "sine" && g.surface != "plane") {
     return error("generate: --surface must be sine or plane", 2);
   }
+  // The outputs checked as the main job's are: not one file twice, nowhere they cannot be
+  // written (a FIFO, a read-only file, a device).
+  if (!g.out_cls.empty() && !g.out_mesh.empty() && taxopt::same_file(g.out_cls, g.out_mesh)) {
+    return error("generate: --out-cls and --out-mesh name the same file " + g.out_cls, 2);
+  }
+  for (const auto& [opt, path] : {std::make_pair(std::string("--out-cls"), g.out_cls),
+                                  std::make_pair(std::string("--out-mesh"), g.out_mesh)}) {
+    if (path.empty()) continue;
+    if (const std::string why = taxopt::writable_output_problem(path); !why.empty()) {
+      return error("generate: " + opt + " " + path + ": cannot write there: " + why, 2);
+    }
+  }
   // Each option within what a part and a machine are (and NaN never): a bound with a reason,
   // checked before anything is allocated (issue 35).
   struct Bound {
@@ -653,10 +665,13 @@ int main(int argc, char** argv) {
       // --dialect overrides the machine file's gcode.dialect, under the same rules: a program
       // template written for the file's dialect is not another's, and the decimals must fit.
       const taxopt::ProgramTemplate& t = machine.gcode.program;
+      // A work offset is a dialect's word too (Sinumerik G505 is out of LinuxCNC's range).
+      const bool own_work_offset = !t.work_offset.empty() && t.work_offset != "none";
       if (!t.header.empty() || !t.footer.empty() || !t.tool_change.empty() || !t.tcp_on.empty() ||
-          !t.tcp_off.empty()) {
+          !t.tcp_off.empty() || own_work_offset) {
         return error("--dialect " + a.dialect + ": the machine file's program template " +
-                         "(header, footer, tool_change, tcp_on, tcp_off) is written for the " +
+                         "(header, footer, tool_change, tcp_on, tcp_off, work_offset) is written "
+                         "for the " +
                          taxopt::to_string(machine.gcode.dialect) +
                          " dialect; change gcode.dialect in the file instead",
                      2);

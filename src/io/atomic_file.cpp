@@ -181,6 +181,12 @@ std::string writable_output_problem(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) return "is a folder";
+  // Renaming over a link replaces the link, not its target (`--gcode /dev/stdout` replaced
+  // the system's /dev/stdout link with a regular file): name the target instead.
+  if (fs::is_symlink(fs::symlink_status(path, ec))) {
+    return "is a symbolic link (the output would replace the link, not write its target; name "
+           "the target)";
+  }
   const fs::file_status st = fs::status(path, ec);
   if (fs::exists(st)) {
     // The output replaces the file by renaming over it: a device, FIFO or socket would be

@@ -1472,8 +1472,9 @@ class Reader {
       const std::size_t at = major == "LOADTL" ? 0 : 1;
       if (args.size() <= at) fail(line, major + " expects a tool number");
       const auto v = numbers(args, at, at + 1, major, line);
-      if (!(v[0] >= 0.0 && v[0] <= 1e6 && v[0] == std::floor(v[0]))) {
-        fail(line, major + ": tool number must be a whole number from 0 to 1000000");
+      // As --tool-number: five digits, what the dialects' T words take.
+      if (!(v[0] >= 0.0 && v[0] <= 99999.0 && v[0] == std::floor(v[0]))) {
+        fail(line, major + ": tool number must be a whole number from 0 to 99999");
       }
       // NX: LOAD/TOOL,n,ADJUST,h (its real files: h = n). taxopt writes the length offset of
       // the tool's own register (H n): another register is refused, not dropped (the machine
@@ -1709,6 +1710,10 @@ class Reader {
     if (!(d > 0.0)) fail(line, "tool diameter must be positive");
     if (r < 0.0 || r > 0.5 * d + 1e-9) fail(line, "tool corner radius must be in [0, diameter/2]");
     if (length < 0.0) fail(line, "tool length must not be negative");
+    // The bounds of the options that override them (--tool-radius, --flute-length: a metre).
+    if (d * scale_ > 1000.0 || length * scale_ > 1000.0) {
+      fail(line, "tool diameter or length beyond 1000 mm (the tool options' bound)");
+    }
     tool_.diameter_mm = d * scale_;
     tool_.corner_radius_mm = r * scale_;
     tool_.flute_length_mm = length * scale_;

@@ -409,3 +409,20 @@ TEST_CASE(
     }
   }
 }
+
+TEST_CASE("cl reader: tool records beyond the tool options' bounds are refused naming the line",
+          "[io][cl][hostile]") {
+  const std::string body = "FEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
+  for (const std::string& bad :
+       {std::string("CUTTER/5000\n"), std::string("TLDATA/MILL,6.0,3.0,1000000000.0,0.0,0.0\n"),
+        std::string("LOADTL/100000\n")}) {
+    INFO(bad);
+    try {
+      parse_cl(bad + body, "bad.cls");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == 1);
+    }
+  }
+  CHECK_NOTHROW(parse_cl("LOADTL/99999\nCUTTER/6\n" + body, "ok.cls"));
+}

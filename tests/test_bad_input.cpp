@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <sstream>
 
 #include "support.hpp"
 #include "taxopt/core/types.hpp"
@@ -722,4 +723,34 @@ TEST_CASE(
   INFO(r.err);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("work_offset"));
+}
+
+TEST_CASE(
+    "hostile input, round 4: a part and an operation with no tool geometry -- the user is "
+    "told nothing of it was checked against the part",
+    "[hostile][safety]") {
+  TempDir dir;
+  const std::string demo = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  // The demo's CL file without its tool record.
+  std::istringstream in(read_file(demo + "sine.cls"));
+  std::string text;
+  for (std::string l; std::getline(in, l);) {
+    if (l.rfind("TLDATA", 0) == 0 || l.rfind("CUTTER", 0) == 0) continue;
+    text += l + "\n";
+  }
+  REQUIRE(text.size() > 1000);
+  write_file(dir.path("notool.cls"), text);
+  const RunResult r =
+      run_taxopt("--in " + dir.path("notool.cls") + " --part " + demo + "sine.stl" +
+                 " --method none --gcode " + dir.path("o.nc") + " --report " + dir.path("r.json"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("NOT CHECKED") && Catch::Contains("no tool geometry"));
+  const auto report = nlohmann::json::parse(read_file(dir.path("r.json")));
+  bool said = false;
+  for (const auto& f : report["findings"]) {
+    said = said || (f["code"] == "no_tool_model" && f["severity"] == "safety");
+  }
+  CHECK(said);
+  CHECK_THAT(read_file(dir.path("o.nc")), Catch::Contains("no tool geometry"));
 }

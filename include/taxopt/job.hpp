@@ -314,6 +314,7 @@ enum class FindingCode {
   NoHolderModel,    ///< the holder is not checked against the part
   NoSafeRetract,    ///< gcode.safe_retract = "none"
   NoLinearisation,  ///< machine mode without linearisation
+  NoToolModel,      ///< with a part, an operation with no tool geometry: nothing of it checked
   // Warnings: the output is sound; something the user should know.
   NotABallMill,       ///< an operation's tool is no ball-end mill: its input axes are kept
   LocalGouge,         ///< a concave radius below the ball radius at contact points (eq. 19)

@@ -16,7 +16,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::NoPart:
     case FindingCode::NoHolderModel:
     case FindingCode::NoSafeRetract:
-    case FindingCode::NoLinearisation: return Severity::Safety;
+    case FindingCode::NoLinearisation:
+    case FindingCode::NoToolModel: return Severity::Safety;
     case FindingCode::NotABallMill:
     case FindingCode::LocalGouge:
     case FindingCode::InputAxesKept:

@@ -212,6 +212,14 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
   const std::size_t k = o.index;
   const auto t0 = Clock::now();
   if (!(o.ball_radius_mm > 0.0)) {
+    if (!(op.tool.from_file && op.tool.diameter_mm > 0.0)) {
+      // Said as what was not checked (the program's header, stderr's NOT CHECKED lines): the
+      // run was "ok" with every point not checked, and only the holder named.
+      add_finding(res, FindingCode::NoToolModel, k, op.points.empty() ? 0 : op.points.front().line,
+                  "operation " + op.name +
+                      " has no tool geometry (no TLDATA or CUTTER, or not a mill): none of its "
+                      "moves is checked against the part (--tool-radius gives it a ball)");
+    }
     add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
                 not_a_ball(op) +
                     (op.tool.from_file && op.tool.diameter_mm > 0.0

@@ -129,6 +129,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::NoPart: return "no_part";
     case FindingCode::NoHolderModel: return "no_holder_model";
     case FindingCode::NoToolModel: return "no_tool_model";
+    case FindingCode::NoCoolant: return "no_coolant";
     case FindingCode::NoSafeRetract: return "no_safe_retract";
     case FindingCode::NoLinearisation: return "no_linearisation";
     case FindingCode::NotABallMill: return "not_a_ball_mill";

@@ -754,3 +754,32 @@ TEST_CASE(
   CHECK(said);
   CHECK_THAT(read_file(dir.path("o.nc")), Catch::Contains("no tool geometry"));
 }
+
+TEST_CASE(
+    "safe by default: a program that turns no coolant on says so, unless the CL file or "
+    "the machine file asks for some",
+    "[hostile][safety][coolant]") {
+  TempDir dir;
+  const std::string machine =
+      read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/generic-ac-trt.toml");
+  REQUIRE(machine.find("coolant") == std::string::npos);
+  write_file(dir.path("m.toml"), machine);
+  const std::string body =
+      "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nLOADTL/1\nSPINDL/3000\nFEDRAT/MMPM,500\n"
+      "GOTO/0,0,5\nGOTO/10,0,5\n";
+  const auto coolant_said = [&](const std::string& cl) {
+    write_file(dir.path("in.cls"), cl);
+    const RunResult r = run_taxopt("--in " + dir.path("in.cls") + " --machine " +
+                                   dir.path("m.toml") + " --method none --gcode " +
+                                   dir.path("o.nc") + " --report " + dir.path("r.json"));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    bool said = false;
+    const auto report = nlohmann::json::parse(read_file(dir.path("r.json")));
+    for (const auto& f : report["findings"]) said = said || f["code"] == "no_coolant";
+    return said;
+  };
+  CHECK(coolant_said(body));
+  CHECK_FALSE(coolant_said("COOLNT/ON\n" + body));
+  CHECK_FALSE(coolant_said("COOLNT/OFF\n" + body));  // asked for none: no surprise
+}

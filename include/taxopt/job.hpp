@@ -315,6 +315,7 @@ enum class FindingCode {
   NoSafeRetract,    ///< gcode.safe_retract = "none"
   NoLinearisation,  ///< machine mode without linearisation
   NoToolModel,      ///< with a part, an operation with no tool geometry: nothing of it checked
+  NoCoolant,        ///< neither the CL file nor the machine file asks for coolant
   // Warnings: the output is sound; something the user should know.
   NotABallMill,       ///< an operation's tool is no ball-end mill: its input axes are kept
   LocalGouge,         ///< a concave radius below the ball radius at contact points (eq. 19)

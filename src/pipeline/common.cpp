@@ -17,7 +17,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::NoHolderModel:
     case FindingCode::NoSafeRetract:
     case FindingCode::NoLinearisation:
-    case FindingCode::NoToolModel: return Severity::Safety;
+    case FindingCode::NoToolModel:
+    case FindingCode::NoCoolant: return Severity::Safety;
     case FindingCode::NotABallMill:
     case FindingCode::LocalGouge:
     case FindingCode::InputAxesKept:

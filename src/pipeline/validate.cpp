@@ -76,6 +76,23 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
         "the machine file's gcode.safe_retract is \"none\": no retract before an operation's "
         "first move nor after the last, and the table turns where the tool stands");
   }
+  {
+    // Coolant: where neither the CL file (COOLNT) nor the machine file (gcode.coolant) asks for
+    // any, the program runs dry; said, not assumed (a real NX program's post wrote M8, taxopt
+    // nothing, silently).
+    bool asked = machine.gcode.program.coolant != Coolant::None;
+    for (const Operationd& op : tp.operations) {
+      asked = asked || op.coolant.has_value();
+      for (const ProgramEvent& e : op.events) {
+        asked = asked || e.kind == ProgramEvent::Kind::Coolant;
+      }
+    }
+    if (!asked && !tp.operations.empty()) {
+      add_finding(res, FindingCode::NoCoolant, std::nullopt, 0,
+                  "no coolant: neither the CL file (COOLNT) nor the machine file "
+                  "(gcode.coolant) asks for any, so the program turns none on");
+    }
+  }
   if (machine.gcode.mode == GcodeMode::Machine &&
       !(machine.gcode.program.linearise_tolerance_mm > 0.0)) {
     add_finding(

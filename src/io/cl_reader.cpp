@@ -1563,9 +1563,20 @@ class Reader {
       e.dwell_s = sec;
       add_event(e, line);
     } else if (major == "INSERT") {
-      fail(line, "INSERT/" + args_text.substr(0, 60) +
-                     ": text for the controller, which taxopt does not pass unchecked into a "
-                     "program; --skip-record INSERT drops it");
+      // SOLIDWORKS CAM's INSERT/[HOLDER=C40-16ERP412] 16MM CRB 2FL 32 LOC: a bracketed note to
+      // the operator, no block: dropped with a note. Any other text is what the post would write
+      // into the program as it stands (INSERT/Stock Size X135. Y135. Z30. reads as a move):
+      // refused, as unchecked text.
+      const std::string text = trim(args_text);
+      if (!text.empty() && (text.front() == '[' || text.front() == '(')) {
+        tp_.warnings.push_back(format_location(
+            source_, line, "INSERT/" + text.substr(0, 60) + ": an operator's note, not written"));
+        skipped(major);
+      } else {
+        fail(line, "INSERT/" + args_text.substr(0, 60) +
+                       ": text for the controller, which taxopt does not pass unchecked into a "
+                       "program; --skip-record INSERT drops it");
+      }
     } else if (major == "FINI" || major == "END") {
       finished_line_ = line;
     } else if (major == "LOAD" && (args.empty() || upper(args[0]) != "TOOL")) {

@@ -96,7 +96,8 @@ const std::vector<ClWord>& cl_words() {
        "refused for the other dialects",
        "generic APT", kApt, true},
       {"INSERT", M::Program,
-       "text for the controller, refused: taxopt does not pass unchecked text into a program "
+       "a bracketed operator's note (INSERT/[HOLDER=...]) dropped with a note; other text for "
+       "the controller refused: taxopt does not pass unchecked text into a program "
        "(--skip-record INSERT drops it)",
        "SOLIDWORKS CAM, generic APT", kApt, true},
       // Structure.

@@ -426,3 +426,19 @@ TEST_CASE("cl reader: tool records beyond the tool options' bounds are refused n
   }
   CHECK_NOTHROW(parse_cl("LOADTL/99999\nCUTTER/6\n" + body, "ok.cls"));
 }
+
+TEST_CASE(
+    "cl reader: SOLIDWORKS CAM's bracketed INSERT note is dropped with a note, other INSERT "
+    "text is refused as unchecked",
+    "[io][cl][words]") {
+  const std::string body =
+      "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
+  const Toolpath tp =
+      parse_cl("INSERT/[HOLDER=C40-16ERP412] 16MM CRB 2FL 32 LOC\n" + body, "s.apt");
+  CHECK(tp.operations.front().points.size() == 2);
+  bool noted = false;
+  for (const std::string& w : tp.warnings)
+    noted = noted || w.find("operator's note") != std::string::npos;
+  CHECK(noted);
+  CHECK_THROWS_AS(parse_cl("INSERT/Stock Size X135. Y135. Z30.\n" + body, "s.apt"), InputError);
+}

@@ -16,6 +16,20 @@ struct Counts {
   std::set<std::tuple<long, long, long>> axes;
 };
 
+/// Each record of `first_lines` put before `body` stops the reader with an InputError naming
+/// line 1.
+void check_refused_at_line_1(const std::vector<std::string>& first_lines, const std::string& body) {
+  for (const std::string& bad : first_lines) {
+    INFO(bad);
+    try {
+      parse_cl(bad + body, "bad.cls");
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(e.line() == 1);
+    }
+  }
+}
+
 Counts count_records(const Toolpath& tp) {
   Counts c;
   for (const auto& r : tp.records) {
@@ -372,16 +386,8 @@ TEST_CASE(
   CHECK(points(parse_cl("UNITS/MM\nSET/MODE,ABSOL\n" + body, "makino.cldata")) == 2);
   CHECK(points(parse_cl("PARTNO PART1\nREMARK created by GPOST\nREMARK\n" + body, "creo.ncl")) ==
         2);
-  for (const char* refused :
-       {"MODE/TURN\n", "MODE/MILL,TURN\n", "SET/MODE,INCR\n", "SET/TOOL,3\n"}) {
-    INFO(refused);
-    try {
-      parse_cl(std::string(refused) + body, "r.cls");
-      FAIL("accepted");
-    } catch (const InputError& e) {
-      CHECK(e.line() == 1);
-    }
-  }
+  check_refused_at_line_1({"MODE/TURN\n", "MODE/MILL,TURN\n", "SET/MODE,INCR\n", "SET/TOOL,3\n"},
+                          body);
   // A word that starts like REMARK is no comment.
   CHECK_THROWS_AS(parse_cl("REMARKABLE/1\n" + body, "x.cls"), InputError);
 }
@@ -397,33 +403,16 @@ TEST_CASE(
   CHECK(format_cl(z, z.operations) == body + "FINI\n\x1a");
   const Toolpath nx = parse_cl("LOAD/TOOL,5,ADJUST,5\n" + body, "nx.cls");
   CHECK(nx.operations.front().tool.number == 5);
-  for (const std::string& bad :
-       {std::string("LOAD/TOOL,5,ADJUST,7\n"), std::string("LOAD/TOOL,5,LENGTH,7\n"),
-        std::string("CYCLE/TAP,FEDTO,10,RAPTO,2,MMPM,100\n")}) {
-    INFO(bad);
-    try {
-      parse_cl(bad + body, "bad.cls");
-      FAIL("accepted");
-    } catch (const InputError& e) {
-      CHECK(e.line() == 1);
-    }
-  }
+  check_refused_at_line_1(
+      {"LOAD/TOOL,5,ADJUST,7\n", "LOAD/TOOL,5,LENGTH,7\n", "CYCLE/TAP,FEDTO,10,RAPTO,2,MMPM,100\n"},
+      body);
 }
 
 TEST_CASE("cl reader: tool records beyond the tool options' bounds are refused naming the line",
           "[io][cl][hostile]") {
   const std::string body = "FEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
-  for (const std::string& bad :
-       {std::string("CUTTER/5000\n"), std::string("TLDATA/MILL,6.0,3.0,1000000000.0,0.0,0.0\n"),
-        std::string("LOADTL/100000\n")}) {
-    INFO(bad);
-    try {
-      parse_cl(bad + body, "bad.cls");
-      FAIL("accepted");
-    } catch (const InputError& e) {
-      CHECK(e.line() == 1);
-    }
-  }
+  check_refused_at_line_1(
+      {"CUTTER/5000\n", "TLDATA/MILL,6.0,3.0,1000000000.0,0.0,0.0\n", "LOADTL/100000\n"}, body);
   CHECK_NOTHROW(parse_cl("LOADTL/99999\nCUTTER/6\n" + body, "ok.cls"));
 }
 

@@ -807,7 +807,8 @@ TEST_CASE("cli: every operation's first feed block carries its F", "[cli][gcode]
   CHECK(operations == 15);
 }
 
-TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew", "[cli][feed][slow]") {
+TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew",
+          "[cli][feed][slow]") {
   TempDir t;
   REQUIRE(run_taxopt("generate --surface sine --height 10 --tilt 15 --yaw 10 --out-cls " +
                      t.path("s.cls") + " --out-mesh " + t.path("s.stl"))

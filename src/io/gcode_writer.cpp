@@ -479,10 +479,9 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     };
     std::string coolant = coolant_of(op);
     if (!coolant.empty() && coolant != running_coolant) line(coolant);
-    bool coolant_on = !coolant.empty();
-    bool spindle_on = op.spindle_rpm > 0.0;
+    // The spindle's words in force (empty: stopped), as the coolant's.
     std::string spindle =
-        spindle_on ? spindle_words(op.spindle_rpm, op.spindle_clockwise) : std::string();
+        op.spindle_rpm > 0.0 ? spindle_words(op.spindle_rpm, op.spindle_clockwise) : std::string();
     // The file's stops, dwells, spindle and coolant changes before point i.
     std::size_t next_event = 0;
     const auto events_before = [&](std::size_t i) {
@@ -512,12 +511,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
               spindle.clear();
               line("M5");
             }
-            spindle_on = e.spindle_rpm > 0.0;
             break;
           case ProgramEvent::Kind::Coolant: {
             const std::string c = coolant_code(e.coolant);
             line(c.empty() ? "M9" : c);
-            coolant_on = !c.empty();
             coolant = c;
             break;
           }
@@ -746,10 +743,9 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         // the machine's Z is the tool axis already.
         // Not on Fanuc, whose TCP comes on with the block down from the retract height (left as
         // it was: straight down to the point).
-        const Vec3d above = descend ? out_xyz(approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm,
-                                                              g.program.approach_clearance_mm),
-                                              pose)
-                                    : xyz;
+        const Vec3d above_tip =
+            approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm, g.program.approach_clearance_mm);
+        const Vec3d above = descend ? out_xyz(above_tip, pose) : xyz;
         std::string xy = dialect.rapid() + " X" + dialect.number(above.x() * scale, d) + " Y" +
                          dialect.number(above.y() * scale, d);
         if (dialect.length_on_first_move()) {
@@ -769,8 +765,7 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
         have_prev = descend && p.motion == Motion::Rapid;
         along_axis_leg = have_prev;
         if (have_prev) {
-          prev_tip =
-              approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm, g.program.approach_clearance_mm);
+          prev_tip = above_tip;
           prev_pose = pose;
           prev_xyz = above;
         }
@@ -948,11 +943,11 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
     const PostedOperation* next =
         op_index + 1 < operations.size() ? &operations[op_index + 1] : nullptr;
     const bool same_tool = next && (next->tool.number <= 0 || next->tool.number == current_tool);
-    const bool keep_spindle = same_tool && spindle_on && next->spindle_rpm > 0.0 &&
+    const bool keep_spindle = same_tool && !spindle.empty() && next->spindle_rpm > 0.0 &&
                               spindle_words(next->spindle_rpm, next->spindle_clockwise) == spindle;
-    const bool keep_coolant = same_tool && coolant_on && coolant_of(*next) == coolant;
-    if (coolant_on && !keep_coolant) line("M9");
-    if (spindle_on && !keep_spindle) line("M5");
+    const bool keep_coolant = same_tool && !coolant.empty() && coolant_of(*next) == coolant;
+    if (!coolant.empty() && !keep_coolant) line("M9");
+    if (!spindle.empty() && !keep_spindle) line("M5");
     running_spindle = keep_spindle ? spindle : std::string();
     running_coolant = keep_coolant ? coolant : std::string();
     last_words.clear();

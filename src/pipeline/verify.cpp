@@ -979,7 +979,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   }
   struct Hit {
     std::size_t count = 0;
-    int line = 0;
+    std::size_t move = 0;  // the first block that hits
   };
   std::vector<Hit> hits(posted.size());
   std::vector<std::size_t> candidates;
@@ -997,6 +997,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   const Machine& machine = run.machine;
   constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  const double flute_tolerance_mm = margins_of(run.options).flute_tolerance_mm;
   const std::vector<std::size_t> hit =
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
@@ -1006,7 +1007,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
         // In the air the ball counts as a body too, within the flutes' tolerance of the part
         // (a block that ends at a contact point touches it there by design).
         ToolModel air = tool;
-        air.ball_radius_mm = std::max(0.5 * R, R - margins_of(run.options).flute_tolerance_mm);
+        air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm);
         // A block whose start is not known (the first after a retract in machine
         // coordinates): its end, where the tool stands.
         const JointPosition& q1 = *w.joints_after[j];
@@ -1045,7 +1046,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   for (std::size_t c : hit) {
     const std::size_t j = candidates[c];
     Hit& h = hits[op_of(moves[j].line)];
-    if (h.count++ == 0) h.line = moves[j].line;
+    if (h.count++ == 0) h.move = j;
   }
   for (std::size_t k = 0; k < posted.size(); ++k) {
     res.operations[k].verification.blocks_swept = 0;
@@ -1057,16 +1058,13 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
     r.verification.colliding_blocks = static_cast<long>(hits[k].count);
     if (!hits[k].count) continue;
     r.verification.collision_free = false;
-    const GcodeMove& m = moves[static_cast<std::size_t>(
-        std::find_if(moves.begin(), moves.end(),
-                     [&](const GcodeMove& x) { return x.line == hits[k].line; }) -
-        moves.begin())];
+    const GcodeMove& m = moves[hits[k].move];
     add_finding(res, FindingCode::MoveCollision, k, 0,
                 "operation " + posted[k].name + ": " + std::to_string(hits[k].count) +
                     " blocks the program adds between CL points (approach, retract, index or "
                     "end moves) where the tool hits the part as the machine moves it, first G-code "
                     "line " +
-                    std::to_string(hits[k].line) + " (" + (m.rapid ? "a rapid" : "a feed block") +
+                    std::to_string(m.line) + " (" + (m.rapid ? "a rapid" : "a feed block") +
                     (m.retract ? " in machine coordinates" : "") + ")");
   }
 }

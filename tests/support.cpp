@@ -350,6 +350,39 @@ struct HeightSurface {
 
 }  // namespace
 
+TriangleMesh extruded_profile(const std::vector<Eigen::Vector2d>& profile, double y0, double y1,
+                              int rows) {
+  TriangleMesh m;
+  const int n = static_cast<int>(profile.size());
+  for (int j = 0; j <= rows; ++j) {
+    const double y = y0 + (y1 - y0) * j / rows;
+    for (const auto& p : profile) m.vertices.emplace_back(p.x(), y, p.y());
+  }
+  const auto id = [n](int j, int i) { return j * n + (i % n); };
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < n; ++i) {
+      m.faces.push_back({id(j, i), id(j + 1, i + 1), id(j + 1, i)});
+      m.faces.push_back({id(j, i), id(j, i + 1), id(j + 1, i + 1)});
+    }
+  }
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& p : profile) c += p;
+  c /= n;
+  for (int end = 0; end < 2; ++end) {
+    const int centre = static_cast<int>(m.vertices.size());
+    m.vertices.emplace_back(c.x(), end == 0 ? y0 : y1, c.y());
+    const int j = end == 0 ? 0 : rows;
+    for (int i = 0; i < n; ++i) {
+      if (end == 0) {
+        m.faces.push_back({centre, id(j, i), id(j, i + 1)});
+      } else {
+        m.faces.push_back({centre, id(j, i + 1), id(j, i)});
+      }
+    }
+  }
+  return m;
+}
+
 TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x0, double x1,
                               double y0, double y1) {
   const HeightSurface s{&hf, x0, x1, y0, y1};

@@ -142,6 +142,12 @@ struct GeneratedCl {
 void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Vec3d& axis,
                  bool rapid, const Vec3d& cc_mm, const Vec3d& centre_mm);
 
+/// A closed profile in the xz plane (clockwise seen from +y) extruded along y over [y0, y1] in
+/// `rows` rows: each profile segment a quad of two triangles per row, the ends closed by fans
+/// from the profile's centroid; outward normals.
+TriangleMesh extruded_profile(const std::vector<Eigen::Vector2d>& profile_xz, double y0, double y1,
+                              int rows);
+
 /// The heightfield over [x0, x1] x [y0, y1] as a triangle mesh with the given spacing.
 TriangleMesh heightfield_mesh(const Heightfield& hf, double spacing_mm, double x0 = -10.0,
                               double x1 = 60.0, double y0 = -10.0, double y1 = 60.0);

@@ -325,7 +325,7 @@ TEST_CASE(
   const auto hit = run_taxopt(base + " --shank-radius 2 --part-tolerance 0.01");
   CHECK(hit.code == 1);
   CHECK_THAT(hit.err, Catch::Contains("11 CL points where the flutes reach into the part deeper "
-                                      "than the part tolerance (a gouge"));
+                                      "than the part tolerance 0.01 mm (as given; a gouge"));
   CHECK_THAT(hit.err, !Catch::Contains("CL points where the tool hits the part"));
   // A shank 2.9 mm wide lying 2.98 mm above the plane clears it by 0.08 mm: free without a
   // clearance, a collision with the default 0.5 mm. It never cuts, so it gets no tolerance.

@@ -388,7 +388,7 @@ int main(int argc, char** argv) {
   app.add_option(
          "--contact-tolerance", a.contact_tolerance,
          "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, the mesh's chordal "
-         "error))")
+         "error + the CL file's INTOL/OUTTOL/TOLER band))")
       ->group("Input");
   app.add_option("--threads", a.threads, "worker threads, 1 to 1024 (default: all cores)")
       ->group("Diagnostics");

@@ -75,7 +75,8 @@ struct JobOptions {
   /// Empty: the machine file's [checks], else kDefaultShankClearanceMm / ...HolderClearanceMm.
   std::optional<double> shank_clearance_mm, holder_clearance_mm;
   /// How far the flutes may reach into the part mesh without a collision: its chordal error
-  /// (--part-tolerance), mm; empty: the contact tolerance (max(0.05, 0.1 x mean edge)).
+  /// (--part-tolerance), mm; empty: the contact tolerance (contact_tolerance_mm: max(0.05, the
+  /// mesh's chordal error + the CL file's tolerance band)).
   std::optional<double> part_tolerance_mm;
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).

@@ -1,5 +1,7 @@
 #include "taxopt/geometry/contact.hpp"
 
+#include <sstream>
+
 #include "util/parallel.hpp"
 
 namespace taxopt {
@@ -14,17 +16,38 @@ const char* to_string(CurvatureSource source) {
   return "?";
 }
 
-double contact_tolerance_mm(const Part& part, const ContactOptions& options) {
-  // CAM finishing tolerances and CAD export chordal errors are hundredths of a millimetre;
-  // a mesh whose curves are tessellated coarser than that is judged by its own chordal error.
-  return options.tolerance_mm > 0.0 ? options.tolerance_mm
-                                    : std::max(0.05, part.chordal_error_mm());
+double contact_tolerance_mm(const Part& part, const ContactOptions& options,
+                            std::optional<double> cam_tolerance_mm) {
+  if (options.tolerance_mm > 0.0) return options.tolerance_mm;
+  // A ball on the CAD surface sinks into the mesh by up to its chordal error, and the CAM's
+  // path lies within its own tolerance band of that surface; where the file gives no band,
+  // CAM finishing tolerances and CAD export chordal errors are hundredths of a millimetre.
+  return std::max(kContactToleranceFloorMm,
+                  part.chordal_error_mm() + cam_tolerance_mm.value_or(0.0));
+}
+
+std::string contact_tolerance_source(const Part& part, const ContactOptions& options,
+                                     std::optional<double> cam_tolerance_mm) {
+  std::ostringstream os;
+  if (options.tolerance_mm > 0.0) return "as given";
+  const double sum = part.chordal_error_mm() + cam_tolerance_mm.value_or(0.0);
+  if (sum < kContactToleranceFloorMm) {
+    os << "the floor " << kContactToleranceFloorMm << " mm, above the mesh's chordal error "
+       << part.chordal_error_mm() << " mm";
+    if (cam_tolerance_mm) os << " + the CL file's tolerance " << *cam_tolerance_mm << " mm";
+    return os.str();
+  }
+  os << "the mesh's chordal error " << part.chordal_error_mm() << " mm";
+  if (cam_tolerance_mm) {
+    os << " + the CL file's tolerance (INTOL/OUTTOL/TOLER) " << *cam_tolerance_mm << " mm";
+  }
+  return os.str();
 }
 
 std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
                                            double ball_radius_mm, const ContactOptions& options) {
   const double R = ball_radius_mm;
-  const double tol = contact_tolerance_mm(part, options);
+  const double tol = contact_tolerance_mm(part, options, op.cam_tolerance_mm);
   const double agree_cos = std::cos(deg_to_rad(options.fit_normal_agreement_deg));
   const std::size_t n = op.points.size();
   std::vector<ContactPoint> out(n);

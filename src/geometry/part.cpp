@@ -86,29 +86,57 @@ double chordal_error_of(const TriangleMesh& m) {
   std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
     return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
   });
-  std::vector<double> sagitta;
+  // Every edge two facets share, with its turn below 30 deg (sharper is a designed edge).
+  struct Turn {
+    int a, b, f1, f2;
+    double angle_rad;
+  };
+  std::vector<Turn> turns;
   const double sharp = 30.0 * 3.14159265358979323846 / 180.0;
   for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
     const HalfEdge& e = edges[i];
     const HalfEdge& g = edges[i + 1];
     if (e.a != g.a || e.b != g.b) continue;
     if (i + 2 < edges.size() && edges[i + 2].a == e.a && edges[i + 2].b == e.b) continue;
-    const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(e.face)];
-    const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(g.face)];
-    const Vec3d n1 = face_normal(m, f1), n2 = face_normal(m, f2);
+    const Vec3d n1 = face_normal(m, m.faces[static_cast<std::size_t>(e.face)]);
+    const Vec3d n2 = face_normal(m, m.faces[static_cast<std::size_t>(g.face)]);
     if (n1.isZero() || n2.isZero()) continue;
     // Consistently oriented neighbours share the edge in opposite directions: the angle
     // between their normals is the turn; else one is flipped.
     const double angle = std::acos(std::clamp(std::abs(n1.dot(n2)), 0.0, 1.0));
-    if (angle >= sharp) continue;
-    const double h = std::min(width_across(m, f1, e.a, e.b), width_across(m, f2, e.a, e.b));
-    sagitta.push_back(h * angle / 8.0);
+    // Below 1e-5 rad: one plane (an STL's float coordinates turn its facets by about 1e-7).
+    if (angle > 1e-5 && angle < sharp) turns.push_back({e.a, e.b, e.face, g.face, angle});
   }
-  if (sagitta.empty()) return 0.0;
-  const std::size_t at = std::min(sagitta.size() - 1, (sagitta.size() * 99) / 100);
-  std::nth_element(sagitta.begin(), sagitta.begin() + static_cast<std::ptrdiff_t>(at),
-                   sagitta.end());
-  return sagitta[at];
+  // The largest turn at each vertex: a facet's far vertex on a curved surface carries a turn
+  // of the same order; on a flat face beside a designed crease (or chamfer) it carries none.
+  std::vector<double> vertex_turn(m.vertices.size(), 0.0);
+  for (const Turn& t : turns) {
+    for (int v : {t.a, t.b}) {
+      double& w = vertex_turn[static_cast<std::size_t>(v)];
+      w = std::max(w, t.angle_rad);
+    }
+  }
+  double largest = 0.0;
+  for (const Turn& t : turns) {
+    const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(t.f1)];
+    const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(t.f2)];
+    const auto far_vertex_turn = [&](const std::array<int, 3>& f) {
+      for (int v : f) {
+        if (v != t.a && v != t.b) return vertex_turn[static_cast<std::size_t>(v)];
+      }
+      return 0.0;
+    };
+    // A curved surface's tessellation: both facets' far vertices turn too (by at least a
+    // quarter of this edge's turn); a crease between flat faces, or a lone chamfer, not.
+    if (far_vertex_turn(f1) < 0.25 * t.angle_rad || far_vertex_turn(f2) < 0.25 * t.angle_rad) {
+      continue;
+    }
+    const double h = std::min(width_across(m, f1, t.a, t.b), width_across(m, f2, t.a, t.b));
+    // The sagitta of an arc turning by the angle over a chord h: h/2 tan(angle/4) (h angle/8
+    // to first order; exact for a circle tessellated evenly, so never below it there).
+    largest = std::max(largest, 0.5 * h * std::tan(0.25 * t.angle_rad));
+  }
+  return largest;
 }
 
 }  // namespace

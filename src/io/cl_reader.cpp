@@ -613,6 +613,10 @@ class Reader {
     p.record = record;
     tp_.records[static_cast<std::size_t>(record)].frame = frame_;
     op.points.push_back(p);
+    if (tolerance_given_) {
+      const double band_mm = std::max(inside_tolerance_, outside_tolerance_) * scale_;
+      op.cam_tolerance_mm = std::max(op.cam_tolerance_mm.value_or(0.0), band_mm);
+    }
   }
 
   /// Coordinates beyond any machine (1e6 mm = 1 km) are a broken file, not a program.
@@ -625,6 +629,8 @@ class Reader {
     }
   }
   static constexpr double kMaxCoordinateMm = 1e6;
+  /// The largest CAM tolerance taken (INTOL, OUTTOL, TOLER), mm: a finishing path's band.
+  static constexpr double kMaxCamToleranceMm = 1.0;
 
   const CLPointd& last_point(const std::string& major, int line) {
     auto& op = current_op();
@@ -1531,6 +1537,27 @@ class Reader {
                        "other settings change what the moves mean");
       }
       skipped(major);
+    } else if (major == "INTOL" || major == "OUTTOL" || major == "TOLER") {
+      // APT: INTOL/OUTTOL/TOLER ds[,ps[,cs1[,cs2]]], a missing value the one before it: the
+      // part surface's is the second, else the first.
+      if (args.empty() || args.size() > 4) {
+        fail(line, major + " expects 1 to 4 tolerances (drive, part, check surfaces)");
+      }
+      const auto v = numbers(args, 0, args.size(), major, line);
+      const double t = v.size() > 1 ? v[1] : v[0];
+      for (double x : v) {
+        if (!(x >= 0.0 && x * scale_ <= kMaxCamToleranceMm)) {
+          std::ostringstream os;
+          os << major << "/" << args_text << ": a tolerance within [0, "
+             << kMaxCamToleranceMm / scale_ << "] " << to_string(tp_.units)
+             << " expected (a finishing tolerance; --skip-record " << major << " ignores it)";
+          fail(line, os.str());
+        }
+      }
+      // TOLER is OUTTOL in some APT processors and the whole band in others: either way the
+      // band the path may lie off the surface, which is all taxopt takes from them.
+      (major == "INTOL" ? inside_tolerance_ : outside_tolerance_) = t;
+      tolerance_given_ = true;
     } else if (major == "MODE") {
       // MODE/MILL says what taxopt posts anyway; any other mode changes what the moves mean.
       if (args.size() != 1 || upper(args[0]) != "MILL") {
@@ -1747,6 +1774,9 @@ class Reader {
   Vec3d axis_ = Vec3d::UnitZ();
   bool rapid_next_ = false;
   double feed_mm_per_min_ = 0.0;
+  /// The CAM's tolerances of the part surface in force (INTOL, OUTTOL, TOLER), file units.
+  double inside_tolerance_ = 0.0, outside_tolerance_ = 0.0;
+  bool tolerance_given_ = false;
   std::optional<CircleRecord> pending_circle_;
   std::vector<PendingArc> arcs_;
   std::optional<PendingSpline> spline_;

@@ -76,6 +76,17 @@ const std::vector<ClWord>& cl_words() {
       {"COOLNT", M::State,
        "ON / FLOOD (M8), MIST (M7), OFF (M9); where it stands; other kinds are refused", "all",
        kApt, false},
+      {"INTOL", M::Information,
+       "the CAM's inside tolerance, ds[,ps,cs1,cs2] (the part surface's: the second, else the "
+       "first): added to the part mesh's chordal error in the default contact tolerance",
+       "generic APT, CATIA", kApt, true},
+      {"OUTTOL", M::Information,
+       "the CAM's outside tolerance: as INTOL (the larger of the two is taken)",
+       "generic APT, CATIA", kApt, true},
+      {"TOLER", M::Information,
+       "a tolerance as OUTTOL (some APT processors take it for the whole band: either way the "
+       "band the path may lie off the surface)",
+       "generic APT", kApt, true},
       {"CUTCOM", M::State,
        "OFF is taken; LEFT / RIGHT (compensation in the control) are refused: taxopt posts the "
        "tool centre path without G41/G42",

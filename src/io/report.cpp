@@ -254,6 +254,10 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                       {"local_gouge_points", r.contact.local_gouges},
                       {"max_gap_mm", r.contact.max_abs_gap_mm},
                       {"tolerance_mm", r.contact.tolerance_mm}};
+      if (k < toolpath.operations.size()) {
+        const auto& band = toolpath.operations[k].cam_tolerance_mm;
+        o["contact"]["cam_tolerance_mm"] = band ? nlohmann::json(*band) : nlohmann::json(nullptr);
+      }
     }
     nlohmann::json v;
     v["roundtrip_max_mm"] = r.verification.roundtrip_max_mm;

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <sstream>
 
 #include "pipeline/stages.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
@@ -60,14 +61,20 @@ std::string not_a_ball(const Operationd& op) {
   return "operation " + op.name + ": not a ball-end mill";
 }
 
+std::string shown(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
-ToolMargins margins_of(const JobOptions& options) {
+ToolMargins margins_of(const JobOptions& options, const Operationd& op) {
   ToolMargins m;
   m.shank_clearance_mm = options.shank_clearance_mm.value_or(kDefaultShankClearanceMm);
   m.holder_clearance_mm = options.holder_clearance_mm.value_or(kDefaultHolderClearanceMm);
   if (options.part) {
-    m.flute_tolerance_mm =
-        options.part_tolerance_mm.value_or(contact_tolerance_mm(*options.part, options.contact));
+    m.flute_tolerance_mm = options.part_tolerance_mm.value_or(
+        contact_tolerance_mm(*options.part, options.contact, op.cam_tolerance_mm));
   }
   return m;
 }

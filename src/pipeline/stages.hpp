@@ -259,7 +259,10 @@ double ball_radius_mm(const Operationd& op, const JobOptions& options);
 /// Why an operation with no ball radius is left alone.
 std::string not_a_ball(const Operationd& op);
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
-ToolMargins margins_of(const JobOptions& options);
+ToolMargins margins_of(const JobOptions& options, const Operationd& op);
+
+/// A number for a message, as a stream writes it (6 significant digits).
+std::string shown(double v);
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill.
 Vec3d reference_point(const CLPointd& p, double ball_radius_mm);
 /// The tip that keeps the ball centre of `p` where it is with the tool along `axis`.

@@ -37,16 +37,6 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
 }  // namespace taxopt
 
 namespace taxopt::pipeline {
-namespace {
-
-std::string shown(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
-}  // namespace
-
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
   JobOptions options = resolved_options(given, machine);
   res.collision_checked = given.part != nullptr;
@@ -249,15 +239,18 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
   o.contacts = recover_contacts(part, op, o.ball_radius_mm, run.options.contact);
   ContactSummary& cs = o.contact;
   cs.recovered = true;
-  cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact);
+  cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact, op.cam_tolerance_mm);
   bool any_feed = false;
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     const ContactPoint& c = o.contacts[i];
     any_feed = any_feed || op.points[i].motion == Motion::Feed;
     if (c.state == ContactState::Gouging) {
-      throw InputError(run.tp.source, op.points[i].line,
-                       "operation " + op.name + ": the ball cuts " + std::to_string(-c.gap_mm) +
-                           " mm into the part here (wrong part, wrong tool or wrong units?)");
+      throw InputError(
+          run.tp.source, op.points[i].line,
+          "operation " + op.name + ": the ball cuts " + shown(-c.gap_mm) +
+              " mm into the part here, more than the contact tolerance " + shown(cs.tolerance_mm) +
+              " mm (" + contact_tolerance_source(part, run.options.contact, op.cam_tolerance_mm) +
+              "; --contact-tolerance); wrong part, wrong tool or wrong units?");
     }
     if (c.state == ContactState::Touching) {
       ++cs.touching;
@@ -303,7 +296,7 @@ void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& r
   for (OperationContext& o : ops) {
     if (!o.contact.recovered) continue;
     o.real_tool = ToolModel::ball_end(o.op->tool, run.options.tool);
-    o.tool = o.real_tool->judged(margins_of(run.options));
+    o.tool = o.real_tool->judged(margins_of(run.options, *o.op));
   }
 }
 

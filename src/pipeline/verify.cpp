@@ -341,9 +341,14 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
            "where the tool hits the part (the shank or holder within its clearance, or a "
            "ball in the air)",
            hit_detail);
-    report(gouges,
-           "where the flutes reach into the part deeper than the part tolerance "
-           "(a gouge; --part-tolerance)");
+    const double flute_tolerance_mm = margins_of(run.options, op).flute_tolerance_mm;
+    report(gouges, "where the flutes reach into the part deeper than the part tolerance " +
+                       shown(flute_tolerance_mm) + " mm (" +
+                       (run.options.part_tolerance_mm
+                            ? std::string("as given")
+                            : contact_tolerance_source(*run.options.part, run.options.contact,
+                                                       op.cam_tolerance_mm)) +
+                       "; a gouge; --part-tolerance)");
     if (hits.empty() && gouges.empty()) {
       report(after, "where the tool hits the part");  // never: the bodies are the same
     }
@@ -384,7 +389,8 @@ void check_shank_and_holder(const Run& run, const OperationContext& o, const Pos
   const std::size_t k = o.index;
   ToolModel tool;
   try {
-    tool = ToolModel::shank_and_holder(op.tool, run.options.tool).judged(margins_of(run.options));
+    tool =
+        ToolModel::shank_and_holder(op.tool, run.options.tool).judged(margins_of(run.options, op));
   } catch (const InputError& e) {
     throw InputError(run.tp.source, op.points.empty() ? 0 : op.points.front().line,
                      "operation " + op.name + ": " + e.message());
@@ -812,11 +818,6 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
     }
   };
   const double threshold_deg = t.index_threshold_deg + 1e-9;
-  const auto shown = [](double v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  };
   bool after_retract = false, xy_set = false;
   double xy[2] = {0.0, 0.0};
   const GcodeMove* prev = nullptr;
@@ -997,17 +998,21 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   const Machine& machine = run.machine;
   constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
-  const double flute_tolerance_mm = margins_of(run.options).flute_tolerance_mm;
+  std::vector<double> flute_tolerance_mm(ops.size(), 0.0);
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    flute_tolerance_mm[k] = margins_of(run.options, *ops[k].op).flute_tolerance_mm;
+  }
   const std::vector<std::size_t> hit =
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
-        const OperationContext& o = ops[op_of(moves[j].line)];
+        const std::size_t k = op_of(moves[j].line);
+        const OperationContext& o = ops[k];
         const ToolModel& tool = *o.tool;
         const double R = tool.ball_radius_mm;
         // In the air the ball counts as a body too, within the flutes' tolerance of the part
         // (a block that ends at a contact point touches it there by design).
         ToolModel air = tool;
-        air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm);
+        air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm[k]);
         // A block whose start is not known (the first after a retract in machine
         // coordinates): its end, where the tool stands.
         const JointPosition& q1 = *w.joints_after[j];

@@ -36,39 +36,7 @@ TriangleMesh cad_prism(double x0, double x1, double y0, double y1, double h, dou
   }
   profile.emplace_back(x1, -h);
   profile.emplace_back(x0, -h);
-  TriangleMesh m;
-  const int n = static_cast<int>(profile.size());
-  const int rows = fine ? static_cast<int>(std::round(y1 - y0)) : 1;
-  for (int j = 0; j <= rows; ++j) {
-    const double y = y0 + (y1 - y0) * j / rows;
-    for (const auto& p : profile) m.vertices.emplace_back(p.x(), y, p.y());
-  }
-  const auto id = [n](int j, int i) { return j * n + (i % n); };
-  for (int j = 0; j < rows; ++j) {
-    for (int i = 0; i < n; ++i) {
-      // Outward normals: the profile runs clockwise seen from +y.
-      m.faces.push_back({id(j, i), id(j + 1, i + 1), id(j + 1, i)});
-      m.faces.push_back({id(j, i), id(j, i + 1), id(j + 1, i + 1)});
-    }
-  }
-  // End caps: fans from the profile's centroid.
-  for (int end = 0; end < 2; ++end) {
-    const double y = end == 0 ? y0 : y1;
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& p : profile) c += p;
-    c /= n;
-    const int centre = static_cast<int>(m.vertices.size());
-    m.vertices.emplace_back(c.x(), y, c.y());
-    const int j = end == 0 ? 0 : rows;
-    for (int i = 0; i < n; ++i) {
-      if (end == 0) {
-        m.faces.push_back({centre, id(j, i), id(j, i + 1)});
-      } else {
-        m.faces.push_back({centre, id(j, i + 1), id(j, i)});
-      }
-    }
-  }
-  return m;
+  return extruded_profile(profile, y0, y1, fine ? static_cast<int>(std::round(y1 - y0)) : 1);
 }
 
 /// Nearest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).

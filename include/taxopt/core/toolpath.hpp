@@ -162,6 +162,11 @@ struct Operation {
   std::optional<ClCoolant> coolant;
   /// Stops, dwells, spindle and coolant changes inside the operation, in order.
   std::vector<ProgramEvent> events;
+  /// The band the CAM system kept its path within about the part surface, mm: the largest
+  /// INTOL / OUTTOL / TOLER (part surface) in force over the operation's points; empty where
+  /// the file gives none. It adds to the part mesh's chordal error in the default contact
+  /// tolerance (contact_tolerance_mm).
+  std::optional<double> cam_tolerance_mm;
 };
 using Operationd = Operation<double>;
 

@@ -3,6 +3,7 @@
 /// the part, the cutter-contact point Pc, normal N, feed direction T, K = N x T, the tilt and
 /// yaw of the input axis (the inverse of eq. 11) and the principal curvatures at Pc.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,7 +50,8 @@ struct ContactPoint {
 /// Options of recover_contacts.
 struct ContactOptions {
   /// Largest | |C - Pc| - R | of a contact point, mm; 0: the default, max(0.05 mm, the
-  /// mesh's own chordal error, Part::chordal_error_mm) -- never the facets' size.
+  /// mesh's own chordal error (Part::chordal_error_mm) + the CL file's tolerance band
+  /// (Operation::cam_tolerance_mm)) -- never the facets' size.
   double tolerance_mm = 0.0;
   /// A fit's curvature is used where its point lies within the tolerance of the exact
   /// contact and its normal within this angle of the exact normal, deg.
@@ -73,7 +75,18 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
                                            double ball_radius_mm,
                                            const ContactOptions& options = {});
 
-/// The tolerance recover_contacts uses for `options` on `part`.
-double contact_tolerance_mm(const Part& part, const ContactOptions& options);
+/// The smallest default contact tolerance, mm: the order of CAM finishing tolerances and CAD
+/// export chordal errors where nothing better is known.
+constexpr double kContactToleranceFloorMm = 0.05;
+
+/// The tolerance recover_contacts uses for `options` on `part`, for an operation whose CL file
+/// keeps its path within `cam_tolerance_mm` of the surface (Operation::cam_tolerance_mm): as
+/// given, else max(0.05 mm, the mesh's chordal error + that band).
+double contact_tolerance_mm(const Part& part, const ContactOptions& options,
+                            std::optional<double> cam_tolerance_mm = std::nullopt);
+/// Where contact_tolerance_mm's value comes from, for a message: "the mesh's chordal error
+/// 0.031 mm + the CL file's tolerance (...) 0.02 mm", "the floor ...", "as given".
+std::string contact_tolerance_source(const Part& part, const ContactOptions& options,
+                                     std::optional<double> cam_tolerance_mm);
 
 }  // namespace taxopt

@@ -51,12 +51,15 @@ class Part {
   /// Indices of the faces within `radius_mm` of q (exact triangle distance), ascending.
   std::vector<int> faces_within(const Vec3d& q, double radius_mm) const;
 
-  /// The mesh's chordal error, mm: how far its facets may lie from the surface they stand
-  /// for, measured on the mesh itself. Each edge between two facets that meet at less than
-  /// 30 deg (a tessellated curve, not a sharp edge of the part) spans an arc of that angle over
-  /// the narrower facet's width h, whose sagitta is about h * angle / 8; this is the 99th
-  /// percentile of those (0 for a mesh of flat faces and sharp edges). Big flat facets do not
-  /// raise it: they meet their neighbours at 0 deg, or at a real edge.
+  /// The mesh's chordal error, mm: the largest distance its facets may lie from the curved
+  /// surfaces they stand for, measured on the mesh itself. Each edge between two facets that
+  /// meet at less than 30 deg spans an arc of that angle over the narrower facet's width h,
+  /// whose sagitta is h/2 tan(angle/4) (about h angle / 8); this is the largest of those over
+  /// the edges of tessellated curves: edges whose two facets' far vertices turn too (by a
+  /// quarter of the edge's turn or more). A crease between flat faces, a lone chamfer, or big
+  /// flat facets beside a fillet do not raise it (0 for a mesh of flat faces and sharp edges).
+  /// The largest, not a percentile: a ball on the CAD surface sinks into the mesh by up to
+  /// that much where chords cut a concave surface, anywhere on the part.
   double chordal_error_mm() const;
 
   /// Where a closest point lies on the mesh, and the curvature the mesh itself gives there.

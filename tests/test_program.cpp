@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/gcode.hpp"
+#include "taxopt/io/machine_file.hpp"
 #include "taxopt/job.hpp"
 
 using namespace taxopt;
@@ -621,5 +623,102 @@ TEST_CASE(
     CHECK(pointless == 0);
     CHECK(stops >= 1);
     CHECK(stops <= changes + 1);
+  }
+}
+
+TEST_CASE(
+    "program: the end parks X Y where the machine file says, in machine coordinates, after the "
+    "retract and the rotaries' home, in every dialect and unit, and rs274 runs it there",
+    "[program][real]") {
+  const std::string f = "mech491-project2-multiop.cls";
+  // The file is in inches: --units-out mm writes mm.
+  const std::map<std::string, std::string> want = {
+      {"linuxcnc", "G53 G0 X10.0000 Y-20.0000"}, {"fanuc", "G53 G0 X10.0000 Y-20.0000"},
+      {"haas", "G53 G0 X10.0000 Y-20.0000"}, {"siemens", "G0 SUPA X10.0000 Y-20.0000"},
+      {"heidenhain", "G00 X10.0000 Y-20.0000 M91"}};
+  for (const char* dialect : kDialects) {
+    for (const char* units : {"mm", "in"}) {
+      INFO(dialect << " " << units);
+      TempDir dir;
+      write_file(dir.path("m.toml"),
+                 std::string("kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
+                             "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\ndialect = \"") +
+                     dialect + "\"\nend_park_xy_mm = [10, -20]\n");
+      const RunResult r = run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) +
+                                     " --machine " + dir.path("m.toml") + " --units-out " + units +
+                                     " --gcode " + dir.path("o.nc") + " --report " +
+                                     dir.path("r.json") + " --method none -q");
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      const std::string text = read_file(dir.path("o.nc"));
+      const std::vector<std::string> lines = lines_of(text);
+      std::string park = want.at(dialect);
+      if (std::string(units) == "in") {
+        park = std::regex_replace(park, std::regex("X10.0000 Y-20.0000"), "X0.3937 Y-0.7874");
+      }
+      // The park is the program's last motion block: after the last retract and the home.
+      std::size_t at = lines.size();
+      for (std::size_t i = 0; i < lines.size(); ++i) {
+        if (lines[i].find(park) != std::string::npos) at = i;
+      }
+      REQUIRE(at < lines.size());
+      CHECK(count_of(text, park) == 1);
+      const std::map<std::string, GcodeDialect> dialects = {
+          {"linuxcnc", GcodeDialect::LinuxCNC}, {"fanuc", GcodeDialect::Fanuc},
+          {"haas", GcodeDialect::Haas}, {"siemens", GcodeDialect::Siemens},
+          {"heidenhain", GcodeDialect::Heidenhain}};
+      const std::vector<GcodeMove> moves = read_gcode_moves(text, "o.nc", dialects.at(dialect));
+      REQUIRE(!moves.empty());
+      CHECK(moves.back().line == static_cast<int>(at) + 1);
+      CHECK(moves.back().retract);
+      CHECK(moves.back().given == 3u);  // X and Y
+      CHECK(moves[moves.size() - 2].a_deg == 0.0);
+      CHECK(moves[moves.size() - 2].c_deg == 0.0);
+      if (std::string(dialect) == "linuxcnc" && have_rs274()) {
+        std::vector<CanonMove> pts, all;
+        const RunResult rs = run_rs274(dir.path("o.nc"), pts, {}, &all);
+        INFO(rs.out);
+        CHECK(rs.code == 0);
+        REQUIRE(!all.empty());
+        // rs274 standalone has every offset at 0: machine X Y are the program's.
+        const double s = std::string(units) == "mm" ? 1.0 : 1.0 / 25.4;
+        CHECK(all.back().x == Approx(10.0 * s).margin(1e-4));
+        CHECK(all.back().y == Approx(-20.0 * s).margin(1e-4));
+        // The program's time counts the park: the same program without it is shorter.
+        write_file(dir.path("n.toml"), std::regex_replace(read_file(dir.path("m.toml")),
+                                                          std::regex("end_park_xy_mm.*\n"), ""));
+        REQUIRE(run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --machine " +
+                           dir.path("n.toml") + " --units-out " + units + " --gcode " +
+                           dir.path("n.nc") + " --report " + dir.path("n.json") +
+                           " --method none -q")
+                    .code == 0);
+        const auto time_of = [&](const char* name) {
+          const nlohmann::json j = nlohmann::json::parse(read_file(dir.path(name)));
+          return j["gcode"]["time_s"].get<double>();
+        };
+        CHECK(time_of("r.json") > time_of("n.json") + 0.01);
+      }
+    }
+  }
+  // Outside the travel, or without the retract that lifts the tool first: refused.
+  const std::string head =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n";
+  const auto refusal = [](const std::string& toml) -> std::string {
+    try {
+      (void)parse_machine_toml(toml, "m.toml");
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  CHECK_THAT(refusal(head + "[axes.X]\nmin_mm = -300\nmax_mm = 0\n[gcode]\nend_park_xy_mm = [10, 0]\n"),
+             Catch::Contains("gcode.end_park_xy_mm's X lies outside the machine's travel"));
+  CHECK_THAT(refusal(head + "[gcode]\nsafe_retract = \"none\"\nend_park_xy_mm = [0, 0]\n"),
+             Catch::Contains("needs the safe retract"));
+  for (const char* bad : {"[0]", "[0, 1, 2]", "[\"a\", 0]", "[nan, 0]", "0"}) {
+    INFO(bad);
+    CHECK_THAT(refusal(head + "[gcode]\nend_park_xy_mm = " + bad + "\n"),
+               Catch::Contains("gcode.end_park_xy_mm"));
   }
 }

@@ -303,6 +303,15 @@ struct OperationResult {
     double tie_band = 0.0;
   };
   std::optional<TimeChoice> time_choice;
+  /// The F words of the operation's feed blocks as written (read back), against the feed the
+  /// CL file programmed for each: the least and the largest ratio, over `blocks` blocks; the
+  /// blocks GcodeSettings::max_feed_ratio lengthened (feed_reference "cutter-path": their F
+  /// would have left the ratio to keep the input block's time). Empty for inverse time (G93).
+  struct FeedWords {
+    double min_ratio = 0.0, max_ratio = 0.0, max_feed_ratio = 0.0;
+    std::size_t blocks = 0, lengthened_blocks = 0;
+  };
+  std::optional<FeedWords> feed_words;
   std::vector<PointRow> rows;
   /// With JobOptions::cspace_maps: the maps of the chosen points.
   std::vector<CSpaceMap> cspace_maps;

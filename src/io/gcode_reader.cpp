@@ -47,8 +47,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
                                         GcodeDialect dialect,
                                         const std::vector<int>& verbatim_lines, char tilt_letter,
                                         const std::vector<std::pair<int, int>>& tool_calls) {
-  // Haas is read as Fanuc is, with G234 (tool centre point control) and G53 (machine
-  // coordinates) beside.
+  // Haas is read as Fanuc is, with G234 (tool centre point control) beside.
   const bool haas = dialect == GcodeDialect::Haas;
   const bool fanuc_like = dialect == GcodeDialect::Fanuc || haas;
   std::vector<GcodeMove> moves;
@@ -207,7 +206,9 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
             length_offset = tcp = true;
           } else if (haas && gv == 2340) {
             length_offset = tcp = true;
-          } else if ((dialect == GcodeDialect::LinuxCNC || haas) && gv == 530) {
+          } else if ((dialect == GcodeDialect::LinuxCNC || fanuc_like) && gv == 530) {
+            // G53: machine coordinates for this block (one-shot, group 00: Fanuc and the
+            // controls that follow it, e.g. Mitsubishi M700V manual 14.4).
             machine_coordinates = true;
           } else if (fanuc_like && gv == 910) {
             incremental = true;
@@ -329,6 +330,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
         throw InputError(source, line_no,
                          "a move in machine coordinates must be a rapid of X, Y or Z");
       }
+      const Vec3d machine_xyz = xyz;  // the words given, in machine coordinates
       xyz = xyz_before;
       for (int q = 0; q < 3; ++q) known[q] = known[q] && !given[q];
       // The way back in (a table turn, a descent, an XY move) is positioning until a block
@@ -337,6 +339,7 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
       GcodeMove m{true, xyz, a, c, feed, inverse_time, line_no};
       m.positioning = true;
       m.retract = true;
+      if (!reference_return) m.machine_mm = machine_xyz;
       stamp(m, given_mask(given));
       moves.push_back(m);
       if (end == text.size()) break;

@@ -112,6 +112,18 @@ class Dialect {
     }
     return {};
   }
+  /// The end's park of X and Y in machine coordinates (ProgramTemplate::end_park_xy_mm), as the
+  /// retract: G53 (LinuxCNC, Fanuc, Haas), SUPA (Sinumerik), M91 (TNC).
+  std::vector<std::string> park(const std::string& x, const std::string& y) const {
+    switch (d_) {
+      case GcodeDialect::LinuxCNC:
+      case GcodeDialect::Fanuc:
+      case GcodeDialect::Haas: return {"G53 G0 X" + x + " Y" + y};
+      case GcodeDialect::Siemens: return {"G0 SUPA X" + x + " Y" + y};
+      case GcodeDialect::Heidenhain: return {"G00 X" + x + " Y" + y + " M91"};
+    }
+    return {};
+  }
   /// The tool change; true when the lines are the template's (written as they are).
   std::pair<std::vector<std::string>, bool> tool_change(int tool) const {
     const std::string n = std::to_string(tool);
@@ -957,6 +969,10 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
   if (g.program.end_pose == EndPose::Home && g.program.retract != SafeRetract::None &&
       !operations.empty()) {
     line(dialect.rapid() + tilt_word + dialect.number(0.0, d) + " C" + dialect.number(0.0, d));
+  }
+  if (g.program.end_park_xy_mm && g.program.retract != SafeRetract::None && !operations.empty()) {
+    const auto& xy = *g.program.end_park_xy_mm;
+    lines(dialect.park(dialect.number(xy[0] * scale, d), dialect.number(xy[1] * scale, d)));
   }
   verbatim(g.program.footer);
   line(dialect.end());

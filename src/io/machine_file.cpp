@@ -130,6 +130,7 @@ class MachineParser {
                   "mode",
                   "feed_mode",
                   "feed_reference",
+                  "max_feed_ratio",
                   "decimals",
                   "feed_decimals",
                   "program_name",
@@ -147,7 +148,8 @@ class MachineParser {
                   "blend_tolerance_mm",
                   "approach_clearance_mm",
                   "index_threshold_deg",
-                  "end_pose"});
+                  "end_pose",
+                  "end_park_xy_mm"});
       choose(*g, "gcode", "dialect",
              {{"linuxcnc", GcodeDialect::LinuxCNC},
               {"fanuc", GcodeDialect::Fanuc},
@@ -178,6 +180,13 @@ class MachineParser {
         fail(line_of(*g->get("feed_mode")),
              "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
              "mode has no G93); use \"units-per-minute\"");
+      }
+      if (auto* n = g->get("max_feed_ratio")) {
+        m.gcode.max_feed_ratio = number_of(*n, "gcode.max_feed_ratio");
+        if (!(m.gcode.max_feed_ratio >= 1.0 && m.gcode.max_feed_ratio <= 100.0)) {
+          fail(line_of(*n), "gcode.max_feed_ratio must be within [1, 100] (times the programmed "
+                            "feed)");
+        }
       }
       const std::string dialect = to_string(m.gcode.dialect);
       if (auto* n = g->get("decimals")) {
@@ -249,6 +258,26 @@ class MachineParser {
         fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.ac.tilt_letter() +
                               " and C to 0, outside this machine's axis ranges; use \"none\" "
                               "(and home them in the footer)");
+      }
+      if (auto* n = g->get("end_park_xy_mm")) {
+        const auto* list = n->as_array();
+        if (!list || list->size() != 2) {
+          fail(line_of(*n), "gcode.end_park_xy_mm must be [x, y] in machine coordinates, mm");
+        }
+        std::array<double, 2> xy{};
+        for (std::size_t q = 0; q < 2; ++q) {
+          const std::string what = std::string("gcode.end_park_xy_mm's ") + "XY"[q];
+          xy[q] = number_of(*list->get(q), what);
+          if (!m.linear_range[q].contains(xy[q])) {
+            fail(line_of(*n), what + " lies outside the machine's travel ([axes." + "XY"[q] +
+                                  "] min_mm, max_mm)");
+          }
+        }
+        if (t.retract == SafeRetract::None) {
+          fail(line_of(*n), "gcode.end_park_xy_mm needs the safe retract (safe_retract "
+                            "\"machine-z\"): the table moves under the tool only with it up");
+        }
+        t.end_park_xy_mm = xy;
       }
       const std::pair<const char*, std::vector<std::string>*> blocks[] = {
           {"header", &t.header},

@@ -244,6 +244,15 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                           "(the paper's comparison; before/after are the program's "
                           "own timing)"}};
     o["feed_schedule_written"] = options.feed_schedule;
+    if (r.feed_words) {
+      o["feed_words"] = {{"blocks", r.feed_words->blocks},
+                         {"min_written_over_programmed", r.feed_words->min_ratio},
+                         {"max_written_over_programmed", r.feed_words->max_ratio},
+                         {"max_feed_ratio", r.feed_words->max_feed_ratio},
+                         {"lengthened_blocks", r.feed_words->lengthened_blocks}};
+    } else {
+      o["feed_words"] = nullptr;
+    }
     const std::size_t k = static_cast<std::size_t>(&r - result.operations.data());
     if (k < toolpath.operations.size()) o["tool"] = tool_json(toolpath.operations[k].tool, options);
     o["max_axis_change_deg"] = r.max_axis_change_deg;

@@ -133,18 +133,55 @@ std::vector<double> contact_lengths_mm(const Operationd& op,
   return len;
 }
 
+double BlockTiming::move_time_s(std::size_t i, const Vec3d& from_tip_mm, const Posed& from,
+                                const Vec3d& to_tip_mm, const Posed& to) const {
+  const double feed = feed_mm_per_min[i];
+  if (!(feed > 0.0)) return 0.0;
+  const double own_s = programmed_move_time_s(from_tip_mm, from, to_tip_mm, to, feed);
+  const double kept = i < kept_s.size() ? kept_s[i] : 0.0;
+  return kept > 0.0 ? std::max(kept, own_s / max_feed_ratio) : own_s;  // kept_block_times_s
+}
+
+std::vector<double> kept_block_times_s(const std::vector<double>& kept_s,
+                                       const std::vector<double>& own_s, double max_feed_ratio,
+                                       std::size_t* capped) {
+  std::vector<double> t = own_s;
+  for (std::size_t i = 0; i < t.size() && i < kept_s.size(); ++i) {
+    if (!(kept_s[i] > 0.0)) continue;
+    t[i] = std::max(kept_s[i], own_s[i] / max_feed_ratio);
+    if (capped && t[i] > kept_s[i]) ++*capped;
+  }
+  return t;
+}
+
+BlockTiming block_timing(const Operationd& op, const Machine& machine,
+                         const PosePlanOptions& pose_options,
+                         const std::vector<double>& metric_feed) {
+  BlockTiming timing;
+  timing.feed_mm_per_min = metric_feed;
+  timing.max_feed_ratio = machine.gcode.max_feed_ratio;
+  if (machine.gcode.feed_reference != FeedReference::CutterPath) return timing;
+  std::vector<Vec3d> axes;
+  for (const CLPointd& p : op.points) axes.push_back(p.axis);
+  const PosePlan input = plan_poses(machine.ac, axes, rapid_into_of(op), {}, pose_options);
+  if (!input.ok()) return timing;
+  timing.kept_s.assign(op.points.size(), 0.0);
+  for (std::size_t i = 1; i < op.points.size(); ++i) {
+    if (op.points[i].motion != Motion::Feed || !(metric_feed[i] > 0.0)) continue;
+    timing.kept_s[i] = programmed_move_time_s(op.points[i - 1].tip_mm, input.poses[i - 1],
+                                              op.points[i].tip_mm, input.poses[i], metric_feed[i]);
+  }
+  return timing;
+}
+
 std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
-                                 const std::vector<Posed>& poses,
-                                 const std::vector<double>& metric_feed, const IndexRange& range) {
+                                 const std::vector<Posed>& poses, const BlockTiming& timing,
+                                 const IndexRange& range) {
   std::vector<double> t;
   Vec3d from = Vec3d::Zero();
   for (std::size_t i = range.begin; i < range.end; ++i) {
     const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, ac.forward(poses[i]));
-    if (i > range.begin) {
-      t.push_back(metric_feed[i] > 0.0
-                      ? programmed_move_time_s(from, poses[i - 1], tip, poses[i], metric_feed[i])
-                      : 0.0);
-    }
+    if (i > range.begin) t.push_back(timing.move_time_s(i, from, poses[i - 1], tip, poses[i]));
     from = tip;
   }
   return t;

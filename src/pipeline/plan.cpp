@@ -283,7 +283,7 @@ struct GuardReference {
 StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
                                 double ball_radius_mm, const PartCheck* model,
                                 const ToolModel* tool, const Machine& machine,
-                                const std::vector<double>& metric_feed,
+                                const BlockTiming& timing,
                                 const PosePlanOptions& pose_options, OptimisedOperation& out,
                                 const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
@@ -324,7 +324,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
     PassRates r{rotary_kinematics_from_times(
-                    a, c, move_times_s(op, ball_radius_mm, machine.ac, poses, metric_feed, pass)),
+                    a, c, move_times_s(op, ball_radius_mm, machine.ac, poses, timing, pass)),
                 {}};
     accumulate(r.summary, r.k, c);
     return r;
@@ -421,7 +421,7 @@ struct TimeContext {
 /// their joints, programmed times and alternatives from it.
 void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
                    double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                   const Machine& machine, const std::vector<double>& metric_feed,
+                   const Machine& machine, const BlockTiming& timing,
                    const PosePlanOptions& pose_options, const GlobalOptions& options,
                    OptimisedOperation& out, detail::StageProgress& progress,
                    const TimeContext* time = nullptr, const GuardReference* reference = nullptr) {
@@ -452,7 +452,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     // The program's own timing with the warm start's tips (move_times_s: the report's and the
     // guard's); a move too short to time gets a floor (it would divide).
     problem.segment_time_s =
-        move_times_s(op, ball_radius_mm, machine.ac, warm.poses, metric_feed, pass);
+        move_times_s(op, ball_radius_mm, machine.ac, warm.poses, timing, pass);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
@@ -485,7 +485,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
   out.preferred.assign(n, std::nullopt);
   plan_passes(op, contacts, acceptable_at, out, progress, plan_pass,
               [&](std::size_t, const PassAxes&) { ++out.global_passes; });
-  out.global_guard = guard_passes(op, contacts, ball_radius_mm, model, tool, machine, metric_feed,
+  out.global_guard = guard_passes(op, contacts, ball_radius_mm, model, tool, machine, timing,
                                   pose_options, out, reference ? reference : &paper);
 }
 
@@ -671,9 +671,11 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
                       max_deviation_rad, po);
   std::vector<Vec3d> tips;
   for (const CLPointd& p : po.points) tips.push_back(p.tip_mm);
-  const std::vector<double> programmed = machine.gcode.feed_reference == FeedReference::CutterPath
-                                             ? programmed_s
-                                             : programmed_block_times_s(po.points, po.poses);
+  std::vector<double> programmed = programmed_block_times_s(po.points, po.poses);
+  if (machine.gcode.feed_reference == FeedReference::CutterPath) {
+    // The input block's time, within the feed ratio (as posted: kept_block_times_s).
+    programmed = kept_block_times_s(programmed_s, programmed, machine.gcode.max_feed_ratio);
+  }
   return schedule_operation(po.points, joints_of(machine.ac, tips, po.poses), programmed,
                             effective_limits(machine), machine.ac, nullptr,
                             machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr)
@@ -689,7 +691,7 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
 /// and none of their points or moves hits the part. Returns a line for the log.
 std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& contacts,
                         double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                        const Machine& machine, const std::vector<double>& metric_feed,
+                        const Machine& machine, const BlockTiming& timing,
                         const PosePlanOptions& pose_options, const GlobalOptions& options,
                         double fallback_feed, OptimisedOperation& out,
                         detail::StageProgress& progress) {
@@ -702,12 +704,12 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   GlobalOptions sum_squares = options;
   sum_squares.objective = GlobalObjective::SumSquares;
   sum_squares.fine_step_deg = 0.0;
-  refine_global(op, contacts, ball_radius_mm, model, tool, machine, metric_feed, pose_options,
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
                 sum_squares, smooth, progress);
   const bool pyramid = options.fine_step_deg > 0.0;
   if (pyramid) {
     sum_squares.fine_step_deg = options.fine_step_deg;
-    refine_global(op, contacts, ball_radius_mm, model, tool, machine, metric_feed, pose_options,
+    refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
                   sum_squares, fine, progress);
   }
   const std::vector<bool> rapid_into = rapid_into_of(op);
@@ -726,7 +728,7 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
   OptimisedOperation fast = out;
   const GuardReference reference{smooth.axes, smooth.preferred, false};
-  refine_global(op, contacts, ball_radius_mm, model, tool, machine, metric_feed, pose_options,
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
                 options, fast, progress, &time, &reference);
   const auto cycle = [&](const OptimisedOperation& o) {
     return operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
@@ -767,7 +769,7 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
       c.push_back(rad_to_deg(q.c_rad));
     }
     std::vector<double> into = {0.0};
-    for (double t : move_times_s(op, ball_radius_mm, machine.ac, pp.poses, metric_feed,
+    for (double t : move_times_s(op, ball_radius_mm, machine.ac, pp.poses, timing,
                                  IndexRange{0, op.points.size()})) {
       into.push_back(t);
     }
@@ -833,11 +835,14 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
   const PartCheck* check = run.planner_check();
   const ToolModel* tool = o.judged_tool();
   const auto t0 = Clock::now();
+  // The written program's timing (the guard's, the global objective's, the report's).
+  const BlockTiming timing =
+      block_timing(op, run.machine, options.pose_options, o.metric_feed_mm_per_min);
   o.optimised =
       optimise_paper(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
                      options.pose_options, options.paper, progress);
   OptimisedOperation& out = *o.optimised;
-  out.guard = guard_passes(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
+  out.guard = guard_passes(op, o.contacts, R, check, tool, run.machine, timing,
                            options.pose_options, out);
   std::string time_line;
   GlobalOptions global = options.global;
@@ -849,10 +854,10 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
   if (options.method == Method::Global) {
     if (global.objective == GlobalObjective::Time) {
       time_line =
-          refine_time(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
+          refine_time(op, o.contacts, R, check, tool, run.machine, timing,
                       options.pose_options, global, run.fallback_feed_mm_per_min, out, progress);
     } else {
-      refine_global(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
+      refine_global(op, o.contacts, R, check, tool, run.machine, timing,
                     options.pose_options, global, out, progress);
     }
   }
@@ -879,7 +884,7 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
     {
       const std::size_t paper_hits = hits(out);
       OptimisedOperation alt = out;
-      refine_global(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
+      refine_global(op, o.contacts, R, check, tool, run.machine, timing,
                     options.pose_options, global, alt, progress);
       std::string how;
       if (hits(alt) == 0) {
@@ -888,7 +893,7 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
       } else {
         const StretchGuardResult g =
             guard_passes(op, o.contacts, R, &*run.collision, tool, run.machine,
-                         o.metric_feed_mm_per_min, options.pose_options, out);
+                         timing, options.pose_options, out);
         out.guard.points_hit += g.points_hit;
         out.guard.stretches += g.stretches;
         out.guard.whole_passes += g.whole_passes;

@@ -93,8 +93,12 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       // the contact point run as the CAM system programmed them, whatever the tip does.
       std::vector<CLPointd> in_points = po.points;
       for (std::size_t i = 0; i < in_points.size(); ++i) in_points[i].tip_mm = op.points[i].tip_mm;
-      po.programmed_time_s =
-          programmed_block_times_s(in_points, o.input_poses.empty() ? po.poses : o.input_poses);
+      // Within the feed ratio: where the new tip path would need an F above max_feed_ratio
+      // times the programmed one, the block takes longer (the contact runs slower there).
+      po.programmed_time_s = kept_block_times_s(
+          programmed_block_times_s(in_points, o.input_poses.empty() ? po.poses : o.input_poses),
+          programmed_block_times_s(po.points, po.poses), machine.gcode.max_feed_ratio,
+          &po.feed_ratio_blocks);
     }
     start = po.poses.back();
     posted.push_back(std::move(po));

@@ -285,13 +285,38 @@ std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_
 std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const IndexRange& pass);
+/// How the written program times an operation's feed blocks (GcodeSettings::feed_reference):
+/// each at its feed over the new tip path ("tip"), or at the input block's time, but never
+/// shorter than the new tip path at max_feed_ratio times the feed ("cutter-path").
+struct BlockTiming {
+  /// The feed of the move into each point, mm/min (the metric feed).
+  std::vector<double> feed_mm_per_min;
+  /// "cutter-path": the input's time of the move into each point (0: none), s; empty: "tip".
+  std::vector<double> kept_s;
+  double max_feed_ratio = 1.0;
+  /// The written time of the move into point i: tip path from_tip -> to_tip at the feed, or
+  /// the kept time within the feed ratio.
+  double move_time_s(std::size_t i, const Vec3d& from_tip_mm, const Posed& from,
+                     const Vec3d& to_tip_mm, const Posed& to) const;
+};
+/// Per block: the kept time, but no shorter than the block's own time over `max_feed_ratio`
+/// (BlockTiming); a block with no kept time (0) keeps its own. `capped`, when given, counts
+/// the blocks the ratio lengthened.
+std::vector<double> kept_block_times_s(const std::vector<double>& kept_s,
+                                       const std::vector<double>& own_s, double max_feed_ratio,
+                                       std::size_t* capped = nullptr);
+/// The timing of `op`'s blocks on `machine` with the metric feeds: under "cutter-path" the
+/// input's block times with its axes as the machine runs them (planned from no start pose).
+BlockTiming block_timing(const Operationd& op, const Machine& machine,
+                         const PosePlanOptions& pose_options,
+                         const std::vector<double>& metric_feed);
 /// The time of each move from point i to i + 1 in `range` (range.size() - 1 of them) as the
-/// controller takes it from the written words under TCP (programmed_move_time_s), with the
-/// tool along `poses` (of the whole operation) and the ball centres where the CL file has
-/// them, at the metric feeds: the program's own timing.
+/// controller takes it from the written words (BlockTiming), with the tool along `poses` (of
+/// the whole operation) and the ball centres where the CL file has them: the program's own
+/// timing, as the report measures it.
 std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
-                                 const std::vector<Posed>& poses,
-                                 const std::vector<double>& metric_feed, const IndexRange& range);
+                                 const std::vector<Posed>& poses, const BlockTiming& timing,
+                                 const IndexRange& range);
 /// Rotary kinematics of every pass of an operation for the axis angles a_deg, c_deg of its
 /// points, each move taking `time_into_s` (per point, the move into it: the program's own
 /// timing); fills the rows' omega and accel (before or after) when given.

@@ -19,6 +19,31 @@
 namespace taxopt::pipeline {
 namespace {
 
+/// The F words of an operation's feed blocks as read back, against the programmed feeds
+/// (OperationResult::FeedWords); none for an inverse-time program.
+std::optional<OperationResult::FeedWords> written_feed_words(
+    const Operationd& op, const PostedOperation& po,
+    const std::vector<const GcodeMove*>& point_moves, LengthUnit units, const Machine& machine) {
+  if (machine.gcode.feed_mode != FeedMode::UnitsPerMinute) return std::nullopt;
+  OperationResult::FeedWords f;
+  f.max_feed_ratio = machine.gcode.max_feed_ratio;
+  f.lengthened_blocks = po.feed_ratio_blocks;
+  const GcodeMove* last = nullptr;
+  for (std::size_t i = 1; i < op.points.size() && i < point_moves.size(); ++i) {
+    const GcodeMove* m = point_moves[i];
+    const double programmed = op.points[i].feed_mm_per_min;
+    if (!m || m == last || m->rapid || op.points[i].motion != Motion::Feed || !(programmed > 0.0)) {
+      continue;
+    }
+    last = m;  // an arc's chord points share its block
+    const double ratio = m->feed * mm_per_unit(units) / programmed;
+    f.min_ratio = f.blocks ? std::min(f.min_ratio, ratio) : ratio;
+    f.max_ratio = f.blocks ? std::max(f.max_ratio, ratio) : ratio;
+    ++f.blocks;
+  }
+  return f;
+}
+
 double round_to(double v, int decimals) {
   const double s = std::pow(10.0, decimals);
   return std::round(v * s) / s;
@@ -763,6 +788,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     r.rows[i].feed_mm_min = w.schedule_after[k].feed_mm_min[i];
     r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];
   }
+  r.feed_words = written_feed_words(op, po, w.point_moves[k], res.gcode_units, machine);
   check_dynamic_limits(r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves,
                        res, run.tp.source,
                        options.feed_schedule ? effective_limits(machine) : machine.limits,

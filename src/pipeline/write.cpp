@@ -308,8 +308,12 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (gives[3]) set[kA] = true;
     if (gives[4]) set[kC] = true;
     if (m.retract) {
-      // Machine coordinates: the spindle's reference point to the retract height.
+      // Machine coordinates: the spindle's reference point to the retract height; X and Y (the
+      // end's park) where the block gives them, the work offset taken as zero.
       if (gives[2]) to[2] = t.retract_z_mm - length_mm;
+      for (int k = 0; k < 2; ++k) {
+        if (gives[k]) to[k] = m.machine_mm[k];
+      }
       // In machine coordinates: where it leaves the tool relative to the part depends on the
       // work offset and the tool length, which the program does not hold.
       set[0] = set[1] = set[2] = false;

@@ -368,6 +368,14 @@ TEST_CASE(
   expect_error(d + "tool = 1\n", 8, "unknown key 'defaults.tool'");
   const std::string g = head + "[gcode]\n";
   expect_error(g + "index_threshold_deg = -1\n", 8, "within [0, 360] deg");
+  // The feed ratio: 2 by default; below 1 would speed every kept block up, nan and inf mean
+  // nothing.
+  CHECK(plain.gcode.max_feed_ratio == 2.0);
+  CHECK(parse_machine_toml(g + "max_feed_ratio = 1.5\n", "m.toml").gcode.max_feed_ratio == 1.5);
+  for (const char* bad : {"0.5", "0", "-2", "101", "nan", "inf", "\"2\""}) {
+    INFO(bad);
+    expect_error(g + "max_feed_ratio = " + bad + "\n", 8, "gcode.max_feed_ratio must");
+  }
   expect_error(g + "end_pose = \"park\"\n", 8, "\"home\" or \"none\"");
   expect_error(g + "footer = [\"G91 G28 C90.\"]\n", 8, "home the rotary axes only");
   expect_error(g + "footer = [\"G28 X0 C0\"]\n", 8, "home the rotary axes only");

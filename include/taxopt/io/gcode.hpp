@@ -21,7 +21,8 @@ struct PostedOperation {
   std::vector<CLPointd> points;
   std::vector<Posed> poses;
   /// Optional, per point: the time of the feed move into it at the programmed feed, s
-  /// (FeedReference::CutterPath: the input block's); absent: programmed_block_times_s.
+  /// (FeedReference::CutterPath: the input block's, within GcodeSettings::max_feed_ratio);
+  /// absent: programmed_block_times_s.
   std::vector<double> programmed_time_s;
   /// Optional, per point: the time of the feed move into it, s, from a feed schedule
   /// (feed_schedule.hpp); 0 or absent: the programmed time. Never shorter than that.
@@ -47,6 +48,9 @@ struct PostedOperation {
   /// each of its blocks, s (adding up to block_time_s); used where the count matches the
   /// blocks written, else the point's time is shared in proportion to the blocks' lengths.
   std::vector<std::vector<double>> linearised_time_s = {};
+  /// The blocks of programmed_time_s that the feed ratio lengthened (their input block's time
+  /// would have needed an F above max_feed_ratio times the programmed feed).
+  std::size_t feed_ratio_blocks = 0;
 };
 
 /// Where an approach under TCP comes down to before the last leg along the tool axis to
@@ -196,6 +200,9 @@ struct GcodeMove {
   bool tcp = false;
   /// A move in machine coordinates (the dialect's retract: G53, G28, SUPA, M91).
   bool retract = false;
+  /// Such a move's target in machine coordinates, mm, for the axes it gives (`given`); Fanuc's
+  /// reference return (G28) goes to the machine's reference point instead: zero here.
+  Vec3d machine_mm = Vec3d::Zero();
   /// Which of X Y Z A C (bits 0 to 4) the block gives.
   unsigned given = 0;
   /// The machine's state at the block, as the program set it: the tool in the spindle (T with
@@ -224,8 +231,8 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// Heidenhain ISO program blocks, N numbers and "*"). @throws InputError on anything outside.
 /// `verbatim_lines` (GcodeProgram::verbatim_lines) are stepped over. The safe retracts
 /// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
-/// `G00 Z M91`) are read as positioning moves. Haas as Fanuc, with G234 H (tool centre point
-/// control) and `G53 G0 Z`. The tilt axis's word is `tilt_letter` (A, or B on a B/C machine;
+/// `G00 Z M91`) and the end's park of X Y (`G53 G0 X Y` on LinuxCNC, Fanuc, Haas) are read as
+/// positioning moves. Haas as Fanuc, with G234 H (tool centre point control). The tilt axis's word is `tilt_letter` (A, or B on a B/C machine;
 /// GcodeMove::a_deg holds it); the other is refused. `tool_calls` (GcodeProgram::tool_calls)
 /// are the verbatim lines that change the tool.
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,

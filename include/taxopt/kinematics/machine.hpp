@@ -90,6 +90,10 @@ struct ProgramTemplate {
   /// "The approach"). CAM systems' clearance heights are of this order above the stock.
   double approach_clearance_mm = 10.0;
   EndPose end_pose = EndPose::Home;
+  /// Where the program parks X and Y at its end, in machine coordinates, mm (after the retract
+  /// and the rotaries' home, as a machinist brings the table to the door: Haas posts write
+  /// G53 Y0); empty: where the last retract leaves them.
+  std::optional<std::array<double, 2>> end_park_xy_mm;
 };
 
 /// How G-code is written for a machine.
@@ -98,6 +102,12 @@ struct GcodeSettings {
   GcodeMode mode = GcodeMode::Tcp;
   FeedMode feed_mode = FeedMode::UnitsPerMinute;
   FeedReference feed_reference = FeedReference::CutterPath;
+  /// feed_reference "cutter-path": a block keeps its input block's time (its F is the new tip
+  /// path over that time), but never at an F above this many times the programmed feed; where
+  /// the new tip path would need more, the block takes longer (the contact point runs slower
+  /// than programmed there, never faster). Below the programmed feed there is no bound: a low
+  /// F over a short tip path keeps the contact at its programmed speed.
+  double max_feed_ratio = 2.0;
   /// Decimals of every coordinate and angle (0 to max_decimals(dialect)).
   int decimals = 4;
   /// Decimals of a units-per-minute F word; -1: the dialect's (feed_decimals()).

@@ -488,9 +488,27 @@ TEST_CASE(
     std::size_t line;  // 1-based
     std::string block;
   };
+  // The retract between the operations (the first G53 of the second) and the end's turn of
+  // the rotaries home (the last block that gives A and C).
+  const std::size_t retract = line_of("G53 G0 Z", second);
+  std::size_t home = 0;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].rfind("G0 A", 0) == 0) home = i + 1;
+  }
+  REQUIRE(retract > 0);
+  REQUIRE(home > second);
+  // The retract turned into a move down in the workpiece; the home turn made at a height
+  // inside the part, over the first operation's last point.
+  const CLPointd& last = tp.operations.front().points.back();
+  std::ostringstream end_xy;
+  end_xy << std::fixed << std::setprecision(4) << "G0 X" << last.tip_mm.x() << " Y"
+         << last.tip_mm.y();
   const std::vector<Tamper> tampers = {
       {"the approach's XY move at the clearance height", xy, with_z(xy)},
       {"the approach's block down to the first point", down, with_z(down)},
+      {"the retract between the operations", retract, "G0" + z.str()},
+      {"the end's turn of the rotaries home", home,
+       end_xy.str() + z.str() + lines.at(home - 1).substr(2)},
   };
   for (const Tamper& t : tampers) {
     INFO(t.what << ": G-code line " << t.line << " '" << lines.at(t.line - 1) << "' -> '" << t.block

@@ -632,10 +632,11 @@ TEST_CASE(
     "[program][real]") {
   const std::string f = "mech491-project2-multiop.cls";
   // The file is in inches: --units-out mm writes mm.
-  const std::map<std::string, std::string> want = {
-      {"linuxcnc", "G53 G0 X10.0000 Y-20.0000"}, {"fanuc", "G53 G0 X10.0000 Y-20.0000"},
-      {"haas", "G53 G0 X10.0000 Y-20.0000"}, {"siemens", "G0 SUPA X10.0000 Y-20.0000"},
-      {"heidenhain", "G00 X10.0000 Y-20.0000 M91"}};
+  const std::map<std::string, std::string> want = {{"linuxcnc", "G53 G0 X10.0000 Y-20.0000"},
+                                                   {"fanuc", "G53 G0 X10.0000 Y-20.0000"},
+                                                   {"haas", "G53 G0 X10.0000 Y-20.0000"},
+                                                   {"siemens", "G0 SUPA X10.0000 Y-20.0000"},
+                                                   {"heidenhain", "G00 X10.0000 Y-20.0000 M91"}};
   for (const char* dialect : kDialects) {
     for (const char* units : {"mm", "in"}) {
       INFO(dialect << " " << units);
@@ -644,10 +645,10 @@ TEST_CASE(
                  std::string("kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
                              "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\ndialect = \"") +
                      dialect + "\"\nend_park_xy_mm = [10, -20]\n");
-      const RunResult r = run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) +
-                                     " --machine " + dir.path("m.toml") + " --units-out " + units +
-                                     " --gcode " + dir.path("o.nc") + " --report " +
-                                     dir.path("r.json") + " --method none -q");
+      const RunResult r =
+          run_taxopt("--in " + real_path(f, dir.dir()) + real_flags(f) + " --machine " +
+                     dir.path("m.toml") + " --units-out " + units + " --gcode " + dir.path("o.nc") +
+                     " --report " + dir.path("r.json") + " --method none -q");
       INFO(r.err);
       REQUIRE(r.code == 0);
       const std::string text = read_file(dir.path("o.nc"));
@@ -664,8 +665,10 @@ TEST_CASE(
       REQUIRE(at < lines.size());
       CHECK(count_of(text, park) == 1);
       const std::map<std::string, GcodeDialect> dialects = {
-          {"linuxcnc", GcodeDialect::LinuxCNC}, {"fanuc", GcodeDialect::Fanuc},
-          {"haas", GcodeDialect::Haas}, {"siemens", GcodeDialect::Siemens},
+          {"linuxcnc", GcodeDialect::LinuxCNC},
+          {"fanuc", GcodeDialect::Fanuc},
+          {"haas", GcodeDialect::Haas},
+          {"siemens", GcodeDialect::Siemens},
           {"heidenhain", GcodeDialect::Heidenhain}};
       const std::vector<GcodeMove> moves = read_gcode_moves(text, "o.nc", dialects.at(dialect));
       REQUIRE(!moves.empty());
@@ -712,8 +715,9 @@ TEST_CASE(
     }
     return "";
   };
-  CHECK_THAT(refusal(head + "[axes.X]\nmin_mm = -300\nmax_mm = 0\n[gcode]\nend_park_xy_mm = [10, 0]\n"),
-             Catch::Contains("gcode.end_park_xy_mm's X lies outside the machine's travel"));
+  CHECK_THAT(
+      refusal(head + "[axes.X]\nmin_mm = -300\nmax_mm = 0\n[gcode]\nend_park_xy_mm = [10, 0]\n"),
+      Catch::Contains("gcode.end_park_xy_mm's X lies outside the machine's travel"));
   CHECK_THAT(refusal(head + "[gcode]\nsafe_retract = \"none\"\nend_park_xy_mm = [0, 0]\n"),
              Catch::Contains("needs the safe retract"));
   for (const char* bad : {"[0]", "[0, 1, 2]", "[\"a\", 0]", "[nan, 0]", "0"}) {

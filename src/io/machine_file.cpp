@@ -184,8 +184,9 @@ class MachineParser {
       if (auto* n = g->get("max_feed_ratio")) {
         m.gcode.max_feed_ratio = number_of(*n, "gcode.max_feed_ratio");
         if (!(m.gcode.max_feed_ratio >= 1.0 && m.gcode.max_feed_ratio <= 100.0)) {
-          fail(line_of(*n), "gcode.max_feed_ratio must be within [1, 100] (times the programmed "
-                            "feed)");
+          fail(line_of(*n),
+               "gcode.max_feed_ratio must be within [1, 100] (times the programmed "
+               "feed)");
         }
       }
       const std::string dialect = to_string(m.gcode.dialect);
@@ -274,8 +275,9 @@ class MachineParser {
           }
         }
         if (t.retract == SafeRetract::None) {
-          fail(line_of(*n), "gcode.end_park_xy_mm needs the safe retract (safe_retract "
-                            "\"machine-z\"): the table moves under the tool only with it up");
+          fail(line_of(*n),
+               "gcode.end_park_xy_mm needs the safe retract (safe_retract "
+               "\"machine-z\"): the table moves under the tool only with it up");
         }
         t.end_park_xy_mm = xy;
       }

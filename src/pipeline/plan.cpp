@@ -283,8 +283,8 @@ struct GuardReference {
 StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
                                 double ball_radius_mm, const PartCheck* model,
                                 const ToolModel* tool, const Machine& machine,
-                                const BlockTiming& timing,
-                                const PosePlanOptions& pose_options, OptimisedOperation& out,
+                                const BlockTiming& timing, const PosePlanOptions& pose_options,
+                                OptimisedOperation& out,
                                 const GuardReference* reference = nullptr) {
   const std::size_t n = op.points.size();
   const std::vector<bool> rapid_into = rapid_into_of(op);
@@ -451,8 +451,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     }
     // The program's own timing with the warm start's tips (move_times_s: the report's and the
     // guard's); a move too short to time gets a floor (it would divide).
-    problem.segment_time_s =
-        move_times_s(op, ball_radius_mm, machine.ac, warm.poses, timing, pass);
+    problem.segment_time_s = move_times_s(op, ball_radius_mm, machine.ac, warm.poses, timing, pass);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
@@ -728,8 +727,8 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
   OptimisedOperation fast = out;
   const GuardReference reference{smooth.axes, smooth.preferred, false};
-  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
-                options, fast, progress, &time, &reference);
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options, options,
+                fast, progress, &time, &reference);
   const auto cycle = [&](const OptimisedOperation& o) {
     return operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
                              deg_to_rad(options.max_deviation_deg), o.axes, o.preferred,
@@ -842,8 +841,8 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
       optimise_paper(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
                      options.pose_options, options.paper, progress);
   OptimisedOperation& out = *o.optimised;
-  out.guard = guard_passes(op, o.contacts, R, check, tool, run.machine, timing,
-                           options.pose_options, out);
+  out.guard =
+      guard_passes(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options, out);
   std::string time_line;
   GlobalOptions global = options.global;
   global.max_deviation_deg = options.paper.max_deviation_deg;
@@ -854,11 +853,11 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
   if (options.method == Method::Global) {
     if (global.objective == GlobalObjective::Time) {
       time_line =
-          refine_time(op, o.contacts, R, check, tool, run.machine, timing,
-                      options.pose_options, global, run.fallback_feed_mm_per_min, out, progress);
+          refine_time(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
+                      global, run.fallback_feed_mm_per_min, out, progress);
     } else {
-      refine_global(op, o.contacts, R, check, tool, run.machine, timing,
-                    options.pose_options, global, out, progress);
+      refine_global(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
+                    global, out, progress);
     }
   }
   if (options.method == Method::Paper && run.collision && tool && run.paper_fallback.count(k)) {
@@ -884,16 +883,15 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
     {
       const std::size_t paper_hits = hits(out);
       OptimisedOperation alt = out;
-      refine_global(op, o.contacts, R, check, tool, run.machine, timing,
-                    options.pose_options, global, alt, progress);
+      refine_global(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
+                    global, alt, progress);
       std::string how;
       if (hits(alt) == 0) {
         out = std::move(alt);
         how = "the global method's plan is used for this operation";
       } else {
-        const StretchGuardResult g =
-            guard_passes(op, o.contacts, R, &*run.collision, tool, run.machine,
-                         timing, options.pose_options, out);
+        const StretchGuardResult g = guard_passes(op, o.contacts, R, &*run.collision, tool,
+                                                  run.machine, timing, options.pose_options, out);
         out.guard.points_hit += g.points_hit;
         out.guard.stretches += g.stretches;
         out.guard.whole_passes += g.whole_passes;

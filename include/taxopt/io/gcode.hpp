@@ -232,9 +232,9 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// `verbatim_lines` (GcodeProgram::verbatim_lines) are stepped over. The safe retracts
 /// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
 /// `G00 Z M91`) and the end's park of X Y (`G53 G0 X Y` on LinuxCNC, Fanuc, Haas) are read as
-/// positioning moves. Haas as Fanuc, with G234 H (tool centre point control). The tilt axis's word is `tilt_letter` (A, or B on a B/C machine;
-/// GcodeMove::a_deg holds it); the other is refused. `tool_calls` (GcodeProgram::tool_calls)
-/// are the verbatim lines that change the tool.
+/// positioning moves. Haas as Fanuc, with G234 H (tool centre point control). The tilt axis's word
+/// is `tilt_letter` (A, or B on a B/C machine; GcodeMove::a_deg holds it); the other is refused.
+/// `tool_calls` (GcodeProgram::tool_calls) are the verbatim lines that change the tool.
 std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
                                         GcodeDialect dialect = GcodeDialect::LinuxCNC,
                                         const std::vector<int>& verbatim_lines = {},

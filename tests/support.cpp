@@ -350,6 +350,51 @@ struct HeightSurface {
 
 }  // namespace
 
+std::string input_error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// Nearest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Vec3d closest_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Vec3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+Vec3d brute_nearest(const TriangleMesh& m, const Vec3d& p) {
+  Vec3d best = Vec3d::Zero();
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const auto& f : m.faces) {
+    const Vec3d q = closest_on_triangle(p, m.vertices[static_cast<std::size_t>(f[0])],
+                                        m.vertices[static_cast<std::size_t>(f[1])],
+                                        m.vertices[static_cast<std::size_t>(f[2])]);
+    const double d = (q - p).norm();
+    if (d < best_d) best_d = d, best = q;
+  }
+  return best;
+}
+
 TriangleMesh extruded_profile(const std::vector<Eigen::Vector2d>& profile, double y0, double y1,
                               int rows) {
   TriangleMesh m;

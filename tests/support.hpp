@@ -142,6 +142,15 @@ struct GeneratedCl {
 void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Vec3d& axis,
                  bool rapid, const Vec3d& cc_mm, const Vec3d& centre_mm);
 
+/// The message of the InputError `f` throws, "" when it throws none (other exceptions pass).
+std::string input_error_of(const std::function<void()>& f);
+
+/// Nearest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5): written
+/// here, independent of CGAL and FCL.
+Vec3d closest_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+/// Nearest point of a mesh to p, by every triangle (brute force).
+Vec3d brute_nearest(const TriangleMesh& m, const Vec3d& p);
+
 /// A closed profile in the xz plane (clockwise seen from +y) extruded along y over [y0, y1] in
 /// `rows` rows: each profile segment a quad of two triangles per row, the ends closed by fans
 /// from the profile's centroid; outward normals.

@@ -205,7 +205,7 @@ TEST_CASE("bad input: --force never writes an empty program", "[cli][bad-input]"
   write_file(t.path("a.cls"), kInchCl);
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 50\nmax_deg = 60\n"
-             "[axes.C]\ncontinuous = true\n");
+             "[axes.C]\ncontinuous = true\n[gcode]\nend_pose = \"none\"\n");
   const auto r =
       run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
                  t.path("m.toml") + " --gcode " + t.path("o.nc") + " --method none --force");

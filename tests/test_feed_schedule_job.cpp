@@ -362,7 +362,11 @@ TEST_CASE(
             time["time_objective"]["shortest_cycle_s"].get<double>() * (1.0 + band + 1e-9));
       CHECK(time["time_objective"]["peak_accel_deg_s2"].get<double>() <=
             time["time_objective"]["shortest_peak_accel_deg_s2"].get<double>() * (1.0 + 1e-9));
-      if (time_s < std::min({input_s, paper_s, global_s}) * (1.0 - 1e-3)) ++shorter;
+      // Shorter than the CAM's axes and the paper's plan by more than the tie band. (Against
+      // the global method's sum-squares plan it now ties on these parts: timed as the program
+      // keeps its blocks, that plan is 0.2-0.5 % shorter than it was and within the band of
+      // the time plan, so the smoother one is kept.)
+      if (time_s < std::min(input_s, paper_s) * (1.0 - 1e-3)) ++shorter;
       CHECK(time["verification"]["within_dynamic_limits"] == true);
       CHECK(time["verification"]["collision_free"] == true);
       const Measured m =
@@ -377,7 +381,7 @@ TEST_CASE(
   }
   CHECK(checked == 6);
   // The objective buys time somewhere, not only ties.
-  CHECK(shorter >= 2);
+  CHECK(shorter >= 4);
 }
 
 TEST_CASE(

@@ -707,13 +707,8 @@ TEST_CASE(
   const std::string head =
       "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n[axes.C]\n"
       "continuous = true\n";
-  const auto refusal = [](const std::string& toml) -> std::string {
-    try {
-      (void)parse_machine_toml(toml, "m.toml");
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "";
+  const auto refusal = [](const std::string& toml) {
+    return input_error_of([&] { (void)parse_machine_toml(toml, "m.toml"); });
   };
   CHECK_THAT(
       refusal(head + "[axes.X]\nmin_mm = -300\nmax_mm = 0\n[gcode]\nend_park_xy_mm = [10, 0]\n"),

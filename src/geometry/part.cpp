@@ -14,6 +14,9 @@
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
+#include <string>
+
+#include "taxopt/core/error.hpp"
 
 namespace taxopt {
 namespace {
@@ -142,7 +145,25 @@ double chordal_error_of(const TriangleMesh& m) {
 }  // namespace
 
 Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
-  if (mesh.faces.empty()) throw std::invalid_argument("Part: empty mesh");
+  // As the mesh readers check a file: a mesh built in code has not been read.
+  if (mesh.faces.empty()) throw InputError("Part: the mesh has no faces");
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    // Beyond any machine (1 km, as the CL reader's reach) a coordinate is a broken mesh, and
+    // FCL's fitting of its bounding volumes does not converge.
+    if (!mesh.vertices[v].allFinite() || mesh.vertices[v].cwiseAbs().maxCoeff() > 1e6) {
+      throw InputError("Part: vertex " + std::to_string(v) +
+                       " is not a finite point within +-1e6 mm");
+    }
+  }
+  const auto count = static_cast<long long>(mesh.vertices.size());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    for (int index : mesh.faces[f]) {
+      if (index < 0 || index >= count) {
+        throw InputError("Part: face " + std::to_string(f) + " names vertex " +
+                         std::to_string(index) + " of " + std::to_string(count));
+      }
+    }
+  }
   impl_->mesh = std::move(mesh);
   const auto& m = impl_->mesh;
   impl_->triangles.reserve(m.faces.size());

@@ -309,6 +309,12 @@ class MachineParser {
           out->push_back(b);
         }
       }
+    } else if (m.gcode.program.end_pose == EndPose::Home &&
+               (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+      // The default end pose as the key would be checked: no program ends outside the ranges.
+      fail(0, std::string("gcode.end_pose \"home\" (the default) turns ") + m.ac.tilt_letter() +
+                  " and C to 0, outside this machine's axis ranges; give [gcode] end_pose = "
+                  "\"none\" (and home them in the footer)");
     }
     return m;
   }

@@ -1,6 +1,10 @@
 #include "taxopt/kinematics/machine.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "taxopt/core/error.hpp"
 
 namespace taxopt {
 
@@ -16,6 +20,104 @@ const char* to_string(GcodeDialect dialect) {
 }
 
 Machine default_machine() { return Machine{}; }
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& field, const std::string& expected, double got) {
+  std::ostringstream os;
+  os << "Machine::" << field << " must be " << expected << ", got " << got;
+  throw InputError(os.str());
+}
+
+void check_range(const std::string& field, double v, double lo, double hi,
+                 const std::string& expected) {
+  if (!(v >= lo && v <= hi)) refuse(field, expected, v);
+}
+
+void check_rotary(const char* name, const RotaryAxis<double>& axis) {
+  const std::string f = std::string("ac.") + name;
+  if (axis.sense != 1 && axis.sense != -1) {
+    refuse(f + ".sense", "+1 or -1", static_cast<double>(axis.sense));
+  }
+  if (axis.continuous) return;
+  if (std::isnan(axis.min_rad)) refuse(f + ".min_rad", "a number", axis.min_rad);
+  if (std::isnan(axis.max_rad)) refuse(f + ".max_rad", "a number", axis.max_rad);
+  if (axis.min_rad > axis.max_rad) refuse(f + ".min_rad", "<= max_rad", axis.min_rad);
+}
+
+}  // namespace
+
+void validate(const Machine& m) {
+  const bool bc = m.ac.tilt == TiltAxis::Y;
+  if (m.kinematics != (bc ? "bc-table-table" : "ac-table-table")) {
+    throw InputError("Machine::kinematics '" + m.kinematics + "' does not name this machine: " +
+                     (bc ? "\"bc-table-table\" for a tilt about Y (ac.tilt)"
+                         : "\"ac-table-table\" for a tilt about X (ac.tilt)"));
+  }
+  check_rotary(bc ? "a (B)" : "a (A)", m.ac.a);
+  check_rotary("c", m.ac.c);
+  for (int q = 0; q < 3; ++q) {
+    const std::string f = std::string("ac.") + (q == 0 ? "c_axis_point_mm" : "a_axis_point_mm");
+    const Vec3d& p = q == 0 ? m.ac.c_axis_point_mm : m.ac.a_axis_point_mm;
+    if (!p.allFinite()) refuse(f, "finite", p.norm());
+  }
+  const char* joint = "XYZAC";
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    const std::string f = std::string("limits[") + joint[j] + "].";
+    const JointLimit& l = m.limits[j];
+    check_range(f + "max_velocity_per_s", l.max_velocity_per_s, 0.0, 1e9, "finite and >= 0");
+    check_range(f + "max_accel_per_s2", l.max_accel_per_s2, 0.0, 1e12, "finite and >= 0");
+    check_range(f + "max_jerk_per_s3", l.max_jerk_per_s3, 0.0, 1e15, "finite and >= 0");
+    check_range(std::string("joint_max_accel_per_s2[") + joint[j] + "]",
+                m.joint_max_accel_per_s2[j], 0.0, 1e12, "finite and >= 0");
+  }
+  for (std::size_t q = 0; q < 3; ++q) {
+    const auto& r = m.linear_range[q];
+    const std::string f = std::string("linear_range[") + joint[q] + "]";
+    if (std::isnan(r.min_mm) || std::isnan(r.max_mm) || r.min_mm > r.max_mm) {
+      refuse(f + ".min_mm", "a number <= max_mm", r.min_mm);
+    }
+  }
+  const GcodeSettings& g = m.gcode;
+  const std::string dialect = to_string(g.dialect);
+  check_range("gcode.decimals", g.decimals, 0, max_decimals(g.dialect),
+              "within [0, " + std::to_string(max_decimals(g.dialect)) + "] (the most " + dialect +
+                  " takes)");
+  if (g.feed_decimals != -1) {
+    check_range(
+        "gcode.feed_decimals", g.feed_decimals, 0, max_feed_decimals(g.dialect),
+        "-1 (the dialect's) or within [0, " + std::to_string(max_feed_decimals(g.dialect)) + "]");
+  }
+  if (g.dialect == GcodeDialect::Heidenhain && g.feed_mode == FeedMode::InverseTime) {
+    throw InputError(
+        "Machine::gcode.feed_mode inverse-time is not written for the heidenhain dialect (its "
+        "ISO mode has no G93)");
+  }
+  check_range("gcode.max_feed_ratio", g.max_feed_ratio, 1.0, 100.0, "within [1, 100]");
+  const ProgramTemplate& t = g.program;
+  check_range("gcode.program.number", t.number, 1, 9999, "within [1, 9999]");
+  check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");
+  check_range("gcode.program.linearise_tolerance_mm", t.linearise_tolerance_mm, 0.0, 1e3,
+              "finite and >= 0");
+  check_range("gcode.program.blend_tolerance_mm", t.blend_tolerance_mm, 0.0, 1.0, "within [0, 1]");
+  check_range("gcode.program.approach_clearance_mm", t.approach_clearance_mm, 0.0, 1000.0,
+              "within [0, 1000]");
+  check_range("gcode.program.index_threshold_deg", t.index_threshold_deg, 0.0, 360.0,
+              "within [0, 360]");
+  if (t.end_pose == EndPose::Home && (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+    throw InputError(
+        "Machine::gcode.program.end_pose Home turns the rotaries to 0, outside their ranges");
+  }
+  if (t.end_park_xy_mm) {
+    for (std::size_t q = 0; q < 2; ++q) {
+      const double v = (*t.end_park_xy_mm)[q];
+      if (!std::isfinite(v) || !m.linear_range[q].contains(v)) {
+        refuse(std::string("gcode.program.end_park_xy_mm[") + joint[q] + "]",
+               "finite and within the travel (linear_range)", v);
+      }
+    }
+  }
+}
 
 int max_decimals(GcodeDialect dialect) {
   switch (dialect) {

@@ -37,7 +37,47 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
 }  // namespace taxopt
 
 namespace taxopt::pipeline {
+namespace {
+
+/// Every point as the CL reader makes them (a toolpath built in code has not been read): a
+/// finite tip within reach, a unit axis (as the reader normalises it: a point taxopt changed
+/// silently would be posted where the caller did not put it), a finite feed >= 0.
+void check_points(const Toolpath& tp) {
+  constexpr double kReachMm = 1e6;
+  for (const Operationd& op : tp.operations) {
+    for (std::size_t i = 0; i < op.points.size(); ++i) {
+      const CLPointd& p = op.points[i];
+      const auto refuse = [&](const std::string& what) {
+        std::ostringstream os;
+        os << "operation " << op.name << ", point " << i << ": " << what;
+        throw InputError(tp.source, p.line, os.str());
+      };
+      if (!p.tip_mm.allFinite() || p.tip_mm.cwiseAbs().maxCoeff() > kReachMm) {
+        std::ostringstream os;
+        os << "tip (" << p.tip_mm.x() << ", " << p.tip_mm.y() << ", " << p.tip_mm.z()
+           << ") mm is not a finite point within +-1e6 mm";
+        refuse(os.str());
+      }
+      const double length = p.axis.norm();
+      if (!std::isfinite(length) || std::abs(length - 1.0) > 1e-9) {
+        std::ostringstream os;
+        os << "tool axis (" << p.axis.x() << ", " << p.axis.y() << ", " << p.axis.z()
+           << ") has length " << length << ", expected a unit vector (normalise it)";
+        refuse(os.str());
+      }
+      if (!(p.feed_mm_per_min >= 0.0 && p.feed_mm_per_min <= 1e6)) {
+        refuse("feed " + shown(p.feed_mm_per_min) +
+               " mm/min, expected within [0, 1e6] (0: none given)");
+      }
+    }
+  }
+}
+
+}  // namespace
+
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+  taxopt::validate(machine);
+  check_points(tp);
   JobOptions options = resolved_options(given, machine);
   res.collision_checked = given.part != nullptr;
   res.tilt_letter = machine.ac.tilt_letter();

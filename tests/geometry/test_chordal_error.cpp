@@ -134,13 +134,9 @@ TEST_CASE(
   JobOptions options;
   options.part = &part;
   options.method = Method::None;
-  const auto refusal = [&](const std::string& text) -> std::string {
-    try {
-      (void)run_job(parse_cl(text, "f.cls"), default_machine(), options);
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "";
+  const auto refusal = [&](const std::string& text) {
+    return input_error_of(
+        [&] { (void)run_job(parse_cl(text, "f.cls"), default_machine(), options); });
   };
   // 0.03 mm deeper than the chords: refused without a band, and the message says why.
   const std::string no_band = refusal(cl_on_fillet(t_deg, 0.03, ""));

@@ -19,17 +19,8 @@ using namespace taxopt::test;
 
 namespace {
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 std::string error_of_text(const std::string& text, const ClReadOptions& o = {}) {
-  return error_of([&] { parse_cl(text, "w.cls", o); });
+  return input_error_of([&] { parse_cl(text, "w.cls", o); });
 }
 
 }  // namespace
@@ -63,7 +54,7 @@ TEST_CASE(
         "peening-catia-multax.aptsource", "amorim-tilt-support1.apt", "amorim-interface-glue.apt",
         "amorim-wall-holes.apt", "creopost-profilfraesen.ncl"}) {
     INFO(f);
-    const std::string as_is = error_of([&] { read_cl_file(real_data(f)); });
+    const std::string as_is = input_error_of([&] { read_cl_file(real_data(f)); });
     if (real_skips(f).empty()) {
       CHECK(as_is.empty());
     } else {
@@ -88,7 +79,7 @@ TEST_CASE(
   // with the machine's words skipped.
   ClReadOptions o;
   for (const auto& w : real_skips("peening-catia-multax.aptsource")) o.skip_records.insert(w);
-  CHECK_THAT(error_of([&] { read_cl_file(real_data("peening-catia-multax.aptsource"), o); }),
+  CHECK_THAT(input_error_of([&] { read_cl_file(real_data("peening-catia-multax.aptsource"), o); }),
              Catch::Contains("SPINDL: 'CLW20' not interpreted"));
 }
 

@@ -384,6 +384,11 @@ TEST_CASE(
       "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 10\nmax_deg = 90\n[axes.C]\n"
       "continuous = true\n[gcode]\n",
       7, "outside this machine's axis ranges");
+  // The same without a [gcode] table: the default end pose is checked as the key would be.
+  expect_error(
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 10\nmax_deg = 90\n[axes.C]\n"
+      "continuous = true\n",
+      0, "gcode.end_pose \"home\" (the default) turns A and C to 0");
 }
 
 TEST_CASE("machine file: machine mode needs an explicit [pivot] -- the Haas preset has none",

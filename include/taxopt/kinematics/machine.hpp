@@ -196,4 +196,12 @@ inline double joint_accel_limit(const Machine& machine, const JointLimits& effec
 /// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
 Machine default_machine();
 
+/// Checks a machine made in code as the machine file's reader checks a file: the kinematics
+/// name against its tilt axis, the rotary ranges (min <= max, no NaN) and senses, the limits
+/// (finite, >= 0; 0: not given), the linear travel, the pivots (finite), the G-code settings
+/// (decimals and F decimals within the dialect's, inverse time where the dialect writes it,
+/// the feed ratio, the tolerances, the end pose and park within the ranges). run_job calls it
+/// before any work. @throws InputError naming the field and what was expected.
+void validate(const Machine& machine);
+
 }  // namespace taxopt

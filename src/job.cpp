@@ -1,6 +1,8 @@
 // run_job and plan_axes: the stages of src/pipeline/ (stages.hpp) called in order.
 #include "taxopt/job.hpp"
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -216,45 +218,76 @@ bool AxisPlan::ok() const {
                       [](const Finding& f) { return f.severity == Severity::Problem; });
 }
 
+namespace {
+
+/// Runs `f` in the job's own task arena (JobOptions::threads workers, else all cores): no
+/// process-global state, another job's threads untouched. A stop requested before it starts
+/// ends it at once.
+template <class F>
+void in_job_arena(const JobOptions& options, const F& f) {
+  if (options.threads > 1024) {
+    throw InputError("JobOptions::threads must be within [0, 1024] (0: all cores), got " +
+                     std::to_string(options.threads));
+  }
+  options.stop.throw_if_stop_requested();
+  tbb::task_arena arena(options.threads ? static_cast<int>(options.threads)
+                                        : tbb::task_arena::automatic);
+  arena.execute(f);
+}
+
+}  // namespace
+
 AxisPlan plan_axes(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
-  JobResult res;
-  pipeline::Run run = pipeline::validate(tp, machine, options, res);
-  std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
-  pipeline::recover_contacts(run, ops, res);
-  pipeline::plan_operations(run, ops, res);
   AxisPlan out;
-  if (auto posted = pipeline::post_operations(run, ops, res)) out.operations = std::move(*posted);
-  for (pipeline::OperationContext& o : ops) out.contacts.push_back(std::move(o.contacts));
-  out.findings = std::move(res.findings);
+  in_job_arena(options, [&] {
+    JobResult res;
+    const StopSource& stop = options.stop;
+    pipeline::Run run = pipeline::validate(tp, machine, options, res);
+    std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
+    pipeline::recover_contacts(run, ops, res);
+    stop.throw_if_stop_requested();
+    pipeline::plan_operations(run, ops, res);
+    stop.throw_if_stop_requested();
+    if (auto posted = pipeline::post_operations(run, ops, res)) out.operations = std::move(*posted);
+    stop.throw_if_stop_requested();
+    for (pipeline::OperationContext& o : ops) out.contacts.push_back(std::move(o.contacts));
+    out.findings = std::move(res.findings);
+  });
   return out;
 }
 
 namespace {
 
+/// One run of the pipeline; between its stages (and inside the long ones) a stop requested
+/// ends it with Cancelled.
 JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions& options,
                    const std::set<std::size_t>& paper_fallback) {
   JobResult res;
+  const StopSource& stop = options.stop;
   pipeline::Run run = pipeline::validate(tp, machine, options, res);
   run.paper_fallback = paper_fallback;
   std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
   pipeline::recover_contacts(run, ops, res);
+  stop.throw_if_stop_requested();
   pipeline::plan_operations(run, ops, res);
+  stop.throw_if_stop_requested();
   std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, res);
+  stop.throw_if_stop_requested();
   if (!posted) return res;
   const pipeline::Written written = pipeline::write_program(run, ops, *posted, res);
+  stop.throw_if_stop_requested();
   pipeline::verify_operations(run, ops, *posted, written, res);
   pipeline::mark_unverified(run, *posted, res);
+  stop.throw_if_stop_requested();
   return res;
 }
 
-}  // namespace
-
-JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+/// The default method's output verifies wherever a program exists (issue 34): operations
+/// whose points or moves the verification found hitting the part are planned again with the
+/// fallbacks of plan_operation. Only failed runs pay for the second run.
+JobResult run_with_fallback(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
   JobResult res = run_once(tp, machine, options, {});
   if (options.method != Method::Paper || !options.part) return res;
-  // The default method's output verifies wherever a program exists (issue 34): operations
-  // whose points or moves the verification found hitting the part are planned again with the
-  // fallbacks of plan_operation. Only failed runs pay for the second run.
   std::set<std::size_t> refused;
   for (const Finding& f : res.findings) {
     if ((f.code == FindingCode::PointCollision || f.code == FindingCode::MoveCollision) &&
@@ -264,6 +297,14 @@ JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& 
   }
   if (refused.empty()) return res;
   return run_once(tp, machine, options, refused);
+}
+
+}  // namespace
+
+JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+  JobResult res;
+  in_job_arena(options, [&] { res = run_with_fallback(tp, machine, options); });
+  return res;
 }
 
 }  // namespace taxopt

@@ -1,5 +1,4 @@
 // taxopt command line: option parsing and wiring only (CLI.md is the contract).
-#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -17,7 +16,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "taxopt/core/digest.hpp"
 #include "taxopt/core/error.hpp"
@@ -310,6 +308,8 @@ int main(int argc, char** argv) {
   // A closed stdout (taxopt ... | head) is an error to write to, not a signal that kills the
   // run after its outputs were written (exit 141, issue 35).
   std::signal(SIGPIPE, SIG_IGN);
+  // An interrupted run leaves no temporary file beside its outputs.
+  taxopt::OutputTransaction::remove_pending_on_signals();
   const std::string command_line = quoted_command_line(argc, argv);
   const std::string started_utc = utc_now();
   Args a;
@@ -636,11 +636,6 @@ int main(int argc, char** argv) {
         return error("--plots " + a.plots + " is a file, not a folder", 2);
       }
     }
-    const int threads = a.threads > 0
-                            ? a.threads
-                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
-                                    static_cast<std::size_t>(threads));
 
     // The method's numbers, before any file is read (the library refuses them too, naming the
     // JobOptions field).
@@ -737,6 +732,8 @@ int main(int argc, char** argv) {
       if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
     }
     taxopt::JobOptions options;
+    // The job's own arena: --threads workers, else all cores.
+    options.threads = a.threads > 0 ? static_cast<std::size_t>(a.threads) : 0;
     if (part) options.part = &*part;
     options.count_free_cells = !a.points_csv.empty();
     options.cspace_maps = !a.plots.empty();

@@ -1,16 +1,26 @@
 // Loads a CL file (and, when given, the part mesh), optimises the tool axes with the paper's
 // method for the built-in A/C machine, schedules the feeds at the machine's limits and writes
-// LinuxCNC G-code through taxopt's public API.
+// LinuxCNC G-code through taxopt's public API. Ctrl-C stops the job (JobOptions::stop): nothing
+// is written. The output is written atomically (OutputTransaction).
 // Usage: taxopt_consumer IN.cls [PART.stl] OUT.ngc
+#include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <taxopt/core/error.hpp>
 #include <taxopt/geometry/part.hpp>
+#include <taxopt/io/atomic_file.hpp>
 #include <taxopt/io/cl_file.hpp>
 #include <taxopt/io/mesh_file.hpp>
 #include <taxopt/job.hpp>
+
+namespace {
+// The job's stop, for the SIGINT handler (a lock-free atomic store: safe in a handler).
+const taxopt::StopSource* g_stop = nullptr;
+extern "C" void on_interrupt(int) {
+  if (g_stop) g_stop->request_stop();
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
@@ -32,13 +42,18 @@ int main(int argc, char** argv) {
     options.progress = [](const std::string& stage, std::size_t done, std::size_t total) {
       if (done == total && total > 0) std::fprintf(stderr, "%s: done\n", stage.c_str());
     };
+    options.threads = 2;  // the job's own arena; the result is the same for any count
+    g_stop = &options.stop;
+    std::signal(SIGINT, on_interrupt);
     const taxopt::JobResult result = taxopt::run_job(toolpath, taxopt::default_machine(), options);
     for (const auto& w : result.warnings) std::cerr << "warning: " << w << "\n";
     if (!result.ok()) {
       for (const auto& p : result.problems) std::cerr << p << "\n";
       return 1;
     }
-    std::ofstream(argv[argc - 1]) << result.gcode.text;
+    taxopt::OutputTransaction out;
+    out.stage(argv[argc - 1], result.gcode.text);
+    out.commit();
     for (const auto& op : result.operations) {
       std::printf(
           "%s: %zu points, peak omega %.1f -> %.1f deg/s, peak a %.1f -> %.1f deg/s^2, "
@@ -51,5 +66,8 @@ int main(int argc, char** argv) {
   } catch (const taxopt::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
+  } catch (const taxopt::Cancelled& e) {
+    std::cerr << "stopped: " << e.what() << " -- nothing written\n";
+    return 130;
   }
 }

@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/stop.hpp"
 #include "taxopt/core/toolpath.hpp"
+#include "taxopt/core/version.hpp"
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/contact.hpp"
@@ -92,9 +94,15 @@ struct JobOptions {
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
   /// Receives the progress of the long stages ("contact recovery", "optimisation",
-  /// "collision check", "C-space cells"): items done of total, from 0 and once per whole
-  /// percent up to done == total. Called from any thread, never concurrently.
+  /// "verification"): items done of total, from 0 and once per whole percent up to done ==
+  /// total. Called from any of the job's threads, never concurrently. An exception it throws
+  /// stops the job (as `stop` does) and is what run_job throws.
   std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
+  /// Stops the job from another thread: run_job throws Cancelled, nothing is returned.
+  StopSource stop;
+  /// Worker threads of the job (its own task arena; other jobs and the caller's own TBB work
+  /// are not limited by it); 0: all cores. The result does not depend on it.
+  std::size_t threads = 0;
 };
 
 /// What run_job proved about its output.

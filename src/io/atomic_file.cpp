@@ -31,15 +31,20 @@ struct PendingSlot {
 std::array<PendingSlot, kSlots> g_pending;
 std::mutex g_pending_mutex;
 
-extern "C" void remove_pending_and_reraise(int sig) {
+// Internal linkage: a handler of this file's, not a symbol of the library.
+extern "C" {
+static void remove_pending_and_reraise(int sig) {
   for (auto& s : g_pending) {
     if (s.used.load()) ::unlink(s.path);
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
 }
+}  // extern "C"
 
-void install_handlers() {
+}  // namespace
+
+void OutputTransaction::remove_pending_on_signals() {
   static std::once_flag once;
   std::call_once(once, [] {
     // Every signal whose default ends the process (SIGKILL and SIGSTOP cannot be caught).
@@ -56,6 +61,8 @@ void install_handlers() {
     }
   });
 }
+
+namespace {
 
 /// Publishes a temporary path for the signal handler; -1 when every slot is taken (the file
 /// is then only removed by the transaction itself).
@@ -88,7 +95,6 @@ void OutputTransaction::stage(const std::string& path, const std::string& conten
   if (fs::is_directory(path, ec)) throw InputError(path, 0, "cannot write: is a directory");
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  install_handlers();
   // The temporary file's name is chosen and published to the signal handler before the file
   // is created (O_EXCL), so that a signal taken on any thread, at any moment, finds it: a
   // handler that unlinks a name not yet created does no harm. This thread blocks the signals

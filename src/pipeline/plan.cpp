@@ -131,8 +131,9 @@ void plan_passes(const Operationd& op, const std::vector<ContactPoint>& contacts
   const std::vector<IndexRange> passes = feed_passes(op);
   std::vector<std::optional<PassAxes>> plans(passes.size());
   detail::parallel_for(std::size_t(0), passes.size(), [&](std::size_t q) {
-    const detail::StageProgress::Step step(progress);
+    progress.check();  // a stopped job plans no more passes
     plans[q] = plan_pass(q, passes[q]);
+    progress.advance();
   });
   const auto carry = [&](std::size_t to, std::size_t from) {
     carry_axis(out, acceptable, to, from);
@@ -951,7 +952,8 @@ void plan_operations(const Run& run, std::vector<OperationContext>& ops, JobResu
       options.progress, "optimisation",
       all_passes * (options.method != Method::Global                    ? 1
                     : options.global.objective == GlobalObjective::Time ? 3
-                                                                        : 2));
+                                                                        : 2),
+      options.stop);
   for (OperationContext& o : ops) {
     const Operationd& op = *o.op;
     if (!(o.ball_radius_mm > 0.0)) {

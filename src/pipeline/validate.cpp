@@ -319,13 +319,11 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
 void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& res) {
   if (!run.options.part) return;
   const auto recover_all = [&] {
-    detail::StageProgress progress(run.options.progress, "contact recovery", ops.size());
+    detail::StageProgress progress(run.options.progress, "contact recovery", ops.size(),
+                                   run.options.stop);
     for (OperationContext& o : ops) {
-      struct Advance {  // on every way out of this operation
-        detail::StageProgress& p;
-        ~Advance() { p.advance(); }
-      } advance{progress};
       recover_operation(run, o, res);
+      progress.advance();
     }
   };
   // FCL's model takes ~2 s at 800k triangles on one thread: built beside the contacts.

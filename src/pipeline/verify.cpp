@@ -1113,7 +1113,7 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
     if (run.collision && o.contact.recovered) check_items += 4 * n;
     if (rasters && !o.contacts.empty()) check_items += n;
   }
-  detail::StageProgress checking(options.progress, "verification", check_items);
+  detail::StageProgress checking(options.progress, "verification", check_items, options.stop);
   std::vector<Operationd> out_ops = run.tp.operations;
   for (std::size_t k = 0; k < posted.size(); ++k) {
     res.operations.push_back(

@@ -13,6 +13,7 @@
 
 #ifdef TAXOPT_TSAN
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <thread>
 #else
@@ -25,11 +26,34 @@
 namespace taxopt::detail {
 
 #ifdef TAXOPT_TSAN
-/// Threads to use: --threads (TBB's global limit), at least 2 so that TSan has two to watch.
+/// Threads to use: the job's arena (JobOptions::threads) or TBB's global limit, at least 2 so
+/// that TSan has two to watch.
 inline std::size_t tsan_threads() {
-  const std::size_t limit =
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  const std::size_t limit = std::min<std::size_t>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+      static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency())));
   return std::max<std::size_t>(2, std::min<std::size_t>(limit, 8));
+}
+
+/// Runs work(t) for t in [0, threads) on as many std::threads; the first exception (by t) is
+/// rethrown after every thread has ended, as TBB's loops do.
+template <class Work>
+void run_threads(std::size_t threads, const Work& work) {
+  std::vector<std::exception_ptr> errors(threads);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 0; t < threads; ++t) {
+    pool.emplace_back([&, t] {
+      try {
+        work(t);
+      } catch (...) {
+        errors[t] = std::current_exception();
+      }
+    });
+  }
+  for (std::thread& th : pool) th.join();
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
 }
 #endif
 
@@ -39,13 +63,9 @@ void parallel_for(std::size_t begin, std::size_t end, const Body& body) {
 #ifdef TAXOPT_TSAN
   if (end <= begin) return;
   const std::size_t n = end - begin, threads = std::min(tsan_threads(), n);
-  std::vector<std::thread> pool;
-  for (std::size_t t = 0; t < threads; ++t) {
-    pool.emplace_back([&, t] {
-      for (std::size_t i = begin + t * n / threads; i < begin + (t + 1) * n / threads; ++i) body(i);
-    });
-  }
-  for (std::thread& th : pool) th.join();
+  run_threads(threads, [&](std::size_t t) {
+    for (std::size_t i = begin + t * n / threads; i < begin + (t + 1) * n / threads; ++i) body(i);
+  });
 #else
   tbb::parallel_for(begin, end, body);
 #endif
@@ -60,13 +80,9 @@ T parallel_reduce(std::size_t begin, std::size_t end, const T& identity, const C
   if (end <= begin) return identity;
   const std::size_t n = end - begin, threads = std::min(tsan_threads(), n);
   std::vector<T> parts(threads, identity);
-  std::vector<std::thread> pool;
-  for (std::size_t t = 0; t < threads; ++t) {
-    pool.emplace_back([&, t] {
-      parts[t] = chunk(begin + t * n / threads, begin + (t + 1) * n / threads, identity);
-    });
-  }
-  for (std::thread& th : pool) th.join();
+  run_threads(threads, [&](std::size_t t) {
+    parts[t] = chunk(begin + t * n / threads, begin + (t + 1) * n / threads, identity);
+  });
   T acc = identity;
   for (const T& p : parts) acc = join(acc, p);
   return acc;

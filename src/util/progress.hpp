@@ -4,56 +4,68 @@
 
 #include <atomic>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <string>
 
+#include "taxopt/core/stop.hpp"
+
 namespace taxopt::detail {
 
-/// Counts the work items of a stage and reports each whole percent once, and the end.
+/// Counts the work items of a stage and reports each whole percent once, and the end. The
+/// callback is the caller's code: what it throws stops the job (StopSource::request_stop with
+/// that exception) instead of passing through the job's threads and destructors; advance()
+/// and check() throw it, or Cancelled, once a stop is requested.
 class StageProgress {
  public:
   using Callback = std::function<void(const std::string&, std::size_t, std::size_t)>;
 
-  StageProgress(const Callback& callback, std::string stage, std::size_t total)
-      : callback_(callback), stage_(std::move(stage)), total_(total) {
+  StageProgress(const Callback& callback, std::string stage, std::size_t total,
+                const StopSource& stop)
+      : callback_(callback), stage_(std::move(stage)), total_(total), stop_(stop) {
+    check();
     report(0);
+    check();
   }
   StageProgress(const StageProgress&) = delete;
   StageProgress& operator=(const StageProgress&) = delete;
-  /// Reports the end (done = total) if the stage has not.
-  ~StageProgress() { report(total_); }
+  /// Reports the end (done = total) if the stage has not, unless it is being left by an
+  /// exception or a stop.
+  ~StageProgress() {
+    if (std::uncaught_exceptions() == exceptions_ && !stop_.stop_requested()) report(total_);
+  }
 
-  /// `n` more items done (thread-safe).
-  void advance(std::size_t n = 1) { report(done_ += n); }
-
-  /// One item done when it goes out of scope, whichever way the work of the item ends.
-  class Step {
-   public:
-    explicit Step(StageProgress& progress) : progress_(progress) {}
-    Step(const Step&) = delete;
-    Step& operator=(const Step&) = delete;
-    ~Step() { progress_.advance(); }
-
-   private:
-    StageProgress& progress_;
-  };
+  /// `n` more items done (thread-safe); throws when the job is to stop.
+  void advance(std::size_t n = 1) {
+    report(done_ += n);
+    check();
+  }
+  /// Throws the callback's exception, or Cancelled, when the job is to stop.
+  void check() const { stop_.throw_if_stop_requested(); }
 
  private:
-  void report(std::size_t done) {
+  /// Calls the callback for a new whole percent; never throws.
+  void report(std::size_t done) noexcept {
     if (!callback_) return;
     done = done > total_ ? total_ : done;
     const long percent = total_ ? static_cast<long>(100 * done / total_) : 100;
     std::lock_guard<std::mutex> lock(mutex_);
-    if (percent <= last_percent_ || ended_) return;
+    if (percent <= last_percent_ || ended_ || stop_.stop_requested()) return;
     last_percent_ = percent;
     ended_ = done == total_;
-    callback_(stage_, done, total_);
+    try {
+      callback_(stage_, done, total_);
+    } catch (...) {
+      stop_.request_stop(std::current_exception());
+    }
   }
 
   const Callback& callback_;
   std::string stage_;
   std::size_t total_;
+  const StopSource& stop_;
+  int exceptions_ = std::uncaught_exceptions();
   std::atomic<std::size_t> done_{0};
   std::mutex mutex_;
   long last_percent_ = -1;

@@ -1,8 +1,10 @@
 #pragma once
 /// @file Atomic output: every file of a run is first written to a temporary file beside its
 /// target, and only when all are written are they renamed into place. A failed run leaves no
-/// partial file and never overwrites a good one. A SIGINT, SIGTERM or SIGHUP (whose handler
-/// is the default one) removes the pending temporary files before the process ends by it.
+/// partial file and never overwrites a good one. After remove_pending_on_signals (the CLI calls
+/// it; a library never touches a process's signals on its own), a SIGINT, SIGTERM or SIGHUP
+/// (whose handler is the default one) removes the pending temporary files before the process
+/// ends by it.
 
 #include <string>
 #include <vector>
@@ -27,6 +29,12 @@ class OutputTransaction {
 
   /// Removes every staged temporary file.
   void abort() noexcept;
+
+  /// Installs, once per process, handlers of the signals whose default ends the process
+  /// (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1/2, SIGALRM, SIGXFSZ, SIGXCPU, SIGVTALRM,
+  /// SIGPROF) that remove every transaction's pending temporary files and end the process by
+  /// the signal; a handler someone else installed (or SIG_IGN) is kept.
+  static void remove_pending_on_signals();
 
  private:
   struct Staged {

@@ -1,0 +1,123 @@
+// A job its caller can stop: JobOptions::stop from another thread or from the progress callback
+// ends run_job with Cancelled and no result; a progress callback that throws stops the job with
+// its own exception (it used to end the process: the callback ran in destructors inside TBB
+// tasks); JobOptions::threads is the job's own arena, and the result does not depend on it.
+#include <catch2/catch.hpp>
+#include <thread>
+
+#include "support.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/geometry/part.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/mesh_file.hpp"
+#include "taxopt/job.hpp"
+
+using namespace taxopt;
+using namespace taxopt::test;
+
+namespace {
+
+struct Demo {
+  Toolpath tp = read_cl_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls");
+  Part part{read_mesh_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl")};
+  JobOptions options() const {
+    JobOptions o;
+    o.part = &part;
+    o.method = Method::Global;
+    return o;
+  }
+};
+
+}  // namespace
+
+TEST_CASE(
+    "cancel: a stop from the progress callback, another thread or before the start ends the job "
+    "with Cancelled, and a callback that throws ends it with its own exception",
+    "[library][cancel]") {
+  const Demo demo;
+  // Stopped before it starts.
+  {
+    JobOptions o = demo.options();
+    o.stop.request_stop();
+    CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), Cancelled);
+    CHECK_THROWS_AS(plan_axes(demo.tp, default_machine(), o), Cancelled);
+  }
+  // Stopped by the callback halfway through each long stage: nothing after it runs.
+  for (const std::string stage : {"contact recovery", "optimisation", "verification"}) {
+    INFO(stage);
+    JobOptions o = demo.options();
+    std::vector<std::string> seen;
+    const StopSource stop = o.stop;
+    o.progress = [&](const std::string& s, std::size_t done, std::size_t total) {
+      if (seen.empty() || seen.back() != s) seen.push_back(s);
+      if (s == stage && 2 * done >= total) stop.request_stop();
+    };
+    CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), Cancelled);
+    REQUIRE_FALSE(seen.empty());
+    CHECK(seen.back() == stage);
+  }
+  // A callback that throws: its exception, the process alive, nothing after it run.
+  {
+    JobOptions o = demo.options();
+    int calls_after = 0;
+    bool thrown = false;
+    o.progress = [&](const std::string& s, std::size_t done, std::size_t total) {
+      if (thrown) ++calls_after;
+      if (s == "optimisation" && 4 * done >= total && !thrown) {
+        thrown = true;
+        throw std::runtime_error("the post's own error");
+      }
+    };
+    CHECK_THROWS_WITH(run_job(demo.tp, default_machine(), o), "the post's own error");
+    CHECK(calls_after == 0);
+  }
+  // From another thread, while it runs.
+  {
+    JobOptions o = demo.options();
+    const StopSource stop = o.stop;
+    std::atomic<bool> started{false};
+    o.progress = [&](const std::string&, std::size_t, std::size_t) { started = true; };
+    std::thread stopper([&] {
+      while (!started) std::this_thread::yield();
+      stop.request_stop();
+    });
+    CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), Cancelled);
+    stopper.join();
+  }
+}
+
+TEST_CASE(
+    "cancel: JobOptions::threads runs the job in its own arena: 1, 2 and all cores, and two jobs "
+    "at once in two threads, give the same bytes",
+    "[library][threads]") {
+  const Demo demo;
+  std::vector<std::string> programs;
+  for (std::size_t threads : {std::size_t(1), std::size_t(2), std::size_t(0)}) {
+    JobOptions o = demo.options();
+    o.method = Method::Paper;
+    o.threads = threads;
+    programs.push_back(run_job(demo.tp, default_machine(), o).gcode.text);
+  }
+  CHECK(programs[0] == programs[1]);
+  CHECK(programs[0] == programs[2]);
+  std::string a, b;
+  std::thread first([&] {
+    JobOptions o = demo.options();
+    o.method = Method::Paper;
+    o.threads = 1;
+    a = run_job(demo.tp, default_machine(), o).gcode.text;
+  });
+  std::thread second([&] {
+    JobOptions o = demo.options();
+    o.method = Method::Paper;
+    o.threads = 2;
+    b = run_job(demo.tp, default_machine(), o).gcode.text;
+  });
+  first.join();
+  second.join();
+  CHECK(a == programs[0]);
+  CHECK(b == programs[0]);
+  JobOptions o = demo.options();
+  o.threads = 5000;
+  CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), InputError);
+}

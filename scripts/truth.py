@@ -8,7 +8,8 @@ canonical moves), times each feed block as the controller takes it from the writ
 peak rotary acceleration of each program from those times; prints it beside what the report
 says (the operation's before and after max_accel_deg_s2).
 
-    python3 scripts/truth.py build/release/taxopt [--steps 0.25,0.5,1,2] [--surfaces sine,plane]
+    python3 scripts/truth.py build/release/taxopt [--steps 0.25,0.5,1,2]
+        [--surfaces sine,plane,bump,saddle]
 
 Exit 1 when a method's timed peak is worse than its input's (a reported gain that is a loss on
 the machine) or when the report's percentage differs from the timed one by more than
@@ -45,6 +46,11 @@ def canon_moves(rs274, ngc):
         if m:
             rate = float(m.group(1))
             continue
+        if "DWELL(" in line:
+            # The controller stops there (G4 P0 before and after LinuxCNC's joint-safe rapids):
+            # the blocks on either side are no chain.
+            moves.append(None)
+            continue
         m = re.search(r"(STRAIGHT_FEED|STRAIGHT_TRAVERSE)\(([^)]*)\)", line)
         if not m:
             continue
@@ -55,9 +61,14 @@ def canon_moves(rs274, ngc):
 
 def timed_peak_accel(moves):
     """Peak synthetic rotary acceleration (deg/s^2) of the feed chains, block times from the
-    words: a_i = (w_i - w_{i-1}) / ((t_{i-1} + t_i) / 2), each chain from its first block."""
+    words: a_i = (w_i - w_{i-1}) / ((t_{i-1} + t_i) / 2), each chain from its first block; a
+    rapid or a dwell (the controller at rest) ends a chain."""
     peak, prev, last = 0.0, None, None
-    for feed, xyz, a, c, rate in moves:
+    for move in moves:
+        if move is None:
+            prev = None
+            continue
+        feed, xyz, a, c, rate = move
         if feed and last is not None and rate > 0:
             lin = math.dist(xyz, last[0])
             rot = math.hypot(a - last[1], c - last[2])

@@ -94,6 +94,36 @@ TEST_CASE(
   }
 }
 
+TEST_CASE(
+    "library boundary: no point to post is an InputError, and a feed point 50 mm above the part "
+    "mid-pass is a finding naming it",
+    "[library][bad-input]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::None;
+  Toolpath none = pass_in_code();
+  none.operations.clear();
+  CHECK_THAT(input_error_of([&] { (void)run_job(none, default_machine(), options); }),
+             Catch::Contains("no CL point in any operation"));
+  Toolpath empty = pass_in_code();
+  empty.operations[0].points.clear();
+  CHECK_THAT(input_error_of([&] { (void)run_job(empty, default_machine(), options); }),
+             Catch::Contains("nothing to post"));
+  // The untouched pass: every feed point on the part.
+  CHECK_FALSE(run_job(pass_in_code(), default_machine(), options).has(FindingCode::FeedInAir));
+  Toolpath lifted = pass_in_code();
+  lifted.operations[0].points[10].tip_mm.z() += 50.0;
+  const JobResult r = run_job(lifted, default_machine(), options);
+  REQUIRE(r.has(FindingCode::FeedInAir));
+  for (const Finding& f : r.findings) {
+    if (f.code != FindingCode::FeedInAir) continue;
+    CHECK(f.severity == Severity::Warning);
+    CHECK_THAT(f.message, Catch::Contains("1 feed points in the air"));
+    CHECK_THAT(f.message, Catch::Contains("the ball up to 49.9963 mm off it (point 10)"));
+  }
+}
+
 TEST_CASE("library boundary: a mesh built in code is checked before anything reads it",
           "[library][bad-input]") {
   {

@@ -147,8 +147,8 @@ std::string data_dir(const char* argv0) {
 int run_generate(const GenerateArgs& g) {
   if (g.out_cls.empty() && g.out_mesh.empty())
     return error("generate: give --out-cls and/or --out-mesh", 2);
-  if (g.surface != "sine" && g.surface != "plane") {
-    return error("generate: --surface must be sine or plane", 2);
+  if (g.surface != "sine" && g.surface != "plane" && g.surface != "bump" && g.surface != "saddle") {
+    return error("generate: --surface must be sine, plane, bump or saddle", 2);
   }
   // The outputs checked as the main job's are: not one file twice, nowhere they cannot be
   // written (a FIFO, a read-only file, a device).
@@ -225,11 +225,29 @@ int run_generate(const GenerateArgs& g) {
     return std::max(1, static_cast<int>(std::ceil(size / g.mesh_step_mm)));
   };
   try {
-    if (g.surface == "sine") {
-      pts = taxopt::generate_raster(sine, g.raster);
-      taxopt::SineSurfaced big = sine;
+    // The raster over a surface on x, y, and its mesh over the domain grown by the margin.
+    const auto raster_and_mesh = [&](const auto& surface) {
+      pts = taxopt::generate_raster(surface, g.raster);
+      auto big = surface;
       big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
       mesh = taxopt::tessellate(big, cells(big.x1_mm - big.x0_mm), cells(big.y1_mm - big.y0_mm));
+    };
+    if (g.surface == "sine") {
+      raster_and_mesh(sine);
+    } else if (g.surface == "bump" || g.surface == "saddle") {
+      // Centred on the path's rectangle: the bump's sigma a quarter of --wavelength, the
+      // saddle's half-widths the rectangle's; both --height high.
+      const auto heightfield = [&](auto field) {
+        raster_and_mesh(taxopt::HeightfieldSurface<double, decltype(field)>{
+            {0.0, g.width_mm, 0.0, g.length_mm}, field});
+      };
+      if (g.surface == "bump") {
+        heightfield(taxopt::BumpField<double>{g.height_mm, g.wavelength_mm / 4.0, g.width_mm / 2.0,
+                                              g.length_mm / 2.0});
+      } else {
+        heightfield(taxopt::SaddleField<double>{g.height_mm, g.width_mm / 2.0, g.length_mm / 2.0,
+                                                g.width_mm / 2.0, g.length_mm / 2.0});
+      }
     } else {
       pts = taxopt::generate_raster(plane, g.raster);
       taxopt::Planed big = plane;
@@ -442,7 +460,9 @@ int main(int argc, char** argv) {
   GenerateArgs gen;
   auto* generate =
       app.add_subcommand("generate", "write a CL file and part mesh of a built-in surface");
-  generate->add_option("--surface", gen.surface, "sine (the paper's case) | plane");
+  generate->add_option(
+      "--surface", gen.surface,
+      "sine (the paper's case) | plane | bump (a round bump, sigma = wavelength / 4) | saddle");
   generate->add_option("--out-cls", gen.out_cls, "CL file to write (NX CLSF, mm)");
   generate->add_option("--out-mesh", gen.out_mesh, "part mesh to write (binary STL, mm)");
   generate->add_option("--height", gen.height_mm, "sine amplitude, mm (10)");

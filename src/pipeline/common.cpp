@@ -27,7 +27,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::JerkLimitExceeded:
     case FindingCode::LongerCycle:
     case FindingCode::ClFileNote:
-    case FindingCode::TcpJointLimit: return Severity::Warning;
+    case FindingCode::TcpJointLimit:
+    case FindingCode::FeedInAir: return Severity::Warning;
     default: return Severity::Problem;
   }
 }

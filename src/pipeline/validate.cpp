@@ -44,6 +44,9 @@ namespace {
 /// silently would be posted where the caller did not put it), a finite feed >= 0.
 void check_points(const Toolpath& tp) {
   constexpr double kReachMm = 1e6;
+  if (point_count(tp) == 0) {
+    throw InputError(tp.source, 0, "no CL point in any operation: there is nothing to post");
+  }
   for (const Operationd& op : tp.operations) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       const CLPointd& p = op.points[i];
@@ -304,6 +307,34 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
     throw InputError(
         run.tp.source, op.points.front().line,
         "operation " + op.name + ": no CL point touches the part (wrong part or wrong units?)");
+  }
+  // Feed points off the part between points of their pass that touch it: the ball cuts air at
+  // feed there -- a pass lifting over a gap, or points made for another part.
+  std::size_t feed_in_air = 0, worst = 0;
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::size_t first = pass.end, last = pass.begin;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      if (o.contacts[i].state != ContactState::Touching) continue;
+      first = std::min(first, i);
+      last = i;
+    }
+    for (std::size_t i = first + 1; i < last; ++i) {
+      if (o.contacts[i].state != ContactState::InAir || op.points[i].motion != Motion::Feed)
+        continue;
+      if (!feed_in_air || o.contacts[i].gap_mm > o.contacts[worst].gap_mm) worst = i;
+      ++feed_in_air;
+    }
+  }
+  if (feed_in_air) {
+    add_finding(
+        res, FindingCode::FeedInAir, k, op.points[worst].line,
+        "operation " + op.name + ": " + std::to_string(feed_in_air) +
+            " feed points in the air between points of their pass that touch the part, "
+            "the ball up to " +
+            shown(o.contacts[worst].gap_mm) + " mm off it (point " + std::to_string(worst) +
+            (op.points[worst].line > 0 ? ", CL line " + std::to_string(op.points[worst].line)
+                                       : std::string()) +
+            "): a pass lifting over a gap at feed, or points made for another part");
   }
   if (cs.local_gouges) {
     add_finding(res, FindingCode::LocalGouge, k, 0,

@@ -80,7 +80,7 @@ TEST_CASE(
     INFO("concave fillet in " << coarse << " strips");
     // The concave fillet's chords are the mesh's largest departure from the designed part:
     // 200 of its edges against 1,950 of the small fillet's (a 99th percentile would be the
-    // small fillet's) and 50 of the 20 deg crease's (whose formula would give 0.22 mm).
+    // small fillet's) and 50 of the 20 deg crease's (whose formula would give 0.875 mm).
     CHECK(part.chordal_error_mm() == Approx(step.fillet_sagitta_mm()).epsilon(1e-9));
     CHECK(contact_tolerance_mm(part, {}) ==
           Approx(std::max(kContactToleranceFloorMm, step.fillet_sagitta_mm())).epsilon(1e-9));

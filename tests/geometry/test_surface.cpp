@@ -231,3 +231,39 @@ TEST_CASE("generator: eq. 11 turns the axis by tilt about K and yaw about N",
   // Tilt 30 towards the feed (+x), then yaw 90 about N: towards +y.
   CHECK((v - Vec3d(0, 0.5, std::sqrt(3.0) / 2)).norm() < 1e-12);
 }
+
+TEST_CASE(
+    "surface: the bump's and the saddle's jets are their heightfields' derivatives, and the "
+    "saddle bends by h / a^2 across and -h / b^2 along at its centre",
+    "[geometry][surface]") {
+  std::mt19937 rng(4403);
+  std::uniform_real_distribution<double> ux(0.0, 20.0), uy(0.0, 80.0);
+  const BumpField<double> bump{10.0, 10.0, 10.0, 40.0};
+  const SaddleField<double> saddle{10.0, 10.0, 40.0, 10.0, 40.0};
+  const double h = 1e-5;
+  const auto check = [&](const auto& field) {
+    for (int k = 0; k < 50; ++k) {
+      const double x = ux(rng), y = uy(rng);
+      const auto f = field.at(x, y);
+      const auto fxp = field.at(x + h, y), fxm = field.at(x - h, y);
+      const auto fyp = field.at(x, y + h), fym = field.at(x, y - h);
+      INFO("x " << x << " y " << y);
+      CHECK(f[1] == Approx((fxp[0] - fxm[0]) / (2 * h)).margin(1e-6));
+      CHECK(f[2] == Approx((fyp[0] - fym[0]) / (2 * h)).margin(1e-6));
+      CHECK(f[3] == Approx((fxp[1] - fxm[1]) / (2 * h)).margin(1e-6));
+      CHECK(f[4] == Approx((fyp[1] - fym[1]) / (2 * h)).margin(1e-6));
+      CHECK(f[5] == Approx((fyp[2] - fym[2]) / (2 * h)).margin(1e-6));
+    }
+  };
+  check(bump);
+  check(saddle);
+  const HeightfieldSurface<double, SaddleField<double>> s{{0.0, 20.0, 0.0, 80.0}, saddle};
+  const PrincipalCurvatures<double> pc = principal_curvatures(s.jet(10.0, 40.0));
+  CHECK(pc.k1 == Approx(10.0 / 100.0));
+  CHECK(pc.k2 == Approx(-10.0 / 1600.0));
+  // The bump's top is convex by h / sigma^2 both ways.
+  const HeightfieldSurface<double, BumpField<double>> b{{0.0, 20.0, 0.0, 80.0}, bump};
+  const PrincipalCurvatures<double> top = principal_curvatures(b.jet(10.0, 40.0));
+  CHECK(top.k1 == Approx(-0.1));
+  CHECK(top.k2 == Approx(-0.1));
+}

@@ -11,6 +11,7 @@
 /// (eq. 2, S_u x S_v), i.e. it is concave seen from the tool, which sits on the N side.
 /// The local gouge check (eq. 19) fails where a concave radius 1/k is smaller than R.
 
+#include <array>
 #include <cmath>
 
 #include "taxopt/core/types.hpp"
@@ -75,21 +76,27 @@ S normal_curvature(const PrincipalCurvatures<S>& pc, const Vec3<S>& t) {
   return pc.k1 * c * c + pc.k2 * s * s;
 }
 
-/// The demo part: a sine wave along y, constant along x, with a crest at y = 0:
-/// z = height_mm * cos(2 pi y / wavelength_mm), u = x, v = y (documented in data/README.md).
-/// With the defaults (10 mm, 40 mm) the normal leans up to atan(2 pi 10 / 40) = 57.5 deg off
-/// vertical (62.5 deg with the 5 deg tilt, the paper's largest 62 deg) and the tightest radius
-/// is 40^2 / (4 pi^2 10) = 4.05 mm, above the 3 mm ball: no local gouge.
+/// The parameter domain of a surface over x in [x0, x1], y in [y0, y1] (u = x, v = y): by
+/// default the paper's 20 x 80 mm.
 template <class S>
-struct SineSurface {
-  S height_mm = S(10);
-  S wavelength_mm = S(40);
+struct XYDomain {
   S x0_mm = S(0), x1_mm = S(20), y0_mm = S(0), y1_mm = S(80);
 
   S u_min() const { return x0_mm; }
   S u_max() const { return x1_mm; }
   S v_min() const { return y0_mm; }
   S v_max() const { return y1_mm; }
+};
+
+/// The demo part: a sine wave along y, constant along x, with a crest at y = 0:
+/// z = height_mm * cos(2 pi y / wavelength_mm), u = x, v = y (documented in data/README.md).
+/// With the defaults (10 mm, 40 mm) the normal leans up to atan(2 pi 10 / 40) = 57.5 deg off
+/// vertical (62.5 deg with the 5 deg tilt, the paper's largest 62 deg) and the tightest radius
+/// is 40^2 / (4 pi^2 10) = 4.05 mm, above the 3 mm ball: no local gouge.
+template <class S>
+struct SineSurface : XYDomain<S> {
+  S height_mm = S(10);
+  S wavelength_mm = S(40);
 
   SurfaceJet<S> jet(S u, S v) const {
     const S w = Constants<S>::two_pi() / wavelength_mm;
@@ -128,5 +135,57 @@ struct Plane {
   }
 };
 using Planed = Plane<double>;
+
+/// A heightfield z = f(x, y) over [x0, x1] x [y0, y1], u = x, v = y, from f and its first and
+/// second partial derivatives (`Field::at(x, y)` returns f, fx, fy, fxx, fxy, fyy).
+template <class S, class Field>
+struct HeightfieldSurface : XYDomain<S> {
+  Field field;
+
+  SurfaceJet<S> jet(S u, S v) const {
+    const std::array<S, 6> f = field.at(u, v);
+    SurfaceJet<S> j;
+    j.p = Vec3<S>(u, v, f[0]);
+    j.su = Vec3<S>(1, 0, f[1]);
+    j.sv = Vec3<S>(0, 1, f[2]);
+    j.suu = Vec3<S>(0, 0, f[3]);
+    j.suv = Vec3<S>(0, 0, f[4]);
+    j.svv = Vec3<S>(0, 0, f[5]);
+    return j;
+  }
+};
+
+/// A round bump: z = h exp(-r^2 / (2 sigma^2)), r the distance from (cx, cy). Its concave ring
+/// (r = sqrt(3) sigma) bends by at most 0.45 h / sigma^2 (a 22 mm radius for h = sigma = 10).
+template <class S>
+struct BumpField {
+  S height_mm = S(10), sigma_mm = S(10), cx_mm = S(10), cy_mm = S(40);
+  std::array<S, 6> at(S x, S y) const {
+    const S dx = x - cx_mm, dy = y - cy_mm, s2 = sigma_mm * sigma_mm;
+    const S z = height_mm * std::exp(-(dx * dx + dy * dy) / (S(2) * s2));
+    return {z,
+            -z * dx / s2,
+            -z * dy / s2,
+            z * (dx * dx / s2 - S(1)) / s2,
+            z * dx * dy / (s2 * s2),
+            z * (dy * dy / s2 - S(1)) / s2};
+  }
+};
+
+/// A saddle: z = h ((x - cx)^2 / a^2 - (y - cy)^2 / b^2) / 2, concave across x (radius about
+/// a^2 / h), convex along y.
+template <class S>
+struct SaddleField {
+  S height_mm = S(10), a_mm = S(10), b_mm = S(40), cx_mm = S(10), cy_mm = S(40);
+  std::array<S, 6> at(S x, S y) const {
+    const S dx = x - cx_mm, dy = y - cy_mm, a2 = a_mm * a_mm, b2 = b_mm * b_mm;
+    return {height_mm * (dx * dx / a2 - dy * dy / b2) / S(2),
+            height_mm * dx / a2,
+            -height_mm * dy / b2,
+            height_mm / a2,
+            S(0),
+            -height_mm / b2};
+  }
+};
 
 }  // namespace taxopt

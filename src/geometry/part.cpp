@@ -150,7 +150,8 @@ Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
     // Beyond any machine (1 km, as the CL reader's reach) a coordinate is a broken mesh, and
     // FCL's fitting of its bounding volumes does not converge.
-    if (!mesh.vertices[v].allFinite() || mesh.vertices[v].cwiseAbs().maxCoeff() > 1e6) {
+    if (!mesh.vertices[v].allFinite() ||
+        mesh.vertices[v].cwiseAbs().maxCoeff() > kMaxCoordinateMm) {
       throw InputError("Part: vertex " + std::to_string(v) +
                        " is not a finite point within +-1e6 mm");
     }

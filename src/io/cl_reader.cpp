@@ -628,7 +628,6 @@ class Reader {
       fail(line, os.str());
     }
   }
-  static constexpr double kMaxCoordinateMm = 1e6;
   /// The largest CAM tolerance taken (INTOL, OUTTOL, TOLER), mm: a finishing path's band.
   static constexpr double kMaxCamToleranceMm = 1.0;
 

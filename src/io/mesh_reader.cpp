@@ -23,10 +23,6 @@ namespace {
 
 using K = CGAL::Simple_cartesian<double>;
 
-/// Coordinates beyond any machine (1e6 mm = 1 km; the CL reader's bound too): a broken file.
-/// Past it the areas and normals of the faces overflow.
-constexpr double kMaxCoordinate = 1e6;
-
 /// Why a text mesh CGAL could not read is broken: the first line that breaks its format, by a
 /// plain scan of the format's records (OBJ v/f, OFF counts, vertices and faces, ASCII STL's
 /// solid/facet/loop/vertex nesting, PLY's header); empty when the scan finds nothing.
@@ -248,7 +244,7 @@ bool read_binary_stl(const std::string& path, std::vector<K::Point_3>& points,
                              " has a vertex that is not "
                              "finite (NaN or infinity)");
       }
-      if (std::max({std::abs(xyz[0]), std::abs(xyz[1]), std::abs(xyz[2])}) > kMaxCoordinate) {
+      if (std::max({std::abs(xyz[0]), std::abs(xyz[1]), std::abs(xyz[2])}) > kMaxCoordinateMm) {
         throw InputError(path, 0,
                          "part mesh face " + std::to_string(f + 1) + " has a vertex beyond " +
                              "+-1e6 (1 km in mm): not a part on a machine");
@@ -302,7 +298,7 @@ TriangleMesh read_mesh_file(const std::string& path) {
     if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
       throw InputError(path, 0, "part mesh vertex " + std::to_string(i + 1) + " is not finite");
     }
-    if (std::max({std::abs(p.x()), std::abs(p.y()), std::abs(p.z())}) > kMaxCoordinate) {
+    if (std::max({std::abs(p.x()), std::abs(p.y()), std::abs(p.z())}) > kMaxCoordinateMm) {
       throw InputError(path, 0,
                        "part mesh vertex " + std::to_string(i + 1) +
                            " lies beyond +-1e6 (1 km in mm): not a part on a machine");

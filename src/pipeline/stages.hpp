@@ -299,9 +299,10 @@ struct BlockTiming {
   double move_time_s(std::size_t i, const Vec3d& from_tip_mm, const Posed& from,
                      const Vec3d& to_tip_mm, const Posed& to) const;
 };
-/// Per block: the kept time, but no shorter than the block's own time over `max_feed_ratio`
-/// (BlockTiming); a block with no kept time (0) keeps its own. `capped`, when given, counts
-/// the blocks the ratio lengthened.
+/// A block's written time under "cutter-path" (BlockTiming): the kept time, but no shorter than
+/// its own time over `max_feed_ratio`; with no kept time (0), its own.
+double kept_time_s(double kept_s, double own_s, double max_feed_ratio);
+/// kept_time_s of every block. `capped`, when given, counts the blocks the ratio lengthened.
 std::vector<double> kept_block_times_s(const std::vector<double>& kept_s,
                                        const std::vector<double>& own_s, double max_feed_ratio,
                                        std::size_t* capped = nullptr);

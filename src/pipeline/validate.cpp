@@ -43,7 +43,6 @@ namespace {
 /// finite tip within reach, a unit axis (as the reader normalises it: a point taxopt changed
 /// silently would be posted where the caller did not put it), a finite feed >= 0.
 void check_points(const Toolpath& tp) {
-  constexpr double kReachMm = 1e6;
   if (point_count(tp) == 0) {
     throw InputError(tp.source, 0, "no CL point in any operation: there is nothing to post");
   }
@@ -55,7 +54,7 @@ void check_points(const Toolpath& tp) {
         os << "operation " << op.name << ", point " << i << ": " << what;
         throw InputError(tp.source, p.line, os.str());
       };
-      if (!p.tip_mm.allFinite() || p.tip_mm.cwiseAbs().maxCoeff() > kReachMm) {
+      if (!p.tip_mm.allFinite() || p.tip_mm.cwiseAbs().maxCoeff() > kMaxCoordinateMm) {
         std::ostringstream os;
         os << "tip (" << p.tip_mm.x() << ", " << p.tip_mm.y() << ", " << p.tip_mm.z()
            << ") mm is not a finite point within +-1e6 mm";

@@ -27,6 +27,10 @@ struct Constants {
 
 /// Millimetres per inch (exact, by definition).
 inline constexpr double kMmPerInch = 25.4;
+/// Coordinates beyond any machine (1e6 mm = 1 km) are a broken input, not a part or a program
+/// (past it a mesh's face areas and normals overflow): the CL and mesh readers (on a file's own
+/// numbers, whatever its unit) and the library's checks of values built in code refuse them.
+inline constexpr double kMaxCoordinateMm = 1e6;
 
 /// Degrees to radians. Angles are radians inside taxopt; this and rad_to_deg are the
 /// only conversions, used at I/O boundaries.

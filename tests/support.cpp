@@ -3,6 +3,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <catch2/catch.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -539,6 +541,41 @@ std::size_t count_of(const std::string& text, const std::string& what) {
   std::size_t n = 0;
   for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
   return n;
+}
+
+/// The writer's plan of `prog` (GcodeProgram::blocks) against its text and the blocks read
+/// back: one entry per line in order, every point's line a block that leads to that point,
+/// every motion read back a motion block, the linearisation blocks counted.
+void check_blocks(const GcodeProgram& prog, GcodeDialect dialect, char tilt_letter) {
+  const auto lines = static_cast<std::size_t>(std::count(prog.text.begin(), prog.text.end(), '\n'));
+  REQUIRE(prog.blocks.size() == lines);
+  for (std::size_t l = 0; l < lines; ++l) REQUIRE(prog.blocks[l].line == static_cast<int>(l + 1));
+  const auto block_at = [&](int line) {
+    return prog.blocks.at(static_cast<std::size_t>(line - 1));
+  };
+  for (std::size_t k = 0; k < prog.emitted.size(); ++k) {
+    for (std::size_t i = 0; i < prog.emitted[k].size(); ++i) {
+      const int line = prog.emitted[k][i];
+      if (line == 0) continue;
+      const ProgramBlock b = block_at(std::abs(line));
+      CHECK(b.operation == static_cast<int>(k));
+      if (line > 0) CHECK(b.point == static_cast<int>(i));
+      if (line < 0) CHECK(b.point > static_cast<int>(i));  // an arc's chord point: its end is on
+      CHECK((b.kind == BlockKind::Point || b.kind == BlockKind::JointSafeRapid ||
+             b.kind == BlockKind::Arc));
+    }
+  }
+  std::size_t linearised = 0;
+  for (const ProgramBlock& b : prog.blocks) linearised += b.kind == BlockKind::Linearised;
+  CHECK(linearised == prog.linearised_blocks);
+  const std::set<BlockKind> motions = {
+      BlockKind::Retract,    BlockKind::TableTurn, BlockKind::Approach,       BlockKind::Point,
+      BlockKind::Linearised, BlockKind::Arc,       BlockKind::JointSafeRapid, BlockKind::End};
+  for (const GcodeMove& g : read_gcode_moves(prog.text, "p", dialect, prog.verbatim_lines,
+                                             tilt_letter, prog.tool_calls)) {
+    INFO("line " << g.line);
+    CHECK(motions.count(block_at(g.line).kind) == 1);
+  }
 }
 
 }  // namespace taxopt::test

@@ -11,6 +11,7 @@
 #include "taxopt/core/types.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/gcode.hpp"
 
 namespace taxopt::test {
 
@@ -141,6 +142,11 @@ struct GeneratedCl {
 /// ground truth in `g`: tip, axis, contact point `cc_mm` and ball centre `centre_mm`.
 void append_goto(GeneratedCl& g, std::ostream& os, const Vec3d& tip_mm, const Vec3d& axis,
                  bool rapid, const Vec3d& cc_mm, const Vec3d& centre_mm);
+
+/// The writer's plan of `prog` (GcodeProgram::blocks) against its text and the blocks read
+/// back: one entry per line in order, every point's line a block that leads to that point,
+/// every motion read back a motion block, the linearisation blocks counted.
+void check_blocks(const GcodeProgram& prog, GcodeDialect dialect, char tilt_letter = 'A');
 
 /// The message of the InputError `f` throws, "" when it throws none (other exceptions pass).
 std::string input_error_of(const std::function<void()>& f);

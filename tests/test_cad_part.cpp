@@ -162,6 +162,7 @@ TEST_CASE(
         swept += o.verification.blocks_swept;
       }
       CHECK(swept > 0);
+      check_blocks(r.gcode, c.dialect, machine.ac.tilt_letter());
       const std::vector<GcodeMove> moves =
           read_gcode_moves(r.gcode.text, "lip.nc", c.dialect, r.gcode.verbatim_lines,
                            machine.ac.tilt_letter(), r.gcode.tool_calls);

@@ -487,6 +487,7 @@ TEST_CASE(
     const char* what;
     std::size_t line;  // 1-based
     std::string block;
+    const char* kind;  // as the finding names the writer's block (GcodeProgram::blocks)
   };
   // The retract between the operations (the first G53 of the second) and the end's turn of
   // the rotaries home (the last block that gives A and C).
@@ -504,11 +505,12 @@ TEST_CASE(
   end_xy << std::fixed << std::setprecision(4) << "G0 X" << last.tip_mm.x() << " Y"
          << last.tip_mm.y();
   const std::vector<Tamper> tampers = {
-      {"the approach's XY move at the clearance height", xy, with_z(xy)},
-      {"the approach's block down to the first point", down, with_z(down)},
-      {"the retract between the operations", retract, "G0" + z.str()},
+      {"the approach's XY move at the clearance height", xy, with_z(xy), "the approach"},
+      {"the approach's block down to the first point", down, with_z(down),
+       "a rapid at a joint-safe feed"},
+      {"the retract between the operations", retract, "G0" + z.str(), "the retract"},
       {"the end's turn of the rotaries home", home,
-       end_xy.str() + z.str() + lines.at(home - 1).substr(2)},
+       end_xy.str() + z.str() + lines.at(home - 1).substr(2), "the program's end"},
   };
   for (const Tamper& t : tampers) {
     INFO(t.what << ": G-code line " << t.line << " '" << lines.at(t.line - 1) << "' -> '" << t.block
@@ -524,9 +526,9 @@ TEST_CASE(
     bool named = false;
     for (const Finding& f : res.findings) {
       INFO(f.message);
-      named = named ||
-              (f.code == FindingCode::MoveCollision &&
-               f.message.find("G-code line " + std::to_string(t.line) + " ") != std::string::npos);
+      named = named || (f.code == FindingCode::MoveCollision &&
+                        f.message.find("G-code line " + std::to_string(t.line) + " (" + t.kind +
+                                       ", ") != std::string::npos);
     }
     CHECK(named);
     CHECK_FALSE(res.problems.empty());

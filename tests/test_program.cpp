@@ -721,3 +721,44 @@ TEST_CASE(
                Catch::Contains("gcode.end_park_xy_mm"));
   }
 }
+
+TEST_CASE(
+    "program: the writer's blocks of every real CL file, in every dialect and in machine mode, "
+    "are the program's lines: each point's line a block leading to it, every motion read back "
+    "a motion block (arcs, index moves, linearisation and joint-safe rapids among them)",
+    "[program][real][gcode]") {
+  std::size_t arcs = 0, index_moves = 0, linearised = 0, joint_safe = 0;
+  for (const std::string& f : real_files()) {
+    const Toolpath tp = read_real(f);
+    for (const char* dialect : kDialects) {
+      for (GcodeMode mode : {GcodeMode::Tcp, GcodeMode::Machine}) {
+        INFO(f << " --dialect " << dialect << (mode == GcodeMode::Machine ? " machine mode" : ""));
+        Machine machine = default_machine();
+        machine.gcode.dialect = dialect_of(dialect);
+        machine.gcode.mode = mode;
+        JobOptions options;
+        options.method = Method::None;
+        options.spindle_rpm = 8000.0;
+        options.tool_number = 3;
+        JobResult r;
+        try {
+          r = run_job(tp, machine, options);
+        } catch (const InputError& e) {
+          // A dwell in a dialect whose dwell words taxopt does not write: refused.
+          REQUIRE(std::string(e.what()).find("DELAY:") != std::string::npos);
+          continue;
+        }
+        REQUIRE_FALSE(r.gcode.text.empty());
+        check_blocks(r.gcode, machine.gcode.dialect, machine.ac.tilt_letter());
+        arcs += r.gcode.arcs_kept;
+        index_moves += r.gcode.index_moves;
+        linearised += r.gcode.linearised_blocks;
+        joint_safe += r.gcode.joint_safe_rapids.size();
+      }
+    }
+  }
+  CHECK(arcs > 0);
+  CHECK(index_moves > 0);
+  CHECK(linearised > 0);
+  CHECK(joint_safe > 0);
+}

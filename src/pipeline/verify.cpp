@@ -801,23 +801,48 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
 
 /// The operation a block of the program belongs to: the first whose last point is at or after
 /// it (the approach to its first point is its own, the moves after the last point the last's).
+/// The operation each written line belongs to and what it is, from the writer's blocks
+/// (GcodeProgram::blocks): a line of the program's start counts as the first operation's, one
+/// of its end as the last's.
 class BlockOwner {
  public:
-  BlockOwner(const std::vector<PostedOperation>& posted, const Written& w)
-      : last_line_(posted.size(), 0) {
-    for (std::size_t k = 0; k < posted.size(); ++k) {
-      for (const GcodeMove* m : w.point_moves[k]) last_line_[k] = std::max(last_line_[k], m->line);
-    }
-  }
+  BlockOwner(const GcodeProgram& program, std::size_t operations)
+      : blocks_(program.blocks), last_(operations > 0 ? operations - 1 : 0) {}
   std::size_t operator()(int line) const {
-    for (std::size_t k = 0; k < last_line_.size(); ++k) {
-      if (last_line_[k] >= line) return k;
+    const ProgramBlock* b = at(line);
+    if (!b || b->operation < 0) return line <= first_line() ? 0 : last_;
+    return std::min(static_cast<std::size_t>(b->operation), last_);
+  }
+  /// What the block is, in words.
+  std::string what(int line) const {
+    const ProgramBlock* b = at(line);
+    if (!b) return "a block";
+    switch (b->kind) {
+      case BlockKind::Retract: return "the retract";
+      case BlockKind::TableTurn: return "the table's turn with the tool up";
+      case BlockKind::Approach: return "the approach";
+      case BlockKind::Point: return "the move to a CL point";
+      case BlockKind::Linearised: return "a linearisation block";
+      case BlockKind::Arc: return "an arc";
+      case BlockKind::JointSafeRapid: return "a rapid at a joint-safe feed";
+      case BlockKind::End: return "the program's end";
+      default: return "a block";
     }
-    return last_line_.size() - 1;
   }
 
  private:
-  std::vector<int> last_line_;
+  const ProgramBlock* at(int line) const {
+    if (line < 1 || static_cast<std::size_t>(line) > blocks_.size()) return nullptr;
+    return &blocks_[static_cast<std::size_t>(line - 1)];
+  }
+  int first_line() const {
+    for (const ProgramBlock& b : blocks_) {
+      if (b.operation >= 0) return b.line;
+    }
+    return 0;
+  }
+  const std::vector<ProgramBlock>& blocks_;
+  std::size_t last_;
 };
 
 }  // namespace
@@ -828,7 +853,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   const ProgramTemplate& t = machine.gcode.program;
   const std::vector<GcodeMove>& moves = w.moves;
   if (moves.empty() || posted.empty()) return;
-  const BlockOwner op_of(posted, w);
+  const BlockOwner op_of(res.gcode, posted.size());
   struct Breach {
     std::size_t count = 0;
     int line = 0;
@@ -980,7 +1005,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   const std::vector<GcodeMove>& moves = w.moves;
   if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
     return;
-  const BlockOwner op_of(posted, w);
+  const BlockOwner op_of(res.gcode, posted.size());
   // The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
   // point with its linearisation blocks, a rapid written as one block. Every other block (the
   // approach, the descent and the XY move to it, an index move's retract, turn and way back,
@@ -1095,7 +1120,8 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
                     " blocks the program adds between CL points (approach, retract, index or "
                     "end moves) where the tool hits the part as the machine moves it, first G-code "
                     "line " +
-                    std::to_string(m.line) + " (" + (m.rapid ? "a rapid" : "a feed block") +
+                    std::to_string(m.line) + " (" + op_of.what(m.line) + ", " +
+                    (m.rapid ? "a rapid" : "a feed block") +
                     (m.retract ? " in machine coordinates" : "") + ")");
   }
 }

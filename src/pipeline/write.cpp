@@ -542,7 +542,10 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   }
   const std::size_t before = res.gcode.text.size();
   GcodeProgram marked = write_gcode(posted, run.machine, res.gcode_units, comments);
-  if (marked.text.size() > before) res.gcode.text = std::move(marked.text);
+  if (marked.text.size() > before) {
+    res.gcode.text = std::move(marked.text);
+    res.gcode.blocks = std::move(marked.blocks);
+  }
 }
 
 Written write_program(const Run& run, const std::vector<OperationContext>& ops,

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <set>
 
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
@@ -234,6 +235,7 @@ TEST_CASE("gcode: golden programs of each dialect, mode and feed mode", "[io][gc
       written += g.positioning ? 0 : 1;
     }
     CHECK(written == op.points.size() + prog.linearised_blocks);
+    test::check_blocks(prog, c.dialect);
   }
 }
 

@@ -80,9 +80,39 @@ struct JointPeak {
   int velocity_line = 0, accel_line = 0;
 };
 
+/// What a written line is for (GcodeProgram::blocks).
+enum class BlockKind {
+  Start,    ///< program start, comments, modal set-up, work offset, template header
+  Retract,  ///< the safe retract to the machine's Z (an operation's start, an index move, the end)
+  ToolChange,      ///< the tool change (and the set-up again after a template's)
+  Spindle,         ///< S M3/M4, M5 between operations
+  Coolant,         ///< M7, M8, M9 between operations
+  TableTurn,       ///< A and C turned with the tool up
+  LengthTcp,       ///< tool length offset and tool centre point control on or off
+  Approach,        ///< the way down from the retract: clearance height, XY, along the axis
+  Point,           ///< the block reaching a CL point (rapid or feed), G93 after a first feed block
+  Linearised,      ///< machine mode: a block between two points keeping the tip on the line
+  Arc,             ///< a G2/G3 block of a CL arc
+  JointSafeRapid,  ///< LinuxCNC tcp mode: a rapid written at a joint-safe feed
+  Dwell,           ///< G4 P0 between a joint-safe rapid and a feed block
+  Event,           ///< the CL file's stop, dwell, spindle or coolant change
+  End,             ///< the home turn, the park, the footer, M2/M30
+};
+
+/// One written line, its kind and where it comes from.
+struct ProgramBlock {
+  int line = 0;  ///< 1-based line of GcodeProgram::text
+  BlockKind kind = BlockKind::Start;
+  int operation = -1;  ///< index of its operation; -1: the program's start or end
+  int point = -1;      ///< CL point it leads to (an arc's: its last); -1: none
+};
+
 /// Written G-code and where each point went.
 struct GcodeProgram {
   std::string text;
+  /// Every line of `text`, in order, with its kind and origin: the writer's plan of the
+  /// program, which the verification and the time model read with the blocks read back.
+  std::vector<ProgramBlock> blocks;
   /// emitted[k][i]: 1-based G-code line of point i of operation k; 0 when the point was not
   /// written because it repeats the previous block exactly (nothing would move); minus the
   /// line of the G2/G3 block the point lies on when it is a chord point inside that block.

@@ -1,4 +1,6 @@
 /// @file The time of a feed block as a controller runs it at its programmed feed.
+#include "controller/block_time.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,4 +34,30 @@ double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from, const
   return 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / feed_mm_per_min;
 }
 
+namespace controller {
+
+double BlockTiming::move_time_s(std::size_t i, const Vec3d& from_tip_mm, const Posed& from,
+                                const Vec3d& to_tip_mm, const Posed& to) const {
+  const double feed = feed_mm_per_min[i];
+  if (!(feed > 0.0)) return 0.0;
+  const double own_s = programmed_move_time_s(from_tip_mm, from, to_tip_mm, to, feed);
+  return kept_time_s(i < kept_s.size() ? kept_s[i] : 0.0, own_s, max_feed_ratio);
+}
+
+double kept_time_s(double kept_s, double own_s, double max_feed_ratio) {
+  return kept_s > 0.0 ? std::max(kept_s, own_s / max_feed_ratio) : own_s;
+}
+
+std::vector<double> kept_block_times_s(const std::vector<double>& kept_s,
+                                       const std::vector<double>& own_s, double max_feed_ratio,
+                                       std::size_t* capped) {
+  std::vector<double> t = own_s;
+  for (std::size_t i = 0; i < t.size() && i < kept_s.size(); ++i) {
+    t[i] = kept_time_s(kept_s[i], own_s[i], max_feed_ratio);
+    if (capped && kept_s[i] > 0.0 && t[i] > kept_s[i]) ++*capped;
+  }
+  return t;
+}
+
+}  // namespace controller
 }  // namespace taxopt

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "controller/block_time.hpp"
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/gcode.hpp"
@@ -285,27 +286,9 @@ std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_
 std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const IndexRange& pass);
-/// How the written program times an operation's feed blocks (GcodeSettings::feed_reference):
-/// each at its feed over the new tip path ("tip"), or at the input block's time, but never
-/// shorter than the new tip path at max_feed_ratio times the feed ("cutter-path").
-struct BlockTiming {
-  /// The feed of the move into each point, mm/min (the metric feed).
-  std::vector<double> feed_mm_per_min;
-  /// "cutter-path": the input's time of the move into each point (0: none), s; empty: "tip".
-  std::vector<double> kept_s;
-  double max_feed_ratio = 1.0;
-  /// The written time of the move into point i: tip path from_tip -> to_tip at the feed, or
-  /// the kept time within the feed ratio.
-  double move_time_s(std::size_t i, const Vec3d& from_tip_mm, const Posed& from,
-                     const Vec3d& to_tip_mm, const Posed& to) const;
-};
-/// A block's written time under "cutter-path" (BlockTiming): the kept time, but no shorter than
-/// its own time over `max_feed_ratio`; with no kept time (0), its own.
-double kept_time_s(double kept_s, double own_s, double max_feed_ratio);
-/// kept_time_s of every block. `capped`, when given, counts the blocks the ratio lengthened.
-std::vector<double> kept_block_times_s(const std::vector<double>& kept_s,
-                                       const std::vector<double>& own_s, double max_feed_ratio,
-                                       std::size_t* capped = nullptr);
+using controller::BlockTiming;
+using controller::kept_block_times_s;
+using controller::kept_time_s;
 /// The timing of `op`'s blocks on `machine` with the metric feeds: under "cutter-path" the
 /// input's block times with its axes as the machine runs them (planned from no start pose).
 BlockTiming block_timing(const Operationd& op, const Machine& machine,

@@ -9,12 +9,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "controller/linuxcnc_planner.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/kinematics/machine.hpp"
 
 namespace taxopt::pipeline {
 namespace {
+
+using controller::TcpBlock;
 
 /// Reads `program` back and finds, per operation and point, the move that put the machine
 /// there. A chord point inside a G2/G3 block gets the point of the arc read back at its angle
@@ -121,118 +124,6 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
       s.table_turn_s = t;
     }
   }
-}
-
-/// One block with TCP on as LinuxCNC's planner moves it (GcodeProgram::tcp_joint_peaks): `from`
-/// and `to` in the program's axes (tip X Y Z mm, A C deg), on a straight line in their space,
-/// at the path velocity (at most `rate_per_s` of the block a second, the written F) and the
-/// path acceleration that keep every axis within `limits`; from rest and to rest where the
-/// block starts or ends a chain (LinuxCNC never blends a rapid with a feed block, measured),
-/// else at that velocity through the end. `accel_share`: of that acceleration, the share
-/// LinuxCNC gives the block (tcp_block_peaks).
-struct TcpBlock {
-  JointPosition from, to;
-  JointLimits limits;
-  double rate_per_s = 0.0;
-  bool start_rest = true, end_rest = true;
-  int line = 0;
-  double accel_share = 1.0;
-};
-
-/// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit
-/// scaled by `accel_scale` (1: the machine's), sampled each 1 ms servo period and differenced
-/// over 10 (the window of scripts/linuxcnc_controller.py), the motion before and after the
-/// block extended at its end velocities. Raises `peaks` (kJointCount of them) where the block
-/// exceeds them. Ramps that do not fit in the block are cut at its ends (a chain's first or
-/// last block shorter than its ramp: the blocks beside it are not followed). The block's
-/// acceleration is its `accel_share` of the path's (a chain's first block LinuxCNC blends
-/// parabolically with the next: half, program_time); a rapid and the last feed block before
-/// one run at the full acceleration (measured to 0.01 mm/s^2). A bound on a chain's first
-/// block of X Y Z alone: LinuxCNC may blend it parabolically too (at half).
-void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_scale,
-                     std::vector<JointPeak>& peaks) {
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
-  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
-  // The path u in [0, 1]: its velocity and acceleration limits from the axes that move.
-  double u_vel = b.rate_per_s > 0.0 ? b.rate_per_s : std::numeric_limits<double>::infinity();
-  double u_acc = std::numeric_limits<double>::infinity();
-  for (std::size_t j = 0; j < kJointCount; ++j) {
-    const double d = std::abs(b.to[j] - b.from[j]);
-    if (d < 1e-12) continue;
-    if (b.limits[j].max_velocity_per_s > 0.0) {
-      u_vel = std::min(u_vel, b.limits[j].max_velocity_per_s / d);
-    }
-    if (b.limits[j].max_accel_per_s2 > 0.0) {
-      u_acc = std::min(u_acc, accel_scale * b.accel_share * b.limits[j].max_accel_per_s2 / d);
-    }
-  }
-  if (!std::isfinite(u_vel) || !std::isfinite(u_acc)) return;  // no move, or no limits to plan on
-  if (!b.start_rest && !b.end_rest) return;  // the schedule's: joint rates along the chain
-  // u(t) over [0, total_s]: a ramp up from rest (start_rest), a cruise, a ramp down to rest
-  // (end_rest); v_in and v_out its velocities at the ends.
-  double t_up = b.start_rest ? u_vel / u_acc : 0.0, t_down = b.end_rest ? u_vel / u_acc : 0.0;
-  double top = u_vel;
-  const double ramps_u = 0.5 * u_acc * (t_up * t_up + t_down * t_down);
-  if (ramps_u >= 1.0) {
-    // The ramps meet: the top velocity is what the block's length allows.
-    top = std::sqrt(u_acc / ((b.start_rest ? 0.5 : 0.0) + (b.end_rest ? 0.5 : 0.0)));
-    t_up = b.start_rest ? top / u_acc : 0.0;
-    t_down = b.end_rest ? top / u_acc : 0.0;
-  }
-  const double cruise_s =
-      std::max(0.0, (1.0 - 0.5 * u_acc * (t_up * t_up + t_down * t_down)) / std::max(top, 1e-300));
-  const double total_s = t_up + cruise_s + t_down;
-  const double v_in = b.start_rest ? 0.0 : top, v_out = b.end_rest ? 0.0 : top;
-  const auto u_at = [&](double t) {
-    if (t <= 0.0) return v_in * t;
-    if (t >= total_s) return 1.0 + v_out * (t - total_s);
-    if (t < t_up) return 0.5 * u_acc * t * t;
-    const double up_u = 0.5 * u_acc * t_up * t_up;
-    if (t < t_up + cruise_s) return up_u + top * (t - t_up);
-    const double r = total_s - t;
-    return b.end_rest ? 1.0 - 0.5 * u_acc * r * r : 1.0 - top * r;
-  };
-  const auto joints_at = [&](double t) {
-    const double u = u_at(t);
-    JointPosition p{};
-    for (std::size_t j = 0; j < kJointCount; ++j) p[j] = b.from[j] + u * (b.to[j] - b.from[j]);
-    const Posed pose{deg_to_rad(p[kA]), deg_to_rad(p[kC])};
-    const Vec3d m = machine.ac.to_machine_mm(Vec3d(p[0], p[1], p[2]), pose);
-    return JointPosition{m.x(), m.y(), m.z(), p[kA], p[kC]};
-  };
-  // The joints once per servo period from two windows before the block to two after it, the
-  // last 2 kWindow + 1 of them kept (a ring), differenced by index about the middle one.
-  constexpr double kPeriodS = 1e-3;
-  constexpr long kWindow = 10;
-  constexpr double kWindowS = static_cast<double>(kWindow) * kPeriodS;
-  const long steps = static_cast<long>(std::ceil((total_s + 4.0 * kWindowS) / kPeriodS));
-  if (steps > 10'000'000) return;  // a block of hours: no controller test runs it
-  std::array<JointPosition, 2 * kWindow + 1> ring{};
-  const auto at = [&](long i) -> const JointPosition& {
-    return ring[static_cast<std::size_t>(i % static_cast<long>(ring.size()))];
-  };
-  peaks.resize(kJointCount);
-  for (long i = 0; i <= steps; ++i) {
-    ring[static_cast<std::size_t>(i % static_cast<long>(ring.size()))] =
-        joints_at(-2.0 * kWindowS + static_cast<double>(i) * kPeriodS);
-    if (i < 2 * kWindow) continue;
-    const JointPosition &before = at(i - 2 * kWindow), &here = at(i - kWindow), &after = at(i);
-    for (std::size_t j = 0; j < kJointCount; ++j) {
-      const double v = std::abs(after[j] - before[j]) / (2.0 * kWindowS);
-      const double a = std::abs(after[j] - 2.0 * here[j] + before[j]) / (kWindowS * kWindowS);
-      if (v > peaks[j].velocity_per_s) peaks[j].velocity_per_s = v, peaks[j].velocity_line = b.line;
-      if (a > peaks[j].accel_per_s2) peaks[j].accel_per_s2 = a, peaks[j].accel_line = b.line;
-    }
-  }
-}
-
-/// GcodeProgram::tcp_joint_peaks of `blocks` with the axes' accelerations scaled by
-/// `accel_scale`.
-std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector<TcpBlock>& blocks,
-                                       double accel_scale) {
-  std::vector<JointPeak> peaks;
-  for (const TcpBlock& b : blocks) tcp_block_peaks(machine, b, accel_scale, peaks);
-  return peaks;
 }
 
 /// GcodeProgram::time_s: the feed blocks at their scheduled times (the operations'
@@ -408,42 +299,10 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     if (known) record(index);
   }
   flush_feed(true, nullptr);
-  g.tcp_joint_peaks = tcp_joint_peaks(machine, tcp_blocks, 1.0);
+  g.tcp_joint_peaks = controller::tcp_joint_peaks(machine, tcp_blocks, 1.0);
   g.time_s = feed_s + rapid_s;
   g.time_from_line = from_line;
   g.time_tool_length_mm = length_mm;
-}
-
-/// The largest share of the axes' acceleration limits (0.001 steps, rounded down) at which
-/// `blocks` keep every joint within its own (joint_accel_limit); 0 where none down to 0.05
-/// does (the joints' speed, not the axes' acceleration, drives them). The peaks fall as the
-/// share does (the ramps' slope with it; a short block's top speed too), so a bisection finds
-/// it; only the blocks past a limit at the full share are followed.
-double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
-                            const std::vector<TcpBlock>& blocks) {
-  const auto worst = [&](const std::vector<TcpBlock>& of, double scale) {
-    const std::vector<JointPeak> peaks = tcp_joint_peaks(machine, of, scale);
-    double r = 0.0;
-    for (std::size_t j = 0; j < peaks.size(); ++j) {
-      const double a_max = joint_accel_limit(machine, limits, j);
-      if (a_max > 0.0) r = std::max(r, peaks[j].accel_per_s2 / a_max);
-    }
-    return r;
-  };
-  std::vector<TcpBlock> over;
-  for (const TcpBlock& b : blocks) {
-    if (worst({b}, 1.0) > 1.0) over.push_back(b);
-  }
-  if (over.empty()) return 1.0;
-  constexpr double kLeast = 0.05;
-  if (worst(over, kLeast) > 1.0) return 0.0;
-  double lo = kLeast, hi = 1.0;  // lo keeps the joints within, hi does not
-  while (hi - lo > 1e-4) {
-    const double mid = 0.5 * (lo + hi);
-    (worst(over, mid) > 1.0 ? hi : lo) = mid;
-  }
-  const double scale = std::floor(lo * 1000.0) / 1000.0;
-  return worst(over, scale) > 1.0 ? 0.0 : scale;
 }
 
 /// A warning where a block with TCP on drives a joint past its limit as LinuxCNC moves it
@@ -483,7 +342,7 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
   std::ostringstream remedy;
   remedy << std::fixed;
   if (accel_over) {
-    const double scale = tcp_axis_accel_scale(machine, limits, blocks);
+    const double scale = controller::tcp_axis_accel_scale(machine, limits, blocks);
     res.gcode.tcp_axis_accel_scale = scale;
     if (scale > 0.0) {
       remedy << "every [AXIS_*] MAX_ACCELERATION at " << std::setprecision(3) << scale

@@ -1,0 +1,48 @@
+#pragma once
+/// @file LinuxCNC's trajectory planner with tool centre point control on, as measured on its
+/// motion controller (tests/controller, scripts/linuxcnc_controller.py): every block a straight
+/// line in the program's axes (tip X Y Z, A, C) at the path velocity and acceleration within
+/// every axis's limit, the joints following through the kinematics.
+
+#include <vector>
+
+#include "taxopt/io/gcode.hpp"
+#include "taxopt/kinematics/machine.hpp"
+
+namespace taxopt::controller {
+
+/// One block with TCP on as LinuxCNC's planner moves it (GcodeProgram::tcp_joint_peaks): `from`
+/// and `to` in the program's axes (tip X Y Z mm, A C deg), on a straight line in their space,
+/// at the path velocity (at most `rate_per_s` of the block a second, the written F) and the
+/// path acceleration that keep every axis within `limits`; from rest and to rest where the
+/// block starts or ends a chain (LinuxCNC never blends a rapid with a feed block, measured),
+/// else at that velocity through the end. `accel_share`: of that acceleration, the share
+/// LinuxCNC gives the block (tcp_block_peaks).
+struct TcpBlock {
+  JointPosition from, to;
+  JointLimits limits;
+  double rate_per_s = 0.0;
+  bool start_rest = true, end_rest = true;
+  int line = 0;
+  double accel_share = 1.0;
+};
+
+/// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit
+/// scaled by `accel_scale` (1: the machine's), sampled each 1 ms servo period and differenced
+/// over 10 (the window of scripts/linuxcnc_controller.py). Raises `peaks` (kJointCount of
+/// them) where the block exceeds them.
+void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_scale,
+                     std::vector<JointPeak>& peaks);
+
+/// GcodeProgram::tcp_joint_peaks of `blocks` with the axes' accelerations scaled by
+/// `accel_scale`.
+std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector<TcpBlock>& blocks,
+                                       double accel_scale);
+
+/// The largest share of the axes' acceleration limits (0.001 steps, rounded down) at which
+/// `blocks` keep every joint within its own (joint_accel_limit); 0 where none down to 0.05
+/// does.
+double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
+                            const std::vector<TcpBlock>& blocks);
+
+}  // namespace taxopt::controller

@@ -7,7 +7,7 @@ and measures the length of the path the file means, in mm: straight moves betwee
 arcs by their own geometry with each arc's sense taken from the straight moves before and
 after it (tangent continuity) and, where those do not decide, from the CAM system's
 documented sense; drilling cycles expanded as docs/cl-files.md states. It shares no code with
-taxopt's reader (src/io/cl_reader.cpp).
+taxopt's reader (src/cl/).
 
     python3 scripts/cl_reference.py tests/data/real/*.cls ... > tests/data/real/reference.tsv
 """

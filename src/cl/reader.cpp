@@ -1,0 +1,285 @@
+// The CL reader: the file, its units, the record table (reader.hpp).
+#include "cl/reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "taxopt/core/error.hpp"
+
+namespace taxopt::cl {
+
+Toolpath Reader::run(const std::string& input) {
+  tp_.source = source_;
+  for (const std::string& w : options_.skip_records) {
+    const ClWord* word = find_cl_word(w);
+    if (w.empty() || w != upper(w)) {
+      throw InputError("--skip-record '" + w + "': a record word in upper case");
+    }
+    if (word && !word->skippable) {
+      throw InputError("--skip-record " + w + ": a " + to_string(word->meaning) + " word (" +
+                       word->what + "); skipping it would change the motion");
+    }
+  }
+  std::string text = input;
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) {
+    text.erase(0, 3);
+    tp_.byte_order_mark = true;
+  } else if (text.rfind("\xFF\xFE", 0) == 0 || text.rfind("\xFE\xFF", 0) == 0) {
+    fail(1, "UTF-16 text: save the CL file as UTF-8 or ASCII");
+  }
+  auto lines = split_logical(text, source_, tp_.line_end, tp_.final_line_end);
+  tp_.reading.dialect = detect_dialect(lines);
+  determine_units(lines);
+  scale_ = mm_per_unit(tp_.units);
+  for (const auto& ll : lines) handle(ll);
+  if (spline_) finish_spline();
+  if (pending_circle_) {
+    throw InputError(source_, pending_circle_->line, "CIRCLE is not followed by its end GOTO");
+  }
+  if (point_count(tp_) == 0) {
+    throw InputError(source_, 0, "no GOTO records: not a cutter-location file");
+  }
+  expand_arcs();
+  // Drop operations that received no point (a TOOL PATH block with no motion).
+  std::vector<Operationd> kept;
+  for (auto& op : tp_.operations) {
+    for (const ProgramEvent& e : op.events) {
+      if (op.points.empty() &&
+          (e.kind == ProgramEvent::Kind::Stop || e.kind == ProgramEvent::Kind::OptionalStop ||
+           e.kind == ProgramEvent::Kind::Dwell)) {
+        fail(e.line, "a stop or dwell in an operation without motion: not posted");
+      }
+    }
+    if (!op.points.empty()) kept.push_back(std::move(op));
+  }
+  tp_.operations = std::move(kept);
+  index_records();
+  for (std::size_t k = 0; k < tp_.operations.size(); ++k) {
+    if (tp_.operations[k].name.empty()) tp_.operations[k].name = std::to_string(k + 1);
+  }
+  return std::move(tp_);
+}
+
+void Reader::fail(int line, const std::string& what) const {
+  // A message quotes the record: never a 10 MB token back (issue 35).
+  throw InputError(source_, line, what.size() > 400 ? what.substr(0, 400) + "... (cut)" : what);
+}
+
+void Reader::notice(int line, const std::string& what) {
+  tp_.notices.push_back(format_location(source_, line, what));
+}
+
+void Reader::determine_units(const std::vector<LogicalLine>& lines) {
+  std::optional<LengthUnit> declared;
+  int declared_line = 0, motion_line = 0, inch_feed_line = 0, mm_feed_line = 0;
+  for (const auto& ll : lines) {
+    if (ll.kind != RecordKind::Record) continue;
+    std::string args;
+    const std::string major = major_word(ll.code, args);
+    const ClWord* w = find_cl_word(major);
+    if (w && w->meaning == ClWordMeaning::Motion && motion_line == 0) motion_line = ll.line;
+    if (major == "UNITS" || major == "UNIT") {
+      const auto fields = split_args(args);
+      const std::string a = upper(fields.empty() ? std::string() : fields[0]);
+      LengthUnit u = LengthUnit::Millimetre;
+      if (fields.size() == 1 && (a == "INCHES" || a == "INCH" || a == "IN")) {
+        u = LengthUnit::Inch;
+      } else if (fields.size() != 1 ||
+                 !(a == "MM" || a == "MILLIMETERS" || a == "MILLIMETRES" || a == "METRIC")) {
+        fail(ll.line, major + " expects INCHES or MM, got '" + trim(args) + "'");
+      }
+      if (declared && *declared != u) {
+        fail(ll.line, major + "/" + a + " contradicts the " + to_string(*declared) + " of line " +
+                          std::to_string(declared_line) +
+                          (motion_line && motion_line < ll.line
+                               ? " after motion (line " + std::to_string(motion_line) + ")"
+                               : std::string()) +
+                          ": a change of units inside a file is not interpreted");
+      }
+      if (!declared) {
+        declared = u;
+        declared_line = ll.line;
+      }
+    }
+    if (major == "FEDRAT") {
+      int inch = 0, mm = 0;
+      for (const auto& a : split_args(args)) {
+        const std::string u = upper(a);
+        inch += u == "IPM" || u == "IPR";
+        mm += u == "MMPM" || u == "MMPR";
+      }
+      if (inch && mm) {
+        fail(ll.line, "FEDRAT/" + trim(args) + ": both an inch and a millimetre feed word");
+      }
+      if (inch && !inch_feed_line) inch_feed_line = ll.line;
+      if (mm && !mm_feed_line) mm_feed_line = ll.line;
+    }
+  }
+  const LengthUnit from_file =
+      declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
+  tp_.units = options_.units ? *options_.units : from_file;
+  const char* name = to_string(tp_.units);
+  if (options_.units && declared && *declared != *options_.units) {
+    notice(declared_line, std::string("--units ") + name + " read the file in " + name +
+                              " though it says " + to_string(*declared) + " here");
+  } else if (options_.units && !declared && inch_feed_line && *options_.units != LengthUnit::Inch) {
+    notice(inch_feed_line, std::string("--units ") + name + " read the file in " + name +
+                               " though its feeds are in inches (IPM/IPR) from here");
+  }
+  if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
+    notice(inch_feed_line,
+           "a feed in inches (IPM/IPR) in a file read in millimetres: the "
+           "feed is taken as its word says, the coordinates in mm");
+  }
+  if (tp_.units == LengthUnit::Inch && mm_feed_line) {
+    notice(mm_feed_line,
+           "a feed in millimetres (MMPM/MMPR) in a file read in inches: the feed "
+           "is taken as its word says, the coordinates in inches");
+  }
+}
+
+std::vector<double> Reader::numbers(const std::vector<std::string>& args, std::size_t from,
+                                    std::size_t to, const std::string& major, int line) const {
+  std::vector<double> out;
+  for (std::size_t k = from; k < to && k < args.size(); ++k) {
+    double v = 0.0;
+    if (!parse_number(args[k], v)) {
+      fail(line, major + " field " + std::to_string(k + 1) + ": expected a number, got '" +
+                     args[k] + "'");
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+Vec3d Reader::parse_axis(const std::vector<double>& v, std::size_t at, const std::string& major,
+                         int line) const {
+  Vec3d axis(v[at], v[at + 1], v[at + 2]);
+  const double len = axis.norm();
+  if (len < 1e-12) fail(line, major + ": tool axis (i,j,k) is zero");
+  if (std::abs(len - 1.0) > options_.axis_length_tolerance) {
+    std::ostringstream os;
+    os << major << ": tool axis (" << v[at] << "," << v[at + 1] << "," << v[at + 2]
+       << ") has length " << len << ", expected a unit vector";
+    fail(line, os.str());
+  }
+  return axis / len;
+}
+
+void Reader::handle(const LogicalLine& ll) {
+  ClRecord rec;
+  rec.kind = ll.kind;
+  rec.text = ll.raw;
+  rec.line = ll.line;
+  std::string args;
+  if (ll.kind == RecordKind::Record) {
+    rec.major = major_word(ll.code, args);
+    if (rec.major.empty()) {
+      // Only the lines NX's listing window adds around a CLSF are no records; anything
+      // else that cannot be read is an error, never a skipped line (it may be UNITS).
+      if (!is_listing_line(ll.code)) {
+        fail(ll.line, "not a CL record: '" + trim(ll.code).substr(0, 60) +
+                          "' (expected a record word such as GOTO/, or a $$ comment)");
+      }
+      rec.kind = RecordKind::NotRecord;
+      tp_.warnings.push_back(format_location(
+          source_, ll.line, "not a CL record, skipped: '" + trim(ll.code).substr(0, 60) + "'"));
+    }
+  }
+  tp_.records.push_back(rec);
+  if (rec.kind != RecordKind::Record) return;
+  const int index = static_cast<int>(tp_.records.size()) - 1;
+  interpret(rec.major, args, index, ll.line);
+}
+
+void Reader::interpret(const std::string& major, const std::string& args_text, int index,
+                       int line) {
+  const auto args = split_args(args_text);
+  if (spline_) {
+    if (major == "KNOT") {
+      if (!spline_->control.empty()) fail(line, "KNOT after the CNTRL records of its NURBS");
+      for (double k : numbers(args, 0, args.size(), major, line)) spline_->knots.push_back(k);
+      tp_.records[static_cast<std::size_t>(index)].owner = spline_->record;
+      return;
+    }
+    if (major == "CNTRL") {
+      if (args.size() != 3 && args.size() != 4) {
+        fail(line, "CNTRL expects x,y,z[,weight], got " + std::to_string(args.size()) + " fields");
+      }
+      const auto v = numbers(args, 0, args.size(), major, line);
+      const double w = v.size() == 4 ? v[3] : 1.0;
+      if (!(w > 0.0)) fail(line, "CNTRL: weight must be positive");
+      const Vec3d q = to_mcs_point(Vec3d(v[0], v[1], v[2]));
+      spline_->control.emplace_back(q.x(), q.y(), q.z(), w);
+      tp_.records[static_cast<std::size_t>(index)].owner = spline_->record;
+      return;
+    }
+    finish_spline();
+  }
+  if (major == "KNOT" || major == "CNTRL") fail(line, major + " outside a NURBS record");
+  if (pending_circle_ && major != "GOTO" && major != "PAINT" && major != "FEDRAT") {
+    fail(line, std::string(pending_circle_->movarc ? "MOVARC" : "CIRCLE") + " at line " +
+                   std::to_string(pending_circle_->line) +
+                   " must be followed by its end GOTO, got " + major);
+  }
+  const ClWord* word = find_cl_word(major);
+  if (options_.skip_records.count(major)) {
+    skipped(major);
+    ++tp_.skipped_by_option[major];
+    return;
+  }
+  if (!word) {
+    fail(line, major +
+                   ": not a record word taxopt knows (docs/cl-files.md lists them); if it "
+                   "neither moves the tool nor changes what the moves mean, --skip-record " +
+                   major + " skips it");
+  }
+  if (finished_line_ > 0 && word->meaning == ClWordMeaning::Motion) {
+    fail(line, major + " after the end of the program (line " + std::to_string(finished_line_) +
+                   "): motion after FINI or END is not posted");
+  }
+  if (word->meaning == ClWordMeaning::Refused) {
+    fail(line, major + ": " + word->what +
+                   "; taxopt does not interpret it and cannot skip it (post the file "
+                   "without it, or expand it in the CAM system)");
+  }
+  const ClRecordArgs r{major, args, args_text, index, line};
+  const auto& readers = record_readers();
+  if (const auto it = readers.find(major); it != readers.end()) {
+    (this->*(it->second))(r);
+  } else if (major != "UNITS" && major != "UNIT") {
+    skipped(major);
+  }
+}
+
+}  // namespace taxopt::cl
+
+namespace taxopt {
+
+Toolpath parse_cl(const std::string& text, const std::string& source,
+                  const ClReadOptions& options) {
+  return cl::Reader(source, options).run(text);
+}
+
+Toolpath read_cl_file(const std::string& path, const ClReadOptions& options) {
+  // A CL file is a regular file: a FIFO would hang and /dev/zero would be read whole (issue
+  // 35). 2 GB is beyond the 2e7 points the reader posts at the most.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path, 0, "not a regular file (a CL file is one)");
+  }
+  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{2} << 30)) {
+    throw InputError(path, 0, "larger than 2 GB: more than the 2e7 CL points taxopt posts");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open CL file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(path, 0, "cannot read CL file");
+  return parse_cl(ss.str(), path, options);
+}
+
+}  // namespace taxopt

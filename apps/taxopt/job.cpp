@@ -1,0 +1,360 @@
+// The main job on the command line: the options checked and turned into the library's inputs,
+// the job run, its messages printed and its outputs written in one transaction.
+#include <unistd.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <tuple>
+
+#include "cli.hpp"
+#include "taxopt/core/digest.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/geometry/part.hpp"
+#include "taxopt/io/atomic_file.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/io/html_page.hpp"
+#include "taxopt/io/machine_file.hpp"
+#include "taxopt/io/mesh_file.hpp"
+#include "taxopt/io/plots.hpp"
+
+namespace taxopt::cli {
+namespace {
+
+/// An option refused: its message and exit code (cli.md), printed by run_main_job.
+struct Refused {
+  std::string what;
+  int code;
+};
+[[noreturn]] void refuse(const std::string& what, int code = 2) { throw Refused{what, code}; }
+
+/// The outputs: given, none of them an input or another output, none in the plots folder, each
+/// writable, checked before any work (a run of minutes must not end in "cannot write").
+void check_outputs(const Args& a) {
+  if (a.in.empty()) refuse("--in is required");
+  if (a.gcode.empty() && a.out_cls.empty() && a.report.empty() && a.html.empty()) {
+    refuse("nothing to write: give --gcode, --out-cls, --report or --html");
+  }
+  std::map<std::string, std::string> outputs;
+  for (const auto& [opt, path] : std::map<std::string, std::string>{{"--gcode", a.gcode},
+                                                                    {"--report", a.report},
+                                                                    {"--points-csv", a.points_csv},
+                                                                    {"--html", a.html},
+                                                                    {"--out-cls", a.out_cls}}) {
+    if (path.empty()) continue;
+    // No output may replace an input (the CL file, the part, the machine file).
+    for (const auto& [in_opt, in_path] : std::map<std::string, std::string>{
+             {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
+      if (!in_path.empty() && same_file(path, in_path)) {
+        refuse(opt + " " + path + " is the " + (in_opt == "--in" ? std::string("input") : in_opt) +
+               " file");
+      }
+    }
+    // Nor may it lie in the plots folder (whose SVGs are written after it) or be that folder.
+    if (!a.plots.empty()) {
+      std::error_code ec;
+      const auto dir =
+          std::filesystem::weakly_canonical(std::filesystem::absolute(a.plots, ec), ec);
+      const auto file = std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec), ec);
+      if (file == dir || file.parent_path() == dir) {
+        refuse(opt + " " + path + " lies in the --plots folder " + a.plots);
+      }
+    }
+    for (const auto& [other_opt, other] : outputs) {
+      if (same_file(path, other)) {
+        refuse(opt + " and " + other_opt + " name the same file " + path);
+      }
+    }
+    // Checked before any work: a run of minutes must not end in "cannot write".
+    const std::string why = writable_output_problem(path);
+    if (!why.empty()) refuse(opt + " " + path + ": cannot write there: " + why);
+    outputs[opt] = path;
+  }
+  if (!a.plots.empty()) {
+    std::error_code ec;
+    const auto plots_dir = std::filesystem::absolute(a.plots, ec);
+    if (std::filesystem::exists(plots_dir, ec) && !std::filesystem::is_directory(plots_dir, ec)) {
+      refuse("--plots " + a.plots + " is a file, not a folder");
+    }
+  }
+}
+
+/// The method's numbers, before any file is read (the library refuses them too, naming the
+/// JobOptions field).
+void check_method_numbers(const Args& a) {
+  if (a.jerk_weight && !(*a.jerk_weight >= 0.0 && std::isfinite(*a.jerk_weight))) {
+    refuse("--jerk-weight must be a number >= 0 (s^2)");
+  }
+  if (a.max_deviation && !(*a.max_deviation >= 0.0 && *a.max_deviation <= 90.0)) {
+    refuse("--max-deviation must be within [0, 90] deg");
+  }
+  if (a.grid && !(*a.grid >= 0.1 && *a.grid <= 10.0)) {
+    refuse("--grid must be within [0.1, 10] deg");
+  }
+  if (a.feed_mm_per_min && !(*a.feed_mm_per_min >= 0.01 && *a.feed_mm_per_min <= 1e6))
+    refuse("--feed must be within [0.01, 1e6] mm/min");
+  if (a.spindle_rpm && !(*a.spindle_rpm >= 1.0 && *a.spindle_rpm <= 2e5))
+    refuse("--spindle-rpm must be within [1, 200000] rpm");
+  if (a.tool_number && !(*a.tool_number >= 1 && *a.tool_number <= 99999))
+    refuse("--tool-number must be a whole number from 1 to 99999");
+}
+
+/// The machine: its file (else the built-in one), with --dialect over its gcode.dialect.
+Machine machine_of(const Args& a) {
+  Machine machine = a.machine.empty() ? default_machine() : read_machine_file(a.machine);
+  if (!a.dialect.empty() && a.dialect != to_string(machine.gcode.dialect)) {
+    // --dialect overrides the machine file's gcode.dialect, under the same rules: a program
+    // template written for the file's dialect is not another's, and the decimals must fit.
+    const ProgramTemplate& t = machine.gcode.program;
+    // A work offset is a dialect's word too (Sinumerik G505 is out of LinuxCNC's range).
+    const bool own_work_offset = !t.work_offset.empty() && t.work_offset != "none";
+    if (!t.header.empty() || !t.footer.empty() || !t.tool_change.empty() || !t.tcp_on.empty() ||
+        !t.tcp_off.empty() || own_work_offset) {
+      refuse("--dialect " + a.dialect + ": the machine file's program template " +
+             "(header, footer, tool_change, tcp_on, tcp_off, work_offset) is written "
+             "for the " +
+             to_string(machine.gcode.dialect) +
+             " dialect; change gcode.dialect in the file instead");
+    }
+    for (const auto d : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
+                         GcodeDialect::Heidenhain, GcodeDialect::Haas}) {
+      if (a.dialect == to_string(d)) machine.gcode.dialect = d;
+    }
+    if (machine.gcode.decimals > max_decimals(machine.gcode.dialect) ||
+        machine.gcode.feed_decimals > max_feed_decimals(machine.gcode.dialect)) {
+      refuse("--dialect " + a.dialect + ": the machine file's gcode.decimals or " +
+             "feed_decimals are more than the " + a.dialect + " dialect takes");
+    }
+    if (machine.gcode.dialect == GcodeDialect::Heidenhain &&
+        machine.gcode.feed_mode == FeedMode::InverseTime) {
+      refuse(
+          "--dialect heidenhain: the machine's gcode.feed_mode is inverse-time, which "
+          "the heidenhain dialect does not write (its ISO mode has no G93)");
+    }
+  }
+  return machine;
+}
+
+ClReadOptions read_options_of(const Args& a) {
+  ClReadOptions read_options;
+  read_options.units = parse_unit(a.units, "--units");
+  read_options.arc_direction = a.arc_direction == "cw"    ? ArcDirection::Clockwise
+                               : a.arc_direction == "ccw" ? ArcDirection::CounterClockwise
+                                                          : ArcDirection::Auto;
+  read_options.apply_msys = a.msys == "apply";
+  for (std::string w : a.skip_records) {
+    for (auto& ch : w) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    read_options.skip_records.insert(w);
+  }
+  return read_options;
+}
+
+/// The part mesh in the CL file's units and coordinates, with its frame note.
+std::optional<Part> part_of(const Args& a, const Toolpath& toolpath) {
+  std::optional<Part> part;
+  if (!a.part.empty()) {
+    std::string frame_note;
+    std::optional<double> radius_mm;
+    if (a.tool_radius) radius_mm = *a.tool_radius * mm_per_unit(toolpath.units);
+    part.emplace(
+        part_mesh_for(toolpath, read_mesh_file(a.part), toolpath.units, &frame_note, radius_mm));
+    if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
+  }
+  return part;
+}
+
+/// The job's options from the command line, the tool's and the checks' bounded.
+JobOptions job_options_of(const Args& a, const Toolpath& toolpath) {
+  JobOptions options;
+  // The job's own arena: --threads workers, else all cores.
+  options.threads = a.threads > 0 ? static_cast<std::size_t>(a.threads) : 0;
+  options.count_free_cells = !a.points_csv.empty();
+  options.cspace_maps = !a.plots.empty();
+  options.feed_schedule = a.feed_schedule;
+  {
+    // Tool dimensions are in the CL file's units; none larger than a metre.
+    const double u = mm_per_unit(toolpath.units);
+    for (const auto& [name, v] : {std::make_pair("--tool-radius", a.tool_radius),
+                                  std::make_pair("--shank-radius", a.shank_radius),
+                                  std::make_pair("--flute-length", a.flute_length),
+                                  std::make_pair("--holder-radius", a.holder_radius),
+                                  std::make_pair("--holder-length", a.holder_length),
+                                  std::make_pair("--gauge-length", a.gauge_length)}) {
+      if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
+        refuse(std::string(name) + " must be within (0, 1000] mm (in the CL file's " +
+               to_string(toolpath.units) + ")");
+      }
+    }
+    options.tool = tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
+                                   a.holder_radius, a.holder_length, a.gauge_length});
+    // The machine file's holder and clearances apply where these name none (the library's
+    // resolved_options).
+  }
+  if (a.contact_tolerance) {
+    // Beyond a millimetre a contact is no contact: the gouge and flute checks would be off.
+    if (!(*a.contact_tolerance > 0.0 && *a.contact_tolerance <= 1.0)) {
+      refuse("--contact-tolerance must be within (0, 1] mm");
+    }
+    options.contact.tolerance_mm = *a.contact_tolerance;
+  }
+  options.method = a.method == "none"    ? Method::None
+                   : a.method == "paper" ? Method::Paper
+                                         : Method::Global;
+  options.global.objective = a.objective == "peak"   ? GlobalObjective::Peak
+                             : a.objective == "time" ? GlobalObjective::Time
+                                                     : GlobalObjective::SumSquares;
+  if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
+  if (a.grid) options.paper.grid_deg = *a.grid;
+  options.max_deviation_deg = a.max_deviation;
+  // Clearances a machine keeps (50 mm is more than any holder's), and a part tolerance that
+  // is still one (1 mm): larger values turn the checks off or make them hang.
+  for (const auto& [name, v, most] :
+       {std::make_tuple("--shank-clearance", a.shank_clearance_mm, 50.0),
+        std::make_tuple("--holder-clearance", a.holder_clearance_mm, 50.0),
+        std::make_tuple("--part-tolerance", a.part_tolerance, 1.0)}) {
+    if (v && !(*v >= 0.0 && *v <= most)) {
+      std::ostringstream os;
+      os << name << " must be within [0, " << most << "] mm";
+      refuse(os.str());
+    }
+  }
+  options.shank_clearance_mm = a.shank_clearance_mm;
+  options.holder_clearance_mm = a.holder_clearance_mm;
+  options.part_tolerance_mm = a.part_tolerance;
+  options.feed_mm_per_min = a.feed_mm_per_min;
+  options.spindle_rpm = a.spindle_rpm;
+  options.tool_number = a.tool_number;
+  options.units_out = parse_unit(a.units_out, "--units-out");
+  return options;
+}
+
+/// The report's and page's account of the run.
+RunInfo run_info(const Args& a, const Invocation& how, bool digest) {
+  RunInfo run;
+  run.command_line = how.command_line;
+  run.started_utc = how.started_utc;
+  run.machine_file = a.machine;
+  if (digest && !a.machine.empty()) {
+    std::ifstream m(a.machine, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << m.rdbuf();
+    run.machine_sha256 = sha256_hex(bytes.str());
+  }
+  run.part_file = a.part;
+  return run;
+}
+
+/// Every output of the run in one transaction (all or none), then the summary.
+void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpath,
+                   const Machine& machine, const JobOptions& options, const JobResult& result,
+                   const std::optional<Part>& part, const std::optional<HtmlAssets>& html_assets) {
+  OutputTransaction tx;
+  if (!a.gcode.empty()) tx.stage(a.gcode, result.gcode.text);
+  if (!a.out_cls.empty()) tx.stage(a.out_cls, result.out_cls);
+  if (!a.report.empty()) {
+    tx.stage(a.report, report_json(result, toolpath, machine, options, run_info(a, how, true)));
+  }
+  if (!a.points_csv.empty()) tx.stage(a.points_csv, points_csv(result));
+  if (!a.html.empty()) {
+    tx.stage(a.html, html_page(result, toolpath, machine, options, run_info(a, how, false),
+                               part ? &part->mesh() : nullptr, *html_assets));
+  }
+  if (!a.plots.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(a.plots, ec);
+    if (ec) refuse(a.plots + ": cannot create folder: " + ec.message());
+    for (const auto& [name, svg] : job_plots(result)) tx.stage(a.plots + "/" + name, svg);
+  }
+  tx.commit();
+  if (!a.quiet) print_summary(result);
+  if (how.demo && !a.quiet) {
+    // What it wrote, and what to look at first.
+    std::printf(
+        "\ntaxopt demo wrote %s/: demo.nc (the G-code), report.json, points.csv, plots/ "
+        "and demo.html.\nOpen %s/demo.html first: the part, the tool axes before and "
+        "after, and the rotary axes' plots.\n",
+        how.demo_out.c_str(), how.demo_out.c_str());
+  }
+}
+
+}  // namespace
+
+std::optional<LengthUnit> parse_unit(const std::string& s, const char* option) {
+  if (s.empty()) return std::nullopt;
+  if (s == "mm") return LengthUnit::Millimetre;
+  if (s == "in") return LengthUnit::Inch;
+  throw InputError(std::string(option) + " expects 'in' or 'mm', got '" + s + "'");
+}
+
+int run_main_job(Args& a, const Invocation& how) {
+  try {
+    check_outputs(a);
+    check_method_numbers(a);
+    const Machine machine = machine_of(a);
+    const ClReadOptions read_options = read_options_of(a);
+    // The page's libraries are read before any work: a run must not end in "cannot embed".
+    std::optional<HtmlAssets> html_assets;
+    if (!a.html.empty()) {
+      const char* dir = std::getenv("TAXOPT_JAVASCRIPT_DIR");
+      html_assets = load_html_assets(dir && *dir ? dir : kDefaultJavascriptDir);
+    }
+    const Toolpath toolpath = read_cl_file(a.in, read_options);
+    if (a.tool_radius && !(*a.tool_radius > 0.0)) refuse("--tool-radius must be positive");
+    // Plots: five SVG files an operation (and C-space maps); 20,000 operations wrote 100,000
+    // files, 468 MB. A page of plots beyond a few hundred operations helps no one.
+    constexpr std::size_t kMostPlottedOperations = 200;
+    if (!a.plots.empty() && toolpath.operations.size() > kMostPlottedOperations) {
+      refuse("--plots: the CL file has " + std::to_string(toolpath.operations.size()) +
+             " operations; plots are written for at most " +
+             std::to_string(kMostPlottedOperations) +
+             " (about 5 SVG files each): split the file, or leave out --plots");
+    }
+    const std::optional<Part> part = part_of(a, toolpath);
+    JobOptions options = job_options_of(a, toolpath);
+    if (part) options.part = &*part;
+    ProgressPrinter printer(!a.quiet && isatty(STDERR_FILENO), !a.quiet && a.verbose > 0);
+    if (!a.quiet) {
+      options.progress = [&printer](const std::string& stage, std::size_t done, std::size_t total) {
+        printer(stage, done, total);
+      };
+    }
+    if (!a.quiet && a.verbose > 0) {
+      options.log = [](const std::string& line) {
+        std::fprintf(stderr, "taxopt: %s\n", line.c_str());
+      };
+    }
+    const JobResult result = run_job(toolpath, machine, options);
+    print_messages(result, toolpath, a);
+    if (!result.ok() && !a.force) {
+      std::cerr << "taxopt: no output written (--force writes it anyway)\n";
+      return 1;
+    }
+    if (!a.gcode.empty() && result.gcode.text.find_first_of("\n") == std::string::npos) {
+      refuse("no G-code to write: no point of the program could be posted" +
+                 (result.problems.empty() ? std::string() : " (" + result.problems[0] + ")"),
+             1);
+    }
+    write_outputs(a, how, toolpath, machine, options, result, part, html_assets);
+    return result.ok() ? 0 : 1;
+  } catch (const Refused& r) {
+    return error(r.what, r.code);
+  } catch (const InputError& e) {
+    return error(e.what(), 2);
+  } catch (const std::bad_alloc&) {
+    // Not a failed verification (exit 1): the input is larger than this machine's memory.
+    return error(
+        "out of memory: the part, the CL file or an option's resolution needs more "
+        "memory than this machine gives (docs/cli.md \"Bounds\"); nothing written",
+        2);
+  } catch (const std::exception& e) {
+    return error(std::string("internal error: ") + e.what(), 1);
+  }
+}
+
+}  // namespace taxopt::cli

@@ -1,0 +1,94 @@
+// What the command line prints: progress, the job's messages and the summary table.
+#include <cstdio>
+#include <iostream>
+
+#include "cli.hpp"
+
+namespace taxopt::cli {
+namespace {
+
+/// "before -> after (-x %)".
+std::string before_after(double before, double after, const char* format) {
+  char b[32], a[32], pct[32] = "";
+  std::snprintf(b, sizeof b, format, before);
+  std::snprintf(a, sizeof a, format, after);
+  if (before > 0.0) std::snprintf(pct, sizeof pct, " (%+.0f %%)", 100.0 * (after / before - 1.0));
+  return std::string(b) + " -> " + a + pct;
+}
+
+}  // namespace
+
+int error(const std::string& what, int code) {
+  std::cerr << "taxopt: error: " << what << "\n";
+  return code;
+}
+
+void print_summary(const JobResult& result) {
+  std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %-26s %7s\n", "operation", "points",
+              "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "feed time s",
+              "cycle time s", "time s");
+  for (const auto& r : result.operations) {
+    const auto count = [](long before, long after) {
+      return before < 0 ? std::string("-") : std::to_string(before) + "->" + std::to_string(after);
+    };
+    const std::string collide = result.collision_checked
+                                    ? count(r.colliding_before, r.colliding_after)
+                                    : std::string("unchecked");
+    std::printf(
+        "%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %-26s %7.2f\n", r.name.c_str(), r.points,
+        before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
+        before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
+        count(r.before.c_jumps, r.after.c_jumps).c_str(), collide.c_str(), r.max_axis_change_deg,
+        before_after(r.feed_before.feed_time_s, r.feed_after.feed_time_s, "%.1f").c_str(),
+        before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
+        r.time_contacts_s + r.time_cspace_s + r.time_optimise_s + r.time_post_s + r.time_verify_s);
+  }
+}
+
+void print_messages(const JobResult& result, const Toolpath& toolpath, const Args& a) {
+  // Errors first (the first 10; -v all of them), then how the file was read, then warnings.
+  const std::size_t shown = a.verbose > 0 ? result.problems.size() : 10;
+  for (std::size_t i = 0; i < result.problems.size() && i < shown; ++i) {
+    std::cerr << "taxopt: error: " << result.problems[i] << "\n";
+  }
+  if (result.problems.size() > shown) {
+    std::cerr << "taxopt: error: ... and " << result.problems.size() - shown
+              << " more (-v lists them all)\n";
+  }
+  // What was not checked first (even with -q: -q silences progress and notes, never a
+  // safety warning), then how the file was read, then the other warnings.
+  for (const auto& w : result.safety_warnings) {
+    std::cerr << "taxopt: warning: NOT CHECKED: " << w << "\n";
+  }
+  if (!a.quiet) {
+    for (const auto& n : toolpath.notices) std::cerr << "taxopt: note: " << n << "\n";
+    for (const auto& w : result.warnings) std::cerr << "taxopt: warning: " << w << "\n";
+    if (a.verbose > 0) {
+      // Each stage's own time over all operations (the report's timings_s per operation).
+      double t[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+      for (const auto& r : result.operations) {
+        t[0] += r.time_contacts_s;
+        t[1] += r.time_cspace_s;
+        t[2] += r.time_optimise_s;
+        t[3] += r.time_post_s;
+        t[4] += r.time_verify_s;
+      }
+      std::fprintf(stderr,
+                   "taxopt: stage times: contacts %.2f s, cspace %.2f s, optimise %.2f s, "
+                   "post %.2f s, verify %.2f s\n",
+                   t[0], t[1], t[2], t[3], t[4]);
+      for (const auto& [word, count] : toolpath.skipped_records) {
+        std::cerr << "taxopt: note: " << count << " " << word
+                  << " record(s) skipped (no motion), kept for --out-cls\n";
+      }
+    }
+    // Records skipped by --skip-record are said even with -q: the user decided, the
+    // program lacks them.
+    for (const auto& [word, count] : toolpath.skipped_by_option) {
+      std::cerr << "taxopt: note: " << count << " " << word
+                << " record(s) skipped as asked (--skip-record " << word << ")\n";
+    }
+  }
+}
+
+}  // namespace taxopt::cli

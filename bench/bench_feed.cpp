@@ -1,7 +1,7 @@
 // Feed scheduling speed: schedule_feed on one chain of N feed moves (default 100,000), one core.
 // Two paths: a smooth sine-like zig-zag finishing path as an A/C machine moves it (the joints of
 // a ball-end mill following z = 10 cos(2 pi y / 40) with the axis on the normal), and a random
-// walk of the five joints with reversals (conflicting joints, more sweeps). Target (issue 10):
+// walk of the five joints with reversals (conflicting joints, more sweeps). Target:
 // 100,000 points in <= 0.2 s on one core.
 // Run: build/release/bench/bench_feed [points] [repeats]
 #include <algorithm>

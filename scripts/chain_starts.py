@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """How hard LinuxCNC started each chain of feed blocks of a tcp program: measured against the
-planner model at the full and at half the block's acceleration (issue 36).
+planner model at the full and at half the block's acceleration (measured on LinuxCNC's motion controller, tests/controller).
 
     chain_starts.py PROGRAM.ngc SAMPLES.txt [--accel 300,300,300,300,300]
                     [--velocity 20,20,20,30,30]

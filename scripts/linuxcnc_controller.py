@@ -21,7 +21,7 @@ velocity and acceleration (from the commanded positions, central differences ove
 MAX_ACCELERATION, and how far the axis path passed from every programmed point of the file
 (`--points` FILE: one "x y z a c" per line, program units).
 
-Facts this relies on (issue 36, measured here): as root, rtapi_app needs RTAPI_UID naming a
+Facts this relies on (measured here): as root, rtapi_app needs RTAPI_UID naming a
 fallback uid (65534); RTAPI_FIFO_PATH is the master's socket path (a file in a folder of our
 own); HOME must be writable; one LinuxCNC runs per machine (/tmp/linuxcnc.lock).
 """
@@ -265,8 +265,14 @@ def analyse(path, args, summary):
             w = line.split()
             if len(w) != 12:
                 continue
-            rows.append([float(x) for x in w[1:11]] + [int(w[11])])
+            rows.append([float(x) for x in w[1:11]] + [int(w[11]), int(w[0])])
     summary["samples"] = len(rows)
+    # halsampler -t tags each row with its sample number: where its reader fell behind (the
+    # machine busy with other work) the FIFO overran and numbers are missing. A window across
+    # such a gap would difference positions a jump apart (a joint "at 417 mm/s" at line 0):
+    # no velocity or acceleration is taken across one, and the times count the periods lost.
+    tags = [r[11] for r in rows]
+    summary["lost_samples"] = sum(max(0, tags[i] - tags[i - 1] - 1) for i in range(1, len(tags)))
     if not rows:
         summary["errors"].append("no samples recorded")
         return
@@ -277,14 +283,14 @@ def analyse(path, args, summary):
         summary["errors"].append("nothing moved")
         return
     first, last = moving[0] - 1, moving[-1]
-    summary["move_s"] = (last - first) * period
+    summary["move_s"] = (tags[last] - tags[first]) * period
     # The controller's time per program line: the servo periods in which the commanded
     # joints moved, s (a program stop, a dwell or a tool change waits without moving and is
     # not the motion's time).
     line_s = {}
     for i in range(first + 1, last + 1):
         if any(abs(rows[i][j] - rows[i - 1][j]) > 1e-9 for j in range(5)):
-            line_s[rows[i][10]] = line_s.get(rows[i][10], 0.0) + period
+            line_s[rows[i][10]] = line_s.get(rows[i][10], 0.0) + period * (tags[i] - tags[i - 1])
     summary["line_s"] = {str(k): v for k, v in sorted(line_s.items())}
     summary["end_line"] = max(r[10] for r in rows)
     # Velocities and accelerations of the commanded joints: differences over a window of
@@ -297,6 +303,8 @@ def analyse(path, args, summary):
         vmax = amax = 0.0
         vmax_at = amax_at = 0
         for i in range(first + w, last - w + 1):
+            if tags[i + w] - tags[i - w] != 2 * w:
+                continue  # a window across lost samples
             v = (rows[i + w][j] - rows[i - w][j]) / (2 * w * period)
             a = (rows[i + w][j] - 2 * rows[i][j] + rows[i - w][j]) / ((w * period) ** 2)
             if abs(v) > vmax:

@@ -34,8 +34,13 @@ def canon_moves(rs274, ngc):
         for line in src:
             if line.strip() not in ("M428", "M429"):  # the sample's TCP switch: not in rs274's set
                 dst.write(line)
-    out = subprocess.run([rs274, "-t", tbl.name, "-g", clean], capture_output=True, text=True,
-                         timeout=120)
+    # rs274 keeps its parameter file in the working directory and maps $HOME/.tool.mmap with
+    # O_TRUNC: two concurrent runs (ctest -j, the other truth test, tests/support.cpp) truncate
+    # each other's mapping and one fails. Each run gets its own folder and HOME.
+    with tempfile.TemporaryDirectory() as home:
+        out = subprocess.run([rs274, "-t", tbl.name, "-v", os.path.join(home, "rs274ngc.var"),
+                              "-g", clean], capture_output=True, text=True, timeout=120,
+                             cwd=home, env={**os.environ, "HOME": home})
     os.unlink(tbl.name)
     os.unlink(clean)
     if out.returncode != 0:

@@ -110,7 +110,8 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
 ToolOverrides tool_overrides(const ToolDimensions& given) {
   const double u = mm_per_unit(given.units);
   const auto mm = [u](const std::optional<double>& v) -> std::optional<double> {
-    // A tool is no larger than a metre: larger dimensions make the checks hang (issue 35).
+    // A tool is no larger than a metre: larger dimensions make the checks hang
+    // (tests/test_bad_input.cpp).
     if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
       throw InputError("tool dimensions must be within (0, 1000] mm");
     }
@@ -283,9 +284,9 @@ JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions&
   return res;
 }
 
-/// The default method's output verifies wherever a program exists (issue 34): operations
-/// whose points or moves the verification found hitting the part are planned again with the
-/// fallbacks of plan_operation. Only failed runs pay for the second run.
+/// The default method's output verifies wherever a program exists (tests/test_paper_method.cpp):
+/// operations whose points or moves the verification found hitting the part are planned again with
+/// the fallbacks of plan_operation. Only failed runs pay for the second run.
 JobResult run_with_fallback(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
   JobResult res = run_once(tp, machine, options, {});
   if (options.method != Method::Paper || !options.part) return res;

@@ -485,7 +485,7 @@ GeneratedCl raster_cl(const Heightfield& hf, double r_mm, double tilt_deg, int p
   os << "TLDATA/MILL," << 2 * r_mm << "," << r_mm << ",30.0,0.0,0.0\n";
   os << "MSYS/0,0,0,1,0,0,0,1,0\n";
   // As a CAM system writes them: the tool called and the spindle started (a program that
-  // calls neither is refused, issue 33).
+  // calls neither is refused).
   os << "LOADTL/1\nSPINDL/RPM,8000,CLW\n";
   const double tilt = deg_to_rad(tilt_deg);
   for (int p = 0; p < passes; ++p) {

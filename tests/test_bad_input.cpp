@@ -1,4 +1,4 @@
-// The silent holes of issue 23, each a regression test: every case exits non-zero with a clear
+// Silent holes of hostile input, each a regression test: every case exits non-zero with a clear
 // message (file, line or face, what was expected), or gives the same G-code as the good input.
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -608,7 +608,7 @@ TEST_CASE(
                      t.path("m.stl"))
               .code == 0);
   // FCL's model of this part fails to allocate under the limit: it printed "BVH Error! Out of
-  // memory" and the next query segfaulted (issue 35, item 12).
+  // memory" and the next query segfaulted (tests/test_bad_input.cpp).
   const RunResult r =
       run("ulimit -v 600000; " + std::string(TAXOPT_EXE) + " --in " + t.path("m.cls") + " --part " +
           t.path("m.stl") + " --method none -q --gcode " + t.path("o.nc"));

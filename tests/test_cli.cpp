@@ -834,7 +834,8 @@ TEST_CASE("cli: a longer cycle is said above its threshold, naming what grew",
 TEST_CASE("cli: the LinuxCNC preset turns the tool length on before the TCP kinematics",
           "[cli][gcode][linuxcnc][slow]") {
   // LinuxCNC's motion controller jumps its joints when M428 switches to the TCP kinematics with
-  // the table tilted and G43 follows (issue 36): G43 first.
+  // the table tilted and G43 follows (measured on LinuxCNC's motion controller, tests/controller):
+  // G43 first.
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
   const RunResult r =

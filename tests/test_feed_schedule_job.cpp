@@ -72,7 +72,7 @@ double rapid_time(const std::array<double, 5>& p, const std::array<double, 5>& q
 /// feed moves from rest to rest, velocity per move and acceleration between moves over their
 /// mean time (eq. 16-18). A move into a CL rapid (`cl_rapid`) is a rapid whatever its G word:
 /// LinuxCNC's tcp programs write a rapid that turns the table as a feed block at a joint-safe
-/// feed (issue 36).
+/// feed (measured on LinuxCNC's motion controller, tests/controller).
 Measured measure(const std::vector<CanonMove>& moves, bool machine_mode, const double c0[2],
                  const double a0[2], const Limits& lim, const std::vector<Vec3d>& input_tips_mm,
                  double programmed_mm_min, const std::vector<bool>& cl_rapid = {}) {
@@ -257,7 +257,7 @@ TEST_CASE(
                    "feed_reference = \"" +
                    reference + "\"\n");
     // No limit binds on this machine: with the cutter-path reference the feed moves take the
-    // input's time (the invariant of issue 21), with the tip reference the new tip path's; so
+    // input's time (the feed-reference invariant), with the tip reference the new tip path's; so
     // too with the time objective (the time plan, the others' axes or a mix).
     // The paper method's program, written last, is the one read below.
     for (const char* method : {"global --objective time", "paper"}) {
@@ -292,7 +292,7 @@ TEST_CASE(
     for (std::size_t i = 1; i < moves.size(); ++i) {
       const CanonMove &p = moves[i - 1], &m = moves[i];
       // A CL rapid is a rapid, also where LinuxCNC's tcp program writes it as a feed block at
-      // a joint-safe feed (issue 36).
+      // a joint-safe feed (measured on LinuxCNC's motion controller, tests/controller).
       if (!m.feed || g.rapid[i]) continue;
       const double len = std::sqrt((m.x - p.x) * (m.x - p.x) + (m.y - p.y) * (m.y - p.y) +
                                    (m.z - p.z) * (m.z - p.z));

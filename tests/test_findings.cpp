@@ -1,4 +1,4 @@
-// Structured outcomes (issue 19): a library caller tells the kinds of finding apart by code,
+// Structured outcomes: a library caller tells the kinds of finding apart by code,
 // the display lists hold the same messages, and the report carries the codes.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>

@@ -150,7 +150,7 @@ TEST_CASE(
       "N70 ");
   REQUIRE(post.size() == 348);  // one per GOTO
   // The post writes the GOTOs as they are in the listing (the MCS's own coordinates): so does
-  // taxopt by default, though the file says MSYS/3,3,0,... (issue 32).
+  // taxopt by default, though the file says MSYS/3,3,0,... (tests/data/real/SOURCES.md).
   const RunResult r = run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + cls + " --machine " +
                                  std::string(TAXOPT_SOURCE_DIR) +
                                  "/data/machines/haas-umc750.toml --method none "
@@ -178,8 +178,8 @@ TEST_CASE(
   int branch = 0, moving = 0;
   for (std::size_t i = 0; i < post.size(); ++i) {
     worst_b = std::max(worst_b, std::abs(ours[i].b - post[i].b));
-    // C as the post winds it, not modulo a turn (issue 33: half-turn ties turned the post's
-    // way).
+    // C as the post winds it, not modulo a turn (tests/test_program.cpp: half-turn ties turned the
+    // post's way).
     worst_c = std::max(worst_c, std::abs(ours[i].c - post[i].c));
     worst_xyz = std::max({worst_xyz, std::abs(ours[i].x - post[i].x),
                           std::abs(ours[i].y - post[i].y), std::abs(ours[i].z - post[i].z)});

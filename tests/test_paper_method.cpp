@@ -1,4 +1,4 @@
-// The paper's method end to end on parts no code was tuned on (issue 5's "done when"): the
+// The paper's method end to end on parts no code was tuned on: the
 // CLI with its defaults on a sine-like part crossed by several passes and on a bump crossed
 // off centre. Everything is judged independently of taxopt's own report: A and C as LinuxCNC's
 // rs274 reads them from the G-code, the path lengths between the true contact points of the
@@ -195,7 +195,7 @@ void check_case(const Case& k) {
   CHECK(ja.worst_dev_deg <= 30.0 + 0.01);
   CHECK(ja.hits == 0);
 
-  // --method global (issue 6's done-when): its peak a, recomputed here from what rs274 read,
+  // --method global: its peak a, recomputed here from what rs274 read,
   // no higher than the paper method's, as safe, centres unchanged, axes within the cone.
   for (const char* objective : {"sum-squares", "peak"}) {
     INFO("--method global --objective " << objective);
@@ -244,7 +244,7 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
   os << "TOOL PATH/GENERATED_" << hf.name << ",TOOL,BALL\n";
   os << "TLDATA/MILL," << 2 * r_mm << "," << r_mm << ",30.0,0.0,0.0\n";
   // As a CAM system writes them: the tool called and the spindle started (a program that
-  // calls neither is refused, issue 33).
+  // calls neither is refused).
   os << "LOADTL/1\nSPINDL/RPM,8000,CLW\n";
   const auto put = [&](const Vec3d& tip, const Vec3d& v, bool rapid, const Vec3d& cc) {
     append_goto(g, os, tip, v, rapid, cc, tip + r_mm * v);
@@ -272,7 +272,7 @@ GeneratedCl leaning_cl(const Heightfield& hf, double r_mm, double lean_deg,
 
 }  // namespace
 
-// Issue 5's acceptance target. Near the pole A = 0 the paper's slerp alone is not enough (on
+// Near the pole A = 0 the paper's slerp alone is not enough (on
 // the sine-like part the passes graze the pole and C turns fast: 728 -> 683 deg/s, -6 %);
 // the pole passages re-planned in machine space (plan/pole_passage.hpp) are what meets it.
 TEST_CASE(
@@ -326,7 +326,7 @@ TEST_CASE(
   for (const Case& k : cases) check_case(k);
 }
 
-// Issue 4's acceptance target: a tall steep wall beside the path, the input axes leaning the
+// a tall steep wall beside the path, the input axes leaning the
 // shank and a holder into it. --method paper must give collision-free output (judged by the
 // exact triangle-versus-cylinder test, not FCL), ball centres where they were, every axis
 // within --max-deviation.
@@ -353,7 +353,7 @@ TEST_CASE(
   check_case(k);
 }
 
-// Issue 34: the default method's output verifies wherever a program exists. Walls with a
+// the default method's output verifies wherever a program exists. Walls with a
 // concave fillet at their foot, the input leaning the shank and holder into them, at the
 // clearances a shop sets (shank 0.5 to 1 mm, holder 0.5 to 3 mm): --method paper writes a
 // program the verification (FCL, the grown bodies, every move as the machine runs it) passes.
@@ -363,7 +363,8 @@ TEST_CASE(
     "[paper][wall][clearance][integration][slow]") {
   TempDir dir;
   // One seed here (a run under the sanitizers takes minutes); 16 seeds at four clearances were
-  // run by hand (issue 34's note): all verified where the generator did not gouge.
+  // run by hand (the measurement in tests/test_paper_method.cpp): all verified where the generator
+  // did not gouge.
   for (int seed : {1}) {
     std::mt19937 rng(static_cast<unsigned>(seed * 77));
     std::uniform_real_distribution<double> u(0.0, 1.0);

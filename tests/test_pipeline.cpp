@@ -1,4 +1,4 @@
-// The stages of a run called one by one (src/pipeline/stages.hpp, issue 19), and plan_axes:
+// The stages of a run called one by one (src/pipeline/stages.hpp), and plan_axes:
 // the axes a post-processor gets without G-code are the ones run_job writes. On seeded random
 // heightfield parts no test was tuned on; every stage's output is checked for the property it
 // promises, not for numbers.
@@ -289,7 +289,7 @@ TEST_CASE(
 
 namespace {
 
-/// One pass of a real 5-axis finish's two troubles (the NX program of issue 20): the tool
+/// One pass of a real 5-axis finish's two troubles (a real NX program): the tool
 /// nearly horizontal (tilt `tilt_deg`) turning by 90 deg round a tight fillet over `fillet_mm`
 /// -- C turning fast, which no axis in a 1 deg cone can slow much -- then the axis brought up
 /// to pass the pole twice at `offset_deg`, where the machine turns C by about 180 deg in a few

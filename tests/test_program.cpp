@@ -1,7 +1,8 @@
-// The program as a machinist checks it (issue 33): a tool called and the spindle turning
-// before the first feed move, the coolant the CL file asks for, no table turned below the
-// retract without a part model, the approach from the retract XY first and then down, the
-// rotary axes home at the end; in every dialect, on every real CL file, and through rs274.
+// The program as a machinist checks it (a machinist's review, tests/test_program.cpp): a tool
+// called and the spindle turning before the first feed move, the coolant the CL file asks for, no
+// table turned below the retract without a part model, the approach from the retract XY first and
+// then down, the rotary axes home at the end; in every dialect, on every real CL file, and through
+// rs274.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <iomanip>

@@ -44,7 +44,7 @@ int generate_refusal(const GenerateArgs& g) {
     }
   }
   // Each option within what a part and a machine are (and NaN never): a bound with a reason,
-  // checked before anything is allocated (issue 35).
+  // checked before anything is allocated (tests/test_bad_input.cpp).
   struct Bound {
     const char* name;
     double value, lo, hi;

@@ -241,7 +241,7 @@ struct FeedSummary {
   /// The table turned with the tool up, A and C on their trapezoids: to the operation's first
   /// pose from the previous operation's last (the first: from home, A = C = 0), and for the
   /// last operation back home (gcode.end_pose "home"), s; the program's time adds it to the
-  /// cycles (issue 36: the global method's first turn of two whole turns took 24 s that the
+  /// cycles (tests/controller: the global method's first turn of two whole turns took 24 s that the
   /// report did not show).
   double table_turn_s = 0.0;
   /// The part of rapid_time_s the rotary joints add: over the rapids, each one's time less the
@@ -355,7 +355,8 @@ enum class FindingCode {
   DeviationExceeded,     ///< an output axis outside the deviation cone
   PointCollision,        ///< CL points whose tool hits the part
   MoveCollision,         ///< moves where the tool hits the part between CL points
-  // The program as a machinist checks it, on the read-back (issue 33).
+  // The program as a machinist checks it, on the read-back (a machinist's review,
+  // tests/test_program.cpp).
   NoToolCalled,         ///< a move with no tool called (T .. M6, a TNC's tool call)
   SpindleOff,           ///< a feed move with the spindle stopped
   CoolantMismatch,      ///< an operation starts with other coolant than the CL file asks

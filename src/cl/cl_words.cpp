@@ -41,7 +41,9 @@ const std::vector<ClWord>& cl_words() {
        "an arc to the next GOTO sweeping ANGLE deg counter-clockwise about (i,j,k), checked "
        "against the GOTO and the tangents of the moves beside it",
        "Autodesk Fusion / HSM",
-       "five public Fusion files: 24,948 arcs, tangent continuity 24,483 to 2 (issue 32)", false},
+       "five public Fusion files: 24,948 arcs, tangent continuity 24,483 to 2 "
+       "(tests/data/real/SOURCES.md)",
+       false},
       {"NURBS", M::Motion, "a rational B-spline from the current point (KNOT and CNTRL follow)",
        "NX", kNx, false},
       {"KNOT", M::Motion, "the knots of the NURBS being read", "NX", kNx, false},
@@ -95,9 +97,7 @@ const std::vector<ClWord>& cl_words() {
       {"MSYS", M::Frame,
        "the MCS of the coordinates that follow; they are posted as written (as the production "
        "NX post does), or moved into it with --msys apply",
-       "NX",
-       "tests/data/real-post: the NX post for the Haas UMC-750 writes the GOTOs unchanged "
-       "(issue 32)",
+       "NX", "tests/data/real-post: the NX post for the Haas UMC-750 writes the GOTOs unchanged",
        false},
       // Program.
       {"STOP", M::Program, "a program stop (M0) where it stands", "CATIA, generic APT", kApt, true},
@@ -151,7 +151,7 @@ const std::vector<ClWord>& cl_words() {
       {"COPY", M::Refused, kSubroutine, "Pro/E, generic APT", kApt, false},
       {"LOOP", M::Refused,
        "LOOP/START,n ... LOOP/END: the post repeats the body n times (turning between copies)",
-       "CATIA", "issue 32 (a shop's CATIA post)", false},
+       "CATIA", "a shop's CATIA post (LOOP/START, LOOP/END around its copies)", false},
       {"INDEX", M::Refused, "moves the frame", "generic APT", kApt, false},
       {"ROTATE", M::Refused, "turns the frame", "generic APT", kApt, false},
       {"ROTABL", M::Refused, "turns a rotary table", "generic APT", kApt, false},

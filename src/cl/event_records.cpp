@@ -9,16 +9,14 @@
 namespace taxopt::cl {
 
 void Reader::stop(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   ProgramEvent e;
   e.kind = major == "STOP" ? ProgramEvent::Kind::Stop : ProgramEvent::Kind::OptionalStop;
   add_event(e, line);
 }
 
 void Reader::delay(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   double sec = 0.0;
   if (args.size() != 1 || !parse_number(args[0], sec) || !(sec > 0.0 && sec <= 3600.0)) {
     fail(line,
@@ -32,9 +30,7 @@ void Reader::delay(const ClRecordArgs& r) {
 }
 
 void Reader::insert(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   // SOLIDWORKS CAM's INSERT/[HOLDER=C40-16ERP412] 16MM CRB 2FL 32 LOC: a bracketed note to
   // the operator, no block: dropped with a note. Any other text is what the post would write
   // into the program as it stands (INSERT/Stock Size X135. Y135. Z30. reads as a move):
@@ -52,12 +48,12 @@ void Reader::insert(const ClRecordArgs& r) {
 }
 
 void Reader::fini(const ClRecordArgs& r) {
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   finished_line_ = line;
 }
 
 void Reader::tool_path(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   op_ = -1;
   in_block_ = true;
   pending_name_ = args.empty() ? std::string() : args[0];

@@ -147,10 +147,7 @@ void Reader::drill_hole(const Vec3d& top, int record, int line) {
 }
 
 void Reader::goto_record(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 3 && args.size() != 6) {
     fail(line, major + " expects 3 or 6 numbers (x,y,z[,i,j,k]), got " +
                    std::to_string(args.size()) + " fields");
@@ -195,10 +192,7 @@ void Reader::goto_record(const ClRecordArgs& r) {
 }
 
 void Reader::godlta(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 1 && args.size() != 3) {
     fail(line, "GODLTA expects dx,dy,dz or a distance along the tool axis");
   }
@@ -213,10 +207,7 @@ void Reader::godlta(const ClRecordArgs& r) {
 }
 
 void Reader::gohome(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   // APT's GOHOME returns to the FROM point; NX's CLSF writes its Gohome point in the record
   // (GOHOME/x,y,z[,i,j,k]): that point, as NX's posts move to it (read as the FROM point,
   // the program lost its end point and ran an 811.6 mm diagonal rising from 7 mm above
@@ -239,10 +230,7 @@ void Reader::gohome(const ClRecordArgs& r) {
 }
 
 void Reader::circle(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   std::size_t nnum = 0;
   while (nnum < args.size() && is_number_like(args[nnum])) ++nnum;
   if (nnum < 6) fail(line, "CIRCLE expects at least 6 numbers (xc,yc,zc,i,j,k[,r,...])");
@@ -273,10 +261,7 @@ void Reader::circle(const ClRecordArgs& r) {
 }
 
 void Reader::movarc(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   // Fusion / HSM: MOVARC/xc,yc,zc,i,j,k,r,ANGLE,a -- the arc to the next GOTO sweeps a deg
   // counter-clockwise about (i,j,k).
   if (args.size() != 9 || upper(args[7]) != "ANGLE") {
@@ -303,9 +288,7 @@ void Reader::movarc(const ClRecordArgs& r) {
 }
 
 void Reader::tlaxis(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 3) {
     fail(line, "TLAXIS expects i,j,k (the tool axis); other forms are not interpreted");
   }
@@ -313,10 +296,7 @@ void Reader::tlaxis(const ClRecordArgs& r) {
 }
 
 void Reader::nurbs(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int index = r.index;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (!args.empty()) {
     fail(line, "NURBS/" + args_text +
                    ": only NX's bare NURBS/ followed by KNOT/ and CNTRL/ is interpreted");
@@ -333,9 +313,7 @@ void Reader::nurbs(const ClRecordArgs& r) {
 void Reader::rapid(const ClRecordArgs&) { rapid_next_ = true; }
 
 void Reader::msys(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 9) fail(line, "MSYS expects 9 numbers (origin, x axis, y axis)");
   const auto v = numbers(args, 0, 9, major, line);
   const Vec3d x = parse_axis(v, 3, major, line), y = parse_axis(v, 6, major, line);
@@ -369,9 +347,7 @@ void Reader::msys(const ClRecordArgs& r) {
 }
 
 void Reader::multax(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (!args.empty() && upper(args[0]) == "OFF") {
     axis_ = Vec3d::UnitZ();  // 3-axis: +Z
     multax_off_line_ = line;
@@ -383,8 +359,7 @@ void Reader::multax(const ClRecordArgs& r) {
 }
 
 void Reader::cycle(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.empty()) fail(line, "CYCLE expects a cycle type, INIT or OFF");
   const std::string kind = upper(args[0]);
   if (kind == "OFF") {

@@ -64,7 +64,7 @@ Toolpath Reader::run(const std::string& input) {
 }
 
 void Reader::fail(int line, const std::string& what) const {
-  // A message quotes the record: never a 10 MB token back (issue 35).
+  // A message quotes the record: never a 10 MB token back (tests/test_bad_input.cpp).
   throw InputError(source_, line, what.size() > 400 ? what.substr(0, 400) + "... (cut)" : what);
 }
 

@@ -89,16 +89,12 @@ double Reader::feed_of(const std::vector<std::string>& args, std::size_t from,
 }
 
 void Reader::fedrat(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   feed_mm_per_min_ = feed_of(args, 0, major, line);
 }
 
 void Reader::tldata(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.empty() || upper(args[0]) != "MILL") {
     tp_.warnings.push_back(format_location(source_, line, "TLDATA other than MILL ignored"));
     skipped(major);
@@ -110,9 +106,7 @@ void Reader::tldata(const ClRecordArgs& r) {
 }
 
 void Reader::cutter(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.empty()) fail(line, "CUTTER expects a diameter");
   const auto v = numbers(args, 0, std::min<std::size_t>(args.size(), 7), major, line);
   if (v.size() == 7 && v[0] > 0.0 && v[1] > 0.5 * v[0] + 1e-9) {
@@ -123,10 +117,7 @@ void Reader::cutter(const ClRecordArgs& r) {
 }
 
 void Reader::load_tool(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (major == "LOAD" && (args.empty() || upper(args[0]) != "TOOL")) {
     fail(line, "LOAD/" + args_text + ": only LOAD/TOOL,n is interpreted");
   }
@@ -160,14 +151,12 @@ void Reader::load_tool(const ClRecordArgs& r) {
 }
 
 void Reader::spindl(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   spindle(args, line);
 }
 
 void Reader::coolnt(const ClRecordArgs& r) {
-  const std::vector<std::string>& args = r.args;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 1) fail(line, "COOLNT expects one of ON, FLOOD, MIST, OFF");
   const std::string a = upper(args[0]);
   ClCoolant c = ClCoolant::Off;
@@ -188,10 +177,7 @@ void Reader::coolnt(const ClRecordArgs& r) {
 }
 
 void Reader::cutcom(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.empty() || upper(args[0]) != "OFF") {
     fail(line, "CUTCOM/" + args_text +
                    ": cutter compensation in the control is not posted (taxopt writes the "
@@ -202,10 +188,7 @@ void Reader::cutcom(const ClRecordArgs& r) {
 }
 
 void Reader::set_mode(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (args.size() != 2 || upper(args[0]) != "MODE" || upper(args[1]) != "ABSOL") {
     fail(line, "SET/" + args_text +
                    ": only SET/MODE,ABSOL is read (absolute coordinates); incremental or "
@@ -215,10 +198,7 @@ void Reader::set_mode(const ClRecordArgs& r) {
 }
 
 void Reader::tolerance(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   // APT: INTOL/OUTTOL/TOLER ds[,ps[,cs1[,cs2]]], a missing value the one before it: the
   // part surface's is the second, else the first.
   if (args.empty() || args.size() > 4) {
@@ -242,10 +222,7 @@ void Reader::tolerance(const ClRecordArgs& r) {
 }
 
 void Reader::mode(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   // MODE/MILL says what taxopt posts anyway; any other mode changes what the moves mean.
   if (args.size() != 1 || upper(args[0]) != "MILL") {
     fail(line, "MODE/" + args_text +
@@ -256,10 +233,7 @@ void Reader::mode(const ClRecordArgs& r) {
 }
 
 void Reader::machin(const ClRecordArgs& r) {
-  const std::string& major = r.major;
-  const std::vector<std::string>& args = r.args;
-  const std::string& args_text = r.text;
-  const int line = r.line;
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   for (const auto& a : args) {
     const std::string u = upper(a);
     if (u == "TURN" || u == "LATHE" || u == "MILLTURN") {

@@ -26,8 +26,8 @@ CollisionModel::CollisionModel(const TriangleMesh& mesh) : impl_(std::make_uniqu
   }
   impl_->bvh = std::make_shared<fcl::BVHModel<fcl::OBBd>>();
   // FCL reports a failed allocation by a return code ("BVH Error! Out of memory") and leaves a
-  // model that crashes the first query (issue 35: a segfault under ulimit -v with a 183 MB
-  // part): every step is checked, and a failure is the out-of-memory it is.
+  // model that crashes the first query (tests/test_bad_input.cpp: a segfault under ulimit -v with a
+  // 183 MB part): every step is checked, and a failure is the out-of-memory it is.
   const auto ok = [](int code) {
     if (code != fcl::BVH_OK) throw std::bad_alloc();
   };

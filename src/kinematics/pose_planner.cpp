@@ -96,7 +96,7 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       // The caller's pose and its mirror (the whole pass mirrored has the same rates: which
       // one is left to the travel to and from the neighbouring passes), where the machine has
       // them; on a bounded C every turn of the caller's C within the range, the programme
-      // choosing the winding (issue 36: the global method's first table turn went to C-720,
+      // choosing the winding (tests/controller: the global method's first table turn went to C-720,
       // two turns from home, on LinuxCNC's sample with C in +-36000 deg).
       std::vector<Candidate> kept;
       for (Candidate c : cand[i]) {
@@ -202,8 +202,8 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
     }
     // Continuous C: take the turn nearest to the previous key point (the first from `start`,
     // else from home, C = 0). A half turn either way is a tie: turned negative, as the
-    // production NX post for the Haas UMC-750 turns it (issue 33: it turns -180 deg where
-    // taxopt turned +180, and every C after differed by a whole turn).
+    // production NX post for the Haas UMC-750 turns it (tests/test_program.cpp: it turns -180 deg
+    // where taxopt turned +180, and every C after differed by a whole turn).
     if (m.c.continuous) {
       double prev_c = start ? start->c_rad : 0.0;
       for (std::size_t k : keys) {

@@ -21,7 +21,7 @@ using detail::trim;
 
 std::string read_text(const std::string& path) {
   // A configuration file is a regular file of a few kB: a FIFO would hang, /dev/zero would
-  // fill memory (issue 35); 16 MB is far beyond any INI or HAL file.
+  // fill memory (tests/test_bad_input.cpp); 16 MB is far beyond any INI or HAL file.
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw InputError(path, 0, "not a regular file (a LinuxCNC INI or HAL file is one)");

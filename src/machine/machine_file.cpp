@@ -98,7 +98,8 @@ class MachineParser {
       if (!m.holder_radius_mm) fail(0, "[holder] needs radius_mm");
     }
     if (const toml::table* d = table_of(root, "defaults", false)) {
-      // What an operation runs with where its CL file says nothing (issue 33): never guessed.
+      // What an operation runs with where its CL file says nothing (a machinist's review,
+      // tests/test_program.cpp): never guessed.
       check_keys(*d, "defaults", {"spindle_rpm", "tool_number"});
       if (const toml::node* n = d->get("spindle_rpm")) {
         const double rpm = number_of(*n, "defaults.spindle_rpm");
@@ -161,7 +162,8 @@ class MachineParser {
              m.gcode.mode);
       if (m.gcode.mode == GcodeMode::Machine && !table_of(root, "pivot", false)) {
         // Machine mode writes joint positions about the rotary axes' pivots: a file without
-        // them would post every point about a pivot at 0, silently (issue 33).
+        // them would post every point about a pivot at 0, silently (a machinist's review,
+        // tests/test_program.cpp).
         fail(line_of(*g->get("mode")),
              std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
                  (m.ac.tilt == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
@@ -361,9 +363,9 @@ class MachineParser {
   }
 
   /// A block of the program template is written as it is and stepped over by the read-back,
-  /// so it is checked by what it does, against an allowlist (issue 35): machine-specific M
-  /// codes (an unlock, a kinematics switch such as LinuxCNC's M428), dwell and path-control
-  /// codes (G4 P, G40, G61, G61.1, G64 P Q, G80; Fanuc G5.1 Q and G8 P; Haas G187 P E;
+  /// so it is checked by what it does, against an allowlist (tests/test_bad_input.cpp):
+  /// machine-specific M codes (an unlock, a kinematics switch such as LinuxCNC's M428), dwell and
+  /// path-control codes (G4 P, G40, G61, G61.1, G64 P Q, G80; Fanuc G5.1 Q and G8 P; Haas G187 P E;
   /// Sinumerik FFWON, SOFT, G642, COMPCAD, CYCLE832(...) ...), and comments. Everything else
   /// is refused with its line: a word that moves an axis, a G code outside the list (motion,
   /// units, planes, frames such as G10 L2, G7, G59.3, G30, G95, G96), the spindle, coolant,
@@ -704,7 +706,7 @@ class MachineParser {
         fail(line_of(*lo), where + ": range must lie within [-360, 360] deg");
       }
       // A bounded C of many turns (LinuxCNC's sample: +-36000 deg, 100 turns) is real; beyond
-      // 1e5 deg (278 turns) the winding plans outgrow memory and time (issue 35).
+      // 1e5 deg (278 turns) the winding plans outgrow memory and time (tests/test_bad_input.cpp).
       if (is_c && (min_deg < -1e5 || max_deg > 1e5)) {
         fail(line_of(*lo), where + ": range must lie within [-1e5, 1e5] deg (278 turns)");
       }
@@ -748,7 +750,7 @@ Machine parse_machine_toml(const std::string& text, const std::string& source) {
 }
 
 Machine read_machine_file(const std::string& path) {
-  // A machine file is a regular file of a few kB: a FIFO would hang (issue 35).
+  // A machine file is a regular file of a few kB: a FIFO would hang (tests/test_bad_input.cpp).
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw InputError(path, 0, "not a regular file (a machine file is one)");

@@ -236,7 +236,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
                        const std::vector<PostedOperation>& posted, const Written& w,
                        JobResult& res);
 
-/// The program as a machinist checks it, on the read-back (issue 33; verify_operations runs
+/// The program as a machinist checks it, on the read-back (verify_operations runs
 /// it): a tool called and the spindle turning before anything moves at feed, the coolant the
 /// CL file asks for at each operation's start, no turn of the table by more than the index
 /// threshold in a rapid below the retract without a part model to check the move, the
@@ -323,10 +323,10 @@ std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec
 std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points);
 /// The feed schedule of one operation's points at `limits`. With `via` (per point), a
 /// linearised move is scheduled block by block, so that none of its blocks exceeds a limit
-/// (issue 33: scheduled on the points alone, a block ran X at 32 mm/s against 20). With
-/// `tcp_poses` (tcp mode: the controller interpolates the tip and A, C, and the joints follow
+/// (tests/test_program.cpp: scheduled on the points alone, a block ran X at 32 mm/s against 20).
+/// With `tcp_poses` (tcp mode: the controller interpolates the tip and A, C, and the joints follow
 /// through the kinematics), no feed block is shorter than its joints' velocity limits allow
-/// along it (joint_velocity_rate_per_s, issue 36).
+/// along it (joint_velocity_rate_per_s, measured on LinuxCNC's motion controller).
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,

@@ -187,7 +187,8 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
   const double fallback = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
   Run run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
   // The tool and the spindle speed: the CL file's, else the command line's, else the machine
-  // file's [defaults]; never guessed (issue 33: a program that feeds with the spindle off).
+  // file's [defaults]; never guessed (tests/test_program.cpp: a program that feeds with the spindle
+  // off).
   run.fallback_tool =
       run.options.tool_number ? run.options.tool_number : machine.default_tool_number;
   run.fallback_spindle_rpm =

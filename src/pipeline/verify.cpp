@@ -151,7 +151,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   for (const IndexRange& c : feed_chains(po.points)) {
     // The chain as written: a linearised move is its blocks (machine mode), each at its own F
     // with its own joints, so that no block between the points is faster than the limits
-    // (issue 33); `owner` maps a block back to its point.
+    // (a machinist's review, tests/test_program.cpp); `owner` maps a block back to its point.
     std::vector<JointPosition> q = {joints[c.begin - 1]};
     std::vector<double> t;
     std::vector<std::size_t> owner = {c.begin - 1};
@@ -221,7 +221,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
 /// What hits at point i (axis `axis`): the first body of the judged `tool` past the flutes
 /// that meets the part, how far its real body (`real_tool`) stays from it (or that it enters
 /// it), and, for the shank, the flute length that would clear it when one does: the words a
-/// refusal gives (issue 34).
+/// refusal gives (tests/test_paper_method.cpp).
 std::string what_hits(const CollisionModel& model, const ToolModel& tool,
                       const ToolModel& real_tool, const Operationd& op, std::size_t i,
                       const Vec3d& axis, bool in_air) {
@@ -404,8 +404,8 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
 
 /// An operation whose tool is no ball end (flat, bull nose) with a part: no contact model, so
 /// its flutes are not judged, but its shank and holder, which never cut, are checked at every
-/// point and along every move as written, with their clearances (issue 35: the demo with a
-/// corner radius of 1 mm was posted with 330 shank collisions at exit 0).
+/// point and along every move as written, with their clearances (tests/test_bad_input.cpp: the demo
+/// with a corner radius of 1 mm was posted with 330 shank collisions at exit 0).
 void check_shank_and_holder(const Run& run, const OperationContext& o, const PostedOperation& po,
                             const Written& w, const std::vector<Vec3d>& xyz_w,
                             const std::vector<double>& a_w, const std::vector<double>& c_w,
@@ -746,7 +746,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   // A longer cycle is worth a warning above 0.1 % and 10 ms (below that it is rounding and the
-  // schedule's own resolution: issue 33 saw warnings for 2e-7 s); it names what grew.
+  // schedule's own resolution: a run saw warnings for 2e-7 s); it names what grew.
   const double grew_s = r.feed_after.cycle_time_s - r.feed_before.cycle_time_s;
   if (o.optimised && grew_s > std::max(0.01, 1e-3 * r.feed_before.cycle_time_s)) {
     const auto part = [](const char* what, double before, double after) {
@@ -874,7 +874,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   const GcodeMove* prev = nullptr;
   // Every block's end within the machine's travel, the spindle's position (the approach, the
   // index moves, the retracts too: a LinuxCNC program whose approach left Z's travel by the
-  // tool's length stopped there with a soft-limit error, issue 36).
+  // tool's length stopped there with a soft-limit error, measured on LinuxCNC's motion controller).
   // The CL points' own blocks are checked with their points (verify_operation, with the same
   // tool length): here the blocks between them.
   std::set<const GcodeMove*> at_points;

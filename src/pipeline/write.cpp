@@ -309,9 +309,9 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
 /// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding): velocities against the
 /// axes' limits (the feed schedule and the joint-safe rapids keep them), accelerations against
 /// the joints' own (joint_accel_limit). No F word helps an acceleration: LinuxCNC accelerates
-/// the program's axes at their [AXIS_*] limits whatever the F word (measured, issue 36); the
-/// warning gives the share of those limits that keeps the joints within theirs
-/// (GcodeProgram::tcp_axis_accel_scale).
+/// the program's axes at their [AXIS_*] limits whatever the F word (measured, measured on
+/// LinuxCNC's motion controller); the warning gives the share of those limits that keeps the joints
+/// within theirs (GcodeProgram::tcp_axis_accel_scale).
 void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
                         const std::vector<TcpBlock>& blocks, JobResult& res) {
   const std::vector<JointPeak>& peaks = res.gcode.tcp_joint_peaks;
@@ -418,7 +418,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     // the scheduled time over the written distance), so the schedule is made on the program
     // as it will be written: the first program already writes every feed block that way, at
     // its programmed time. Scheduled on the arcs read back instead, the chords ran up to
-    // 0.06 % over the velocity limit and 2.4 % over the acceleration limit (issue 33,
+    // 0.06 % over the velocity limit and 2.4 % over the acceleration limit (measured on
     // amorim-wall-holes at LinuxCNC's sample's rates).
     for (PostedOperation& po : posted) {
       po.block_time_s = po.programmed_time_s.empty() ? programmed_block_times_s(po.points, po.poses)

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""taxopt's LinuxCNC programs on LinuxCNC's own motion controller (issue 36; ctest label
+"""taxopt's LinuxCNC programs on LinuxCNC's own motion controller (ctest label
 `controller`, run serially: one LinuxCNC per machine).
 
 A generated sine part (5 passes of 20 mm), `--method paper --feed-schedule`, posted for the
@@ -187,8 +187,9 @@ def main():
         measured = sum(t for line, t in s.get("line_s", {}).items() if int(line) > from_line)
         print("== %s" % name)
         print("controller: ran to end %s, %.2f s moving, points passed within %.4f mm / %.3f deg"
+              ", %d samples lost by the sampler's reader"
               % (s["ran_to_end"], s.get("move_s", 0), s.get("point_miss_mm", -1),
-                 s.get("point_miss_deg", -1)))
+                 s.get("point_miss_deg", -1), s.get("lost_samples", 0)))
         print("program time after line %d: controller %.2f s, report %.2f s (%+.2f %%)"
               % (from_line, measured, predicted, 100.0 * (predicted - measured) / measured
                  if measured > 0 else float("nan")))

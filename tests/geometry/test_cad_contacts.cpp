@@ -1,8 +1,8 @@
-// Contacts on CAD-style meshes (issue 34): big flat facets beside thin fillet strips, as CAD
-// systems export them (binary STL). The contact is the mesh's exact nearest point to the ball
-// centre, its normal the true face or edge normal; the default tolerance comes from the mesh's
-// chordal error, not its facets' size. Checked against a brute-force nearest point written here
-// (no CGAL).
+// Contacts on CAD-style meshes (tests/test_paper_method.cpp): big flat facets beside thin fillet
+// strips, as CAD systems export them (binary STL). The contact is the mesh's exact nearest point to
+// the ball centre, its normal the true face or edge normal; the default tolerance comes from the
+// mesh's chordal error, not its facets' size. Checked against a brute-force nearest point written
+// here (no CGAL).
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>

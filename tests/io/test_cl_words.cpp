@@ -1,6 +1,7 @@
-// The CL reader knows its words (issue 32): one table, documented; unknown words, words it
-// refuses and misspelt motion words stop it by name; stops, dwells, spindle and coolant reach
-// the program where they stand; MSYS as NX's own post reads it; Fusion's MOVARC; TLAXIS; units.
+// The CL reader knows its words (tests/data/real/SOURCES.md): one table, documented; unknown words,
+// words it refuses and misspelt motion words stop it by name; stops, dwells, spindle and coolant
+// reach the program where they stand; MSYS as NX's own post reads it; Fusion's MOVARC; TLAXIS;
+// units.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>

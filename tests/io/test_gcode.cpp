@@ -296,7 +296,7 @@ TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][g
     CHECK(moves.back().a_deg == 0.0);
     CHECK(moves.back().c_deg == 0.0);
     // From the retract: XY first (no Z word), then down to the first point with the same X Y
-    // (issue 33: no diagonal rapid from the retract height).
+    // (tests/test_program.cpp: no diagonal rapid from the retract height).
     for (std::size_t k = 0; k < 2; ++k) {
       const int point_line = prog.emitted[k][0];
       std::size_t at = 0;
@@ -368,7 +368,7 @@ TEST_CASE("gcode: the program template of the machine file", "[io][gcode]") {
 TEST_CASE(
     "A tcp rapid that turns the table gets a rate that keeps every joint within its "
     "velocity limit, checked at 4000 steps along the move (LinuxCNC plans it in the "
-    "program's axes, issue 36)",
+    "program's axes, measured on LinuxCNC's motion controller)",
     "[gcode][tcp]") {
   // LinuxCNC's sample machine: pivot, senses and limits as its preset gives them.
   const Machine m =

@@ -258,7 +258,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "header = [\"G91 G28 C0\"]\n", 9, "holds G91");
   expect_error(head + "tool_change = [\"M6\"]\n", 9, "must call the tool by \"{tool}\"");
   expect_error(head + "tcp_on = [\"G49\"]\n", 9, "holds G49");
-  // Issue 35: blocks that move or reframe the machine, found through rs274, each refused.
+  // Blocks that move or reframe the machine, found through rs274, each refused.
   for (const auto& [block, says] : std::vector<std::pair<std::string, std::string>>{
            {"footer = [\"Z[0-50]\"]", "holds '['"},
            {"footer = [\"X[100]\"]", "holds '['"},
@@ -320,7 +320,8 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
       parse_machine_toml(any + "dialect = \"heidenhain\"\ntool_change = [\"T{tool} G17\"]\n", "m"));
   expect_error(any + "dialect = \"siemens\"\nheader = [\"TRANS X10\"]\n", 9, "holds TRANS");
   expect_error(any + "dialect = \"siemens\"\nheader = [\"CYCLE832(0.01,[1])\"]\n", 9, "holds '['");
-  // Spindle, coolant, tool and program end: the read-back must know them (issue 33).
+  // Spindle, coolant, tool and program end: the read-back must know them (a machinist's review,
+  // tests/test_program.cpp).
   expect_error(head + "tcp_on = [\"M5\"]\n", 9, "holds M5: the spindle, coolant");
   expect_error(head + "header = [\"S1000 M3\"]\n", 9, "holds S1000");
   expect_error(head + "footer = [\"M09\"]\n", 9, "holds M09");
@@ -393,7 +394,8 @@ TEST_CASE(
 
 TEST_CASE("machine file: machine mode needs an explicit [pivot] -- the Haas preset has none",
           "[io][machine][bad-input]") {
-  // Without [pivot] every point would be posted about pivots at 0 (issue 33).
+  // Without [pivot] every point would be posted about pivots at 0 (a machinist's review,
+  // tests/test_program.cpp).
   expect_error(replace(kFull,
                        "[pivot]\na_axis_y = 1.5\na_axis_z = -2.0\nc_axis_x = 3.0\n"
                        "c_axis_y = 4.0\n",

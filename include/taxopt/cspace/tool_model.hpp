@@ -62,7 +62,7 @@ struct ToolModel {
   /// corner radius r): the shank (radius D / 2 unless overridden) and the holder, lengths as
   /// in ball_end but measured from the point r above the tip on the axis (ball_radius_mm is
   /// r). No flute body (flute_bodies 0): without a contact model the cutting part is not
-  /// judged, but the bodies that never cut are (issue 35).
+  /// judged, but the bodies that never cut are (tests/test_bad_input.cpp).
   /// @throws InputError as ball_end does, and for a tool without a diameter.
   static ToolModel shank_and_holder(const Tool& tool, const ToolOverrides& overrides = {});
 

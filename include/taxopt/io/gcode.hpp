@@ -131,9 +131,10 @@ struct GcodeProgram {
   /// from the end of the first retract (where the machine stands before it is not known) to
   /// the end, the feed blocks at their scheduled times, every rapid (approach, retract, table
   /// turn, index move) rest to rest on the trapezoids of the space the controller plans it in:
-  /// the program's axes with TCP on (LinuxCNC plans X Y Z A C, measured, issue 36), the joints
-  /// otherwise. A retract's length takes the tool length offset as the tool's gauge length
-  /// (time_tool_length_mm) and the work offset as zero. 0 before it is computed.
+  /// the program's axes with TCP on (LinuxCNC plans X Y Z A C, measured, measured on LinuxCNC's
+  /// motion controller), the joints otherwise. A retract's length takes the tool length offset as
+  /// the tool's gauge length (time_tool_length_mm) and the work offset as zero. 0 before it is
+  /// computed.
   double time_s = 0.0;
   int time_from_line = 0;
   double time_tool_length_mm = 0.0;
@@ -172,7 +173,7 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
 
 /// A rapid in tcp mode: LinuxCNC with its kinematics on plans G0 in the program's axes (X Y Z
 /// of the tip, A, C), each at its own limits, and the joints follow through the kinematics,
-/// faster than their limits where the table turns (issue 36, measured on its controller:
+/// faster than their limits where the table turns (measured on LinuxCNC's motion controller:
 /// joints at 42 mm/s against 20). The rate along the move (fraction of it per second) that
 /// keeps every joint's velocity within its limit, from the joints' largest rate of change
 /// along the move (sampled in steps of at most 0.25 deg of turn, up to 64, less 0.1 % and the

@@ -1,5 +1,5 @@
 #pragma once
-/// @file One self-contained HTML page of a run (`--html FILE`, issue 37): a 3D view of the part,
+/// @file One self-contained HTML page of a run (`--html FILE`): a 3D view of the part,
 /// the toolpath and the tool axes before and after (coloured by the rotary axes' angular
 /// acceleration), markers where a check fired, the rotary plots with the machine's limits, the
 /// summary and the run's header. The page needs no network and no server: three.js,

@@ -67,8 +67,9 @@ struct GlobalOptions {
   double fine_step_deg = 2.0;
   /// --objective time: a plan whose scheduled cycle is within this fraction of the shortest
   /// wins on smoothness (the lowest peak a of the rotary axes): a millisecond is not worth a
-  /// tripled peak acceleration (issue 34). 0.001 = 0.1 %, below the 0.1 % within which the
-  /// scheduled feed moves agree with LinuxCNC's own controller (issue 36's measurement).
+  /// tripled peak acceleration (tests/test_paper_method.cpp). 0.001 = 0.1 %, below the 0.1 % within
+  /// which the scheduled feed moves agree with LinuxCNC's own controller (the measurement in
+  /// tests/controller).
   double time_tie_band = 0.001;
   /// Refinement: largest number of accepted steps, and of halvings of a point's step.
   int max_iterations = 40;

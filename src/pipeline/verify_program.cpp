@@ -1,0 +1,347 @@
+// The program's blocks between and around the CL points: swept against the part, held to
+// the machine's travel, read as a machinist reads them (stages.hpp).
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "pipeline/stages.hpp"
+#include "pipeline/verify_checks.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/io/cl_file.hpp"
+#include "taxopt/kinematics/machine.hpp"
+#include "taxopt/kinematics/metrics.hpp"
+#include "util/parallel.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt::pipeline {
+namespace {
+
+/// The operation each written line belongs to and what it is, from the writer's blocks
+/// (GcodeProgram::blocks): a line of the program's start counts as the first operation's, one
+/// of its end as the last's.
+class BlockOwner {
+ public:
+  BlockOwner(const GcodeProgram& program, std::size_t operations)
+      : blocks_(program.blocks), last_(operations > 0 ? operations - 1 : 0) {}
+  std::size_t operator()(int line) const {
+    const ProgramBlock* b = at(line);
+    if (!b || b->operation < 0) return line <= first_line() ? 0 : last_;
+    return std::min(static_cast<std::size_t>(b->operation), last_);
+  }
+  /// What the block is, in words.
+  std::string what(int line) const {
+    const ProgramBlock* b = at(line);
+    if (!b) return "a block";
+    switch (b->kind) {
+      case BlockKind::Retract: return "the retract";
+      case BlockKind::TableTurn: return "the table's turn with the tool up";
+      case BlockKind::Approach: return "the approach";
+      case BlockKind::Point: return "the move to a CL point";
+      case BlockKind::Linearised: return "a linearisation block";
+      case BlockKind::Arc: return "an arc";
+      case BlockKind::JointSafeRapid: return "a rapid at a joint-safe feed";
+      case BlockKind::End: return "the program's end";
+      default: return "a block";
+    }
+  }
+
+ private:
+  const ProgramBlock* at(int line) const {
+    if (line < 1 || static_cast<std::size_t>(line) > blocks_.size()) return nullptr;
+    return &blocks_[static_cast<std::size_t>(line - 1)];
+  }
+  int first_line() const {
+    for (const ProgramBlock& b : blocks_) {
+      if (b.operation >= 0) return b.line;
+    }
+    return 0;
+  }
+  const std::vector<ProgramBlock>& blocks_;
+  std::size_t last_;
+};
+
+}  // namespace
+
+void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
+                   JobResult& res) {
+  const Machine& machine = run.machine;
+  const ProgramTemplate& t = machine.gcode.program;
+  const std::vector<GcodeMove>& moves = w.moves;
+  if (moves.empty() || posted.empty()) return;
+  const BlockOwner op_of(res.gcode, posted.size());
+  struct Breach {
+    std::size_t count = 0;
+    int line = 0;
+    std::string what;
+  };
+  std::map<FindingCode, Breach> breaches;
+  const auto breach = [&](FindingCode code, const GcodeMove& m, const std::string& what) {
+    Breach& b = breaches[code];
+    if (b.count++ == 0) {
+      b.line = m.line;
+      b.what = "operation " + posted[op_of(m.line)].name + ": G-code line " +
+               std::to_string(m.line) + " " + what;
+    }
+  };
+  const double threshold_deg = t.index_threshold_deg + 1e-9;
+  bool after_retract = false, xy_set = false;
+  double xy[2] = {0.0, 0.0};
+  const GcodeMove* prev = nullptr;
+  // Every block's end within the machine's travel, the spindle's position (the approach, the
+  // index moves, the retracts too: a LinuxCNC program whose approach left Z's travel by the
+  // tool's length stopped there with a soft-limit error, measured on LinuxCNC's motion controller).
+  // The CL points' own blocks are checked with their points (verify_operation, with the same
+  // tool length): here the blocks between them.
+  std::set<const GcodeMove*> at_points;
+  for (const auto& op_moves : w.point_moves) at_points.insert(op_moves.begin(), op_moves.end());
+  for (std::size_t k = 0; k < moves.size() && k < w.spindle_mm.size(); ++k) {
+    if (!w.spindle_mm[k] || at_points.count(&moves[k])) continue;
+    for (int q = 0; q < 3; ++q) {
+      const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
+      const double v = (*w.spindle_mm[k])[q];
+      if (range.contains(v) || std::abs(v - std::clamp(v, range.min_mm, range.max_mm)) < 1e-6) {
+        continue;
+      }
+      std::ostringstream os;
+      os << "takes the spindle to "
+         << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
+         << res.gcode.time_tool_length_mm << " mm), outside the machine's travel [" << range.min_mm
+         << ", " << range.max_mm << "] mm";
+      breach(FindingCode::TravelExceeded, moves[k], os.str());
+    }
+  }
+  for (const GcodeMove& m : moves) {
+    const PostedOperation& po = posted[op_of(m.line)];
+    if (!m.retract) {
+      if (m.tool <= 0) {
+        breach(FindingCode::NoToolCalled, m, "moves with no tool called (T with M6)");
+      } else if (po.tool.number > 0 && m.tool != po.tool.number && !m.positioning) {
+        breach(FindingCode::NoToolCalled, m,
+               "runs tool " + std::to_string(m.tool) + " where the operation's is " +
+                   std::to_string(po.tool.number));
+      }
+    }
+    // A rapid written at a joint-safe feed (LinuxCNC, tcp) cuts nothing: a rapid still.
+    const bool joint_safe_rapid = std::binary_search(res.gcode.joint_safe_rapids.begin(),
+                                                     res.gcode.joint_safe_rapids.end(), m.line);
+    if (!m.rapid && !m.spindle_on && !joint_safe_rapid) {
+      breach(FindingCode::SpindleOff, m, "moves at feed with the spindle stopped");
+    }
+    if (!m.rapid && !(m.feed > 0.0)) {
+      // A feed that rounds to F0 at gcode.feed_decimals: no controller runs it (rs274: "Cannot
+      // do g1 with zero feed rate").
+      breach(FindingCode::ReadBackMismatch, m,
+             "moves at feed F0 (the feed rounds to zero at gcode.feed_decimals)");
+    }
+    if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
+        t.retract != SafeRetract::None &&
+        std::max(std::abs(m.a_deg - prev->a_deg), std::abs(m.c_deg - prev->c_deg)) >
+            threshold_deg) {
+      breach(FindingCode::IndexWithoutRetract, m,
+             "turns the table by more than " + shown(t.index_threshold_deg) +
+                 " deg in a rapid below the retract, with no part model to check the move");
+    }
+    if (m.retract) {
+      after_retract = true;
+      xy_set = false;
+    } else if (after_retract) {
+      const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
+      const bool turns = prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg);
+      if (gives_z && !gives_xy && !xy_set && !turns) {
+        // Straight down (or up) to the clearance height, where it is: not the way in yet.
+      } else if (gives_xy && !gives_z) {
+        xy_set = true;
+        xy[0] = m.xyz_mm.x();
+        xy[1] = m.xyz_mm.y();
+      } else if (gives_z) {
+        // Down from there: straight down, or under TCP along the tool axis (as CAM links an
+        // approach: the writer comes down so where the axis is not vertical).
+        const auto along_axis = [&] {
+          if (!prev || !m.tcp || !prev->tcp) return false;
+          const Vec3d d = m.xyz_mm - prev->xyz_mm;
+          if (d.norm() < 1e-9) return false;
+          const Vec3d axis = machine.ac.forward(Posed{deg_to_rad(m.a_deg), deg_to_rad(m.c_deg)});
+          return std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
+        };
+        if (!xy_set || ((m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1]) && !along_axis()) ||
+            (prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
+          breach(FindingCode::DiagonalApproach, m,
+                 "leaves the retract height otherwise than XY first, then down");
+        }
+        after_retract = false;
+      }
+    }
+    prev = &m;
+  }
+  // The coolant at each operation's first point: the CL file's (its last change before that
+  // point), else the machine file's.
+  const auto code_of = [](ClCoolant c) {
+    return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0;
+  };
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    if (w.point_moves[k].empty()) continue;
+    int want = po.coolant                    ? code_of(*po.coolant)
+               : t.coolant == Coolant::Flood ? 8
+               : t.coolant == Coolant::Mist  ? 7
+                                             : 0;
+    for (const ProgramEvent& e : po.events) {
+      if (e.kind == ProgramEvent::Kind::Coolant && e.before_point == 0) want = code_of(e.coolant);
+    }
+    const GcodeMove& first = *w.point_moves[k].front();
+    if (first.coolant != want) {
+      breach(FindingCode::CoolantMismatch, first,
+             "starts with coolant " +
+                 std::string(first.coolant == 0   ? "off"
+                             : first.coolant == 7 ? "M7"
+                                                  : "M8") +
+                 " where " +
+                 std::string(want == 0   ? "off"
+                             : want == 7 ? "M7 (mist)"
+                                         : "M8 (flood)") +
+                 " is asked (CL file COOLNT, else the machine file's gcode.coolant)");
+    }
+  }
+  if (t.end_pose == EndPose::Home && t.retract != SafeRetract::None &&
+      (moves.back().a_deg != 0.0 || moves.back().c_deg != 0.0)) {
+    breach(FindingCode::EndPoseNotHome, moves.back(),
+           "ends with the rotary axes at " + shown(moves.back().a_deg) + " / " +
+               shown(moves.back().c_deg) + " deg, not at their home (gcode.end_pose)");
+  }
+  for (const auto& [code, b] : breaches) {
+    add_finding(res, code, std::nullopt, 0,
+                b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""));
+  }
+}
+
+void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& w,
+                       JobResult& res) {
+  const std::vector<GcodeMove>& moves = w.moves;
+  if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
+    return;
+  const BlockOwner op_of(res.gcode, posted.size());
+  // The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
+  // point with its linearisation blocks, a rapid written as one block. Every other block (the
+  // approach, the descent and the XY move to it, an index move's retract, turn and way back,
+  // the retract at the end and the unwinding) is swept here, with the whole tool in the air.
+  std::vector<char> swept(moves.size(), 0);
+  std::vector<char> touching_end(moves.size(), 0);
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const OperationContext& o = ops[k];
+    const std::vector<const GcodeMove*>& at = w.point_moves[k];
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      const std::ptrdiff_t to = move_index(moves, at[i]);
+      if (to < 0) continue;
+      if (!o.contacts.empty() && o.contacts[i].state == ContactState::Touching) {
+        touching_end[static_cast<std::size_t>(to)] = 1;
+      }
+      if (i == 0 || !o.judged_tool()) continue;
+      const std::ptrdiff_t from = move_index(moves, at[i - 1]);
+      if (from < 0 || to <= from) continue;
+      if (posted[k].points[i].motion == Motion::Feed || to == from + 1) {
+        for (std::ptrdiff_t j = from + 1; j <= to; ++j) swept[static_cast<std::size_t>(j)] = 1;
+      }
+    }
+  }
+  struct Hit {
+    std::size_t count = 0;
+    std::size_t move = 0;  // the first block that hits
+  };
+  std::vector<Hit> hits(posted.size());
+  std::vector<std::size_t> candidates;
+  std::vector<long> unknown(posted.size(), 0);
+  for (std::size_t j = 1; j < moves.size(); ++j) {
+    if (swept[j]) continue;
+    const OperationContext& o = ops[op_of(moves[j].line)];
+    if (!o.judged_tool()) continue;
+    if (w.joints_after[j]) {
+      candidates.push_back(j);
+    } else {
+      ++unknown[op_of(moves[j].line)];
+    }
+  }
+  const Machine& machine = run.machine;
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  std::vector<double> flute_tolerance_mm(ops.size(), 0.0);
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    flute_tolerance_mm[k] = margins_of(run.options, *ops[k].op).flute_tolerance_mm;
+  }
+  const std::vector<std::size_t> hit =
+      detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
+        const std::size_t j = candidates[c];
+        const std::size_t k = op_of(moves[j].line);
+        const OperationContext& o = ops[k];
+        const ToolModel& tool = *o.tool;
+        const double R = tool.ball_radius_mm;
+        // In the air the ball counts as a body too, within the flutes' tolerance of the part
+        // (a block that ends at a contact point touches it there by design).
+        ToolModel air = tool;
+        air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm[k]);
+        // A block whose start is not known (the first after a retract in machine
+        // coordinates): its end, where the tool stands.
+        const JointPosition& q1 = *w.joints_after[j];
+        const JointPosition& q0 = w.joints_after[j - 1] ? *w.joints_after[j - 1] : q1;
+        const Posed p0{deg_to_rad(q0[kA]), deg_to_rad(q0[kC])};
+        const Posed p1{deg_to_rad(q1[kA]), deg_to_rad(q1[kC])};
+        const Vec3d m0(q0[0], q0[1], q0[2]), m1(q1[0], q1[1], q1[2]);
+        const Vec3d t0 = machine.ac.from_machine_mm(m0, p0),
+                    t1 = machine.ac.from_machine_mm(m1, p1);
+        const bool tip_linear = w.tip_linear[j] != 0;
+        // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
+        // thinnest body's radius (a wall the body could pass between two samples is thinner
+        // than the body is wide).
+        double thinnest = R > 0.0 ? R : 1.0;
+        for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
+        const double step_mm = std::max(0.05, 0.5 * thinnest);
+        const double travel = std::max((t1 - t0).norm(), (m1 - m0).norm());
+        const int steps = static_cast<int>(
+            std::ceil(std::max({std::abs(q1[kA] - q0[kA]) / 0.5, std::abs(q1[kC] - q0[kC]) / 0.5,
+                                travel / step_mm, 1.0})));
+        for (int s = 1; s <= steps; ++s) {
+          const double u = static_cast<double>(s) / steps;
+          const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad),
+                           p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+          const Vec3d tip = tip_linear ? Vec3d(t0 + u * (t1 - t0))
+                                       : machine.ac.from_machine_mm(m0 + u * (m1 - m0), pose);
+          const Vec3d axis = machine.ac.forward(pose);
+          // The block's end at a contact point: the flutes judged as at every CL point.
+          const bool at_contact = s == steps && touching_end[j];
+          if (run.collision->collides(at_contact ? tool : air, tip + R * axis, axis, !at_contact)) {
+            return true;
+          }
+        }
+        return false;
+      });
+  for (std::size_t c : hit) {
+    const std::size_t j = candidates[c];
+    Hit& h = hits[op_of(moves[j].line)];
+    if (h.count++ == 0) h.move = j;
+  }
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    res.operations[k].verification.blocks_swept = 0;
+    res.operations[k].verification.blocks_not_checked = unknown[k];
+  }
+  for (std::size_t j : candidates) ++res.operations[op_of(moves[j].line)].verification.blocks_swept;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    OperationResult& r = res.operations[k];
+    r.verification.colliding_blocks = static_cast<long>(hits[k].count);
+    if (!hits[k].count) continue;
+    r.verification.collision_free = false;
+    const GcodeMove& m = moves[hits[k].move];
+    add_finding(res, FindingCode::MoveCollision, k, 0,
+                "operation " + posted[k].name + ": " + std::to_string(hits[k].count) +
+                    " blocks the program adds between CL points (approach, retract, index or "
+                    "end moves) where the tool hits the part as the machine moves it, first G-code "
+                    "line " +
+                    std::to_string(m.line) + " (" + op_of.what(m.line) + ", " +
+                    (m.rapid ? "a rapid" : "a feed block") +
+                    (m.retract ? " in machine coordinates" : "") + ")");
+  }
+}
+
+}  // namespace taxopt::pipeline

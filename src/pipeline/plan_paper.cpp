@@ -1,0 +1,114 @@
+// The paper's optimiser over an operation's passes, the points between passes carried
+// (plan_rooms.hpp).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pipeline/plan_rooms.hpp"
+#include "pipeline/stages.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/plan/air_turn.hpp"
+#include "taxopt/plan/global_optimiser.hpp"
+#include "taxopt/plan/paper_optimiser.hpp"
+#include "taxopt/plan/pole_passage.hpp"
+#include "taxopt/plan/stretch_guard.hpp"
+#include "util/parallel.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt::pipeline {
+
+/// The cut of a pass: from its first to its last point where the ball touches the part (empty
+/// when it never does); the whole pass without contacts (no part).
+IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRange& pass) {
+  if (contacts.empty()) return pass;
+  IndexRange span{pass.end, pass.end};
+  for (std::size_t i = pass.begin; i < pass.end; ++i) {
+    if (contacts[i].state != ContactState::Touching) continue;
+    if (span.begin == pass.end) span.begin = i;
+    span.end = i + 1;
+  }
+  return span.begin == pass.end ? IndexRange{pass.begin, pass.begin} : span;
+}
+
+/// Runs plan_pass_paper on every feed pass of `op` (in parallel over passes; each pass is
+/// planned alone, so the result does not depend on the thread count). An axis is acceptable
+/// when the machine reaches it and, with a part, the tool above the ball (and the ball, where
+/// it is in the air) misses the part. Points outside the feed passes keep their axes. Then
+/// each pass's stretches near the pole get C re-planned in machine space (pole_passage.hpp).
+OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                                  double ball_radius_mm, const PartCheck* model,
+                                  const ToolModel* tool, const Machine& machine,
+                                  const std::vector<double>& metric_feed,
+                                  const PosePlanOptions& pose_options, const PaperOptions& options,
+                                  detail::StageProgress& progress) {
+  OptimisedOperation out;
+  for (const CLPointd& p : op.points) out.axes.push_back(p.axis);
+  const double R = ball_radius_mm;
+  const double max_dev_rad = deg_to_rad(options.max_deviation_deg);
+  const auto touching = [&](std::size_t i) {
+    return !contacts.empty() && contacts[i].state == ContactState::Touching;
+  };
+  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac, max_dev_rad};
+  std::vector<PassPlan> plans(feed_passes(op).size());
+  std::vector<std::size_t> pole_stretches(plans.size(), 0);
+  const auto plan_pass = [&](std::size_t q, const IndexRange& pass) {
+    PassProblem problem;
+    problem.segment_mm = segment_lengths_mm(op, R, pass);
+    Vec3d mean = Vec3d::Zero();
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      problem.input_axes.push_back(op.points[i].axis);
+      mean += op.points[i].axis;
+    }
+    problem.up = mean.norm() > 1e-9 ? Vec3d(mean.normalized()) : Vec3d::UnitZ();
+    // The curve of the segmenter: the contact points; where the ball is in the air, the ball
+    // centre offset by the normal of the nearest contact point (no jump of R at an approach);
+    // without any contact, the ball centres (an offset of the contact curve).
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      const Vec3d centre = reference_point(op.points[i], R);
+      if (touching(i)) {
+        problem.curve_mm.push_back(contacts[i].cc_mm);
+        continue;
+      }
+      std::optional<Vec3d> normal;
+      for (std::size_t d = 1; !normal && d < pass.size(); ++d) {
+        if (i >= pass.begin + d && touching(i - d)) normal = contacts[i - d].normal;
+        if (i + d < pass.end && touching(i + d)) normal = contacts[i + d].normal;
+      }
+      problem.curve_mm.push_back(normal ? Vec3d(centre - R * *normal) : centre);
+    }
+    const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
+      return acceptable_at(pass.begin + j, axis);
+    };
+    PassPlan plan = plan_pass_paper(problem, acceptable, options);
+    std::vector<bool> rapid_into(pass.size(), false);
+    rapid_into[0] = true;
+    const PosePlan poses = plan_poses(machine.ac, plan.axes, rapid_into, {}, pose_options);
+    if (poses.ok()) {
+      const AxisTest in_cone = [&](std::size_t j, const Vec3d& axis) {
+        return acceptable_at.in_cone(pass.begin + j, axis);
+      };
+      PolePassage pole =
+          smooth_pole_passages(machine.ac, plan.axes, poses.poses, problem.segment_mm,
+                               pass_feeds(metric_feed, pass), in_cone);
+      plan.axes = std::move(pole.axes);
+      pole_stretches[q] = pole.stretches;
+    }
+    PassAxes axes{pass, plan.axes, {}};
+    plans[q] = std::move(plan);
+    return std::optional<PassAxes>(std::move(axes));
+  };
+  const auto merge = [&](std::size_t q, const PassAxes& pass) {
+    const PassPlan& plan = plans[q];
+    out.intervals += plan.intervals();
+    out.repairs += plan.repairs;
+    out.smoothed_joints += plan.smoothed_joints;
+    out.sharp_joints += plan.sharp_joints;
+    out.pole_stretches += pole_stretches[q];
+    for (std::size_t j : plan.keys) out.keys.push_back(pass.span.begin + j);
+    for (std::size_t j : plan.no_free_axis) out.no_free_axis.push_back(pass.span.begin + j);
+  };
+  plan_passes(op, contacts, acceptable_at, out, progress, plan_pass, merge);
+  return out;
+}
+
+}  // namespace taxopt::pipeline

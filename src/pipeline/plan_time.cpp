@@ -1,0 +1,194 @@
+// --objective time: the operation's scheduled cycle and the passes refined for it (plan_rooms.hpp).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pipeline/plan_rooms.hpp"
+#include "pipeline/stages.hpp"
+#include "taxopt/core/error.hpp"
+#include "taxopt/plan/air_turn.hpp"
+#include "taxopt/plan/global_optimiser.hpp"
+#include "taxopt/plan/paper_optimiser.hpp"
+#include "taxopt/plan/pole_passage.hpp"
+#include "taxopt/plan/stretch_guard.hpp"
+#include "util/parallel.hpp"
+#include "util/parallel_select.hpp"
+
+namespace taxopt::pipeline {
+
+/// An operation's scheduled cycle (feed moves and rapids at the machine's effective limits)
+/// with tool axes `axes` about the fixed ball centres, posed as run_job poses them (the turns
+/// between passes in one move); `programmed_s` the least time of every move. Infinite when the
+/// axes cannot be posed.
+double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
+                         const Machine& machine, double max_deviation_rad,
+                         const std::vector<Vec3d>& axes,
+                         const std::vector<std::optional<Posed>>& preferred,
+                         const PosePlanOptions& pose_options, double fallback_feed,
+                         const std::vector<double>& programmed_s) {
+  const PosePlan plan =
+      plan_poses(machine.ac, axes, rapid_into_of(op), {}, pose_options, preferred);
+  if (!plan.ok()) return std::numeric_limits<double>::infinity();
+  PostedOperation po;
+  po.points = posted_feeds(op, fallback_feed);
+  po.poses = plan.poses;
+  for (std::size_t i = 0; i < po.points.size(); ++i) {
+    po.points[i].axis = axes[i];
+    po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
+  }
+  spread_turns_in_air(op, contacts, ball_radius_mm, model, tool ? *tool : ToolModel{}, machine,
+                      max_deviation_rad, po);
+  std::vector<Vec3d> tips;
+  for (const CLPointd& p : po.points) tips.push_back(p.tip_mm);
+  std::vector<double> programmed = programmed_block_times_s(po.points, po.poses);
+  if (machine.gcode.feed_reference == FeedReference::CutterPath) {
+    // The input block's time, within the feed ratio (as posted: kept_block_times_s).
+    programmed = kept_block_times_s(programmed_s, programmed, machine.gcode.max_feed_ratio);
+  }
+  return schedule_operation(po.points, joints_of(machine.ac, tips, po.poses), programmed,
+                            effective_limits(machine), machine.ac, nullptr,
+                            machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr)
+      .summary.cycle_time_s;
+}
+
+/// --method global --objective time (docs/global-method.md): the sum-squares plan first (a
+/// start and an alternative every pass weighs, and the reference of the guard, which gives it
+/// back over stretches whose moves hit), then every pass planned for its scheduled time; of
+/// the paper's, the sum-squares and the time plan the operation keeps the one with the
+/// shortest scheduled cycle (ties to the sum-squares plan, then the paper's). `out` holds the
+/// paper's plan on entry. The input's axes are kept instead where their cycle is shorter still
+/// and none of their points or moves hits the part. Returns a line for the log.
+std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                        double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
+                        const Machine& machine, const BlockTiming& timing,
+                        const PosePlanOptions& pose_options, const GlobalOptions& options,
+                        double fallback_feed, OptimisedOperation& out,
+                        detail::StageProgress& progress) {
+  const OptimisedOperation paper = out;
+  // Two sum-squares plans: the coarse programme's (the time plan's start and guard reference:
+  // off the pyramid's, the time plan's schedule came out longer on three of the eighteen cases
+  // of docs/results.md, up to +14 %) and the pyramid's (--method global's own plan, so the time
+  // objective is never slower than it).
+  OptimisedOperation smooth = out, fine = out;
+  GlobalOptions sum_squares = options;
+  sum_squares.objective = GlobalObjective::SumSquares;
+  sum_squares.fine_step_deg = 0.0;
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+                sum_squares, smooth, progress);
+  const bool pyramid = options.fine_step_deg > 0.0;
+  if (pyramid) {
+    sum_squares.fine_step_deg = options.fine_step_deg;
+    refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+                  sum_squares, fine, progress);
+  }
+  const std::vector<bool> rapid_into = rapid_into_of(op);
+  std::vector<Vec3d> in_axes;
+  for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
+  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options);
+  const PosePlan smooth_plan =
+      plan_poses(machine.ac, smooth.axes, rapid_into, {}, pose_options, smooth.preferred);
+  TimeContext time;
+  time.limits = effective_limits(machine);
+  // Every feed block keeps the time the input block takes at its feed (cutter-path), as
+  // posted; with the tip-path reference that time moves with the tip (the input's here).
+  time.programmed_s = programmed_block_times_s(posted_feeds(op, fallback_feed),
+                                               in_plan.ok() ? in_plan.poses : smooth_plan.poses);
+  if (smooth_plan.ok()) time.alternatives.push_back(smooth_plan.poses);
+  if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
+  OptimisedOperation fast = out;
+  const GuardReference reference{smooth.axes, smooth.preferred, false};
+  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options, options,
+                fast, progress, &time, &reference);
+  const auto cycle = [&](const OptimisedOperation& o) {
+    return operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
+                             deg_to_rad(options.max_deviation_deg), o.axes, o.preferred,
+                             pose_options, fallback_feed, time.programmed_s);
+  };
+  const double paper_s = cycle(paper), smooth_s = cycle(smooth), fast_s = cycle(fast);
+  const double fine_s = pyramid ? cycle(fine) : std::numeric_limits<double>::infinity();
+  // The input's axes count where every point and move of theirs is free.
+  double input_s = in_plan.ok()
+                       ? operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
+                                           deg_to_rad(options.max_deviation_deg), in_axes, {},
+                                           pose_options, fallback_feed, time.programmed_s)
+                       : std::numeric_limits<double>::infinity();
+  OptimisedOperation input = paper;
+  input.axes = in_axes;
+  input.preferred.clear();
+  if (std::isfinite(input_s)) {
+    Machine path_machine = machine;
+    if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
+      path_machine.gcode.mode = GcodeMode::Tcp;
+    }
+    const std::vector<char> hit =
+        points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, in_axes,
+                             in_plan.poses, std::vector<char>(op.points.size(), 1));
+    if (std::find(hit.begin(), hit.end(), 1) != hit.end()) {
+      input_s = std::numeric_limits<double>::infinity();
+    }
+  }
+  // The peak a of a plan's passes, each move timed as the controller takes it from the words
+  // (move_times_s), as the report measures it.
+  const auto peak_a = [&](const OptimisedOperation& o) {
+    const PosePlan pp = plan_poses(machine.ac, o.axes, rapid_into, {}, pose_options, o.preferred);
+    if (!pp.ok()) return std::numeric_limits<double>::infinity();
+    std::vector<double> a, c;
+    for (const Posed& q : pp.poses) {
+      a.push_back(rad_to_deg(q.a_rad));
+      c.push_back(rad_to_deg(q.c_rad));
+    }
+    std::vector<double> into = {0.0};
+    for (double t : move_times_s(op, ball_radius_mm, machine.ac, pp.poses, timing,
+                                 IndexRange{0, op.points.size()})) {
+      into.push_back(t);
+    }
+    return summarise_timed(op, a, c, into).max_accel_deg_s2;
+  };
+  struct Plan {
+    const char* name;
+    const OptimisedOperation* plan;
+    double cycle_s, peak_a;
+  };
+  std::vector<Plan> plans = {{"sum-squares", &smooth, smooth_s, 0.0},
+                             {"sum-squares-fine", &fine, fine_s, 0.0},
+                             {"paper", &paper, paper_s, 0.0},
+                             {"time", &fast, fast_s, 0.0},
+                             {"input", &input, input_s, 0.0}};
+  double shortest = std::numeric_limits<double>::infinity();
+  for (const Plan& p : plans) shortest = std::min(shortest, p.cycle_s);
+  // Within the tie band of the shortest cycle, the smoothest plan wins (then the shorter, then
+  // the earlier in the list: deterministic).
+  const Plan* best = nullptr;
+  const Plan* fastest = nullptr;
+  for (Plan& p : plans) {
+    if (!std::isfinite(p.cycle_s)) continue;
+    if (!fastest || p.cycle_s < fastest->cycle_s * (1.0 - 1e-9)) fastest = &p;
+    if (p.cycle_s > shortest * (1.0 + options.time_tie_band)) continue;
+    p.peak_a = peak_a(*p.plan);
+    if (!best || p.peak_a < best->peak_a * (1.0 - 1e-9) ||
+        (p.peak_a <= best->peak_a * (1.0 + 1e-9) && p.cycle_s < best->cycle_s * (1.0 - 1e-9))) {
+      best = &p;
+    }
+  }
+  if (!best) return "no plan could be timed: the paper's axes kept";
+  const std::string chosen = best->name;
+  const double best_s = best->cycle_s, best_peak = best->peak_a;
+  const double fastest_peak = fastest == best ? best_peak : peak_a(*fastest->plan);
+  const std::string fastest_name = fastest->name;
+  const double fastest_s = fastest->cycle_s;
+  out = *best->plan;
+  out.time_choice = OperationResult::TimeChoice{
+      chosen, fastest_name, best_s, best_peak, fastest_s, fastest_peak, options.time_tie_band};
+  char line[640];
+  std::snprintf(line, sizeof line,
+                "scheduled cycle %.3f s (paper), %.3f s (sum-squares), %.3f s (sum-squares, "
+                "fine), %.3f s (time plan), %.3f s (input): %s axes kept (%.3f s, peak a %.1f "
+                "deg/s^2; the shortest, %s, %.3f s with peak a %.1f: within the %.1f %% tie band "
+                "the smoother wins)",
+                paper_s, smooth_s, fine_s, fast_s, input_s, chosen.c_str(), best_s, best_peak,
+                fastest_name.c_str(), fastest_s, fastest_peak, 100.0 * options.time_tie_band);
+  return line;
+}
+
+}  // namespace taxopt::pipeline

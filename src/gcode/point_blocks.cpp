@@ -1,0 +1,389 @@
+/// @file The blocks that reach the CL points: arcs, index moves, approaches, rapids (joint-safe
+/// on LinuxCNC), feed blocks and their F words, linearisation (program_writer.hpp).
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "gcode/program_writer.hpp"
+#include "taxopt/core/error.hpp"
+
+namespace taxopt::gcode {
+namespace {
+
+/// F with eight significant digits and at least `fd` decimals; where the controller takes
+/// fewer than that (`max_fd`), rounded down: slower, never faster.
+std::string precise_feed(double f, int fd, int max_fd) {
+  const int digits =
+      std::clamp(7 - static_cast<int>(std::floor(std::log10(std::max(f, 1e-300)))), fd, 15);
+  if (digits <= max_fd) return fmt(f, digits);
+  const double unit = std::pow(10.0, max_fd);
+  return fmt(std::max(std::floor(f * unit), 1.0) / unit, max_fd);
+}
+
+}  // namespace
+
+bool ProgramWriter::arc_at(std::size_t i) {
+  const PostedOperation& op = *op_;
+  while (arc_cursor_ < op.arcs.size() && op.arcs[arc_cursor_].start + 1 < i) ++arc_cursor_;
+  if (arc_cursor_ >= op.arcs.size() || op.arcs[arc_cursor_].start + 1 != i) return false;
+  const ArcRun& run = op.arcs[arc_cursor_];
+  bool event_inside = false;
+  for (const ProgramEvent& e : op.events) {
+    if (e.before_point > run.start + 1 && e.before_point <= run.end) event_inside = true;
+  }
+  if (!event_inside && write_arc(run)) {
+    ++prog_.arcs_kept;
+    last_feed_block_ = true;
+    last_joint_safe_ = false;
+    return true;
+  }
+  ++prog_.arcs_chorded;
+  return false;
+}
+
+std::optional<std::pair<double, bool>> ProgramWriter::arc_programmed_s(
+    const ArcRun& run, const std::string& pose_words) const {
+  const PostedOperation& op = *op_;
+  double programmed_s = 0.0;
+  bool own = true;
+  for (std::size_t j = run.start + 1; j <= run.end; ++j) {
+    const CLPointd& q = op.points[j];
+    if (q.motion != Motion::Feed || !(q.feed_mm_per_min > 0.0) ||
+        angle_words(op.poses[j]) != pose_words ||
+        (j < op.block_time_s.size() && op.block_time_s[j] > 0.0) ||
+        q.feed_mm_per_min != op.points[run.end].feed_mm_per_min) {
+      return std::nullopt;
+    }
+    const double given_s = j < op.programmed_time_s.size() ? op.programmed_time_s[j] : 0.0;
+    own = own && (given_s <= 0.0 || std::abs(given_s - own_times_[j]) <= 1e-9 * own_times_[j]);
+    programmed_s += given_s > 0.0 ? given_s : own_times_[j];
+  }
+  return std::make_pair(programmed_s, own);
+}
+
+bool ProgramWriter::write_arc(const ArcRun& run) {
+  const PostedOperation& op = *op_;
+  if (g_.feed_mode != FeedMode::UnitsPerMinute || g_.dialect == GcodeDialect::Heidenhain ||
+      !have_prev_ || run.end >= op.points.size() || run.end <= run.start + 1) {
+    return false;
+  }
+  const std::string pose_words = angle_words(op.poses[run.start]);
+  // The rotary words where tool centre point control came on: a Fanuc 30i raises PS5421 for
+  // G2/G3 after A or C has turned under G43.4 (FANUC Series 30i-MODEL A, Tool center point
+  // control for 5-axis machining, A-79348E, pp. 22-24: circular interpolation is allowed
+  // where neither rotary axis moves after the G43.4 command). Haas's G234 is treated alike
+  // (its rule is not published here).
+  if (tcp_ && (g_.dialect == GcodeDialect::Fanuc || g_.dialect == GcodeDialect::Haas) &&
+      pose_words != tcp_angles_) {
+    return false;  // the table turned under TCP since it came on: chords
+  }
+  const auto timed = arc_programmed_s(run, pose_words);
+  if (!timed) return false;
+  if (xyz_words(out_xyz(op.points[run.start].tip_mm, op.poses[run.start])) + pose_words !=
+      last_words_) {
+    return false;
+  }
+  // The arc where the points are now (new axes move the tips by the same vector where the
+  // axis is the same along the arc), in the output frame.
+  const Posed& pose = op.poses[run.start];
+  const Vec3d centre_tip = run.centre_mm + (op.points[run.start].tip_mm - run.start_tip_mm);
+  const Vec3d c = out_xyz(centre_tip, pose);
+  const Vec3d n = (out_xyz(centre_tip + run.normal, pose) - c).normalized();
+  int axis = -1;
+  for (int q = 0; q < 3; ++q) {
+    if (std::abs(std::abs(n[q]) - 1.0) < 1e-9) axis = q;
+  }
+  if (axis < 0) return false;
+  const Vec3d s0 = out_xyz(op.points[run.start].tip_mm, pose) - c;
+  const Vec3d u0 = s0 - s0.dot(n) * n;
+  const double r0 = u0.norm();
+  if (r0 < 1e-3) return false;
+  for (std::size_t j = run.start; j <= run.end; ++j) {
+    const Vec3d dj = out_xyz(op.points[j].tip_mm, op.poses[j]) - c;
+    if (std::abs((dj - dj.dot(n) * n).norm() - r0) > 1e-6 * std::max(1.0, r0)) return false;
+  }
+  const Vec3d e_out = out_xyz(op.points[run.end].tip_mm, op.poses[run.end]);
+  const double hs = s0.dot(n), he = (e_out - c).dot(n);
+  const double length_mm = std::hypot(run.sweep_rad * r0, he - hs);
+  const double feed =
+      timed->second ? op.points[run.end].feed_mm_per_min : length_mm / (timed->first / 60.0);
+  const std::string f = fmt(feed * scale_, fd_);
+  const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
+  const char* plane = axis == 2 ? "G17" : axis == 1 ? "G18" : "G19";
+  const char* sense = n[axis] > 0.0 ? "G3" : "G2";
+  std::vector<int> piece_line(static_cast<std::size_t>(pieces));
+  Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, pose) * scale_) / scale_;
+  const Vec3d dir = u0 / r0, side = n.cross(dir);
+  point_ = static_cast<int>(run.end);
+  for (int k = 1; k <= pieces; ++k) {
+    const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
+    const Vec3d to = k == pieces ? e_out
+                                 : c + (hs + (he - hs) * frac) * n +
+                                       r0 * (std::cos(th) * dir + std::sin(th) * side);
+    const Vec3d offset = (c - from) * scale_;
+    std::string block = std::string(plane) + " " + sense + " " + xyz_words(to);
+    for (int q = 0; q < 3; ++q) {
+      if (q != axis)
+        block += std::string(" ") + static_cast<char>('I' + q) + dialect_.number(offset[q], d_);
+    }
+    piece_line[static_cast<std::size_t>(k - 1)] = line(block + feed_word(f), BlockKind::Arc);
+    ++prog_.arc_blocks;
+    from = rounded(to * scale_) / scale_;
+  }
+  for (std::size_t j = run.start + 1; j < run.end; ++j) {
+    const double frac =
+        static_cast<double>(j - run.start) / static_cast<double>(run.end - run.start);
+    const auto piece = std::min<std::size_t>(static_cast<std::size_t>(frac * pieces),
+                                             static_cast<std::size_t>(pieces - 1));
+    emitted_[j] = -piece_line[piece];
+  }
+  emitted_[run.end] = piece_line.back();
+  last_words_ = xyz_words(e_out) + pose_words;
+  advance_to(e_out, op.poses[run.end], op.points[run.end].tip_mm);
+  return true;
+}
+
+void ProgramWriter::advance_to(const Vec3d& xyz, const Posed& pose, const Vec3d& tip) {
+  prev_xyz_ = xyz;
+  prev_pose_ = pose;
+  prev_tip_ = tip;
+}
+
+void ProgramWriter::point(std::size_t i) {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  const Vec3d xyz = out_xyz(p.tip_mm, pose);
+  const std::string words = xyz_words(xyz) + angle_words(pose);
+  if (words == last_words_) return;  // nothing would move
+  along_axis_leg_ = false;
+  if (p.motion == Motion::Rapid && have_prev_ && retracts_ && !op_->swept_moves_checked) {
+    index_move_if_turning(pose);
+  }
+  if (approach_) approach(p, pose, xyz);
+  if (p.motion == Motion::Rapid) {
+    if (rapid(i, xyz, words)) return;
+  } else {
+    feed(i, xyz, words);
+  }
+  have_prev_ = true;
+}
+
+void ProgramWriter::index_move_if_turning(const Posed& pose) {
+  const double turn_deg = std::max(
+      std::abs(round_to(rad_to_deg(pose.a_rad), d_) - round_to(rad_to_deg(prev_pose_.a_rad), d_)),
+      std::abs(round_to(rad_to_deg(pose.c_rad), d_) - round_to(rad_to_deg(prev_pose_.c_rad), d_)));
+  if (!(turn_deg > g_.program.index_threshold_deg)) return;
+  length_and_tcp_off();
+  lines(dialect_.retract(retract_z_), BlockKind::Retract);
+  turn_table(pose);
+  length_and_tcp_on();
+  approach_ = true;
+  ++prog_.index_moves;
+}
+
+void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz) {
+  if (descend_) {
+    motion(dialect_.rapid() + " Z" + dialect_.number(clearance_z_mm_ * scale_, d_),
+           BlockKind::Approach);
+  }
+  const Vec3d above_tip =
+      approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm_, g_.program.approach_clearance_mm);
+  const Vec3d above = descend_ ? out_xyz(above_tip, pose) : xyz;
+  const std::string xy = dialect_.rapid() + " X" + dialect_.number(above.x() * scale_, d_) + " Y" +
+                         dialect_.number(above.y() * scale_, d_);
+  if (dialect_.length_on_first_move()) {
+    line(xy, BlockKind::Approach);  // Fanuc: its length and TCP come on with the Z block below
+  } else {
+    motion(xy, BlockKind::Approach);
+  }
+  if (descend_ && std::abs(above.z() - clearance_z_mm_) * scale_ > 0.5 * std::pow(10.0, -d_)) {
+    // A tool within 30 deg of the horizontal: straight down to the safe distance on its
+    // axis, then along it.
+    line(dialect_.rapid() + " Z" + dialect_.number(above.z() * scale_, d_), BlockKind::Approach);
+  }
+  approach_ = false;
+  // The tool comes from the retract: no move to schedule or split; under TCP a rapid to
+  // the point comes from `above` along the axis (at a joint-safe feed on LinuxCNC).
+  have_prev_ = descend_ && p.motion == Motion::Rapid;
+  along_axis_leg_ = have_prev_;
+  if (have_prev_) advance_to(above, pose, above_tip);
+}
+
+std::vector<double> ProgramWriter::linearised(const Vec3d& tip, const Posed& pose) const {
+  return linearise_fractions(machine_.ac, prev_tip_, prev_pose_, tip, pose,
+                             g_.program.linearise_tolerance_mm);
+}
+
+Posed ProgramWriter::pose_at(const Posed& pose, double t) const {
+  return Posed{prev_pose_.a_rad + t * (pose.a_rad - prev_pose_.a_rad),
+               prev_pose_.c_rad + t * (pose.c_rad - prev_pose_.c_rad)};
+}
+
+bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& words) {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  if (g_.mode == GcodeMode::Machine && have_prev_) {
+    // Rapids too: a table that turns while the tool traverses above the part would swing
+    // the tip through it (the controller must run G0 linearly in the joints, as LinuxCNC
+    // does; Fanuc: non-linear positioning off).
+    const std::vector<double> at = linearised(p.tip_mm, pose);
+    for (std::size_t j = 1; j + 1 < at.size(); ++j) {
+      const Posed mid = pose_at(pose, at[j]);
+      const Vec3d mid_xyz = out_xyz(prev_tip_ + at[j] * (p.tip_mm - prev_tip_), mid);
+      motion(dialect_.rapid() + " " + xyz_words(mid_xyz) + angle_words(mid), BlockKind::Linearised);
+      ++prog_.linearised_blocks;
+    }
+  }
+  if (joint_safe_ && have_prev_) {
+    const std::optional<double> rate = joint_safe_rate_per_s(
+        machine_.ac, limits_, prev_tip_, prev_pose_, p.tip_mm, pose, along_axis_leg_);
+    if (rate) {
+      joint_safe_rapid(i, xyz, words, *rate);
+      return true;
+    }
+  }
+  finish_point(i, xyz, words, dialect_.rapid() + " " + words, false);
+  return false;
+}
+
+void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
+                                     double rate_per_s) {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  const double tip_mm = (p.tip_mm - prev_tip_).norm();
+  const double rot_deg = std::hypot(rad_to_deg(pose.a_rad - prev_pose_.a_rad),
+                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
+  const double per_min = 60.0 * rate_per_s;
+  const double feed = g_.feed_mode == FeedMode::InverseTime
+                          ? per_min
+                          : (tip_mm > 1e-9 ? tip_mm * scale_ : rot_deg) * per_min;
+  const int digits = std::clamp(
+      7 - static_cast<int>(std::floor(std::log10(std::max(feed, 1e-300)))), fd_, max_fd_);
+  const double unit = std::pow(10.0, digits);
+  const std::string f = fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
+  const std::string block = dialect_.linear() + " " + words + feed_word(f);
+  // LinuxCNC blends two feed blocks, and the blend leaves the programmed A and C (0.12 deg
+  // measured at the end of a pass), so a dwell G4 P0 (the controller runs its queue to a
+  // stop) stands between such a rapid and a feed block.
+  if (last_feed_block_) line("G4 P0", BlockKind::Dwell);
+  emitted_[i] = motion(block, BlockKind::JointSafeRapid);
+  last_feed_block_ = false;
+  last_joint_safe_ = true;
+  prog_.joint_safe_rapids.push_back(emitted_[i]);
+  last_words_ = words;
+  advance_to(xyz, pose, p.tip_mm);
+}
+
+void ProgramWriter::finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
+                                 const std::string& block, bool restore_inverse_time) {
+  const CLPointd& p = op_->points[i];
+  if (last_joint_safe_ && p.motion != Motion::Rapid) line("G4 P0", BlockKind::Dwell);
+  emitted_[i] = motion(block, BlockKind::Point);
+  last_feed_block_ = p.motion != Motion::Rapid;
+  last_joint_safe_ = false;
+  if (tcp_angles_.empty()) tcp_angles_ = angle_words(op_->poses[i]);
+  if (restore_inverse_time) line("G93", BlockKind::Point);
+  last_words_ = words;
+  advance_to(xyz, op_->poses[i], p.tip_mm);
+}
+
+void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& words) {
+  const PostedOperation& op = *op_;
+  const CLPointd& p = op.points[i];
+  if (!(p.feed_mm_per_min > 0.0)) {
+    throw std::invalid_argument("write_gcode: feed move without a feed");
+  }
+  const double given_s = i < op.programmed_time_s.size() ? op.programmed_time_s[i] : 0.0;
+  const double programmed_min = (given_s > 0.0 ? given_s : own_times_[i]) / 60.0;
+  // A scheduled block (never faster than programmed) writes its F with 8 significant
+  // digits, so that rounding cannot carry it over the limits it was scheduled for; where
+  // the controller takes fewer decimals, F is rounded down (slower, never faster).
+  const bool scheduled = i < op.block_time_s.size() && op.block_time_s[i] > 0.0 && have_prev_;
+  const double time_min =
+      scheduled ? std::max(programmed_min, op.block_time_s[i] / 60.0) : programmed_min;
+  const FeedBlock fb{programmed_min, time_min, scheduled};
+  bool restore_inverse_time = false;
+  std::string f;
+  if (!have_prev_) {
+    // First block of an operation at feed: where the tool comes from is unknown, so the
+    // move is written at the programmed feed in G94 (G93 needs a block time).
+    f = fmt(p.feed_mm_per_min * scale_, fd_);
+    restore_inverse_time = g_.feed_mode == FeedMode::InverseTime;
+  } else if (g_.mode == GcodeMode::Machine) {
+    f = linearised_feed(i, xyz, fb);
+  } else if (g_.feed_mode == FeedMode::InverseTime || scheduled) {
+    f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled);
+  } else {
+    f = tcp_feed(i, programmed_min);
+  }
+  std::string block =
+      std::string(restore_inverse_time ? "G94 " : "") + dialect_.linear() + " " + words;
+  block += feed_word(f);
+  if (restore_inverse_time) last_feed_.clear();
+  finish_point(i, xyz, words, block, restore_inverse_time);
+}
+
+std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  const double tip_mm = (p.tip_mm - prev_tip_).norm();
+  const double rot_deg = std::hypot(rad_to_deg(pose.a_rad - prev_pose_.a_rad),
+                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
+  const double tip_feed = tip_mm > 1e-9 ? tip_mm / programmed_min : rot_deg / programmed_min;
+  const bool own = std::abs(tip_feed - p.feed_mm_per_min) <= 1e-9 * p.feed_mm_per_min;
+  return fmt((own ? p.feed_mm_per_min : tip_feed) * scale_, fd_);
+}
+
+std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,
+                                      const Posed& to_pose, double minutes, bool scheduled) const {
+  const auto fmt_feed = [&](double f) {
+    return scheduled ? precise_feed(f, fd_, max_fd_) : fmt(f, fd_);
+  };
+  if (g_.feed_mode == FeedMode::InverseTime) return fmt_feed(1.0 / minutes);
+  if (scheduled) {
+    // The controller times the block from the written (rounded) words: so does F.
+    const double len = (rounded(to * scale_) - rounded(from * scale_)).norm();
+    const double rot = std::hypot(
+        round_to(rad_to_deg(to_pose.a_rad), d_) - round_to(rad_to_deg(from_pose.a_rad), d_),
+        round_to(rad_to_deg(to_pose.c_rad), d_) - round_to(rad_to_deg(from_pose.c_rad), d_));
+    return fmt_feed((len > 0.0 ? len : rot) / minutes);
+  }
+  // Joint-space XYZ moves differ from the tip's: F makes the block take the time of the
+  // tip at the programmed feed.
+  const double joint = (to - from).norm();
+  const double rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
+                                rad_to_deg(to_pose.c_rad - from_pose.c_rad));
+  return fmt(joint > 1e-9 ? joint * scale_ / minutes : rot / minutes, fd_);
+}
+
+std::string ProgramWriter::linearised_feed(std::size_t i, const Vec3d& xyz, const FeedBlock& fb) {
+  const PostedOperation& op = *op_;
+  const CLPointd& p = op.points[i];
+  const Posed& pose = op.poses[i];
+  const std::vector<double> at = linearised(p.tip_mm, pose);
+  Vec3d from = prev_xyz_;
+  Posed from_pose = prev_pose_;
+  for (std::size_t j = 1; j < at.size(); ++j) {
+    const Posed mid = pose_at(pose, at[j]);
+    const Vec3d mid_xyz = out_xyz(prev_tip_ + at[j] * (p.tip_mm - prev_tip_), mid);
+    double minutes = fb.time_min * (at[j] - at[j - 1]);
+    if (fb.scheduled && i < op.linearised_time_s.size() &&
+        op.linearised_time_s[i].size() + 1 == at.size()) {
+      // Block by block as scheduled, never faster than programmed.
+      minutes =
+          std::max(fb.programmed_min * (at[j] - at[j - 1]), op.linearised_time_s[i][j - 1] / 60.0);
+    }
+    if (j + 1 == at.size()) return joint_feed(from, from_pose, xyz, pose, minutes, fb.scheduled);
+    const std::string piece = joint_feed(from, from_pose, mid_xyz, mid, minutes, fb.scheduled);
+    motion(dialect_.linear() + " " + xyz_words(mid_xyz) + angle_words(mid) + feed_word(piece),
+           BlockKind::Linearised);
+    ++prog_.linearised_blocks;
+    from = mid_xyz;
+    from_pose = mid;
+  }
+  return {};
+}
+
+}  // namespace taxopt::gcode

@@ -1,0 +1,198 @@
+#pragma once
+/// @file The program writer's state and stages (program_writer.cpp: the program and its
+/// operations; point_blocks.cpp: the blocks that reach the CL points), internal to the library.
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gcode/dialect.hpp"
+#include "taxopt/io/gcode.hpp"
+
+namespace taxopt::gcode {
+
+/// Writes one program. The stages: the program's start, per operation its start (retract,
+/// tool, spindle, coolant, table turn, length and TCP on), its points (events, arcs, index
+/// moves, approaches, rapids, feed blocks) and its end, then the program's end. Every line is
+/// recorded with its kind and origin (GcodeProgram::blocks).
+class ProgramWriter {
+ public:
+  ProgramWriter(const std::vector<PostedOperation>& operations, const Machine& machine,
+                LengthUnit units)
+      : ops_(operations),
+        machine_(machine),
+        g_(machine.gcode),
+        scale_(1.0 / mm_per_unit(units)),
+        d_(g_.decimals),
+        fd_(feed_decimals(g_)),
+        max_fd_(max_feed_decimals(g_.dialect)),
+        dialect_(g_, units),
+        tcp_(g_.mode == GcodeMode::Tcp),
+        // LinuxCNC plans a tcp rapid in the program's axes: where that would run a joint over
+        // its velocity limit, the rapid is a feed block at a joint-safe feed
+        // (joint_safe_rate_per_s).
+        joint_safe_(tcp_ && g_.dialect == GcodeDialect::LinuxCNC),
+        retracts_(g_.program.retract != SafeRetract::None),
+        limits_(effective_limits(machine)),
+        retract_z_(dialect_.number(g_.program.retract_z_mm * scale_, d_)),
+        // The tilt axis's word: A or B (ac_machine.hpp).
+        tilt_word_(std::string(" ") + machine.ac.tilt_letter()) {}
+  GcodeProgram write(const std::vector<std::string>& comments) {
+    program_start(comments);
+    for (std::size_t k = 0; k < ops_.size(); ++k) operation(k);
+    program_end();
+    return std::move(prog_);
+  }
+
+ private:
+  // --- emitting lines, each with its kind and origin -------------------------------------
+  int raw(const std::string& s, BlockKind kind);
+  int line(const std::string& s, BlockKind kind) { return raw(dialect_.block(s), kind); }
+  void lines(const std::vector<std::string>& v, BlockKind kind);
+  /// Blocks of the template, written as they are: the reader steps over them.
+  void verbatim(const std::vector<std::string>& v, BlockKind kind);
+  /// A motion block; an operation's first carries Fanuc's length and TCP words.
+  int motion(const std::string& s, BlockKind kind);
+  // --- words -----------------------------------------------------------------------------
+  Vec3d rounded(const Vec3d& v) const;
+  Vec3d out_xyz(const Vec3d& tip, const Posed& pose) const;
+  std::string angle_words(const Posed& pose) const;
+  std::string xyz_words(const Vec3d& xyz) const;
+  static std::string spindle_words(double rpm, bool clockwise);
+  static std::string coolant_code(ClCoolant c);
+  /// Coolant as the CL file asks (COOLNT), else as the machine file's default.
+  std::string coolant_of(const PostedOperation& o) const;
+  /// " F" and the feed where it changes (always under G93).
+  std::string feed_word(const std::string& f);
+  // --- the program -----------------------------------------------------------------------
+  void program_start(const std::vector<std::string>& comments);
+  void program_end();
+  // --- an operation ----------------------------------------------------------------------
+  void operation(std::size_t k);
+  /// Safe start: up to the retract height, the tool, the spindle and the coolant, the table
+  /// turned to the first pose with the tool up, then the tool length and TCP on.
+  void operation_start();
+  void tool_change(int tool);
+  /// Under tool centre point control the retract height can lie above the axes' range in the
+  /// workpiece frame: LinuxCNC's sample (Z to 120, its limit) with the table tilted 19 deg
+  /// refused the XY move there ("would exceed Z's positive limit", measured on its motion
+  /// controller). So the tool first comes straight down to a clearance height, the operation's
+  /// highest tip plus approach_clearance_mm, then XY, then down. Not on Fanuc, whose G43.4
+  /// comes on with the block down: before it, Z would place the spindle nose. With a part
+  /// model the clearance height stands above the part too (its highest point in the
+  /// workpiece, PostedOperation::part_top_z_mm), not only above the operation's tips: an
+  /// operation low on a tall part came down inside it (a Haas part's approach at Z1.5987 in,
+  /// its top at Z3.0).
+  double clearance_z_mm(const PostedOperation& op) const;
+  /// Left running into the next operation where it starts with the same tool, spindle and
+  /// coolant (before its first point: its events may change them after that). The spindle and
+  /// coolant words left running from the operation before (empty: stopped) spare a stop and a
+  /// restart between operations (a machinist's read of a real NX program: 11 pointless M5 /
+  /// S M3 pairs in 12 operations).
+  void operation_end(const PostedOperation* next);
+  /// The file's stops, dwells, spindle and coolant changes before point i.
+  void events_before(std::size_t i);
+  void event(const ProgramEvent& e);
+  /// The table turned with the tool up (after the retract), to `pose`.
+  void turn_table(const Posed& pose);
+  void length_and_tcp_on();
+  void length_and_tcp_off();
+  // --- the points ------------------------------------------------------------------------
+  /// Point i starts the next CL arc: written as G2/G3 when it can be (true), else counted as
+  /// left to its chords. An arc with an event inside it is left to its chords, so that the
+  /// event stands where the file put it.
+  bool arc_at(std::size_t i);
+  /// The programmed time of the arc's chords, s (each block's given time, else its own at the
+  /// programmed feed), and whether every given time is the block's own; nullopt where the arc
+  /// cannot be one block run (a rapid, a turn of A or C, a schedule, a change of feed).
+  std::optional<std::pair<double, bool>> arc_programmed_s(const ArcRun& run,
+                                                          const std::string& pose_words) const;
+  /// Writes the arc `run` as G2/G3 blocks when it can be (PostedOperation::arcs); false: it
+  /// is left to its chords.
+  bool write_arc(const ArcRun& run);
+  void advance_to(const Vec3d& xyz, const Posed& pose, const Vec3d& tip);
+  /// The block (or blocks) that reach point i.
+  void point(std::size_t i);
+  /// An index move: a rapid that turns the table by more than the threshold goes up to the
+  /// retract, turns there and comes down XY first (docs/gcode-dialects.md "Index moves").
+  /// With a part model the turns stay in the air: the check verifies their swept moves.
+  void index_move_if_turning(const Posed& pose);
+  /// The way down from the retract height to point `p`: under TCP straight down to the
+  /// clearance height, XY to above the point on its axis, then along the axis (as CAM links an
+  /// approach: a tool tilted 90 deg that came straight down in the workpiece's Z swept through
+  /// a wall); in machine mode the machine's Z is the tool axis already. Not on Fanuc, whose TCP
+  /// comes on with the block down from the retract height (straight down to the point).
+  void approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz);
+  /// The blocks of a machine-mode move from the last point to (tip, pose) between its ends
+  /// (linearise_fractions): the fractions at which they stand.
+  std::vector<double> linearised(const Vec3d& tip, const Posed& pose) const;
+  Posed pose_at(const Posed& pose, double t) const;
+  /// A rapid to point i; true when it was written as a joint-safe feed block (the point is
+  /// done), false when the rapid block is written and the point's bookkeeping follows.
+  bool rapid(std::size_t i, const Vec3d& xyz, const std::string& words);
+  /// A rapid as a feed block at the rate that keeps the joints within their limits: F is the
+  /// tip's distance (the rotary one when only A and C turn) per minute, or under G93 the
+  /// block's inverse time; eight significant digits, rounded down: slower, never faster.
+  void joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
+                        double rate_per_s);
+  /// The block reaching point i, and the state after it.
+  void finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
+                    const std::string& block, bool restore_inverse_time);
+  /// The feed block (machine mode: blocks) reaching point i.
+  void feed(std::size_t i, const Vec3d& xyz, const std::string& words);
+  struct FeedBlock {
+    double programmed_min, time_min;
+    bool scheduled;
+  };
+  /// TCP: the tip moves at F. Its distance over the block time is the programmed feed unless
+  /// the programmed time is another path's (FeedReference::CutterPath).
+  std::string tcp_feed(std::size_t i, double programmed_min) const;
+  /// F of a joint-space block (machine mode, inverse time, a schedule) from `from` to `to`
+  /// that takes `minutes`.
+  std::string joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,
+                         const Posed& to_pose, double minutes, bool scheduled) const;
+  /// Machine mode: where the joints moving linearly would take the tip off the straight line
+  /// by more than the tolerance, blocks in between keep it on. Writes them and returns the F
+  /// of the last (the point's own block).
+  std::string linearised_feed(std::size_t i, const Vec3d& xyz, const FeedBlock& fb);
+  // --- the program's settings --------------------------------------------------------------
+  const std::vector<PostedOperation>& ops_;
+  const Machine& machine_;
+  const GcodeSettings& g_;
+  const double scale_;
+  const int d_, fd_, max_fd_;
+  Dialect dialect_;
+  const bool tcp_, joint_safe_, retracts_;
+  const JointLimits limits_;
+  const std::string retract_z_, tilt_word_;
+  // --- the program so far ------------------------------------------------------------------
+  GcodeProgram prog_;
+  int line_no_ = 0;
+  int current_tool_ = -1;
+  std::string last_feed_;
+  std::string running_spindle_, running_coolant_;
+  // --- the operation being written ---------------------------------------------------------
+  const PostedOperation* op_ = nullptr;
+  int op_index_ = -1, point_ = -1;
+  std::string spindle_, coolant_;  ///< the words in force (empty: stopped, off)
+  std::size_t next_event_ = 0, arc_cursor_ = 0;
+  /// Fanuc's length and TCP words for the operation's (or index move's) first motion block.
+  std::string prefix_;
+  /// The rotary words of the first block after TCP came on (write_arc).
+  std::string tcp_angles_;
+  bool approach_ = false, descend_ = false;
+  double clearance_z_mm_ = 0.0;
+  std::vector<int> emitted_;
+  std::vector<double> own_times_;
+  std::string last_words_;
+  Vec3d prev_xyz_ = Vec3d::Zero(), prev_tip_ = Vec3d::Zero();
+  Posed prev_pose_;
+  bool have_prev_ = false;
+  /// The last block written is a feed block (not a joint-safe rapid), or a joint-safe rapid.
+  bool last_feed_block_ = false, last_joint_safe_ = false;
+  /// The block written next is an approach's last leg, along the tool axis.
+  bool along_axis_leg_ = false;
+};
+
+}  // namespace taxopt::gcode

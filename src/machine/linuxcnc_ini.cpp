@@ -214,14 +214,21 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
       }
     }
   }
+  // The [JOINT_n] section of an axis that one joint drives ([TRAJ] COORDINATES names it once);
+  // none where two joints drive it (a gantry) or none does.
+  const auto joint_of = [&](const std::string& axis) -> std::optional<std::string> {
+    const std::size_t j = coordinates.find(axis);
+    if (j == std::string::npos || coordinates.find(axis, j + 1) != std::string::npos) {
+      return std::nullopt;
+    }
+    return "JOINT_" + std::to_string(j);
+  };
   const auto rotary_range = [&](const std::string& axis, bool required) {
     std::optional<double> lo = number("AXIS_" + axis, "MIN_LIMIT", required);
     std::optional<double> hi = number("AXIS_" + axis, "MAX_LIMIT", required);
-    const std::size_t j = coordinates.find(axis);
-    if (j != std::string::npos && coordinates.find(axis, j + 1) == std::string::npos) {
-      const std::string joint = "JOINT_" + std::to_string(j);
-      if (const auto l = number(joint, "MIN_LIMIT", false)) lo = lo ? std::max(*lo, *l) : *l;
-      if (const auto h = number(joint, "MAX_LIMIT", false)) hi = hi ? std::min(*hi, *h) : *h;
+    if (const auto joint = joint_of(axis)) {
+      if (const auto l = number(*joint, "MIN_LIMIT", false)) lo = lo ? std::max(*lo, *l) : *l;
+      if (const auto h = number(*joint, "MAX_LIMIT", false)) hi = hi ? std::min(*hi, *h) : *h;
     }
     if (lo && hi && !(*lo < *hi)) {
       fail(0, "[AXIS_" + axis + "] and its joint leave no range: " + number_text(*lo) + " to " +
@@ -234,11 +241,9 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
   // axes at their [AXIS_] limits and the joints follow (Machine::joint_max_accel_per_s2).
   const auto joint_accel = [&](const std::string& axis,
                                const std::optional<double>& axis_accel) -> std::optional<double> {
-    const std::size_t j = coordinates.find(axis);
-    if (j == std::string::npos || coordinates.find(axis, j + 1) != std::string::npos) {
-      return std::nullopt;
-    }
-    const auto a = number("JOINT_" + std::to_string(j), "MAX_ACCELERATION", false);
+    const auto joint = joint_of(axis);
+    if (!joint) return std::nullopt;
+    const auto a = number(*joint, "MAX_ACCELERATION", false);
     if (!a || (axis_accel && *a == *axis_accel)) return std::nullopt;
     return a;
   };

@@ -440,6 +440,17 @@ std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel
   });
 }
 
+std::optional<std::string> outside_travel(const Machine& machine, int q, double v_mm) {
+  const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
+  if (range.contains(v_mm) ||
+      std::abs(v_mm - std::clamp(v_mm, range.min_mm, range.max_mm)) < 1e-6) {
+    return std::nullopt;
+  }
+  std::ostringstream os;
+  os << ", outside the machine's travel [" << range.min_mm << ", " << range.max_mm << "] mm";
+  return os.str();
+}
+
 std::ptrdiff_t move_index(const std::vector<GcodeMove>& moves, const GcodeMove* m) {
   // std::less: a pointer into another container compares without unspecified behaviour.
   const std::less<const GcodeMove*> before;

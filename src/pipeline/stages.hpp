@@ -250,6 +250,11 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
 /// The index of `m` in `moves` (a point's move read back), -1 when it is not one of them (a
 /// chord point's copy on its arc, Written::on_arcs).
 std::ptrdiff_t move_index(const std::vector<GcodeMove>& moves, const GcodeMove* m);
+/// Where the spindle's `v_mm` on linear axis `q` (machine coordinates) lies outside the
+/// machine's travel by more than 1e-6 mm (the written decimals' rounding): the words for it
+/// (", outside the machine's travel [min, max] mm"); empty within it. The one travel rule of
+/// the points' check (verify_operation) and the other blocks' (check_program).
+std::optional<std::string> outside_travel(const Machine& machine, int q, double v_mm);
 
 /// Records a finding, and its message by severity (JobResult's display lists).
 void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,

@@ -132,8 +132,8 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written) +
                             Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
     for (int q = 0; q < 3; ++q) {
-      const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
-      if (range.contains(joints_mm[q])) continue;
+      const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
+      if (!outside) continue;
       r.rows[i].mark(PointMark::TravelExceeded);
       if (r.verification.within_axis_limits) {
         std::ostringstream os;
@@ -142,7 +142,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
         if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
           os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
         }
-        os << ", outside the machine's travel [" << range.min_mm << ", " << range.max_mm << "] mm";
+        os << *outside;
         add_finding(res, FindingCode::TravelExceeded, k, want.line,
                     format_location(run.tp.source, want.line, os.str()));
       }

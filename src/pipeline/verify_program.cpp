@@ -100,16 +100,13 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   for (std::size_t k = 0; k < moves.size() && k < w.spindle_mm.size(); ++k) {
     if (!w.spindle_mm[k] || at_points.count(&moves[k])) continue;
     for (int q = 0; q < 3; ++q) {
-      const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
       const double v = (*w.spindle_mm[k])[q];
-      if (range.contains(v) || std::abs(v - std::clamp(v, range.min_mm, range.max_mm)) < 1e-6) {
-        continue;
-      }
+      const std::optional<std::string> outside = outside_travel(machine, q, v);
+      if (!outside) continue;
       std::ostringstream os;
       os << "takes the spindle to "
          << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
-         << res.gcode.time_tool_length_mm << " mm), outside the machine's travel [" << range.min_mm
-         << ", " << range.max_mm << "] mm";
+         << res.gcode.time_tool_length_mm << " mm)" << *outside;
       breach(FindingCode::TravelExceeded, moves[k], os.str());
     }
   }

@@ -75,8 +75,8 @@ std::size_t line_of(const std::vector<std::string>& lines, const std::string& wh
 std::vector<std::string> real_skips(const std::string& name) {
   if (name.rfind("amorim-", 0) == 0) return {"INSERT", "CUTCOM"};
   if (name.rfind("peening-", 0) == 0) {
-    return {"TOOLNO", "SATUTEST", "RECIPE",  "AIR",     "GLASS",   "FEEDOVER",
-            "SAVERE", "STANDOFF", "SUBPROG", "SURFACE", "INITIAL", "REWIND"};
+    return {"SATUTEST", "RECIPE",  "AIR",     "GLASS",   "FEEDOVER", "SAVERE",
+            "STANDOFF", "SUBPROG", "SURFACE", "INITIAL", "REWIND"};
   }
   return {};
 }

@@ -69,6 +69,13 @@ const std::vector<ClWord>& cl_words() {
        "ball mill of taper b where d = 2 r (1 - sin b) / cos b, else refused",
        "CATIA, SOLIDWORKS CAM, generic APT", kApt, false},
       {"LOADTL", M::State, "the tool number", "CATIA, Creo", kApt, false},
+      {"TOOLNO", M::Information,
+       "TOOLNO/n,d: the tool number and diameter of the LOADTL that follows, checked against it "
+       "and the CUTTER (the LOADTL changes the tool)",
+       "CATIA",
+       "CATIA V5 NC Manufacturing, Import APT Source File (TOOLNO/1, 10.000000 then TPRINT and "
+       "LOADTL); tests/data/real/peening-catia-multax.aptsource",
+       true},
       {"LOAD", M::State, "LOAD/TOOL,n: the tool number", "NX, SOLIDWORKS CAM", kNx, false},
       {"SPINDL", M::State,
        "speed (RPM, or SFM / SMM turned into rpm through the cutter's diameter), CLW / CCLW, "

@@ -153,41 +153,24 @@ class Reader {
   using RecordReader = void (Reader::*)(const ClRecordArgs&);
   static const std::map<std::string, RecordReader>& record_readers() {
     static const std::map<std::string, RecordReader> readers = {
-        {"GOTO", &Reader::goto_record},
-        {"FROM", &Reader::goto_record},
-        {"GODLTA", &Reader::godlta},
-        {"GOHOME", &Reader::gohome},
-        {"CIRCLE", &Reader::circle},
-        {"MOVARC", &Reader::movarc},
-        {"TLAXIS", &Reader::tlaxis},
-        {"NURBS", &Reader::nurbs},
-        {"RAPID", &Reader::rapid},
-        {"FEDRAT", &Reader::fedrat},
-        {"MSYS", &Reader::msys},
-        {"MULTAX", &Reader::multax},
-        {"CYCLE", &Reader::cycle},
-        {"TLDATA", &Reader::tldata},
-        {"CUTTER", &Reader::cutter},
-        {"LOADTL", &Reader::load_tool},
-        {"LOAD", &Reader::load_tool},
-        {"SPINDL", &Reader::spindl},
-        {"SPINDLE", &Reader::spindl},
-        {"COOLNT", &Reader::coolnt},
-        {"CUTCOM", &Reader::cutcom},
-        {"SET", &Reader::set_mode},
-        {"INTOL", &Reader::tolerance},
-        {"OUTTOL", &Reader::tolerance},
-        {"TOLER", &Reader::tolerance},
-        {"MODE", &Reader::mode},
-        {"MACHIN", &Reader::machin},
-        {"STOP", &Reader::stop},
-        {"OPSTOP", &Reader::stop},
-        {"DELAY", &Reader::delay},
-        {"INSERT", &Reader::insert},
-        {"FINI", &Reader::fini},
-        {"END", &Reader::fini},
-        {"TOOL PATH", &Reader::tool_path},
-        {"END-OF-PATH", &Reader::end_of_path},
+        {"GOTO", &Reader::goto_record},    {"FROM", &Reader::goto_record},
+        {"GODLTA", &Reader::godlta},       {"GOHOME", &Reader::gohome},
+        {"CIRCLE", &Reader::circle},       {"MOVARC", &Reader::movarc},
+        {"TLAXIS", &Reader::tlaxis},       {"NURBS", &Reader::nurbs},
+        {"RAPID", &Reader::rapid},         {"FEDRAT", &Reader::fedrat},
+        {"MSYS", &Reader::msys},           {"MULTAX", &Reader::multax},
+        {"CYCLE", &Reader::cycle},         {"TLDATA", &Reader::tldata},
+        {"CUTTER", &Reader::cutter},       {"LOADTL", &Reader::load_tool},
+        {"TOOLNO", &Reader::toolno},       {"LOAD", &Reader::load_tool},
+        {"SPINDL", &Reader::spindl},       {"SPINDLE", &Reader::spindl},
+        {"COOLNT", &Reader::coolnt},       {"CUTCOM", &Reader::cutcom},
+        {"SET", &Reader::set_mode},        {"INTOL", &Reader::tolerance},
+        {"OUTTOL", &Reader::tolerance},    {"TOLER", &Reader::tolerance},
+        {"MODE", &Reader::mode},           {"MACHIN", &Reader::machin},
+        {"STOP", &Reader::stop},           {"OPSTOP", &Reader::stop},
+        {"DELAY", &Reader::delay},         {"INSERT", &Reader::insert},
+        {"FINI", &Reader::fini},           {"END", &Reader::fini},
+        {"TOOL PATH", &Reader::tool_path}, {"END-OF-PATH", &Reader::end_of_path},
     };
     return readers;
   }
@@ -221,6 +204,8 @@ class Reader {
   void cutter(const ClRecordArgs& r);
   /// LOADTL/, LOAD/
   void load_tool(const ClRecordArgs& r);
+  /// TOOLNO/n[,d]: CATIA's announcement of the tool its LOADTL loads next (number, diameter).
+  void toolno(const ClRecordArgs& r);
   /// SPINDL/, SPINDLE/
   void spindl(const ClRecordArgs& r);
   /// COOLNT/
@@ -268,6 +253,13 @@ class Reader {
   bool in_block_ = false;
   std::string pending_name_;
   Tool tool_;
+  /// The last TOOLNO not yet loaded: its tool number, diameter (mm, 0: not given) and line.
+  struct AnnouncedTool {
+    int number = 0;
+    double diameter_mm = 0.0;
+    int line = 0;
+  };
+  std::optional<AnnouncedTool> announced_tool_;
   double spindle_rpm_ = 0.0;
   bool spindle_cw_ = true;
   Vec3d axis_ = Vec3d::UnitZ();

@@ -146,8 +146,51 @@ void Reader::load_tool(const ClRecordArgs& r) {
     fail(line, major + "/" + args_text + ": '" + args[k] +
                    "' not interpreted (only ADJUST,n with the tool's own number may follow)");
   }
+  if (announced_tool_ && announced_tool_->number != static_cast<int>(v[0])) {
+    fail(line, major + "/" + args_text + " loads tool " + args[at] + " where TOOLNO at line " +
+                   std::to_string(announced_tool_->line) + " announced tool " +
+                   std::to_string(announced_tool_->number) +
+                   ": which tool the machine holds is not known (--skip-record TOOLNO trusts the "
+                   "LOADTL)");
+  }
+  announced_tool_.reset();
   tool_.number = static_cast<int>(v[0]);
   tool_changed();
+}
+
+void Reader::toolno(const ClRecordArgs& r) {
+  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
+  // CATIA V5 writes TOOLNO/number, diameter before TPRINT and the LOADTL that loads the tool
+  // (its NC Manufacturing documentation, "Import APT Source File": TOOLNO/1, 10.000000 /
+  // TPRINT/T1 End Mill D 10 / LOADTL; tests/data/real/peening-catia-multax.aptsource the same
+  // after its CUTTER). The number is checked against the LOADTL, the diameter against the
+  // CUTTER; the change is the LOADTL's.
+  if (args.empty() || args.size() > 2) {
+    fail(line, "TOOLNO expects a tool number and a diameter (CATIA's TOOLNO/n,d), got " +
+                   std::to_string(args.size()) + " fields");
+  }
+  const auto v = numbers(args, 0, args.size(), major, line);
+  if (!(v[0] >= 0.0 && v[0] <= 99999.0 && v[0] == std::floor(v[0]))) {
+    fail(line, "TOOLNO: tool number must be a whole number from 0 to 99999");
+  }
+  AnnouncedTool t;
+  t.number = static_cast<int>(v[0]);
+  t.line = line;
+  if (v.size() == 2) {
+    if (!(v[1] > 0.0 && v[1] * scale_ <= 1000.0)) {
+      fail(line, "TOOLNO: the diameter must be within (0, 1000] mm");
+    }
+    t.diameter_mm = v[1] * scale_;
+    if (tool_.diameter_mm > 0.0 &&
+        std::abs(t.diameter_mm - tool_.diameter_mm) > 1e-6 * std::max(1.0, tool_.diameter_mm)) {
+      std::ostringstream os;
+      os << "TOOLNO/" << args_text << ": a tool of diameter " << t.diameter_mm
+         << " mm, where the CUTTER before it gives " << tool_.diameter_mm
+         << " mm: which tool cuts is not known";
+      fail(line, os.str());
+    }
+  }
+  announced_tool_ = t;
 }
 
 void Reader::spindl(const ClRecordArgs& r) {

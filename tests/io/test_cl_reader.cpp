@@ -431,3 +431,45 @@ TEST_CASE(
   CHECK(noted);
   CHECK_THROWS_AS(parse_cl("INSERT/Stock Size X135. Y135. Z30.\n" + body, "s.apt"), InputError);
 }
+
+TEST_CASE(
+    "cl reader: CATIA's TOOLNO/n,d announces the LOADTL's tool: read and checked against the "
+    "LOADTL's number and the CUTTER's diameter, refused naming both where they differ",
+    "[io][cl][catia]") {
+  // The records as CATIA V5 writes a tool change (tests/data/real/peening-catia-multax.aptsource).
+  const auto file = [](const std::string& toolno, const std::string& loadtl) {
+    return "$$ TOOLCHANGEBEGINNING\nCUTTER/  1.700000,  0.000000,  0.850000,  0.000000,  "
+           "0.000000,$\n         0.000000,  1.968504\n" +
+           toolno + "\nTPRINT/T13 End Mill D 1.7\n" + loadtl +
+           "\n$$ TOOLCHANGEEND\nMULTAX\nFEDRAT/ 500.0000,MMPM\nGOTO/ 1.0, 2.0, 3.0, 0.0, 0.0, "
+           "1.0\nGOTO/ 5.0, 2.0, 3.0\n";
+  };
+  const Toolpath tp = parse_cl(file("TOOLNO/13,    1.700000", "LOADTL/13"), "catia.aptsource");
+  REQUIRE(tp.operations.size() == 1);
+  CHECK(tp.operations[0].tool.number == 13);
+  CHECK(tp.operations[0].tool.diameter_mm == Approx(1.7));
+  CHECK(parse_cl(file("TOOLNO/13", "LOADTL/13"), "c.apt").operations[0].tool.number == 13);
+  // Another tool loaded than announced, another diameter than the CUTTER's: which tool cuts
+  // is not known.
+  const std::string other =
+      test::input_error_of([&] { parse_cl(file("TOOLNO/13,    1.700000", "LOADTL/12"), "c.apt"); });
+  CHECK_THAT(other, Catch::Contains("c.apt:6: LOADTL/12 loads tool 12 where TOOLNO at line 4 "
+                                    "announced tool 13"));
+  const std::string wider =
+      test::input_error_of([&] { parse_cl(file("TOOLNO/13,    6.000000", "LOADTL/13"), "c.apt"); });
+  CHECK_THAT(wider, Catch::Contains("c.apt:4: TOOLNO/13,    6.000000: a tool of diameter 6 mm, "
+                                    "where the CUTTER before it gives 1.7 mm"));
+  // Hostile values: a fraction, a negative number, three fields, text.
+  for (const char* bad : {"TOOLNO/1.5, 1.7", "TOOLNO/-1, 1.7", "TOOLNO/13, 1.7, 2", "TOOLNO/T13",
+                          "TOOLNO/13, -1.7", "TOOLNO/", "TOOLNO/13, nan"}) {
+    INFO(bad);
+    CHECK_THAT(test::input_error_of([&] { parse_cl(file(bad, "LOADTL/13"), "c.apt"); }),
+               Catch::Contains("c.apt:4: TOOLNO"));
+  }
+  // --skip-record TOOLNO: the LOADTL alone, unchecked.
+  ClReadOptions skip;
+  skip.skip_records.insert("TOOLNO");
+  CHECK(parse_cl(file("TOOLNO/13,    6.000000", "LOADTL/12"), "c.apt", skip)
+            .operations[0]
+            .tool.number == 12);
+}

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "taxopt/core/error.hpp"
+#include "util/input_file.hpp"
 
 namespace taxopt::cl {
 
@@ -265,21 +266,11 @@ Toolpath parse_cl(const std::string& text, const std::string& source,
 }
 
 Toolpath read_cl_file(const std::string& path, const ClReadOptions& options) {
-  // A CL file is a regular file: a FIFO would hang and /dev/zero would be read whole (issue
-  // 35). 2 GB is beyond the 2e7 points the reader posts at the most.
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path, 0, "not a regular file (a CL file is one)");
-  }
-  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{2} << 30)) {
-    throw InputError(path, 0, "larger than 2 GB: more than the 2e7 CL points taxopt posts");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open CL file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(path, 0, "cannot read CL file");
-  return parse_cl(ss.str(), path, options);
+  // 2 GB is beyond the 2e7 points the reader posts at the most.
+  return parse_cl(detail::read_input_file(path, std::uintmax_t{2} << 30, "a CL file", "CL file",
+                                          "larger than 2 GB: more than the 2e7 CL points taxopt "
+                                          "posts"),
+                  path, options);
 }
 
 }  // namespace taxopt

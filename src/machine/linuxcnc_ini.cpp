@@ -12,6 +12,7 @@
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/types.hpp"
 #include "taxopt/io/machine_file.hpp"
+#include "util/input_file.hpp"
 #include "util/text.hpp"
 
 namespace taxopt {
@@ -20,20 +21,10 @@ namespace {
 using detail::trim;
 
 std::string read_text(const std::string& path) {
-  // A configuration file is a regular file of a few kB: a FIFO would hang, /dev/zero would
-  // fill memory (tests/test_bad_input.cpp); 16 MB is far beyond any INI or HAL file.
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path, 0, "not a regular file (a LinuxCNC INI or HAL file is one)");
-  }
-  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{16} << 20)) {
-    throw InputError(path, 0, "larger than 16 MB: not a LinuxCNC configuration file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open the LinuxCNC configuration file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  // 16 MB is far beyond any INI or HAL file.
+  return detail::read_input_file(path, std::uintmax_t{16} << 20, "a LinuxCNC INI or HAL file",
+                                 "the LinuxCNC configuration file",
+                                 "larger than 16 MB: not a LinuxCNC configuration file");
 }
 
 /// A value of the INI with where it was found.

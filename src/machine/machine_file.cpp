@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "taxopt/core/error.hpp"
+#include "util/input_file.hpp"
 
 namespace taxopt {
 namespace {
@@ -750,19 +751,11 @@ Machine parse_machine_toml(const std::string& text, const std::string& source) {
 }
 
 Machine read_machine_file(const std::string& path) {
-  // A machine file is a regular file of a few kB: a FIFO would hang (tests/test_bad_input.cpp).
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path, 0, "not a regular file (a machine file is one)");
-  }
-  if (std::filesystem::file_size(path, ec) > (std::uintmax_t{16} << 20)) {
-    throw InputError(path, 0, "larger than 16 MB: not a machine file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open machine file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_machine_toml(ss.str(), path);
+  // A machine file is a few kB.
+  return parse_machine_toml(
+      detail::read_input_file(path, std::uintmax_t{16} << 20, "a machine file", "machine file",
+                              "larger than 16 MB: not a machine file"),
+      path);
 }
 
 }  // namespace taxopt

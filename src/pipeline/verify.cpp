@@ -50,114 +50,111 @@ double round_to(double v, int decimals) {
   return std::round(v * s) / s;
 }
 
-/// One operation verified as written.
-OperationResult verify_operation(const Run& run, const OperationContext& o,
-                                 const PostedOperation& po, const Written& w, std::size_t n_posted,
-                                 detail::StageProgress& checking, JobResult& res) {
+/// The axes as written and read back, per point (deg, mm), and the input's (rounded as
+/// written).
+struct WrittenAxes {
+  std::vector<double> a_w, c_w, a_in, c_in;
+  std::vector<Vec3d> xyz_w;
+};
+
+/// Point i as read back: the tool length and TCP on, the round trip, within the axes' ranges
+/// and the machine's travel; its row's place.
+void check_point_written(const Run& run, const OperationContext& o, const PostedOperation& po,
+                         const GcodeMove* last, std::size_t i, WrittenAxes& ax, OperationResult& r,
+                         JobResult& res) {
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
   const Machine& machine = run.machine;
-  const JobOptions& options = run.options;
   const int decimals = machine.gcode.decimals;
-  const auto t_verify = Clock::now();
-  OperationResult r;
-  r.name = op.name;
-  r.points = op.points.size();
-  r.time_post_s = o.post_s + w.write_s / static_cast<double>(n_posted);
-  for (std::size_t i = 0; i < op.points.size(); ++i) {
-    if (op.points[i].motion == Motion::Feed) {
-      r.feed_mm_min = o.metric_feed_mm_per_min[i];
-      break;
+  // Where TCP is asked for, the controller's must be on, with the tool length offset
+  // (LinuxCNC's kinematics steer the spindle nose without it); in machine mode the offset.
+  const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
+  if (!last->length_offset || (tcp_mode && !last->tcp)) {
+    if (r.verification.tool_length_active) {
+      add_finding(res, FindingCode::ToolLengthOffsetOff, k, op.points[i].line,
+                  "operation " + op.name + ": G-code line " + std::to_string(last->line) +
+                      " moves with " +
+                      (!last->length_offset ? std::string("the tool length offset off")
+                                            : std::string("tool centre point control off")) +
+                      " (the written program must switch it on before the operation's first move)");
     }
+    r.verification.tool_length_active = false;
   }
-  // Read back: the A/C values actually written, and what they mean in the workpiece.
-  std::vector<double> a_w(op.points.size()), c_w(op.points.size());
-  std::vector<Vec3d> xyz_w(op.points.size());
-  std::vector<double> a_in(op.points.size()), c_in(op.points.size());
-  r.rows.resize(op.points.size());
-  for (std::size_t i = 0; i < op.points.size(); ++i) {
-    const GcodeMove* last = w.point_moves[k][i];
-    // Where TCP is asked for, the controller's must be on, with the tool length offset
-    // (LinuxCNC's kinematics steer the spindle nose without it); in machine mode the offset.
-    const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
-    if (!last->length_offset || (tcp_mode && !last->tcp)) {
-      if (r.verification.tool_length_active) {
-        add_finding(
-            res, FindingCode::ToolLengthOffsetOff, k, op.points[i].line,
-            "operation " + op.name + ": G-code line " + std::to_string(last->line) +
-                " moves with " +
-                (!last->length_offset ? std::string("the tool length offset off")
-                                      : std::string("tool centre point control off")) +
-                " (the written program must switch it on before the operation's first move)");
-      }
-      r.verification.tool_length_active = false;
-    }
-    a_w[i] = last->a_deg;
-    xyz_w[i] = last->xyz_mm;
-    c_w[i] = last->c_deg;
-    if (!o.input_poses.empty()) {
-      a_in[i] = round_to(rad_to_deg(o.input_poses[i].a_rad), decimals);
-      c_in[i] = round_to(rad_to_deg(o.input_poses[i].c_rad), decimals);
-    }
-    const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
-    const Vec3d axis = machine.ac.forward(written);
-    const Vec3d tip = tip_of_written_mm(machine, last->xyz_mm, written);
-    const CLPointd& want = po.points[i];
-    r.verification.roundtrip_max_mm =
-        std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
-    r.verification.roundtrip_max_deg =
-        std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
-    // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
-    const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
-      const double near_rad = deg_to_rad(0.01);
-      return !range.continuous &&
-             (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
-    };
-    if (at_limit(machine.ac.a, written.a_rad) || at_limit(machine.ac.c, written.c_rad)) {
-      r.rows[i].mark(PointMark::AxisLimit);
-    }
-    if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
-      if (r.verification.within_axis_limits) {
-        add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
-                    format_location(
-                        run.tp.source, want.line,
-                        "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
-                            std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
-                            " deg is outside the machine's axis ranges"));
-      }
-      r.verification.within_axis_limits = false;
-    }
-    // The linear travel, in machine coordinates, where the machine file gives it: the
-    // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
-    const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written) +
-                            Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
-    for (int q = 0; q < 3; ++q) {
-      const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
-      if (!outside) continue;
-      r.rows[i].mark(PointMark::TravelExceeded);
-      if (r.verification.within_axis_limits) {
-        std::ostringstream os;
-        os << "operation " << op.name << ": "
-           << "XYZ"[q] << " would be " << joints_mm[q] << " mm in machine coordinates";
-        if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
-          os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
-        }
-        os << *outside;
-        add_finding(res, FindingCode::TravelExceeded, k, want.line,
-                    format_location(run.tp.source, want.line, os.str()));
-      }
-      r.verification.within_axis_limits = false;
-    }
-    r.max_axis_change_deg =
-        std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
-    PointRow& row = r.rows[i];
-    row.index = i;
-    row.line = want.line;
-    row.tip_mm = want.tip_mm;
-    row.axis = want.axis;
-    row.a_deg = a_w[i];
-    row.c_deg = c_w[i];
+  ax.a_w[i] = last->a_deg;
+  ax.xyz_w[i] = last->xyz_mm;
+  ax.c_w[i] = last->c_deg;
+  if (!o.input_poses.empty()) {
+    ax.a_in[i] = round_to(rad_to_deg(o.input_poses[i].a_rad), decimals);
+    ax.c_in[i] = round_to(rad_to_deg(o.input_poses[i].c_rad), decimals);
   }
+  const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
+  const Vec3d axis = machine.ac.forward(written);
+  const Vec3d tip = tip_of_written_mm(machine, last->xyz_mm, written);
+  const CLPointd& want = po.points[i];
+  r.verification.roundtrip_max_mm =
+      std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
+  r.verification.roundtrip_max_deg =
+      std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
+  // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
+  const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
+    const double near_rad = deg_to_rad(0.01);
+    return !range.continuous &&
+           (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
+  };
+  if (at_limit(machine.ac.a, written.a_rad) || at_limit(machine.ac.c, written.c_rad)) {
+    r.rows[i].mark(PointMark::AxisLimit);
+  }
+  if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
+    if (r.verification.within_axis_limits) {
+      add_finding(
+          res, FindingCode::AxisRangeExceeded, k, want.line,
+          format_location(run.tp.source, want.line,
+                          "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
+                              std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
+                              " deg is outside the machine's axis ranges"));
+    }
+    r.verification.within_axis_limits = false;
+  }
+  // The linear travel, in machine coordinates, where the machine file gives it: the
+  // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
+  const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written) +
+                          Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
+  for (int q = 0; q < 3; ++q) {
+    const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
+    if (!outside) continue;
+    r.rows[i].mark(PointMark::TravelExceeded);
+    if (r.verification.within_axis_limits) {
+      std::ostringstream os;
+      os << "operation " << op.name << ": "
+         << "XYZ"[q] << " would be " << joints_mm[q] << " mm in machine coordinates";
+      if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
+        os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
+      }
+      os << *outside;
+      add_finding(res, FindingCode::TravelExceeded, k, want.line,
+                  format_location(run.tp.source, want.line, os.str()));
+    }
+    r.verification.within_axis_limits = false;
+  }
+  r.max_axis_change_deg =
+      std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
+  PointRow& row = r.rows[i];
+  row.index = i;
+  row.line = want.line;
+  row.tip_mm = want.tip_mm;
+  row.axis = want.axis;
+  row.a_deg = ax.a_w[i];
+  row.c_deg = ax.c_w[i];
+}
+
+/// The round trip held to the written decimals' rounding, and that rounding to a finishing
+/// tolerance.
+void check_round_trip(const Run& run, const OperationContext& o, const PostedOperation& po,
+                      OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const Machine& machine = run.machine;
+  const int decimals = machine.gcode.decimals;
   // The round trip may differ from the intent only by the rounding of the written
   // decimals: half a unit of the last decimal per word, mapped to mm and to the axis angle;
   // in machine mode the angle rounding also moves the mapped point by its lever arm.
@@ -196,52 +193,52 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
                     " deg from the intended axes (rounding allows " + std::to_string(ang_tol) +
                     ")");
   }
-  r.contact = o.contact;
-  r.time_contacts_s = o.contacts_s;
-  r.time_optimise_s = o.optimise_s;
-  if (o.optimised) {
-    r.segments = static_cast<int>(o.optimised->intervals);
-    // Why points kept their input axes: the paper's guard, else no free axis in the cone.
-    const OptimisedOperation& opt = *o.optimised;
-    OperationResult::KeptInputPoints kept;
-    kept.passes = opt.guard.whole_passes;
-    kept.stretches = opt.guard.stretches;
-    std::vector<KeptWhy> why = opt.guard.why;
-    why.resize(op.points.size(), KeptWhy::None);
-    for (std::size_t i : opt.no_free_axis) {
-      if (why[i] == KeptWhy::None) ++kept.no_free_axis;
-      r.rows[i].mark(PointMark::NoFreeAxis);
-    }
-    for (std::size_t i = 0; i < why.size(); ++i) {
-      if (why[i] == KeptWhy::Collision) r.rows[i].mark(PointMark::KeptCollision);
-      if (why[i] == KeptWhy::PeakRate) r.rows[i].mark(PointMark::KeptPeakRate);
-      if (why[i] == KeptWhy::Join) r.rows[i].mark(PointMark::KeptJoin);
-    }
-    for (const KeptWhy kw : why) {
-      kept.collision += kw == KeptWhy::Collision;
-      kept.peak_rate += kw == KeptWhy::PeakRate;
-      kept.join_points += kw == KeptWhy::Join;
-    }
-    r.kept_input_points = kept;
-    r.time_choice = opt.time_choice;
-    // The optimiser keeps every axis within the cone; this proves it on what is written.
-    const double allowed = options.paper.max_deviation_deg + 1e-6;
-    if (r.max_axis_change_deg > allowed) {
-      add_finding(res, FindingCode::DeviationExceeded, k, 0,
-                  "operation " + op.name + ": an output axis is " +
-                      std::to_string(r.max_axis_change_deg) +
-                      " deg from its input axis, more than --max-deviation");
-    }
+}
+
+/// Why points kept their input axes (the guards, no free axis in the cone), and the cone
+/// proved on what is written.
+void kept_points(const Run& run, const OperationContext& o, OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  r.segments = static_cast<int>(o.optimised->intervals);
+  // Why points kept their input axes: the paper's guard, else no free axis in the cone.
+  const OptimisedOperation& opt = *o.optimised;
+  OperationResult::KeptInputPoints kept;
+  kept.passes = opt.guard.whole_passes;
+  kept.stretches = opt.guard.stretches;
+  std::vector<KeptWhy> why = opt.guard.why;
+  why.resize(op.points.size(), KeptWhy::None);
+  for (std::size_t i : opt.no_free_axis) {
+    if (why[i] == KeptWhy::None) ++kept.no_free_axis;
+    r.rows[i].mark(PointMark::NoFreeAxis);
   }
-  if (run.collision && r.contact.recovered) {
-    check_collisions(run, o, po, w, xyz_w, a_w, c_w, checking, r, res);
-  } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
-             op.tool.diameter_mm > 0.0) {
-    check_shank_and_holder(run, o, po, w, xyz_w, a_w, c_w, r, res);
+  for (std::size_t i = 0; i < why.size(); ++i) {
+    if (why[i] == KeptWhy::Collision) r.rows[i].mark(PointMark::KeptCollision);
+    if (why[i] == KeptWhy::PeakRate) r.rows[i].mark(PointMark::KeptPeakRate);
+    if (why[i] == KeptWhy::Join) r.rows[i].mark(PointMark::KeptJoin);
   }
-  if (!r.verification.collision_free) {
-    for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
+  for (const KeptWhy kw : why) {
+    kept.collision += kw == KeptWhy::Collision;
+    kept.peak_rate += kw == KeptWhy::PeakRate;
+    kept.join_points += kw == KeptWhy::Join;
   }
+  r.kept_input_points = kept;
+  r.time_choice = opt.time_choice;
+  // The optimiser keeps every axis within the cone; this proves it on what is written.
+  const double allowed = run.options.paper.max_deviation_deg + 1e-6;
+  if (r.max_axis_change_deg > allowed) {
+    add_finding(res, FindingCode::DeviationExceeded, k, 0,
+                "operation " + op.name + ": an output axis is " +
+                    std::to_string(r.max_axis_change_deg) +
+                    " deg from its input axis, more than --max-deviation");
+  }
+}
+
+/// The contacts' rows, and the C-space rows where asked.
+void contact_rows(const Run& run, const OperationContext& o, detail::StageProgress& checking,
+                  OperationResult& r) {
+  const Operationd& op = *o.op;
+  const JobOptions& options = run.options;
   if (!o.contacts.empty()) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       const ContactPoint& c = o.contacts[i];
@@ -258,26 +255,14 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       cspace_rows(run, o, checking, r);
     }
   }
-  // The rates as the machine runs the program: each move at the time the controller gives the
-  // words written (Written::time_into_after), the input's likewise; the paper's eq. 16-18 over
-  // the contacts beside them, for the paper's comparison.
-  r.before = summarise_timed(op, a_in, c_in, w.time_into_before[k], &r.rows, true);
-  r.paper_before =
-      summarise_paper(op, o.contacts, o.ball_radius_mm, a_in, c_in, o.metric_feed_mm_per_min);
-  for (std::size_t i = 0; i < op.points.size(); ++i) {
-    r.rows[i].a_before_deg = a_in[i];
-    r.rows[i].c_before_deg = c_in[i];
-  }
-  if (o.optimised) {
-    for (std::size_t i : o.optimised->keys) r.rows[i].key = true;
-  }
-  r.after = summarise_timed(op, a_w, c_w, w.time_into_after[k], &r.rows);
-  r.paper_after = summarise_paper(op, o.contacts, o.ball_radius_mm, a_w, c_w,
-                                  o.metric_feed_mm_per_min, &r.rows);
-  r.feed_after = w.schedule_after[k].summary;
-  r.feed_before = w.schedule_before[k].summary;
-  // A longer cycle is worth a warning above 0.1 % and 10 ms (below that it is rounding and the
-  // schedule's own resolution: a run saw warnings for 2e-7 s); it names what grew.
+}
+
+/// A longer cycle is worth a warning above 0.1 % and 10 ms (below that it is rounding and the
+/// schedule's own resolution: a run saw warnings for 2e-7 s); it names what grew.
+void longer_cycle_finding(const Machine& machine, const OperationContext& o,
+                          const OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
   const double grew_s = r.feed_after.cycle_time_s - r.feed_before.cycle_time_s;
   if (o.optimised && grew_s > std::max(0.01, 1e-3 * r.feed_before.cycle_time_s)) {
     const auto part = [](const char* what, double before, double after) {
@@ -315,6 +300,72 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
                 "operation " + op.name + ": at the machine's limits the new axes take " +
                     total.str() + ": " + grew);
   }
+}
+
+/// One operation verified as written.
+OperationResult verify_operation(const Run& run, const OperationContext& o,
+                                 const PostedOperation& po, const Written& w, std::size_t n_posted,
+                                 detail::StageProgress& checking, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const Machine& machine = run.machine;
+  const JobOptions& options = run.options;
+  const auto t_verify = Clock::now();
+  OperationResult r;
+  r.name = op.name;
+  r.points = op.points.size();
+  r.time_post_s = o.post_s + w.write_s / static_cast<double>(n_posted);
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    if (op.points[i].motion == Motion::Feed) {
+      r.feed_mm_min = o.metric_feed_mm_per_min[i];
+      break;
+    }
+  }
+  // Read back: the A/C values actually written, and what they mean in the workpiece.
+  WrittenAxes ax;
+  ax.a_w.resize(op.points.size());
+  ax.c_w.resize(op.points.size());
+  ax.xyz_w.resize(op.points.size());
+  ax.a_in.resize(op.points.size());
+  ax.c_in.resize(op.points.size());
+  r.rows.resize(op.points.size());
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    check_point_written(run, o, po, w.point_moves[k][i], i, ax, r, res);
+  }
+  check_round_trip(run, o, po, r, res);
+  r.contact = o.contact;
+  r.time_contacts_s = o.contacts_s;
+  r.time_optimise_s = o.optimise_s;
+  if (o.optimised) kept_points(run, o, r, res);
+  if (run.collision && r.contact.recovered) {
+    check_collisions(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, checking, r, res);
+  } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
+             op.tool.diameter_mm > 0.0) {
+    check_shank_and_holder(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, r, res);
+  }
+  if (!r.verification.collision_free) {
+    for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
+  }
+  contact_rows(run, o, checking, r);
+  // The rates as the machine runs the program: each move at the time the controller gives the
+  // words written (Written::time_into_after), the input's likewise; the paper's eq. 16-18 over
+  // the contacts beside them, for the paper's comparison.
+  r.before = summarise_timed(op, ax.a_in, ax.c_in, w.time_into_before[k], &r.rows, true);
+  r.paper_before =
+      summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_in, ax.c_in, o.metric_feed_mm_per_min);
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    r.rows[i].a_before_deg = ax.a_in[i];
+    r.rows[i].c_before_deg = ax.c_in[i];
+  }
+  if (o.optimised) {
+    for (std::size_t i : o.optimised->keys) r.rows[i].key = true;
+  }
+  r.after = summarise_timed(op, ax.a_w, ax.c_w, w.time_into_after[k], &r.rows);
+  r.paper_after = summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_w, ax.c_w,
+                                  o.metric_feed_mm_per_min, &r.rows);
+  r.feed_after = w.schedule_after[k].summary;
+  r.feed_before = w.schedule_before[k].summary;
+  longer_cycle_finding(machine, o, r, res);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     r.rows[i].feed_mm_min = w.schedule_after[k].feed_mm_min[i];
     r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];

@@ -254,10 +254,7 @@ void Reader::circle(const ClRecordArgs& r) {
       fail(line, "CIRCLE: '" + args[k] + "' not interpreted (only TIMES,n may follow the numbers)");
     }
   }
-  c.record = index;
-  c.line = line;
-  tp_.records[static_cast<std::size_t>(index)].frame = frame_;
-  pending_circle_ = c;
+  pend_circle(c, index, line);
 }
 
 void Reader::movarc(const ClRecordArgs& r) {
@@ -281,10 +278,7 @@ void Reader::movarc(const ClRecordArgs& r) {
   c.movarc = true;
   c.declared_sweep_rad = deg_to_rad(angle_deg);
   c.turns = 1 + static_cast<int>(std::floor((angle_deg - 1e-6) / 360.0));
-  c.record = index;
-  c.line = line;
-  tp_.records[static_cast<std::size_t>(index)].frame = frame_;
-  pending_circle_ = c;
+  pend_circle(c, index, line);
 }
 
 void Reader::tlaxis(const ClRecordArgs& r) {
@@ -367,6 +361,13 @@ void Reader::cycle(const ClRecordArgs& r) {
   } else if (kind != "INIT" && kind != "ON") {
     start_cycle(args, line);
   }
+}
+
+void Reader::pend_circle(CircleRecord c, int index, int line) {
+  c.record = index;
+  c.line = line;
+  tp_.records[static_cast<std::size_t>(index)].frame = frame_;
+  pending_circle_ = c;
 }
 
 }  // namespace taxopt::cl

@@ -204,6 +204,8 @@ class Reader {
   void cutter(const ClRecordArgs& r);
   /// LOADTL/, LOAD/
   void load_tool(const ClRecordArgs& r);
+  /// A CIRCLE or MOVARC read: its end GOTO comes next.
+  void pend_circle(CircleRecord c, int index, int line);
   /// TOOLNO/n[,d]: CATIA's announcement of the tool its LOADTL loads next (number, diameter).
   void toolno(const ClRecordArgs& r);
   /// SPINDL/, SPINDLE/

@@ -1,0 +1,33 @@
+#pragma once
+/// @file What the global method's dynamic programmes over candidate poses share
+/// (global_optimiser.cpp: the least rotary objective; fastest_sequence.cpp: the least time).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "taxopt/kinematics/ac_machine.hpp"
+
+namespace taxopt::detail {
+
+/// Relative tolerance under which two objective values are equal (ties keep the earlier).
+inline constexpr double kTie = 1e-12;
+
+/// The sequence of a pair programme (states: pairs of consecutive candidates, index r K + s)
+/// from its best final state and back pointers: back[i][state at i - 1] is the candidate at
+/// i - 2.
+inline std::vector<std::size_t> backtrack(const std::vector<std::vector<Posed>>& candidates,
+                                          const std::vector<std::vector<std::uint8_t>>& back,
+                                          std::size_t best) {
+  const std::size_t n = candidates.size(), kl = candidates[n - 1].size();
+  std::vector<std::size_t> seq(n);
+  seq[n - 1] = best % kl;
+  seq[n - 2] = best / kl;
+  for (std::size_t i = n - 1; i >= 2; --i) {
+    const std::size_t kn = candidates[i].size();
+    seq[i - 2] = back[i][seq[i - 1] * kn + seq[i]];
+  }
+  return seq;
+}
+
+}  // namespace taxopt::detail

@@ -169,7 +169,7 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
       csv, Catch::StartsWith(
                "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
                "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_"
-               "line,findings\n"));
+               "line,findings,gap_mm,surface,normal_uncertainty_deg\n"));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
   CHECK(read_file(t.path("o.cls")) == kSmallCl);
 }

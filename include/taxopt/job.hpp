@@ -189,10 +189,16 @@ struct PointRow {
   Vec3d axis = Vec3d::UnitZ();
   double a_deg = 0.0, c_deg = 0.0;
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
-  /// Contact geometry, when a part was given and the ball touches it here.
+  /// Contact geometry, when a part was given and the ball touches it here: the designed
+  /// surface's contact and normal (ContactPoint::surface_cc_mm, surface_normal), the input
+  /// axis's tilt and yaw in its frame, the exact gap to the mesh, where the contact lies and
+  /// the angle between the mesh's and the surface's normals.
   bool has_contact = false;
   Vec3d cc_mm = Vec3d::Zero(), normal = Vec3d::UnitZ();
   double tilt_deg = 0.0, yaw_deg = 0.0;
+  double gap_mm = 0.0;
+  SurfacePlace place = SurfacePlace::Smooth;
+  double normal_uncertainty_deg = 0.0;
   /// The same with the input axes as the machine would have run them (the "before").
   double a_before_deg = 0.0, c_before_deg = 0.0;
   double omega_before_deg_s = 0.0, accel_before_deg_s2 = 0.0;
@@ -213,6 +219,12 @@ struct ContactSummary {
   std::size_t touching = 0, in_air = 0, local_gouges = 0;
   double max_abs_gap_mm = 0.0;
   double tolerance_mm = 0.0;
+  /// Touching points on a designed edge or corner (ContactPoint::place), where the ball rolls
+  /// over a feature and no smooth normal holds.
+  std::size_t edge_points = 0, corner_points = 0;
+  /// The largest ContactPoint::normal_uncertainty_rad over the touching points on the smooth
+  /// surface, deg: the facets' normals against the smooth ones.
+  double max_normal_uncertainty_deg = 0.0;
 };
 
 /// The C-space grid of one contact point (the paper's fig. 10), with the input and output

@@ -66,10 +66,10 @@ std::vector<WindowCell> window(const CSpaceGrid& g, const ContactPoint& cp, cons
     if (a < -1e-12) continue;
     const double ca = std::cos(a), sa = std::sin(a);
     // Every axis of this row makes the angle a with N: skip rows the cone cannot reach.
-    if (std::abs(a - angle_between(cp.normal, input)) > max_dev_rad + 1e-9) continue;
+    if (std::abs(a - angle_between(cp.surface_normal, input)) > max_dev_rad + 1e-9) continue;
     for (int j = 0; j < g.yaw_cells(); ++j) {
       // eq. 11 written out: V = N cos a + sin a (T cos b + K sin b).
-      const Vec3d v = ca * cp.normal + sa * dir[static_cast<std::size_t>(j)];
+      const Vec3d v = ca * cp.surface_normal + sa * dir[static_cast<std::size_t>(j)];
       if (v.dot(input) >= cos_dev) out.push_back({i, j, v});
     }
   }
@@ -129,7 +129,7 @@ Seen seen_from(const Vec3d& centre, const Vec3d& m, const ContactPoint& cp) {
   s.d = w.norm();
   if (s.d <= 1e-12) return s;
   s.u = w / s.d;
-  s.cth = s.u.dot(cp.normal);
+  s.cth = s.u.dot(cp.surface_normal);
   const double t = s.u.dot(cp.feed_dir), k = s.u.dot(cp.side);
   s.sth = std::sqrt(t * t + k * k);
   s.beta = std::atan2(k, t);
@@ -430,8 +430,8 @@ CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint
               if (row[j]) continue;
               // The cell's axis and a frame across it: d/da and d/db of eq. 11, normalised.
               const Vec3d& dj = yaw_dir[static_cast<std::size_t>(j)];
-              const Vec3d v = ca * cp.normal + sa * dj;
-              const Vec3d e1 = ca * dj - sa * cp.normal;
+              const Vec3d v = ca * cp.surface_normal + sa * dj;
+              const Vec3d e1 = ca * dj - sa * cp.surface_normal;
               if (detail::meets_in_frame(rel, v, e1, yaw_side[static_cast<std::size_t>(j)],
                                          body.radius_mm, body.start_mm, body.end_mm)) {
                 row[j] = 1;
@@ -511,7 +511,7 @@ CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const Co
 
 Vec3d cell_axis(const CSpaceGrid& grid, int i, int j, const ContactPoint& cp) {
   const double a = grid.tilt_rad(i), b = grid.yaw_rad(j);
-  return std::cos(a) * cp.normal +
+  return std::cos(a) * cp.surface_normal +
          std::sin(a) * (std::cos(b) * cp.feed_dir + std::sin(b) * cp.side);
 }
 

@@ -16,6 +16,15 @@ const char* to_string(CurvatureSource source) {
   return "?";
 }
 
+const char* to_string(SurfacePlace place) {
+  switch (place) {
+    case SurfacePlace::Smooth: return "smooth";
+    case SurfacePlace::Edge: return "edge";
+    case SurfacePlace::Corner: return "corner";
+  }
+  return "?";
+}
+
 double contact_tolerance_mm(const Part& part, const ContactOptions& options,
                             std::optional<double> cam_tolerance_mm) {
   if (options.tolerance_mm > 0.0) return options.tolerance_mm;
@@ -43,6 +52,65 @@ std::string contact_tolerance_source(const Part& part, const ContactOptions& opt
   }
   return os.str();
 }
+
+namespace {
+
+/// The smooth normal of the mesh's point p where it points at `centre` (C - p parallel to
+/// n(p)), from the exact point `start` and its smooth normal `n0`: Newton's method over p's
+/// offset in the tangent plane of n0 (each offset projected on the mesh), the residual the
+/// part of C - p across n(p), its Jacobian by differences. A plain fixed point (n <- the
+/// normal under C - R n) contracts by R times the curvature a step: slowly where a concave
+/// radius nears R (measured: 8 steps left 0.13 deg where two facets tie on the sine), and
+/// not at all past a convex radius below R. Returns n0 where no step lowers the residual.
+Vec3d normal_towards(const Part& part, const Vec3d& centre, const Part::Closest& start,
+                     const Vec3d& n0) {
+  const Vec3d t1 = n0.unitOrthogonal(), t2 = n0.cross(t1);
+  struct Eval {
+    Vec3d n = Vec3d::Zero();
+    Eigen::Vector2d e = Eigen::Vector2d::Zero();
+    double size = std::numeric_limits<double>::infinity();
+  };
+  const auto eval = [&](const Eigen::Vector2d& x) {
+    Eval out;
+    const Part::Closest c = part.closest(start.point + x(0) * t1 + x(1) * t2);
+    out.n = part.smooth_normal(c, n0);
+    if (out.n.isZero()) return out;
+    const Vec3d w = centre - c.point;
+    const Vec3d across = w - w.dot(out.n) * out.n;
+    out.e = Eigen::Vector2d(across.dot(t1), across.dot(t2));
+    out.size = out.e.norm();
+    return out;
+  };
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Eval at = eval(x);
+  if (!std::isfinite(at.size)) return n0;
+  constexpr double kStepMm = 1e-5;
+  for (int it = 0; it < 12 && at.size > 1e-10; ++it) {
+    Eigen::Matrix2d J;
+    for (int k = 0; k < 2; ++k) {
+      Eigen::Vector2d xk = x;
+      xk(k) += kStepMm;
+      const Eval ek = eval(xk);
+      if (!std::isfinite(ek.size)) return at.n;
+      J.col(k) = (ek.e - at.e) / kStepMm;
+    }
+    if (!(std::abs(J.determinant()) > 1e-12)) break;
+    Eigen::Vector2d d = -J.inverse() * at.e;
+    bool lowered = false;
+    for (int half = 0; half < 6 && !lowered; ++half, d *= 0.5) {
+      const Eval next = eval(x + d);
+      if (next.size < at.size) {
+        x += d;
+        at = next;
+        lowered = true;
+      }
+    }
+    if (!lowered) break;
+  }
+  return at.n;
+}
+
+}  // namespace
 
 std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
                                            double ball_radius_mm, const ContactOptions& options) {
@@ -79,15 +147,31 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
       if (fn.dot(p.axis) < 0.0) fn = -fn;
       c.normal = fn;
     }
-    // Curvature: the local fit only where it agrees with the exact contact, else the mesh's.
+    // The designed surface's estimate: the point of the mesh whose smooth normal points at
+    // the centre (measured on 0.5 mm meshes of unseen heightfields against their analytic
+    // normals: the facets' 3.45 deg at most, 0.41 on average; the smooth normal at the exact
+    // point 1.89 / 0.13; where it points at the centre 0.29 / 0.035).
+    const Part::SurfaceNormal surface = part.surface_normal(near, c.normal);
+    c.surface_normal = surface.normal;
+    c.surface_cc_mm = c.cc_mm;
+    if (!surface.on_feature) {
+      c.surface_normal = normal_towards(part, centre, near, c.surface_normal);
+      c.surface_cc_mm = centre - R * c.surface_normal;
+    }
+    c.place = !surface.on_feature                      ? SurfacePlace::Smooth
+              : surface.where == Part::Feature::Vertex ? SurfacePlace::Corner
+                                                       : SurfacePlace::Edge;
+    c.normal_uncertainty_rad = angle_between(c.normal, c.surface_normal);
+    // Curvature: the local fit only where it agrees with the surface's contact, else the
+    // mesh's.
     const LocalFit fit = part.fit_towards(centre, options.fit_neighbours);
     const Vec3d fit_normal = unit_normal(fit.jet);
-    if (fit.samples > 0 && (fit.jet.p - c.cc_mm).norm() <= tol && fit_normal.allFinite() &&
-        fit_normal.dot(c.normal) >= agree_cos) {
+    if (fit.samples > 0 && (fit.jet.p - c.surface_cc_mm).norm() <= tol && fit_normal.allFinite() &&
+        fit_normal.dot(c.surface_normal) >= agree_cos) {
       c.curvature = principal_curvatures(fit.jet);
       c.curvature_from = CurvatureSource::Fit;
     } else {
-      const Part::MeshCurvature mc = part.mesh_curvature(near, c.normal);
+      const Part::MeshCurvature mc = part.mesh_curvature(near, c.surface_normal);
       c.curvature = mc.curvature;
       c.curvature_from = mc.feature == Part::Feature::Facet  ? CurvatureSource::Facet
                          : mc.feature == Part::Feature::Edge ? CurvatureSource::Edge
@@ -107,18 +191,19 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
     const bool has_next = i + 1 < n && touching(i + 1) && op.points[i + 1].motion == Motion::Feed;
     const bool has_prev = i > 0 && touching(i - 1) && op.points[i].motion == Motion::Feed;
     Vec3d d = Vec3d::Zero();
-    if (has_next) d += out[i + 1].cc_mm - c.cc_mm;
-    if (has_prev) d += c.cc_mm - out[i - 1].cc_mm;
+    if (has_next) d += out[i + 1].surface_cc_mm - c.surface_cc_mm;
+    if (has_prev) d += c.surface_cc_mm - out[i - 1].surface_cc_mm;
     if (d.norm() < 1e-12) {
       // A lone contact: the tool's own motion, else any tangent.
       if (i + 1 < n) d = op.points[i + 1].tip_mm - op.points[i].tip_mm;
       if (d.norm() < 1e-12 && i > 0) d = op.points[i].tip_mm - op.points[i - 1].tip_mm;
     }
-    Vec3d t = d - d.dot(c.normal) * c.normal;
-    if (t.norm() < 1e-12) t = c.normal.unitOrthogonal();
+    const Vec3d& n_s = c.surface_normal;
+    Vec3d t = d - d.dot(n_s) * n_s;
+    if (t.norm() < 1e-12) t = n_s.unitOrthogonal();
     c.feed_dir = t.normalized();
-    c.side = c.normal.cross(c.feed_dir);
-    tilt_yaw_of(op.points[i].axis, c.normal, c.feed_dir, c.tilt_rad, c.yaw_rad);
+    c.side = n_s.cross(c.feed_dir);
+    tilt_yaw_of(op.points[i].axis, n_s, c.feed_dir, c.tilt_rad, c.yaw_rad);
   }
   return out;
 }

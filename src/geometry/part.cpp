@@ -58,6 +58,121 @@ double width_across(const TriangleMesh& m, const std::array<int, 3>& f, int a, i
   return (d - d.dot(e) * e).norm();
 }
 
+/// A turn between two facets from this angle on is a designed edge, not a tessellated curve
+/// (the chordal error's and the smooth normals' one threshold).
+constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
+
+/// The designed surface as the mesh gives it (Part::surface_normal).
+struct SurfaceModel {
+  /// Per face corner (3 f + k): the surface's normal there, the angle-weighted mean of the
+  /// normals of the corner's faces that turn less than kCreaseRad from this face (so split
+  /// across creases); zero for a degenerate face. Floats: 36 bytes a face.
+  std::vector<Eigen::Vector3f> corner_normal;
+  /// The edges (low vertex, high vertex) that are no tessellated curve -- a crease, a border
+  /// or a non-manifold edge --, sorted; and the vertices on them.
+  std::vector<std::pair<int, int>> feature_edges;
+  std::vector<bool> feature_vertex;
+};
+
+/// Builds the SurfaceModel of a mesh.
+SurfaceModel surface_model_of(const TriangleMesh& m) {
+  SurfaceModel s;
+  const std::size_t nf = m.faces.size(), nv = m.vertices.size();
+  std::vector<Vec3d> fn(nf);
+  for (std::size_t f = 0; f < nf; ++f) fn[f] = face_normal(m, m.faces[f]);
+  // The faces around each vertex (compressed rows), with the face's angle at it.
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (const auto& f : m.faces) {
+    for (int v : f) ++start[static_cast<std::size_t>(v) + 1];
+  }
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::pair<int, double>> around(start[nv]);
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const auto& F = m.faces[f];
+      const Vec3d& p = m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])];
+      const Vec3d e1 =
+          m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>((k + 1) % 3)])] - p;
+      const Vec3d e2 =
+          m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>((k + 2) % 3)])] - p;
+      const double l = e1.norm() * e2.norm();
+      const double angle = l > 0.0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) : 0.0;
+      around[fill[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])]++] = {
+          static_cast<int>(f), angle};
+    }
+  }
+  const double crease_cos = std::cos(kCreaseRad);
+  s.corner_normal.assign(3 * nf, Eigen::Vector3f::Zero());
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (fn[f].isZero()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::size_t>(m.faces[f][static_cast<std::size_t>(k)]);
+      Vec3d sum = Vec3d::Zero();
+      for (std::size_t r = start[v]; r < start[v + 1]; ++r) {
+        const auto [g, angle] = around[r];
+        const Vec3d& ng = fn[static_cast<std::size_t>(g)];
+        const double d = ng.dot(fn[f]);
+        // Either orientation: a mesh's faces need not agree on theirs.
+        if (std::abs(d) >= crease_cos) sum += (d < 0.0 ? -angle : angle) * ng;
+      }
+      if (sum.norm() > 0.0)
+        s.corner_normal[3 * f + static_cast<std::size_t>(k)] = sum.normalized().cast<float>();
+    }
+  }
+  // Edges no tessellated curve runs over: not shared by exactly two faces, or turning by
+  // kCreaseRad or more between them.
+  std::vector<std::array<int, 3>> edges;  // low, high, face
+  edges.reserve(3 * nf);
+  for (std::size_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.faces[f][static_cast<std::size_t>(k)];
+      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
+      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  s.feature_vertex.assign(nv, false);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1]) ++j;
+    bool feature = j - i != 2;
+    if (!feature) {
+      const Vec3d& n1 = fn[static_cast<std::size_t>(edges[i][2])];
+      const Vec3d& n2 = fn[static_cast<std::size_t>(edges[i + 1][2])];
+      feature = n1.isZero() || n2.isZero() || std::abs(n1.dot(n2)) < crease_cos;
+    }
+    if (feature) {
+      s.feature_edges.push_back({edges[i][0], edges[i][1]});
+      s.feature_vertex[static_cast<std::size_t>(edges[i][0])] = true;
+      s.feature_vertex[static_cast<std::size_t>(edges[i][1])] = true;
+    }
+    i = j;
+  }
+  return s;
+}
+
+/// Barycentric coordinates w of point p in face f (false for a degenerate face).
+bool barycentric(const TriangleMesh& m, const std::array<int, 3>& f, const Vec3d& p, double w[3]) {
+  const Vec3d& A = m.vertices[static_cast<std::size_t>(f[0])];
+  const Vec3d& B = m.vertices[static_cast<std::size_t>(f[1])];
+  const Vec3d& C = m.vertices[static_cast<std::size_t>(f[2])];
+  const Vec3d n = (B - A).cross(C - A);
+  const double area2 = n.squaredNorm();
+  if (!(area2 > 0.0)) return false;
+  w[0] = (C - B).cross(p - B).dot(n) / area2;
+  w[1] = (A - C).cross(p - C).dot(n) / area2;
+  w[2] = (B - A).cross(p - A).dot(n) / area2;
+  return true;
+}
+
+/// A barycentric weight at or below this: the point lies on the opposite edge.
+constexpr double kOnVertexWeight = 1e-7;
+/// The exact normal of a point on a designed edge turns more than this off its face's: the
+/// ball touches the edge, not the face beside it (1e-4 rad: far above the closest point's
+/// rounding, far below any tessellation's turn).
+constexpr double kOnFeatureRad = 1e-4;
+
 }  // namespace
 
 struct Part::Impl {
@@ -67,6 +182,7 @@ struct Part::Impl {
   KdTree kd;
   double mean_edge = 0.0;
   double chordal_error = 0.0;
+  SurfaceModel surface;
 };
 
 namespace {
@@ -95,7 +211,7 @@ double chordal_error_of(const TriangleMesh& m) {
     double angle_rad;
   };
   std::vector<Turn> turns;
-  const double sharp = 30.0 * 3.14159265358979323846 / 180.0;
+  const double sharp = kCreaseRad;
   for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
     const HalfEdge& e = edges[i];
     const HalfEdge& g = edges[i + 1];
@@ -178,6 +294,7 @@ Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
   }
   impl_->mean_edge = edges / (3.0 * static_cast<double>(m.faces.size()));
   impl_->chordal_error = chordal_error_of(m);
+  impl_->surface = surface_model_of(m);
   impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
@@ -200,18 +317,11 @@ Part::MeshCurvature Part::mesh_curvature(const Closest& c, const Vec3d& normal) 
   out.curvature.d1 = normal.unitOrthogonal();
   out.curvature.d2 = normal.cross(out.curvature.d1);
   // Barycentric coordinates of the point in its face: which vertices it lies on.
-  const Vec3d& A = m.vertices[static_cast<std::size_t>(f[0])];
-  const Vec3d& B = m.vertices[static_cast<std::size_t>(f[1])];
-  const Vec3d& C = m.vertices[static_cast<std::size_t>(f[2])];
-  const Vec3d n = (B - A).cross(C - A);
-  const double area2 = n.squaredNorm();
-  if (!(area2 > 0.0)) return out;
-  const double w[3] = {(C - B).cross(c.point - B).dot(n) / area2,
-                       (A - C).cross(c.point - C).dot(n) / area2,
-                       (B - A).cross(c.point - A).dot(n) / area2};
+  double w[3];
+  if (!barycentric(m, f, c.point, w)) return out;
   std::vector<int> on;  // the face's vertices whose weight is not ~0
   for (int k = 0; k < 3; ++k) {
-    if (w[k] > 1e-7) on.push_back(f[static_cast<std::size_t>(k)]);
+    if (w[k] > kOnVertexWeight) on.push_back(f[static_cast<std::size_t>(k)]);
   }
   if (on.size() == 3) return out;  // inside the facet: flat
   // The curvature across edge (a, b) of this mesh, from the two faces on it.
@@ -281,6 +391,61 @@ Part::MeshCurvature Part::mesh_curvature(const Closest& c, const Vec3d& normal) 
     out.curvature.k1 = 0.0;
   }
   return out;
+}
+
+Part::SurfaceNormal Part::surface_normal(const Closest& c, const Vec3d& exact_normal) const {
+  const TriangleMesh& m = impl_->mesh;
+  const SurfaceModel& sm = impl_->surface;
+  const auto face = static_cast<std::size_t>(c.face);
+  const std::array<int, 3>& f = m.faces[face];
+  SurfaceNormal out;
+  out.normal = exact_normal;
+  double w[3];
+  if (!barycentric(m, f, c.point, w)) {
+    out.on_feature = true;  // a degenerate face: no surface of its own
+    return out;
+  }
+  std::vector<int> on;
+  for (int k = 0; k < 3; ++k) {
+    if (w[k] > kOnVertexWeight) on.push_back(f[static_cast<std::size_t>(k)]);
+  }
+  out.where = on.size() == 3 ? Feature::Facet : (on.size() == 2 ? Feature::Edge : Feature::Vertex);
+  bool on_feature_edge = false;
+  if (out.where == Feature::Edge) {
+    const std::pair<int, int> e{std::min(on[0], on[1]), std::max(on[0], on[1])};
+    on_feature_edge = std::binary_search(sm.feature_edges.begin(), sm.feature_edges.end(), e);
+  } else if (out.where == Feature::Vertex) {
+    const int v = on.empty() ? f[0] : on[0];
+    on_feature_edge = sm.feature_vertex[static_cast<std::size_t>(v)];
+  }
+  Vec3d own = face_normal(m, f);
+  if (own.dot(exact_normal) < 0.0) own = -own;
+  // The ball rolls over a designed edge: its normal turns off the face's own.
+  if (on_feature_edge && angle_between(own, exact_normal) > kOnFeatureRad) {
+    out.on_feature = true;
+    return out;
+  }
+  const Vec3d n = smooth_normal(c, exact_normal);
+  if (n.isZero()) {
+    out.on_feature = true;
+    return out;
+  }
+  out.normal = n;
+  return out;
+}
+
+Vec3d Part::smooth_normal(const Closest& c, const Vec3d& side) const {
+  const TriangleMesh& m = impl_->mesh;
+  const auto face = static_cast<std::size_t>(c.face);
+  double w[3];
+  if (!barycentric(m, m.faces[face], c.point, w)) return Vec3d::Zero();
+  Vec3d n = Vec3d::Zero();
+  for (std::size_t k = 0; k < 3; ++k) {
+    n += std::clamp(w[k], 0.0, 1.0) * impl_->surface.corner_normal[3 * face + k].cast<double>();
+  }
+  if (!(n.norm() > 1e-9)) return Vec3d::Zero();
+  n.normalize();
+  return n.dot(side) < 0.0 ? Vec3d(-n) : n;
 }
 
 Part::Closest Part::closest(const Vec3d& q) const {

@@ -128,7 +128,7 @@ std::vector<double> contact_lengths_mm(const Operationd& op,
   for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
     if (!contacts.empty() && contacts[i].state == ContactState::Touching &&
         contacts[i + 1].state == ContactState::Touching) {
-      len[i - pass.begin] = (contacts[i + 1].cc_mm - contacts[i].cc_mm).norm();
+      len[i - pass.begin] = (contacts[i + 1].surface_cc_mm - contacts[i].surface_cc_mm).norm();
     }
   }
   return len;

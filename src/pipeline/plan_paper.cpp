@@ -66,13 +66,13 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       const Vec3d centre = reference_point(op.points[i], R);
       if (touching(i)) {
-        problem.curve_mm.push_back(contacts[i].cc_mm);
+        problem.curve_mm.push_back(contacts[i].surface_cc_mm);
         continue;
       }
       std::optional<Vec3d> normal;
       for (std::size_t d = 1; !normal && d < pass.size(); ++d) {
-        if (i >= pass.begin + d && touching(i - d)) normal = contacts[i - d].normal;
-        if (i + d < pass.end && touching(i + d)) normal = contacts[i + d].normal;
+        if (i >= pass.begin + d && touching(i - d)) normal = contacts[i - d].surface_normal;
+        if (i + d < pass.end && touching(i + d)) normal = contacts[i + d].surface_normal;
       }
       problem.curve_mm.push_back(normal ? Vec3d(centre - R * *normal) : centre);
     }

@@ -299,6 +299,10 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
       ++cs.touching;
       cs.max_abs_gap_mm = std::max(cs.max_abs_gap_mm, std::abs(c.gap_mm));
       if (c.local_gouge) ++cs.local_gouges;
+      if (c.place == SurfacePlace::Edge) ++cs.edge_points;
+      if (c.place == SurfacePlace::Corner) ++cs.corner_points;
+      cs.max_normal_uncertainty_deg =
+          std::max(cs.max_normal_uncertainty_deg, rad_to_deg(c.normal_uncertainty_rad));
     } else {
       ++cs.in_air;
     }

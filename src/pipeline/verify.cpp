@@ -245,10 +245,13 @@ void contact_rows(const Run& run, const OperationContext& o, detail::StageProgre
       if (c.state != ContactState::Touching) continue;
       PointRow& row = r.rows[i];
       row.has_contact = true;
-      row.cc_mm = c.cc_mm;
-      row.normal = c.normal;
+      row.cc_mm = c.surface_cc_mm;
+      row.normal = c.surface_normal;
       row.tilt_deg = rad_to_deg(c.tilt_rad);
       row.yaw_deg = rad_to_deg(c.yaw_rad);
+      row.gap_mm = c.gap_mm;
+      row.place = c.place;
+      row.normal_uncertainty_deg = rad_to_deg(c.normal_uncertainty_rad);
     }
     if ((options.count_free_cells || options.cspace_maps) && run.checker &&
         o.ball_radius_mm > 0.0) {

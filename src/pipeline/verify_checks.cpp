@@ -465,7 +465,7 @@ void cspace_rows(const Run& run, const OperationContext& o, detail::StageProgres
       if (dev > most_deg) most_deg = dev, turned = i;
     }
     const auto tilt_yaw = [](const ContactPoint& c, const Vec3d& v) {
-      return std::pair<double, double>(rad_to_deg(angle_between(c.normal, v)),
+      return std::pair<double, double>(rad_to_deg(angle_between(c.surface_normal, v)),
                                        rad_to_deg(std::atan2(v.dot(c.side), v.dot(c.feed_dir))));
     };
     for (const auto& [at, why] :

@@ -320,7 +320,9 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
   std::vector<std::vector<Posed>> cand(n);
   std::vector<Posed> extra;
   for (std::size_t i = 0; i < n; ++i) {
-    std::vector<Vec3d> grid = cap_grid(problem.input_axes[i], radius, step);
+    const Vec3d turn =
+        problem.input_axes[std::min(i + 1, n - 1)] - problem.input_axes[i > 0 ? i - 1 : 0];
+    std::vector<Vec3d> grid = cap_grid(problem.input_axes[i], radius, step, turn);
     extra.clear();
     if (timed) {
       for (const auto& alt : problem.alternatives) extra.push_back(alt[i]);

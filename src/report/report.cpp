@@ -262,7 +262,10 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                       {"points_in_air", r.contact.in_air},
                       {"local_gouge_points", r.contact.local_gouges},
                       {"max_gap_mm", r.contact.max_abs_gap_mm},
-                      {"tolerance_mm", r.contact.tolerance_mm}};
+                      {"tolerance_mm", r.contact.tolerance_mm},
+                      {"edge_points", r.contact.edge_points},
+                      {"corner_points", r.contact.corner_points},
+                      {"max_normal_uncertainty_deg", r.contact.max_normal_uncertainty_deg}};
       if (k < toolpath.operations.size()) {
         const auto& band = toolpath.operations[k].cam_tolerance_mm;
         o["contact"]["cam_tolerance_mm"] = band ? nlohmann::json(*band) : nlohmann::json(nullptr);
@@ -359,7 +362,7 @@ std::string points_csv(const JobResult& result) {
   std::string out =
       "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
       "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_line,"
-      "findings\n";
+      "findings,gap_mm,surface,normal_uncertainty_deg\n";
   char buf[512];
   // A value that rounds to zero is written without its sign ("-0.000000" would say a side).
   const auto no_negative_zero = [](char* text) {
@@ -412,7 +415,16 @@ std::string points_csv(const JobResult& result) {
         out += buf;
       }
       // The marks hold only letters, '_' and ';': no quoting needed.
-      out += "," + std::to_string(p.line) + "," + point_marks_text(p.marks) + "\n";
+      out += "," + std::to_string(p.line) + "," + point_marks_text(p.marks);
+      if (p.has_contact) {
+        std::snprintf(buf, sizeof buf, ",%.6f,%s,%.4f", p.gap_mm, to_string(p.place),
+                      p.normal_uncertainty_deg);
+        no_negative_zero(buf);
+        out += buf;
+      } else {
+        out += ",,,";
+      }
+      out += "\n";
     }
   }
   return out;

@@ -15,7 +15,8 @@ using namespace taxopt::test;
 
 TEST_CASE(
     "contact: on unseen heightfield meshes at 0.5 mm the contact is the mesh's exact nearest "
-    "point, and its error against the analytic surface is the mesh's own",
+    "point, its error against the analytic surface the mesh's own, and the designed surface's "
+    "normal a tenth of it",
     "[geometry][contact]") {
   std::mt19937 rng(31337);
   std::uniform_real_distribution<double> tilt(5.0, 15.0), yoff(-5.0, 5.0);
@@ -33,6 +34,8 @@ TEST_CASE(
       REQUIRE(contacts.size() == g.tips_mm.size());
       const double tol = contact_tolerance_mm(part, {});
       double worst_excess_n = 0, worst_excess_cc = 0, worst_excess_tilt = 0, worst_gap = 0;
+      // The designed surface's estimate against the facets' own error, on the same mesh.
+      double worst_s = 0, sum_s = 0, worst_facet = 0, sum_facet = 0, worst_cc_s = 0;
       std::size_t touching = 0;
       for (std::size_t i = 0; i < contacts.size(); ++i) {
         if (g.rapid[i]) {
@@ -72,20 +75,34 @@ TEST_CASE(
           facet_err = std::max(facet_err, angle_between(fn, n_true));
         }
         const double n_err = angle_between(contacts[i].normal, n_true);
+        const double s_err = angle_between(contacts[i].surface_normal, n_true);
+        worst_s = std::max(worst_s, s_err);
+        sum_s += s_err;
+        worst_cc_s = std::max(worst_cc_s, (contacts[i].surface_cc_mm - cc_true).norm());
+        CHECK(contacts[i].place == SurfacePlace::Smooth);
         worst_excess_n = std::max(worst_excess_n, rad_to_deg(n_err - facet_err));
         // The contact moves with its normal: C - R N against C - R N_true.
         worst_excess_cc =
             std::max(worst_excess_cc, (contacts[i].cc_mm - cc_true).norm() -
                                           2.0 * 3.0 * std::sin(0.5 * n_err) - 2.0 * tol);
+        worst_facet = std::max(worst_facet, facet_err);
+        sum_facet += facet_err;
+        // The tilt is the input axis's to the surface's normal: off by that normal's error.
         worst_excess_tilt =
             std::max(worst_excess_tilt,
-                     std::abs(rad_to_deg(contacts[i].tilt_rad) - tilt_deg) - rad_to_deg(n_err));
+                     std::abs(rad_to_deg(contacts[i].tilt_rad) - tilt_deg) - rad_to_deg(s_err));
       }
       CHECK(touching > 100);
       CHECK(worst_gap <= tol);
       CHECK(worst_excess_n <= 1e-6);
       CHECK(worst_excess_cc <= 1e-3);
       CHECK(worst_excess_tilt <= 0.01);
+      // The smooth normal where it points at the centre: a tenth of the facets' error at
+      // most, at most a quarter on average (measured: 0.29 deg against 3.45, 0.035 against
+      // 0.41); the contact C - R n within R times that of the analytic one.
+      CHECK(worst_s <= 0.1 * worst_facet);
+      CHECK(sum_s <= 0.25 * sum_facet);
+      CHECK(worst_cc_s <= 3.0 * 0.1 * worst_facet + 1e-6);
     }
   }
 }

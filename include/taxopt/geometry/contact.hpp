@@ -28,16 +28,35 @@ enum class CurvatureSource {
 };
 const char* to_string(CurvatureSource source);
 
-/// Geometry at one CL point (the vectors are meaningful when Touching). The contact point is
-/// the exact nearest point of the mesh to the ball centre and the normal the direction from
-/// it to the centre, whatever the facets' sizes.
+/// Where a contact lies on the designed surface the mesh stands for (Part::surface_normal).
+enum class SurfacePlace {
+  Smooth,  ///< on a tessellated curve or a face: the smooth normal holds
+  Edge,    ///< on a crease, a border or a non-manifold edge, the ball rolling over it
+  Corner,  ///< at a vertex of such edges
+};
+const char* to_string(SurfacePlace place);
+
+/// Geometry at one CL point (the vectors are meaningful when Touching), in two estimates, each
+/// for its use (docs/method.md, "Contacts"):
+/// - the mesh's, for the checks: `cc_mm` the exact nearest point of the mesh to the ball
+///   centre, `normal` the direction from it to the centre, `gap_mm`;
+/// - the designed surface's, for the paper's parametrisation (the frame T, K, N of eq. 11,
+///   tilt and yaw, the C-space grid), the curvature and the paper's metric: `surface_normal`
+///   the smooth normal at the exact point, `surface_cc_mm` = centre - R surface_normal (the
+///   exact ones on a feature).
 struct ContactPoint {
   ContactState state = ContactState::InAir;
   Vec3d cc_mm = Vec3d::Zero();
   Vec3d normal = Vec3d::UnitZ();
-  Vec3d feed_dir = Vec3d::UnitX();  ///< T, unit, tangent
-  Vec3d side = Vec3d::UnitY();      ///< K = N x T
-  double tilt_rad = 0.0;            ///< in [0, pi]
+  Vec3d surface_cc_mm = Vec3d::Zero();
+  Vec3d surface_normal = Vec3d::UnitZ();
+  SurfacePlace place = SurfacePlace::Smooth;
+  /// The angle between the two normals (the facet's against the smooth one where Smooth; 0
+  /// on a feature), rad: how far the mesh alone leaves the surface's normal unknown.
+  double normal_uncertainty_rad = 0.0;
+  Vec3d feed_dir = Vec3d::UnitX();  ///< T, unit, tangent to surface_normal
+  Vec3d side = Vec3d::UnitY();      ///< K = N x T, N = surface_normal
+  double tilt_rad = 0.0;            ///< of the input axis to surface_normal, in [0, pi]
   double yaw_rad = 0.0;             ///< in (-pi, pi]
   PrincipalCurvatures<double> curvature;
   /// |C - Pc| - R, mm.
@@ -53,8 +72,8 @@ struct ContactOptions {
   /// mesh's own chordal error (Part::chordal_error_mm) + the CL file's tolerance band
   /// (Operation::cam_tolerance_mm)) -- never the facets' size.
   double tolerance_mm = 0.0;
-  /// A fit's curvature is used where its point lies within the tolerance of the exact
-  /// contact and its normal within this angle of the exact normal, deg.
+  /// A fit's curvature is used where its point lies within the tolerance of the surface's
+  /// contact and its normal within this angle of the surface's normal, deg.
   double fit_normal_agreement_deg = 3.0;
   /// Vertices of the local jet fit.
   int fit_neighbours = 30;

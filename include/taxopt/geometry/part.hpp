@@ -74,6 +74,25 @@ class Part {
   /// most concave and most convex of its edges.
   MeshCurvature mesh_curvature(const Closest& c, const Vec3d& normal) const;
 
+  /// The designed surface's normal at the mesh's closest point `c`, on the side of
+  /// `exact_normal` (from c towards the query). Where c lies on a tessellated curve: the
+  /// normals of its face's corners -- each the angle-weighted mean of the normals of the
+  /// corner's faces that turn less than 30 deg from this one, so split across creases --
+  /// interpolated at c (smooth from facet to facet; the facet's own normal strays from the
+  /// curve's by up to half the turn between facets). Where c lies on an edge or a vertex of a
+  /// crease (30 deg or more), a border or a non-manifold edge, and the exact normal leaves
+  /// its face's (the ball rolls over the edge): `on_feature`, no smooth surface there, and
+  /// the normal is the exact one.
+  struct SurfaceNormal {
+    Vec3d normal = Vec3d::UnitZ();
+    Feature where = Feature::Facet;  ///< c inside its face, on an edge or at a vertex
+    bool on_feature = false;
+  };
+  SurfaceNormal surface_normal(const Closest& c, const Vec3d& exact_normal) const;
+  /// The corner normals of c's face interpolated at c, on the side of `side` (zero for a
+  /// degenerate face): surface_normal's smooth normal, with no feature test.
+  Vec3d smooth_normal(const Closest& c, const Vec3d& side) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

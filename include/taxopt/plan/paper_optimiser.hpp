@@ -93,6 +93,15 @@ PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
 
 /// Unit axes on a cap around unit `centre`: rings at multiples of `step_rad` up to
 /// `radius_rad`, each with points about `step_rad` apart; the centre first, rings outwards.
-std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad);
+/// Each ring starts in the direction of `along` (its part across the centre: give the way the
+/// axes turn there, so that the grid turns with the part and a path through the pole keeps
+/// candidates on its own great circle); where that is nil, in a direction fixed by the
+/// world's X or Y axis.
+std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad,
+                            const Vec3d& along = Vec3d::Zero());
+
+/// The tangent direction at `centre` in which `along` points (unit, across the centre), else a
+/// fixed one from the world's X or Y axis: the frame of cap_grid and of a pattern search.
+Vec3d tangent_towards(const Vec3d& centre, const Vec3d& along);
 
 }  // namespace taxopt

@@ -335,6 +335,12 @@ struct OperationResult {
   std::vector<PointRow> rows;
   /// With JobOptions::cspace_maps: the maps of the chosen points.
   std::vector<CSpaceMap> cspace_maps;
+  /// The paper's metric over the mesh's own contacts (the facets' points), beside
+  /// paper_before/after over the designed surface's: what the mesh's uncertainty alone makes
+  /// of it. `paper_gain_claimed`: its peak a falls under both; where it does under one only,
+  /// the reduction is the mesh's, not the method's, and the report does not claim it.
+  RotarySummary paper_before_facets, paper_after_facets;
+  bool paper_gain_claimed = false;
 };
 
 /// What a run found, by kind: programs test the code, people read the message.

@@ -62,6 +62,10 @@ double width_across(const TriangleMesh& m, const std::array<int, 3>& f, int a, i
 /// (the chordal error's and the smooth normals' one threshold).
 constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
 
+/// A face smaller than this times the biggest face of a corner (by least height) does not
+/// enter the corner's normal (an evenly or gradually refined mesh never has one).
+constexpr double kSmallerFace = 0.25;
+
 /// The designed surface as the mesh gives it (Part::surface_normal).
 struct SurfaceModel {
   /// Per face corner (3 f + k): the surface's normal there, the angle-weighted mean of the
@@ -102,19 +106,43 @@ SurfaceModel surface_model_of(const TriangleMesh& m) {
           static_cast<int>(f), angle};
     }
   }
+  // A face's size: its least height (2 area / longest edge), the width of a fillet's strip.
+  std::vector<double> size(nf, 0.0);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const auto& F = m.faces[f];
+    const Vec3d& a = m.vertices[static_cast<std::size_t>(F[0])];
+    const Vec3d& b = m.vertices[static_cast<std::size_t>(F[1])];
+    const Vec3d& c = m.vertices[static_cast<std::size_t>(F[2])];
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    if (longest > 0.0) size[f] = (b - a).cross(c - a).norm() / longest;
+  }
   const double crease_cos = std::cos(kCreaseRad);
   s.corner_normal.assign(3 * nf, Eigen::Vector3f::Zero());
   for (std::size_t f = 0; f < nf; ++f) {
     if (fn[f].isZero()) continue;
     for (int k = 0; k < 3; ++k) {
       const auto v = static_cast<std::size_t>(m.faces[f][static_cast<std::size_t>(k)]);
+      // The corner's faces on this side of any crease (either orientation: a mesh's faces
+      // need not agree on theirs), and the biggest of them.
+      const auto same_side = [&](int g) {
+        return std::abs(fn[static_cast<std::size_t>(g)].dot(fn[f])) >= crease_cos;
+      };
+      double biggest = 0.0;
+      for (std::size_t r = start[v]; r < start[v + 1]; ++r) {
+        if (same_side(around[r].first)) {
+          biggest = std::max(biggest, size[static_cast<std::size_t>(around[r].first)]);
+        }
+      }
+      // A big face beside a fillet's thin strips is a designed plane, tangent to the fillet
+      // where they meet: the corner takes its normal alone (mixed with the strips', a CAD
+      // part's 60 mm top tilted by 1.9 deg beside a 4 mm fillet in 12 strips, and a fillet's
+      // first strip by half its turn where it meets the floor).
       Vec3d sum = Vec3d::Zero();
       for (std::size_t r = start[v]; r < start[v + 1]; ++r) {
         const auto [g, angle] = around[r];
+        if (!same_side(g) || size[static_cast<std::size_t>(g)] < kSmallerFace * biggest) continue;
         const Vec3d& ng = fn[static_cast<std::size_t>(g)];
-        const double d = ng.dot(fn[f]);
-        // Either orientation: a mesh's faces need not agree on theirs.
-        if (std::abs(d) >= crease_cos) sum += (d < 0.0 ? -angle : angle) * ng;
+        sum += (ng.dot(fn[f]) < 0.0 ? -angle : angle) * ng;
       }
       if (sum.norm() > 0.0)
         s.corner_normal[3 * f + static_cast<std::size_t>(k)] = sum.normalized().cast<float>();

@@ -123,12 +123,16 @@ std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_
 
 std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const IndexRange& pass) {
+                                       double ball_radius_mm, const IndexRange& pass,
+                                       bool facets) {
   std::vector<double> len = segment_lengths_mm(op, ball_radius_mm, pass);
+  const auto at = [&](std::size_t i) -> const Vec3d& {
+    return facets ? contacts[i].cc_mm : contacts[i].surface_cc_mm;
+  };
   for (std::size_t i = pass.begin; i + 1 < pass.end; ++i) {
     if (!contacts.empty() && contacts[i].state == ContactState::Touching &&
         contacts[i + 1].state == ContactState::Touching) {
-      len[i - pass.begin] = (contacts[i + 1].surface_cc_mm - contacts[i].surface_cc_mm).norm();
+      len[i - pass.begin] = (at(i + 1) - at(i)).norm();
     }
   }
   return len;
@@ -211,12 +215,14 @@ RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& a
 RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
                               double ball_radius_mm, const std::vector<double>& a_deg,
                               const std::vector<double>& c_deg,
-                              const std::vector<double>& metric_feed, std::vector<PointRow>* rows) {
+                              const std::vector<double>& metric_feed, std::vector<PointRow>* rows,
+                              bool facets) {
   double arc = 0.0;
   return summarise_passes(
       op, a_deg, c_deg,
       [&](const IndexRange& pass) {
-        const std::vector<double> len = contact_lengths_mm(op, contacts, ball_radius_mm, pass);
+        const std::vector<double> len =
+            contact_lengths_mm(op, contacts, ball_radius_mm, pass, facets);
         if (rows) {
           for (std::size_t j = 0; j < pass.size(); ++j) {
             if (j > 0) arc += len[j - 1];

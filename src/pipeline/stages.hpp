@@ -288,9 +288,12 @@ std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_
 /// between ball centres. Only the paper's metric (OperationResult::paper_before/after) uses
 /// them: on a mesh a contact point sticks on a facet or jumps between facets while the ball
 /// moves on, so they carry the tessellation.
+/// The designed surface's contacts (ContactPoint::surface_cc_mm), or with `facets` the
+/// mesh's own (cc_mm).
 std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const IndexRange& pass);
+                                       double ball_radius_mm, const IndexRange& pass,
+                                       bool facets = false);
 using controller::BlockTiming;
 using controller::kept_block_times_s;
 using controller::kept_time_s;
@@ -319,7 +322,7 @@ RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoi
                               double ball_radius_mm, const std::vector<double>& a_deg,
                               const std::vector<double>& c_deg,
                               const std::vector<double>& metric_feed,
-                              std::vector<PointRow>* rows = nullptr);
+                              std::vector<PointRow>* rows = nullptr, bool facets = false);
 /// Joint positions (X Y Z mm, A C deg) of tips and poses, in machine coordinates.
 std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
                                      const std::vector<Posed>& poses);

@@ -366,6 +366,13 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   r.after = summarise_timed(op, ax.a_w, ax.c_w, w.time_into_after[k], &r.rows);
   r.paper_after = summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_w, ax.c_w,
                                   o.metric_feed_mm_per_min, &r.rows);
+  r.paper_before_facets = summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_in, ax.c_in,
+                                          o.metric_feed_mm_per_min, nullptr, true);
+  r.paper_after_facets = summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_w, ax.c_w,
+                                         o.metric_feed_mm_per_min, nullptr, true);
+  r.paper_gain_claimed = r.paper_after.max_accel_deg_s2 < r.paper_before.max_accel_deg_s2 &&
+                         r.paper_after_facets.max_accel_deg_s2 <
+                             r.paper_before_facets.max_accel_deg_s2;
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   longer_cycle_finding(machine, o, r, res);

@@ -239,10 +239,14 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     };
     o["paper_metric"] = {{"before", paper_json(r.paper_before)},
                          {"after", paper_json(r.paper_after)},
+                         {"facets", {{"before", paper_json(r.paper_before_facets)},
+                                     {"after", paper_json(r.paper_after_facets)}}},
+                         {"claimed", r.paper_gain_claimed},
                          {"what",
-                          "eq. 16-18 over contact-point arc lengths at the metric feed "
-                          "(the paper's comparison; before/after are the program's "
-                          "own timing)"}};
+                          "eq. 16-18 over the designed surface's contact-point arc lengths "
+                          "at the metric feed (the paper's comparison; before/after are "
+                          "the program's own timing); `facets` over the mesh's own contact "
+                          "points; `claimed`: its peak a falls under both"}};
     o["feed_schedule_written"] = options.feed_schedule;
     if (r.feed_words) {
       o["feed_words"] = {{"blocks", r.feed_words->blocks},

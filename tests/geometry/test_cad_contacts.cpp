@@ -100,6 +100,24 @@ TEST_CASE(
     CHECK(std::abs((centre - contacts[i].cc_mm).norm() - R) <= contact_tolerance_mm(part, {}));
   }
   CHECK(worst <= 1e-6);
+  // The designed surface's normal: the top's on the top however big its facets (a corner
+  // normal mixed with the fillet's strips would tilt the whole 60 mm facet), the arc's on the
+  // fillet within half a strip's turn (3.75 deg / 2).
+  double worst_top = 0.0, worst_fillet = 0.0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Vec3d centre = tips[i] + R * axes[i];
+    if (centre.x() <= 16.0) {
+      worst_top = std::max(worst_top, rad_to_deg(angle_between(contacts[i].surface_normal,
+                                                                Vec3d(Vec3d::UnitZ()))));
+    } else {
+      const Vec3d truth = (centre - Vec3d(16.0, centre.y(), -4.0)).normalized();
+      worst_fillet = std::max(worst_fillet,
+                              rad_to_deg(angle_between(contacts[i].surface_normal, truth)));
+    }
+    CHECK(contacts[i].place == SurfacePlace::Smooth);
+  }
+  CHECK(worst_top <= 0.01);
+  CHECK(worst_fillet <= 0.5 * 7.5 / 2.0);
   // The default tolerance: the fillet strips' chordal error is 4 (1 - cos 3.75 deg) = 0.0086 mm,
   // below the 0.05 mm floor; the same part with a top of 1 mm facets has the same.
   const Part fine(via_binary_stl(cad_prism(-40, 20, -30, 30, 30, 4, 12, true), dir, "f.stl"));
@@ -130,6 +148,7 @@ TEST_CASE(
     // Balls placed on the mesh: at a random point of a random facet (or edge) the centre
     // along its normal (or an edge's blend of normals) at R: convex, so that is its nearest.
     std::vector<Vec3d> tips, axes, want_cc, want_n;
+    std::vector<bool> on_crease;  // rolling over an edge of 30 deg or more
     for (int k = 0; k < 300; ++k) {
       const auto& f = mesh.faces[static_cast<std::size_t>(rng() % mesh.faces.size())];
       const Vec3d a = mesh.vertices[static_cast<std::size_t>(f[0])];
@@ -154,7 +173,12 @@ TEST_CASE(
           const Vec3d out = gn.dot(ga - inner) < 0.0 ? Vec3d(-gn) : gn;
           if ((out - n).norm() > 1e-9) other = out;
         }
-        n = (n + u(rng) * (other - n)).normalized();
+        const double blend = u(rng);
+        on_crease.push_back(angle_between(n, other) >= deg_to_rad(30.0) && blend > 0.01 &&
+                            blend < 0.99);
+        n = (n + blend * (other - n)).normalized();
+      } else {
+        on_crease.push_back(false);
       }
       // A tool axis within 40 deg of the normal.
       const Vec3d axis = (n + 0.8 * u(rng) * n.unitOrthogonal()).normalized();
@@ -167,8 +191,17 @@ TEST_CASE(
     const Operationd op = pass_of(tips, axes);
     const auto contacts = recover_contacts(part, op, R);
     double worst_cc = 0.0, worst_n = 0.0, worst_len = 0.0;
+    std::size_t creases = 0;
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       REQUIRE(contacts[i].state == ContactState::Touching);
+      // Rolling over a designed edge: a feature, and the designed surface's contact is the
+      // exact one there.
+      if (on_crease[i]) {
+        ++creases;
+        CHECK(contacts[i].place != SurfacePlace::Smooth);
+        CHECK((contacts[i].surface_normal - contacts[i].normal).norm() < 1e-12);
+        CHECK((contacts[i].surface_cc_mm - contacts[i].cc_mm).norm() < 1e-12);
+      }
       worst_cc = std::max(worst_cc, (contacts[i].cc_mm - want_cc[i]).norm());
       worst_n = std::max(worst_n, rad_to_deg(angle_between(contacts[i].normal, want_n[i])));
       if (i > 0) {
@@ -180,5 +213,6 @@ TEST_CASE(
     CHECK(worst_cc <= 0.01);
     CHECK(worst_n <= 0.01);
     CHECK(worst_len <= 0.02);
+    CHECK(creases > 3);
   }
 }

@@ -775,9 +775,9 @@ TEST_CASE("cli: --dialect overrides the machine file's dialect under the same ru
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\n"
              "max_deg = 120\n[axes.C]\ncontinuous = true\n[gcode]\n"
-             "dialect = \"linuxcnc\"\nheader = [\"G64 P0.01\"]\n");
+             "dialect = \"linuxcnc\"\nheader = [\"G80\"]\n");
   r = run_taxopt("--in " + d + "sine.cls --machine " + t.path("m.toml") +
-                 " --dialect haas -q --gcode " + t.path("h.nc"));
+                 " --dialect heidenhain -q --gcode " + t.path("h.nc"));
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("program template"));
   CHECK_FALSE(file_exists(t.path("h.nc")));

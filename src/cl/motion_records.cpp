@@ -27,6 +27,11 @@ void Reader::add_point(const Vec3d& tip_mm, Motion motion, int record, int line)
   CLPointd p;
   p.tip_mm = tip_mm;
   p.axis = axis_;
+  if (motion == Motion::Feed && feed_per_rev_mm_ > 0.0 && !(feed_mm_per_min_ > 0.0)) {
+    fail(line, "a feed move at a feed per revolution (FEDRAT, line " + std::to_string(feed_line_) +
+                   ") with no spindle speed in force: its feed per minute is unknown (SPINDL "
+                   "before it)");
+  }
   p.feed_mm_per_min = feed_mm_per_min_;
   p.motion = motion;
   p.line = line;

@@ -140,9 +140,14 @@ class Reader {
   /// last of the p + 1 ones, so the degree is p = (CNTRL count + 1) - (KNOT count).
   void finish_spline();
   void handle(const LogicalLine& ll);
-  /// A feed word's value: FEDRAT/f, /{MMPM|IPM|PERMIN|MMPR|IPR|PERREV},f or /f,unit.
+  /// A feed word's value: FEDRAT/f, /{MMPM|IPM|PERMIN|MMPR|IPR|PERREV},f or /f,unit, in
+  /// mm/min at the spindle speed in force (0 for a feed per revolution with none). With
+  /// `per_rev_mm`, a feed per revolution is also given there (mm/rev; 0 for one per minute)
+  /// and one with no spindle speed yet is no warning: the state holds it until SPINDL.
   double feed_of(const std::vector<std::string>& args, std::size_t from, const std::string& major,
-                 int line);
+                 int line, double* per_rev_mm = nullptr);
+  /// A feed in mm/min a program can write and a machine run, else a failure naming `major`.
+  double bounded_feed(double mm_per_min, const std::string& major, int line);
   void start_cycle(const std::vector<std::string>& args, int line);
   /// The moves of a drilling cycle at a hole whose top is `top`: in at the retract height, down
   /// to the rapid plane, feed to depth in pecks (back to the rapid plane between them), out.
@@ -267,6 +272,10 @@ class Reader {
   Vec3d axis_ = Vec3d::UnitZ();
   bool rapid_next_ = false;
   double feed_mm_per_min_ = 0.0;
+  /// A feed per revolution in force (mm/rev; 0: the feed is per minute) and its FEDRAT's line:
+  /// the feed per minute follows every SPINDL (APT's MMPR/IPR: the feed is the spindle's).
+  double feed_per_rev_mm_ = 0.0;
+  int feed_line_ = 0;
   /// The CAM's tolerances of the part surface in force (INTOL, OUTTOL, TOLER), file units.
   double inside_tolerance_ = 0.0, outside_tolerance_ = 0.0;
   bool tolerance_given_ = false;

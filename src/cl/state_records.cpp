@@ -37,8 +37,20 @@ void Reader::tool_changed() {
   }
 }
 
+double Reader::bounded_feed(double mm_per_min, const std::string& major, int line) {
+  // A feed the G-code can write (0.01 mm/min is F0.0004 in inches) and a machine can run
+  // (1e6 mm/min is 1 km/min).
+  if (!(mm_per_min >= 0.01 && mm_per_min <= 1e6)) {
+    std::ostringstream os;
+    os << major << ": a feed of " << mm_per_min
+       << " mm/min is outside [0.01, 1e6] mm/min (no program writes or runs it)";
+    fail(line, os.str());
+  }
+  return mm_per_min;
+}
+
 double Reader::feed_of(const std::vector<std::string>& args, std::size_t from,
-                       const std::string& major, int line) {
+                       const std::string& major, int line, double* per_rev_mm) {
   double value = -1.0;
   int count = 0;
   double to_mm = scale_;
@@ -68,29 +80,26 @@ double Reader::feed_of(const std::vector<std::string>& args, std::size_t from,
   }
   if (count != 1) fail(line, major + " expects exactly one number (the feed)");
   if (!(value > 0.0)) fail(line, major + ": feed must be positive");
-  // A feed the G-code can write (0.01 mm/min is F0.0004 in inches) and a machine can run
-  // (1e6 mm/min is 1 km/min).
-  const auto bounded = [&](double mm_per_min) {
-    if (!(mm_per_min >= 0.01 && mm_per_min <= 1e6)) {
-      std::ostringstream os;
-      os << major << ": a feed of " << mm_per_min
-         << " mm/min is outside [0.01, 1e6] mm/min (no program writes or runs it)";
-      fail(line, os.str());
-    }
-    return mm_per_min;
-  };
-  if (!per_rev) return bounded(value * to_mm);
+  if (per_rev_mm) *per_rev_mm = per_rev ? value * to_mm : 0.0;
+  if (!per_rev) return bounded_feed(value * to_mm, major, line);
+  if (per_rev_mm && value * to_mm > 1e3) {
+    fail(line, major + ": a feed of " + std::to_string(value * to_mm) +
+                   " mm per revolution is no cutting feed");
+  }
   if (!(spindle_rpm_ > 0.0)) {
-    tp_.warnings.push_back(format_location(
-        source_, line, "feed per revolution without a spindle speed: feed unknown"));
+    if (!per_rev_mm) {
+      tp_.warnings.push_back(format_location(
+          source_, line, "feed per revolution without a spindle speed: feed unknown"));
+    }
     return 0.0;
   }
-  return bounded(value * to_mm * spindle_rpm_);
+  return bounded_feed(value * to_mm * spindle_rpm_, major, line);
 }
 
 void Reader::fedrat(const ClRecordArgs& r) {
   [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
-  feed_mm_per_min_ = feed_of(args, 0, major, line);
+  feed_mm_per_min_ = feed_of(args, 0, major, line, &feed_per_rev_mm_);
+  feed_line_ = line;
 }
 
 void Reader::tldata(const ClRecordArgs& r) {
@@ -348,6 +357,15 @@ void Reader::spindle(const std::vector<std::string>& args, int line) {
   }
   spindle_rpm_ = rpm;
   spindle_cw_ = cw;
+  // A feed per revolution is the spindle's: the feed per minute of the moves after this one.
+  if (feed_per_rev_mm_ > 0.0) {
+    feed_mm_per_min_ =
+        rpm > 0.0 ? bounded_feed(feed_per_rev_mm_ * rpm, "SPINDL (the feed per revolution of "
+                                                         "line " +
+                                                             std::to_string(feed_line_) + ")",
+                                 line)
+                  : 0.0;
+  }
   ProgramEvent e;
   e.kind = ProgramEvent::Kind::Spindle;
   e.spindle_rpm = rpm;

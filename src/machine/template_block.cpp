@@ -201,8 +201,8 @@ bool footer_homes(const std::vector<Word>& words) {
 }
 
 /// An M code: no spindle, coolant, tool or program end (taxopt writes them); a subprogram call
-/// in the tool change only.
-void check_m(const Word& w, bool tool_change) {
+/// in the tool change only; on LinuxCNC no restore of a modal state.
+void check_m(const Word& w, bool tool_change, GcodeDialect dialect) {
   const std::string word = w.letter + w.number;
   const double x = std::strtod(w.number.c_str(), nullptr);
   if (!(x >= 0.0 && x <= 9999.0) || x != std::floor(x)) {
@@ -215,6 +215,14 @@ void check_m(const Word& w, bool tool_change) {
     refuse("holds " + word +
            ": the spindle, coolant, tool and program end are written by taxopt (the CL "
            "file, --spindle-rpm, [defaults], gcode.coolant)");
+  }
+  // LinuxCNC's M70-M73 (docs: "Save Modal State" ... "Save Autorestore Modal State"): M72
+  // restores what an M70 saved, and rs274 aborts there when none did (a footer's M72, in an
+  // audit); M73 saves for a subroutine's return. Neither is known to a template's block.
+  if (dialect == GcodeDialect::LinuxCNC && (m == 72 || m == 73)) {
+    refuse("holds " + word +
+           ": LinuxCNC restores with M72 only a modal state M70 saved (rs274 aborts where none "
+           "was) and M73 belongs in a subroutine; the program sets every mode it needs");
   }
   if ((m == 97 || m == 98 || m == 99 || m == 198) && !tool_change) {
     refuse("holds " + word +
@@ -240,6 +248,15 @@ void check_g(const Word& w, const BlockRules& r) {
   }
   if ((g_is(w.number, 642) || g_is(w.number, 641) || g_is(w.number, 60)) && !r.siemens) {
     ok = false;
+  }
+  // LinuxCNC's path blending is the machine file's: taxopt writes G64 P<blend_tolerance_mm>
+  // Q0 (G61 at 0) after the set-up and the report states it; a template's G64 P50 (or a bare
+  // G64, no bound at all) would override it unseen.
+  if (r.dialect == GcodeDialect::LinuxCNC &&
+      (g_is(w.number, 64) || g_is(w.number, 61) || g_is(w.number, 61.1))) {
+    refuse("holds " + w.letter + w.number +
+           ": on LinuxCNC the path blending is gcode.blend_tolerance_mm's (taxopt writes G64 "
+           "P<it> Q0, or G61 at 0, and the report states it); set that key instead");
   }
   if (!ok) {
     refuse("holds " + w.letter + w.number +
@@ -280,7 +297,7 @@ void check_words(const std::vector<Word>& words, const BlockRules& r) {
       continue;
     }
     if (c == 'M') {
-      check_m(w, r.tool_change);
+      check_m(w, r.tool_change, r.dialect);
       continue;
     }
     if (c == 'G') {

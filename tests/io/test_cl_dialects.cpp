@@ -354,6 +354,37 @@ TEST_CASE("cl feeds: FEDRAT with PERMIN, PERREV and the value first or last", "[
   CHECK(throws_with([&] { feed("", "FEDRAT/PERSEC,4"); }, "f:2: FEDRAT: expected a feed"));
 }
 
+TEST_CASE(
+    "cl feeds: a feed per revolution is the spindle's -- it follows every SPINDL, waits for the "
+    "first, and a feed move with none in force is refused naming both lines",
+    "[io][cl][hostile]") {
+  const auto feeds = [](const std::string& text) {
+    std::vector<double> out;
+    for (const CLPointd& p : parse_cl(text, "r.cls").operations.at(0).points) {
+      if (p.motion == Motion::Feed) out.push_back(p.feed_mm_per_min);
+    }
+    return out;
+  };
+  // 0.1 mm/rev at 3000 rpm is 300 mm/min, at 6000 rpm 600 (it kept 300).
+  CHECK(feeds("SPINDL/RPM,3000,CLW\nRAPID\nGOTO/0,0,10\nFEDRAT/0.1,MMPR\nGOTO/0,0,0\nGOTO/10,0,0\n"
+              "SPINDL/RPM,6000,CLW\nGOTO/20,0,0\n") == std::vector<double>{300, 300, 600});
+  // Given before the spindle speed: 300 from the SPINDL on (it was the 1000 mm/min default).
+  CHECK(feeds("FEDRAT/0.1,MMPR\nSPINDL/RPM,3000,CLW\nGOTO/0,0,10\nGOTO/0,0,0\n") ==
+        std::vector<double>{300, 300});
+  // Inches per revolution; a feed per minute after it no longer follows the spindle.
+  CHECK(feeds("SPINDL/RPM,1000\nFEDRAT/IPR,0.004\nGOTO/0,0,1\nFEDRAT/MMPM,250\nSPINDL/2000\n"
+              "GOTO/1,0,1\n") == std::vector<double>{0.004 * 25.4 * 1000, 250});
+  const std::string off = test::input_error_of([&] {
+    parse_cl("FEDRAT/0.1,MMPR\nSPINDL/RPM,3000,CLW\nGOTO/0,0,10\nSPINDL/OFF\nGOTO/0,0,0\n",
+             "r.cls");
+  });
+  CHECK_THAT(off, Catch::Contains("r.cls:5: a feed move at a feed per revolution (FEDRAT, line 1) "
+                                  "with no spindle speed in force"));
+  CHECK_THAT(test::input_error_of(
+                 [&] { parse_cl("FEDRAT/0.1,MMPR\nGOTO/0,0,10\nGOTO/0,0,0\n", "r.cls"); }),
+             Catch::Contains("r.cls:2: a feed move at a feed per revolution"));
+}
+
 TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") {
   const Toolpath tp = parse_cl(
       "UNIT/MM\nFEDRAT/500,MMPM\nGOTO/0,0,50\nCYCLE/INIT\n"

@@ -298,8 +298,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   // What a template may hold: machine M codes, dwell and path control, the machine's own
   // tool-change macro, work offsets.
   for (const std::string block :
-       {"header = [\"M11 (C UNLOCK)\", \"G64 P0.01 Q0.01\", \"G61.1\", \"G4 P0.5\"]",
-        "header = [\"G5.1 Q1\", \"G8 P1\", \"M1\"]", "tcp_on = [\"M428\"]",
+       {"header = [\"M11 (C UNLOCK)\", \"G80\", \"G4 P0.5\", \"M70\"]", "tcp_on = [\"M428\"]",
         "tool_change = [\"T{tool} M6\", \"G65 P9001\", \"M98 P9002\"]",
         "work_offset = \"G54.1 P3\"", "work_offset = \"G59.3\"",
         "footer = [\"G91 G28 A0. C0.\", \"G90\"]"}) {
@@ -312,6 +311,22 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
       "continuous = true\n[gcode]\n";
   CHECK_NOTHROW(
       parse_machine_toml(any + "dialect = \"haas\"\nheader = [\"G187 P1 E0.01\"]\n", "m"));
+  CHECK_NOTHROW(parse_machine_toml(any + "dialect = \"fanuc\"\nheader = [\"G5.1 Q1\", \"G8 P1\", "
+                                         "\"M1\", \"G64\", \"G61.1\"]\nfooter = [\"M72\"]\n",
+                                   "m"));
+  // LinuxCNC: the blending is gcode.blend_tolerance_mm's, which the report states (a header's
+  // G64 P50 overrode the program's G64 P0.01 Q0 unseen, a bare G64 bounds nothing); M72
+  // restores only what M70 saved (rs274 aborts on a footer's M72 alone), M73 is a
+  // subroutine's.
+  for (const char* block : {"header = [\"G64 P50\"]", "header = [\"G64\"]",
+                            "tcp_on = [\"G61\"]", "header = [\"G61.1\"]"}) {
+    INFO(block);
+    expect_error(any + "dialect = \"linuxcnc\"\n" + block + "\n", 9,
+                 "the path blending is gcode.blend_tolerance_mm's");
+  }
+  expect_error(any + "dialect = \"linuxcnc\"\nfooter = [\"M72\"]\n", 9,
+               "holds M72: LinuxCNC restores with M72 only a modal state M70 saved");
+  expect_error(any + "dialect = \"linuxcnc\"\nheader = [\"M73\"]\n", 9, "holds M73");
   CHECK_NOTHROW(
       parse_machine_toml(any + "dialect = \"siemens\"\nheader = [\"FFWON\", \"SOFT\", \"G642\", "
                                "\"CYCLE832(0.01,_ORI_FINISH,1)\", \"COMPCAD ; smooth\"]\n",

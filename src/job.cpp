@@ -140,6 +140,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::InputAxesKept: return "input_axes_kept";
     case FindingCode::TcpJointLimit: return "tcp_joint_limit";
     case FindingCode::FeedInAir: return "feed_in_air";
+    case FindingCode::MeshSlivers: return "mesh_slivers";
     case FindingCode::MissingFeed: return "missing_feed";
     case FindingCode::JerkLimitExceeded: return "jerk_limit_exceeded";
     case FindingCode::LongerCycle: return "longer_cycle";

@@ -362,6 +362,7 @@ enum class FindingCode {
   ClFileNote,         ///< what the CL reader noted (a record skipped, a frame applied, ...)
   TcpJointLimit,      ///< LinuxCNC tcp: a rapid its planner moves drives a joint past its limit
   FeedInAir,          ///< feed points in the air between touching points of their pass
+  MeshSlivers,        ///< zero-area faces of the part's file dropped (no surface lost)
   // Problems: the output is not to be used (JobResult::ok() is false).
   NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
   UnreachablePose,       ///< no pose within the machine's axis ranges

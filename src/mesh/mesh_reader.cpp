@@ -337,13 +337,18 @@ TriangleMesh read_mesh_file(const std::string& path) {
       const Vec3d& b = mesh.vertices[static_cast<std::size_t>(t[1])];
       const Vec3d& c = mesh.vertices[static_cast<std::size_t>(t[2])];
       if (0.5 * (b - a).cross(c - a).norm() <= min_area) {
-        std::ostringstream os;
-        os << "part mesh face " << f + 1 << " is degenerate (zero area) at (" << a.x() << ", "
-           << a.y() << ", " << a.z() << ")";
-        throw InputError(path, 0, os.str());
+        // A sliver covers no surface: the faces around it hold the part's shape.
+        if (mesh.dropped_degenerate_faces++ == 0) mesh.first_degenerate_mm = a;
+        continue;
       }
       mesh.faces.push_back(t);
     }
+  }
+  if (mesh.faces.empty()) {
+    throw InputError(path, 0,
+                     "part mesh: every one of its " +
+                         std::to_string(mesh.dropped_degenerate_faces) +
+                         " faces is degenerate (zero area): no surface");
   }
   return mesh;
 }

@@ -28,7 +28,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::LongerCycle:
     case FindingCode::ClFileNote:
     case FindingCode::TcpJointLimit:
-    case FindingCode::FeedInAir: return Severity::Warning;
+    case FindingCode::FeedInAir:
+    case FindingCode::MeshSlivers: return Severity::Warning;
     default: return Severity::Problem;
   }
 }

@@ -102,6 +102,16 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
         "no holder model (--holder-radius, --holder-length): the holder is not checked against "
         "the part, only the tool");
   }
+  if (given.part && given.part->mesh().dropped_degenerate_faces > 0) {
+    const TriangleMesh& m = given.part->mesh();
+    std::ostringstream os;
+    os << "part mesh: " << m.dropped_degenerate_faces
+       << " zero-area faces (slivers) dropped, the first at (" << m.first_degenerate_mm.x()
+       << ", " << m.first_degenerate_mm.y() << ", " << m.first_degenerate_mm.z()
+       << ") in the mesh file's coordinates: they cover no surface, so the part's shape is "
+          "whole";
+    add_finding(res, FindingCode::MeshSlivers, std::nullopt, 0, os.str());
+  }
   if (machine.gcode.program.retract == SafeRetract::None) {
     add_finding(
         res, FindingCode::NoSafeRetract, std::nullopt, 0,

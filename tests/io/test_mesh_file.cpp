@@ -90,6 +90,40 @@ TEST_CASE("mesh: every bad mesh kind is an error naming the file", "[io][mesh][b
   expect_mesh_error(t.path("missing.stl"), "cannot open");
 }
 
+TEST_CASE(
+    "mesh: a CAD export's zero-area slivers are dropped and counted, the part kept whole; a "
+    "mesh of slivers only is refused",
+    "[io][mesh][cli][slow]") {
+  TempDir t;
+  // The demo part with a collinear and a coincident sliver added (36,608 faces + 2).
+  const std::string demo = std::string(TAXOPT_SOURCE_DIR) + "/data/demo/";
+  TriangleMesh m = read_mesh_file(demo + "sine.stl");
+  const std::size_t faces = m.faces.size();
+  const int a = m.faces[100][0], b = m.faces[100][1];
+  m.vertices.push_back(0.5 * (m.vertices[static_cast<std::size_t>(a)] +
+                              m.vertices[static_cast<std::size_t>(b)]));
+  const int mid = static_cast<int>(m.vertices.size()) - 1;
+  m.faces.push_back({a, mid, b});
+  m.faces.push_back({a, a, b});
+  write_file(t.path("slivers.stl"), format_stl_binary(m));
+  const TriangleMesh r = read_mesh_file(t.path("slivers.stl"));
+  CHECK(r.faces.size() == faces);
+  CHECK(r.dropped_degenerate_faces == 2);
+  CHECK((r.first_degenerate_mm - m.vertices[static_cast<std::size_t>(a)]).norm() < 1e-4);
+  // The run: the same program as with the clean part, and a warning saying what was dropped.
+  const auto run = [&](const std::string& part, const std::string& out) {
+    return run_taxopt("--in " + demo + "sine.cls --part " + part + " --method paper -q --gcode " +
+                      t.path(out + ".nc") + " --report " + t.path(out + ".json"));
+  };
+  REQUIRE(run(t.path("slivers.stl"), "s").code == 0);
+  REQUIRE(run(demo + "sine.stl", "c").code == 0);
+  CHECK(read_file(t.path("s.nc")) == read_file(t.path("c.nc")));
+  CHECK_THAT(read_file(t.path("s.json")),
+             Catch::Contains("\"code\": \"mesh_slivers\"") &&
+                 Catch::Contains("2 zero-area faces (slivers) dropped"));
+  CHECK_THAT(read_file(t.path("c.json")), !Catch::Contains("mesh_slivers"));
+}
+
 TEST_CASE("cli: a bad part exits 2 naming the part file -- a wrong part names the CL line",
           "[cli][mesh][bad-input]") {
   TempDir t;

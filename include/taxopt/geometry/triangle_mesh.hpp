@@ -13,6 +13,10 @@ namespace taxopt {
 struct TriangleMesh {
   std::vector<Vec3d> vertices;
   std::vector<std::array<int, 3>> faces;
+  /// Zero-area faces (slivers: collinear or coincident corners) the file held and the reader
+  /// dropped -- they cover no surface --, and where the first lay.
+  std::size_t dropped_degenerate_faces = 0;
+  Vec3d first_degenerate_mm = Vec3d::Zero();
 };
 
 /// Tessellates a surface over its domain into a grid of (nu x nv) quads, two triangles each,

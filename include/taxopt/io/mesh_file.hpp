@@ -9,8 +9,9 @@ namespace taxopt {
 
 /// Reads a part mesh (STL binary or ASCII, OBJ, OFF, PLY, by the file's extension) with CGAL.
 /// Polygons are split into triangles, duplicated vertices merged (a polygon soup becomes an
-/// indexed mesh). @throws InputError naming the file: unreadable or garbled, empty, non-finite
-/// coordinates, degenerate (zero-area) faces.
+/// indexed mesh). Zero-area faces (CAD exports' slivers) cover no surface: dropped and counted
+/// (TriangleMesh::dropped_degenerate_faces). @throws InputError naming the file: unreadable or
+/// garbled, empty, non-finite coordinates, no face of any area.
 TriangleMesh read_mesh_file(const std::string& path);
 
 /// Binary STL of a mesh (normals from the vertex order), as bytes.

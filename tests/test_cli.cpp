@@ -849,3 +849,21 @@ TEST_CASE("cli: the LinuxCNC preset turns the tool length on before the TCP kine
   REQUIRE(m428 != std::string::npos);
   CHECK(g43 < m428);
 }
+
+TEST_CASE("cli: records skipped by --skip-record are said on stderr even with -q", "[cli][cl]") {
+  TempDir t;
+  write_file(t.path("s.cls"),
+             "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nFROBNICATE/3\nRAPID\n"
+             "GOTO/0,0,5\nFROBNICATE/4\nGOTO/50,0,5\n");
+  for (const char* quiet : {"", " -q"}) {
+    INFO("quiet: '" << quiet << "'");
+    const auto r = run_taxopt("--in " + t.path("s.cls") +
+                              " --skip-record FROBNICATE --spindle-rpm 5000 --tool-number 1 "
+                              "--method none --gcode " +
+                              t.path("s.nc") + quiet);
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.err, Catch::Contains(
+                          "taxopt: note: 2 FROBNICATE record(s) skipped as asked (--skip-record "
+                          "FROBNICATE)"));
+  }
+}

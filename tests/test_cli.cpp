@@ -867,3 +867,20 @@ TEST_CASE("cli: records skipped by --skip-record are said on stderr even with -q
                           "FROBNICATE)"));
   }
 }
+
+TEST_CASE(
+    "cli: where the input axis lies outside the machine's rotary range, no_free_axis says so "
+    "with the range, not only the cone",
+    "[cli][machine]") {
+  TempDir t;
+  write_file(t.path("a.toml"),
+             "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 30\nmax_deg = 60\n[axes.C]\n"
+             "continuous = true\n[gcode]\nend_pose = \"none\"\n");
+  const auto r = run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) +
+                            "/data/demo/sine.cls --machine " + t.path("a.toml") + " -q --gcode " +
+                            t.path("a.nc"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("the input axis itself is out of the machine's reach: it "
+                                    "needs A 5 or -5 deg, and A runs over [30, 60] deg"));
+  CHECK_FALSE(file_exists(t.path("a.nc")));
+}

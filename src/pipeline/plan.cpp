@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
@@ -17,6 +18,27 @@
 
 namespace taxopt::pipeline {
 namespace {
+
+/// Where the input axis itself lies outside the machine's rotary ranges, what it needs: the
+/// range, not the cone, is then what stops the point (a machine with A in [30, 60] deg said
+/// only "no tool axis within 1 deg").
+std::string out_of_reach(const ACMachined& ac, const Vec3d& axis) {
+  if (ac.reachable(axis)) return "";
+  const auto poses = ac.inverse(axis);
+  std::ostringstream os;
+  os << "; the input axis itself is out of the machine's reach: it needs " << ac.tilt_letter()
+     << " " << rad_to_deg(poses[0].a_rad) << " or " << rad_to_deg(poses[1].a_rad) << " deg";
+  if (!ac.a.continuous) {
+    os << ", and " << ac.tilt_letter() << " runs over [" << rad_to_deg(ac.a.min_rad) << ", "
+       << rad_to_deg(ac.a.max_rad) << "] deg";
+  }
+  if (!ac.c.continuous) {
+    os << ", C " << rad_to_deg(poses[0].c_rad) << " or " << rad_to_deg(poses[1].c_rad)
+       << " deg within [" << rad_to_deg(ac.c.min_rad) << ", " << rad_to_deg(ac.c.max_rad)
+       << "] deg";
+  }
+  return os.str();
+}
 
 /// The method's axes for one ball-end operation, and the findings of its guards.
 void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& progress,
@@ -116,7 +138,8 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
                 format_location(run.tp.source, op.points[i].line,
                                 "operation " + op.name + ": no tool axis within " +
                                     std::to_string(options.paper.max_deviation_deg) +
-                                    " deg of the input axis is reachable and collision-free here"));
+                                    " deg of the input axis is reachable and collision-free here" +
+                                    out_of_reach(run.machine.ac, op.points[i].axis)));
   }
   o.optimise_s = seconds_since(t0);
   if (options.log) {

@@ -783,3 +783,35 @@ TEST_CASE(
   CHECK_FALSE(coolant_said("COOLNT/ON\n" + body));
   CHECK_FALSE(coolant_said("COOLNT/OFF\n" + body));  // asked for none: no surprise
 }
+
+TEST_CASE(
+    "bad input: no output replaces the files it was made from -- machine --out naming the "
+    "configuration's INI or a HAL file it read, a plot named as an input in the plots folder",
+    "[bad-input][cli][outputs]") {
+  TempDir t;
+  const std::string cfg = std::string(TAXOPT_TEST_DATA) + "/linuxcnc/xyzac-trt/";
+  for (const char* f : {"xyzac-trt.ini", "switchkins_postgui.hal"}) {
+    write_file(t.path(f), read_file(cfg + f));
+  }
+  for (const std::string& out :
+       {t.path("xyzac-trt.ini"), t.path("switchkins_postgui.hal"), t.path("./xyzac-trt.ini")}) {
+    INFO(out);
+    const std::string before = read_file(t.path("xyzac-trt.ini"));
+    const RunResult r =
+        run_taxopt("machine --from-linuxcnc-ini " + t.path("xyzac-trt.ini") + " --out " + out);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("is the configuration's own file"));
+    CHECK(read_file(t.path("xyzac-trt.ini")) == before);
+  }
+  // The CL file in the plots folder under a plot's name.
+  const std::string in = t.path("plots/op1-feed.svg");
+  std::filesystem::create_directories(t.path("plots"));
+  write_file(in, read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls"));
+  const std::string text = read_file(in);
+  const RunResult r = run_taxopt("--in " + in + " --method none --plots " + t.path("plots") +
+                                 " --report " + t.path("r.json") + " -q");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("its plot op1-feed.svg would replace the --in file"));
+  CHECK(read_file(in) == text);
+  CHECK_FALSE(file_exists(t.path("r.json")));
+}

@@ -269,7 +269,18 @@ void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpat
     std::error_code ec;
     std::filesystem::create_directories(a.plots, ec);
     if (ec) refuse(a.plots + ": cannot create folder: " + ec.message());
-    for (const auto& [name, svg] : job_plots(result)) tx.stage(a.plots + "/" + name, svg);
+    for (const auto& [name, svg] : job_plots(result)) {
+      // A plot's name may be an input's that lies in the folder: never written over it.
+      const std::string path = a.plots + "/" + name;
+      for (const auto& [in_opt, in_path] : std::map<std::string, std::string>{
+               {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
+        if (!in_path.empty() && same_file(path, in_path)) {
+          refuse("--plots " + a.plots + ": its plot " + name + " would replace the " + in_opt +
+                 " file " + in_path + "; give the plots a folder of their own");
+        }
+      }
+      tx.stage(path, svg);
+    }
   }
   tx.commit();
   if (!a.quiet) print_summary(result);

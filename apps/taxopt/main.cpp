@@ -53,6 +53,14 @@ int run_machine_import(const Commands& c) {
       std::cout << m.toml;
       return 0;
     }
+    // Never over the configuration it came from (an audit's --out X.ini replaced the INI).
+    for (const std::string& f : m.files_read) {
+      if (taxopt::same_file(c.machine_out, f)) {
+        return error("--out " + c.machine_out + " is the configuration's own file " + f +
+                         " (read to make the machine file): write the machine file elsewhere",
+                     2);
+      }
+    }
     if (const std::string why = taxopt::writable_output_problem(c.machine_out); !why.empty()) {
       return error("--out " + c.machine_out + ": " + why, 2);
     }

@@ -109,6 +109,7 @@ std::string number_text(double v) {
 ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
   const Ini ini = parse_ini(read_text(ini_path));
   ImportedMachine out;
+  out.files_read.push_back(ini_path);
   const auto fail = [&](int line, const std::string& what) -> void {
     throw InputError(ini_path, line, what);
   };
@@ -164,6 +165,7 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
           out.assumptions.push_back("HAL file " + v.text + " not read (not a .hal file here)");
           continue;
         }
+        out.files_read.push_back(f.string());
         std::istringstream lines(read_text(f.string()));
         for (std::string line; std::getline(lines, line);) hal.command(line);
       }

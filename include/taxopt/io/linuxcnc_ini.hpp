@@ -13,6 +13,8 @@ struct ImportedMachine {
   std::string toml;
   /// What the configuration did not say and was taken as a default (one line each).
   std::vector<std::string> assumptions;
+  /// The configuration's files read: the INI and the HAL files it names.
+  std::vector<std::string> files_read;
 };
 
 /// Reads a LinuxCNC INI of an xyzac-trt-kins machine: [KINS] KINEMATICS, [TRAJ] LINEAR_UNITS,

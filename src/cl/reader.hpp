@@ -153,6 +153,8 @@ class Reader {
   /// to the rapid plane, feed to depth in pecks (back to the rapid plane between them), out.
   void drill_hole(const Vec3d& top, int record, int line);
   void skipped(const std::string& major) { ++tp_.skipped_records[major]; }
+  /// Counts `n` points a curve record (at `line`) expands to against the file's budget.
+  void count_curve_points(std::size_t n, const std::string& what, int line);
   void interpret(const std::string& major, const std::string& args_text, int index, int line);
   /// The record words and their readers (the word table, cl_words.cpp, says what each means).
   using RecordReader = void (Reader::*)(const ClRecordArgs&);
@@ -285,6 +287,8 @@ class Reader {
   std::optional<DrillCycle> cycle_;
   std::optional<std::pair<Vec3d, Vec3d>> home_;
   std::size_t points_ = 0;
+  /// Points the file's arcs and splines expanded to so far (count_curve_points).
+  std::size_t curve_points_ = 0;
   double last_rpm_ = 0.0;
   std::optional<ClCoolant> coolant_;
   int finished_line_ = 0;    // line of FINI / END

@@ -89,3 +89,24 @@ TEST_CASE("cl reader: a reader error names the first line of a continued record"
 TEST_CASE("cl reader: a missing file is an input error", "[io][cl][bad-input]") {
   CHECK_THROWS_AS(read_cl_file("/nonexistent/taxopt/x.cls"), InputError);
 }
+
+TEST_CASE(
+    "cl reader: a few curve records cannot ask for more than 1e6 points -- four MOVARC of 400 "
+    "turns at r 1000 (3.9 GB before) are refused naming the record",
+    "[io][cl][bad-input][hostile]") {
+  std::string text = "FEDRAT/MMPM,500\nRAPID\nGOTO/1000,0,0\n";
+  for (int k = 0; k < 4; ++k) text += "MOVARC/0,0,0,0,0,1,1000,ANGLE,144000\nGOTO/1000,0,0\n";
+  try {
+    parse_cl(text, "arc.cls");
+    FAIL("accepted");
+  } catch (const InputError& e) {
+    CHECK(e.line() == 6);
+    CHECK_THAT(e.message(), Catch::Contains("MOVARC: the file's arcs and splines up to here "
+                                            "expand to") &&
+                                Catch::Contains("more than the 1e6"));
+  }
+  // One such arc of 40 turns at r 10 mm is a helix a program may hold (1,800 chords a turn).
+  CHECK_NOTHROW(parse_cl("FEDRAT/MMPM,500\nRAPID\nGOTO/10,0,0\n"
+                         "MOVARC/0,0,0,0,0,1,10,ANGLE,14400\nGOTO/10,0,0\n",
+                         "helix.cls"));
+}

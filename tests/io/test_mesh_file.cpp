@@ -91,7 +91,7 @@ TEST_CASE("mesh: every bad mesh kind is an error naming the file", "[io][mesh][b
 }
 
 TEST_CASE(
-    "mesh: a CAD export's zero-area slivers are dropped and counted, the part kept whole; a "
+    "mesh: a CAD export's zero-area slivers are dropped and counted, the part kept whole -- a "
     "mesh of slivers only is refused",
     "[io][mesh][cli][slow]") {
   TempDir t;

@@ -171,6 +171,17 @@ void Reader::expand_arcs() {
   if (convention != ArcDirection::Auto) {
     rd.arc_convention_source = "option";
   } else {
+    // Two CAM systems' structures whose CIRCLE senses differ: the file cannot say which.
+    for (const DialectEvidence::Seen& s : dialects_seen_) {
+      const DialectEvidence::Seen& first = dialects_seen_.front();
+      if (documented_arc_direction(s.dialect) != documented_arc_direction(first.dialect)) {
+        fail(arcs_.front().line,
+             "CIRCLE: the file shows two CAM systems whose arcs run in opposite senses (line " +
+                 std::to_string(first.line) + ": " + first.what + "; line " +
+                 std::to_string(s.line) + ": " + s.what +
+                 "): which sense its arcs have is not known; give --arc-direction cw|ccw");
+      }
+    }
     convention = documented_arc_direction(rd.dialect);
     if (convention == ArcDirection::Auto) {
       // Nothing documented for this CAM system: the file's own arcs must say it clearly.
@@ -232,6 +243,15 @@ void Reader::expand_arcs() {
       ++rd.arcs_reversed;
       if (rd.reversed_arc_lines.size() < 20) rd.reversed_arc_lines.push_back(a.line);
     }
+  }
+  // The arcs the moves beside them do not decide run by the CAM system's convention: said,
+  // with what named the system.
+  if (rd.arc_convention_source == "documented" && rd.arcs_decidable < rd.arcs) {
+    notice(arcs_.front().line,
+           "CIRCLE: " + std::to_string(rd.arcs - rd.arcs_decidable) + " of " +
+               std::to_string(rd.arcs) + " arcs have no neighbouring moves that decide their " +
+               "sense; they run " + sense + ", the convention of " + dialect + " (" +
+               rd.dialect_evidence + "; --arc-direction cw|ccw sets it)");
   }
   if (rd.arcs_reversed > 0) {
     std::string lines;

@@ -1,6 +1,7 @@
 // The CL file's lexer (lexer.hpp).
 #include "cl/lexer.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <set>
@@ -259,34 +260,51 @@ bool is_listing_line(const std::string& code) {
   return i > digits && (t.substr(i) == " lines." || t.substr(i) == " lines");
 }
 
-/// Recognises the CAM system from its records and comments (docs/cl-files.md).
-ClDialect detect_dialect(const std::vector<LogicalLine>& lines) {
-  bool nx = false, creo = false, catia = false, solidworks = false, ffcam = false, makino = false;
+DialectEvidence detect_dialect(const std::vector<LogicalLine>& lines) {
+  // Only what a CAM system writes in its own structure counts: a PPRINT's or a comment's free
+  // text is no evidence (an audit's "PPRINT/POST FOR MAKINO D500" made a generic file Makino
+  // and reversed its arcs), nor is a record other systems write too (TLDATA).
+  DialectEvidence out;
+  const auto found = [&](ClDialect d, int line, const std::string& what) {
+    for (const DialectEvidence::Seen& s : out.seen) {
+      if (s.dialect == d) return;
+    }
+    out.seen.push_back({d, line, what});
+  };
   for (const auto& ll : lines) {
     const std::string up = upper(ll.raw);
-    ffcam = ffcam || up.find("FFCAM") != std::string::npos;
-    makino = makino || up.find("MAKINO") != std::string::npos;
     if (ll.kind == RecordKind::Comment) {
-      creo = creo || up.find("PRO/CLFILE") != std::string::npos ||
-             up.find("CREO") != std::string::npos;
-      catia = catia || up.find("CATIA") != std::string::npos;
+      // Creo's header "$$* Pro/CLfile Version ..." and CATIA's "$$ CATIA APT VERSION ...".
+      if (up.rfind("$$*", 0) == 0 && up.find("PRO/CLFILE") != std::string::npos) {
+        found(ClDialect::Creo, ll.line, "Creo's header ($$* Pro/CLfile)");
+      }
+      if (up.find("CATIA APT VERSION") != std::string::npos) {
+        found(ClDialect::Catia, ll.line, "CATIA's header ($$ CATIA APT VERSION)");
+      }
       continue;
     }
     if (ll.kind != RecordKind::Record) continue;
     std::string args;
     const std::string major = major_word(ll.code, args);
-    nx = nx || major == "TOOL PATH" || major == "TLDATA" || major == "END-OF-PATH" ||
-         major == "MSYS";
-    solidworks = solidworks || major.rfind("CSI_", 0) == 0 || major == "TRNTYP";
+    if (major == "TOOL PATH" || major == "END-OF-PATH" || major == "MSYS") {
+      found(ClDialect::SiemensNx, ll.line, "NX CLSF's " + major + " record");
+    }
+    if (major == "TRNTYP" || major.rfind("CSI_", 0) == 0) {
+      found(ClDialect::SolidworksCam, ll.line, "SOLIDWORKS CAM's " + major + " record");
+    }
+    // Makino FF APT-CL declares itself: PPRINT/APTCL-SPEC,MAKINO-FF,<version> on line 1
+    // (steptools/STEPNode examples/data/Plane_2.cldata).
+    std::string text = upper(args);
+    text.erase(std::remove(text.begin(), text.end(), ' '), text.end());
+    if (major == "PPRINT" && text.rfind("APTCL-SPEC,MAKINO-FF", 0) == 0) {
+      found(ClDialect::MakinoFfcam, ll.line, "Makino FF's PPRINT/APTCL-SPEC,MAKINO-FF");
+    }
   }
-  // FFCAM names itself; a machine called Makino in another system's file does not make it one.
-  if (ffcam) return ClDialect::MakinoFfcam;
-  if (nx) return ClDialect::SiemensNx;
-  if (creo) return ClDialect::Creo;
-  if (catia) return ClDialect::Catia;
-  if (solidworks) return ClDialect::SolidworksCam;
-  if (makino) return ClDialect::MakinoFfcam;
-  return ClDialect::Generic;
+  if (!out.seen.empty()) {
+    out.dialect = out.seen.front().dialect;
+    out.evidence = "line " + std::to_string(out.seen.front().line) + ": " + out.seen.front().what;
+  }
+  return out;
 }
 
 /// The sense in which a dialect's CIRCLE records run, with the evidence (docs/cl-files.md);

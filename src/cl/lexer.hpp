@@ -35,8 +35,21 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
                                        std::string& line_end, bool& final_line_end);
 /// The lines NX's listing window puts around a CLSF.
 bool is_listing_line(const std::string& code);
-/// Recognises the CAM system from its records and comments (docs/cl-files.md).
-ClDialect detect_dialect(const std::vector<LogicalLine>& lines);
+/// The CAM system a file's own structure names, and where: its first such record, and every
+/// system's (a file that shows two is told apart where it matters: their CIRCLE senses).
+struct DialectEvidence {
+  ClDialect dialect = ClDialect::Generic;
+  std::string evidence;  ///< "line 1: NX CLSF's TOOL PATH record"; empty for Generic
+  struct Seen {
+    ClDialect dialect;
+    int line;
+    std::string what;
+  };
+  std::vector<Seen> seen;
+};
+/// Recognises the CAM system from the records and header comments it writes in its own
+/// structure, never from free text (docs/cl-files.md).
+DialectEvidence detect_dialect(const std::vector<LogicalLine>& lines);
 /// The sense in which a dialect's CIRCLE records run (docs/cl-files.md); Auto where nothing is
 /// documented or measured.
 ArcDirection documented_arc_direction(ClDialect dialect);

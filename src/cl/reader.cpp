@@ -32,7 +32,12 @@ Toolpath Reader::run(const std::string& input) {
     fail(1, "UTF-16 text: save the CL file as UTF-8 or ASCII");
   }
   auto lines = split_logical(text, source_, tp_.line_end, tp_.final_line_end);
-  tp_.reading.dialect = detect_dialect(lines);
+  {
+    DialectEvidence ev = detect_dialect(lines);
+    tp_.reading.dialect = ev.dialect;
+    tp_.reading.dialect_evidence = ev.evidence;
+    dialects_seen_ = std::move(ev.seen);
+  }
   determine_units(lines);
   scale_ = mm_per_unit(tp_.units);
   for (const auto& ll : lines) handle(ll);

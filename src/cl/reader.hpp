@@ -287,6 +287,8 @@ class Reader {
   std::optional<DrillCycle> cycle_;
   std::optional<std::pair<Vec3d, Vec3d>> home_;
   std::size_t points_ = 0;
+  /// Every CAM system whose structure the file shows (detect_dialect), in order.
+  std::vector<DialectEvidence::Seen> dialects_seen_;
   /// Points the file's arcs and splines expanded to so far (count_curve_points).
   std::size_t curve_points_ = 0;
   double last_rpm_ = 0.0;

@@ -175,6 +175,8 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   const ClReadSummary& rd = toolpath.reading;
   nlohmann::json cl;
   cl["dialect"] = to_string(rd.dialect);
+  cl["dialect_evidence"] =
+      rd.dialect_evidence.empty() ? nlohmann::json(nullptr) : nlohmann::json(rd.dialect_evidence);
   cl["motion_records"] = rd.motion_records;
   cl["arcs"] = {{"count", rd.arcs},
                 {"convention", to_string(rd.arc_convention)},

@@ -58,8 +58,10 @@ TEST_CASE(
   CHECK(nx.reading.arcs_decidable == 1);
   CHECK(nx.reading.arcs_contradicting == 0);
   CHECK(nx.notices.empty());
-  const Toolpath makino = parse_cl(quarter("$$ Makino FFCAM\n", 1), "m.cl");
+  // Makino FF declares itself on line 1 (steptools/STEPNode examples/data/Plane_2.cldata).
+  const Toolpath makino = parse_cl(quarter("PPRINT/APTCL-SPEC,MAKINO-FF,1\n", 1), "m.cl");
   CHECK(makino.reading.dialect == ClDialect::MakinoFfcam);
+  CHECK(makino.reading.dialect_evidence == "line 1: Makino FF's PPRINT/APTCL-SPEC,MAKINO-FF");
   CHECK(path_mm(makino.operations[0]) == Approx(quarter_mm).epsilon(1e-4));
   // Creo writes the same arc about -Z (counter-clockwise about it).
   const Toolpath creo = parse_cl(quarter("$$* Pro/CLfile Version 8.0\n", -1), "c.ncl");
@@ -72,6 +74,41 @@ TEST_CASE(
     CHECK(p.tip_mm.x() >= 10.0);
     CHECK(p.tip_mm.y() >= 0.0);
   }
+}
+
+TEST_CASE(
+    "cl arcs: free text names no CAM system -- the convention of arcs no move decides comes from "
+    "a system's own structure, is said with it, and two systems of opposite senses are refused",
+    "[io][cl][arcs][hostile]") {
+  // A 90 deg counter-clockwise arc (APT's sense) between vertical moves: nothing decides it.
+  const std::string arc =
+      "GOTO/20,0,5\nGOTO/20,0,0\nCIRCLE/10,0,0,0,0,1,10\nGOTO/10,10,0\nGOTO/10,10,5\n";
+  const double ninety = 10.0 + 0.5 * M_PI * 10.0;
+  for (const char* header : {"PPRINT/POST FOR MAKINO D500\n", "$$ Makino FFCAM\n",
+                             "PARTNO/CATIA and CREO part\n",
+                             "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\n"}) {
+    INFO(header);
+    const Toolpath tp = parse_cl(std::string(header) + arc, "g.apt");
+    CHECK(tp.reading.dialect == ClDialect::Generic);
+    CHECK(tp.reading.dialect_evidence.empty());
+    CHECK(path_mm(tp.operations[0]) == Approx(ninety).epsilon(1e-4));  // not 270 deg
+  }
+  // NX's own structure: its clockwise convention, said with the record that named it.
+  const Toolpath nx = parse_cl("TOOL PATH/OP,TOOL,T\n" + arc, "nx.cls");
+  CHECK(nx.reading.dialect_evidence == "line 1: NX CLSF's TOOL PATH record");
+  CHECK(path_mm(nx.operations[0]) == Approx(10.0 + 1.5 * M_PI * 10.0).epsilon(1e-4));
+  REQUIRE(nx.notices.size() == 1);
+  CHECK_THAT(nx.notices[0], Catch::Contains("1 of 1 arcs have no neighbouring moves that decide "
+                                            "their sense; they run clockwise") &&
+                                Catch::Contains("line 1: NX CLSF's TOOL PATH record"));
+  // NX and Creo (clockwise and counter-clockwise) in one file: refused, both named.
+  CHECK(throws_with(
+      [&] { parse_cl("$$* Pro/CLfile Version 8.0\nTOOL PATH/OP,TOOL,T\n" + arc, "x.ncl"); },
+      "x.ncl:5: CIRCLE: the file shows two CAM systems whose arcs run in opposite senses (line 1: "
+      "Creo's header ($$* Pro/CLfile); line 2: NX CLSF's TOOL PATH record)"));
+  ClReadOptions o;
+  o.arc_direction = ArcDirection::CounterClockwise;
+  CHECK_NOTHROW(parse_cl("$$* Pro/CLfile Version 8.0\nTOOL PATH/OP,TOOL,T\n" + arc, "x.ncl", o));
 }
 
 TEST_CASE("cl arcs: when most arcs run against the CAM system's sense the reader stops",

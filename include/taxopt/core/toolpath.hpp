@@ -57,6 +57,9 @@ struct ClReadSummary {
   int msys_applied = 0;
   /// Motion records read: GOTO, FROM, GODLTA, GOHOME.
   int motion_records = 0;
+  /// Where `dialect` comes from: the first record of the CAM system's own structure ("line 1:
+  /// NX CLSF's TOOL PATH record"); empty for a generic file.
+  std::string dialect_evidence;
 };
 
 /// A frame a file's coordinates were given in (NX MSYS): a point p of the file is

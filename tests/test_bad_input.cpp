@@ -815,3 +815,21 @@ TEST_CASE(
   CHECK(read_file(in) == text);
   CHECK_FALSE(file_exists(t.path("r.json")));
 }
+
+TEST_CASE(
+    "bad input: an output the system cannot create is refused before any work, naming its "
+    "option (a 300-character file name failed after the whole run)",
+    "[bad-input][cli][outputs]") {
+  TempDir t;
+  const std::string name = t.path(std::string(300, 'x') + ".ngc");
+  const RunResult r = run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) +
+                                 "/data/demo/sine.cls --method none -q --gcode " + name +
+                                 " --report " + t.path("r.json"));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--gcode " + name + ": cannot write there: File name too long"));
+  CHECK_FALSE(file_exists(t.path("r.json")));
+  // The probe leaves nothing behind.
+  std::size_t left = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(t.path(""))) ++left;
+  CHECK(left == 0);
+}

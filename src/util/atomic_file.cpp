@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
@@ -210,6 +211,14 @@ std::string writable_output_problem(const std::string& path) {
   if (::access(dir.c_str(), W_OK | X_OK) != 0) {
     return "cannot write in its folder " + dir.string() + ": " + std::strerror(errno);
   }
+  // What the write will do, tried: a temporary file of the same name's length in the same
+  // folder (a 300-character name, or /sys where root passes access(), failed only after the
+  // whole run).
+  std::string probe = (dir / ("." + target.filename().string() + ".taxopt-XXXXXXXXXXXX")).string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) return std::strerror(errno);
+  ::close(fd);
+  ::unlink(probe.c_str());
   return "";
 }
 

@@ -80,6 +80,7 @@ void Reader::notice(int line, const std::string& what) {
 
 void Reader::determine_units(const std::vector<LogicalLine>& lines) {
   std::optional<LengthUnit> declared;
+  std::string declared_record;
   int declared_line = 0, motion_line = 0, inch_feed_line = 0, mm_feed_line = 0;
   for (const auto& ll : lines) {
     if (ll.kind != RecordKind::Record) continue;
@@ -108,6 +109,7 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
       if (!declared) {
         declared = u;
         declared_line = ll.line;
+        declared_record = major + "/" + trim(args);
       }
     }
     if (major == "FEDRAT") {
@@ -123,6 +125,14 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
       if (inch && !inch_feed_line) inch_feed_line = ll.line;
       if (mm && !mm_feed_line) mm_feed_line = ll.line;
     }
+  }
+  // A file states its units before it moves: declared after the first motion, the units of
+  // the moves before it are not known (they were read in the declared ones without a word).
+  if (declared && motion_line && motion_line < declared_line && !options_.units) {
+    const char* unit = *declared == LengthUnit::Inch ? "inches" : "millimetres";
+    fail(declared_line, declared_record + " comes after the first motion (line " +
+                            std::to_string(motion_line) + "): whether the moves before it are in " +
+                            unit + " too is not known; give --units in|mm");
   }
   const LengthUnit from_file =
       declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);

@@ -422,6 +422,23 @@ TEST_CASE(
              Catch::Contains("r.cls:2: a feed move at a feed per revolution"));
 }
 
+TEST_CASE(
+    "cl units: a file's first UNITS after its first motion is refused (the moves before it were "
+    "read in its units without a word) unless --units says them",
+    "[io][cl][hostile]") {
+  const std::string text = "FEDRAT/MMPM,500\nRAPID\nGOTO/0,0,5\nGOTO/50,0,5\nUNITS/INCHES\n"
+                           "GOTO/60,0,5\n";
+  CHECK(throws_with([&] { parse_cl(text, "u.cls"); },
+                    "u.cls:5: UNITS/INCHES comes after the first motion (line 3): whether the "
+                    "moves before it are in inches too is not known; give --units in|mm"));
+  ClReadOptions o;
+  o.units = LengthUnit::Inch;
+  CHECK(parse_cl(text, "u.cls", o).operations.at(0).points.at(1).tip_mm.x() ==
+        Approx(50 * 25.4));
+  // Before the motion it is the file's units, as always.
+  CHECK_NOTHROW(parse_cl("UNITS/INCHES\n" + text.substr(0, text.find("UNITS")), "u.cls"));
+}
+
 TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") {
   const Toolpath tp = parse_cl(
       "UNIT/MM\nFEDRAT/500,MMPM\nGOTO/0,0,50\nCYCLE/INIT\n"

@@ -148,6 +148,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::NoFreeAxis: return "no_free_axis";
     case FindingCode::UnreachablePose: return "unreachable_pose";
     case FindingCode::AxisRangeExceeded: return "axis_range_exceeded";
+    case FindingCode::TurnInCut: return "turn_in_cut";
     case FindingCode::TravelExceeded: return "travel_exceeded";
     case FindingCode::DynamicLimitExceeded: return "dynamic_limit_exceeded";
     case FindingCode::ToolLengthOffsetOff: return "tool_length_offset_off";

@@ -833,3 +833,39 @@ TEST_CASE(
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(t.path(""))) ++left;
   CHECK(left == 0);
 }
+
+TEST_CASE(
+    "bad input: a limited C that must unwind inside a feed move is a problem naming the CL line, "
+    "part or no part (it turned 356 deg inside a G1, said only as a C jump)",
+    "[bad-input][cli][machine]") {
+  TempDir t;
+  // A 30 deg tilted axis going twice round Z while the tip circles: C runs through 720 deg.
+  std::ostringstream cl;
+  cl << "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nRAPID\n";
+  cl.precision(9);
+  for (int i = 0; i <= 200; ++i) {
+    const double c = taxopt::deg_to_rad(720.0 * i / 200.0), a = taxopt::deg_to_rad(30.0);
+    cl << "GOTO/" << 10 * std::cos(c) << "," << 10 * std::sin(c) << ",0," << std::sin(a) * std::sin(c)
+       << "," << -std::sin(a) * std::cos(c) << "," << std::cos(a) << "\n";
+  }
+  write_file(t.path("rot.cls"), cl.str());
+  const std::string machine =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -120\nmax_deg = 120\n[axes.C]\n";
+  write_file(t.path("c200.toml"), machine + "min_deg = -200\nmax_deg = 200\n");
+  write_file(t.path("cinf.toml"), machine + "continuous = true\n");
+  const auto run = [&](const char* m) {
+    return run_taxopt("--in " + t.path("rot.cls") + " --machine " + t.path(m) +
+                      " --method none --spindle-rpm 5000 --tool-number 1 -q --gcode " +
+                      t.path("o.nc") + " --report " + t.path("r.json") + " --force");
+  };
+  RunResult r = run("c200.toml");
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("feed move(s) where a rotary axis turns more than half a turn, "
+                                    "the first 356.4 deg into CL line") &&
+                        Catch::Contains("C's range [-200, 200] deg makes it unwind there"));
+  CHECK_THAT(read_file(t.path("r.json")), Catch::Contains("\"turn_in_cut\""));
+  // The same path on a C that turns for ever: no unwind, no finding.
+  r = run("cinf.toml");
+  CHECK(r.code == 0);
+  CHECK_THAT(read_file(t.path("r.json")), !Catch::Contains("turn_in_cut"));
+}

@@ -367,6 +367,7 @@ enum class FindingCode {
   NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
   UnreachablePose,       ///< no pose within the machine's axis ranges
   AxisRangeExceeded,     ///< a written rotary value outside its range
+  TurnInCut,             ///< a rotary turns over 180 deg in a feed move: the tool sweeps round
   TravelExceeded,        ///< a written linear joint outside its travel
   DynamicLimitExceeded,  ///< a joint's velocity or acceleration above its limit
   ToolLengthOffsetOff,   ///< a move written without the tool length offset (or TCP) in force

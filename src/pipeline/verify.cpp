@@ -57,6 +57,46 @@ struct WrittenAxes {
   std::vector<Vec3d> xyz_w;
 };
 
+/// A rotary axis that turns more than half a turn between two CL points of a feed move (a
+/// limited C unwinding there: an audit's C of [-200, 200] deg turned 356 deg inside a G1) sweeps
+/// the tool round while it cuts, part or no part: a problem where the ball's centre leaves its
+/// straight path by more than the 0.05 mm contact tolerance floor (a pass through the pole,
+/// where C flips by 180 deg with the axis nearly vertical, stays within it).
+void check_turns_in_cut(const Run& run, const OperationContext& o, const WrittenAxes& ax,
+                        JobResult& res) {
+  const Operationd& op = *o.op;
+  const ACMachined& ac = run.machine.ac;
+  const double R = o.ball_radius_mm > 0.0 ? o.ball_radius_mm : 0.5 * op.tool.diameter_mm;
+  std::size_t count = 0, first = 0;
+  double first_turn = 0.0, first_off = 0.0;
+  for (std::size_t i = 1; i < op.points.size(); ++i) {
+    if (op.points[i].motion != Motion::Feed) continue;
+    const double da = ax.a_w[i] - ax.a_w[i - 1], dc = ax.c_w[i] - ax.c_w[i - 1];
+    if (std::max(std::abs(da), std::abs(dc)) <= 180.0) continue;
+    const auto axis_at = [&](double s) {
+      return ac.forward(Posed{deg_to_rad(ax.a_w[i - 1] + s * da), deg_to_rad(ax.c_w[i - 1] + s * dc)});
+    };
+    const Vec3d v0 = axis_at(0.0), v1 = axis_at(1.0);
+    double off = 0.0;
+    for (int q = 1; q < 16; ++q) {
+      const double s = q / 16.0;
+      off = std::max(off, (R * (axis_at(s) - ((1.0 - s) * v0 + s * v1))).norm());
+    }
+    if (off <= kContactToleranceFloorMm) continue;
+    if (count++ == 0) first = i, first_turn = std::max(std::abs(da), std::abs(dc)), first_off = off;
+  }
+  if (count == 0) return;
+  std::ostringstream os;
+  os << "operation " << op.name << ": " << count << " feed move(s) where a rotary axis turns more "
+     << "than half a turn, the first " << shown(first_turn) << " deg into CL line "
+     << op.points[first].line << " (C's range [" << rad_to_deg(ac.c.min_rad) << ", "
+     << rad_to_deg(ac.c.max_rad) << "] deg makes it unwind there): the tool sweeps round while "
+     << "it cuts, the ball's centre up to " << shown(first_off)
+     << " mm off its straight path; widen the range or make the CL file lift the tool there";
+  add_finding(res, FindingCode::TurnInCut, o.index, op.points[first].line,
+              format_location(run.tp.source, op.points[first].line, os.str()));
+}
+
 /// Point i as read back: the tool length and TCP on, the round trip, within the axes' ranges
 /// and the machine's travel; its row's place.
 void check_point_written(const Run& run, const OperationContext& o, const PostedOperation& po,
@@ -336,6 +376,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     check_point_written(run, o, po, w.point_moves[k][i], i, ax, r, res);
   }
   check_round_trip(run, o, po, r, res);
+  check_turns_in_cut(run, o, ax, res);
   r.contact = o.contact;
   r.time_contacts_s = o.contacts_s;
   r.time_optimise_s = o.optimise_s;

@@ -57,10 +57,10 @@ void Reader::count_curve_points(std::size_t n, const std::string& what, int line
   constexpr std::size_t kCurvePointBudget = 1000000;
   curve_points_ += n;
   if (curve_points_ > kCurvePointBudget) {
-    fail(line, what + ": the file's arcs and splines up to here expand to " +
+    fail(line, what + ": the file's arcs, splines and drilling cycles up to here expand to " +
                    std::to_string(curve_points_) +
-                   " points (chords within 0.001 mm), more than the 1e6 taxopt posts from "
-                   "curve records (about 1 GB to run): a runaway ANGLE, TIMES or knot vector?");
+                   " points, more than the 1e6 taxopt posts from such records (about 1 GB to "
+                   "run): a runaway ANGLE, TIMES, knot vector or peck?");
   }
 }
 

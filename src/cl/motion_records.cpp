@@ -129,6 +129,7 @@ void Reader::drill_hole(const Vec3d& top, int record, int line) {
   const Vec3d u = axis_;
   const double clear = std::max(c.retract_to_mm, c.rapid_to_mm);
   const double saved_feed = feed_mm_per_min_;
+  const std::size_t points_before = points_;
   add_point(top + clear * u, Motion::Rapid, record, line);
   add_point(top + c.rapid_to_mm * u, Motion::Rapid, record, line);
   feed_mm_per_min_ = c.feed_mm_per_min;
@@ -148,6 +149,8 @@ void Reader::drill_hole(const Vec3d& top, int record, int line) {
   }
   add_point(top + clear * u, c.feed_out ? Motion::Feed : Motion::Rapid, record, line);
   feed_mm_per_min_ = saved_feed;
+  // A hole is one GOTO: its pecks count against what the file's few records may ask.
+  count_curve_points(points_ - points_before, "CYCLE", line);
   ++tp_.reading.cycle_holes;
 }
 

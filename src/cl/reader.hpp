@@ -153,7 +153,8 @@ class Reader {
   /// to the rapid plane, feed to depth in pecks (back to the rapid plane between them), out.
   void drill_hole(const Vec3d& top, int record, int line);
   void skipped(const std::string& major) { ++tp_.skipped_records[major]; }
-  /// Counts `n` points a curve record (at `line`) expands to against the file's budget.
+  /// Counts `n` points an arc, spline or drilling hole (at `line`) expands to against the
+  /// file's budget of 1e6.
   void count_curve_points(std::size_t n, const std::string& what, int line);
   void interpret(const std::string& major, const std::string& args_text, int index, int line);
   /// The record words and their readers (the word table, cl_words.cpp, says what each means).
@@ -289,7 +290,8 @@ class Reader {
   std::size_t points_ = 0;
   /// Every CAM system whose structure the file shows (detect_dialect), in order.
   std::vector<DialectEvidence::Seen> dialects_seen_;
-  /// Points the file's arcs and splines expanded to so far (count_curve_points).
+  /// Points the file's arcs, splines and drilling cycles expanded to so far
+  /// (count_curve_points).
   std::size_t curve_points_ = 0;
   double last_rpm_ = 0.0;
   std::optional<ClCoolant> coolant_;

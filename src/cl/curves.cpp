@@ -283,7 +283,13 @@ void Reader::check_movarcs() {
          << rad_to_deg(sweep) << " deg counter-clockwise about (i,j,k) from its start";
       fail(a.line, os.str());
     }
-    if (a.evidence < 0 && a.strong) {
+    // The end GOTO decides the sense where the clockwise reading of ANGLE would end elsewhere:
+    // the two ends lie 2 r |sin ANGLE| apart (a Fusion arc after a 0.112 mm reversed move, a
+    // cusp, ended 1.7e-6 mm from its counter-clockwise end and 1.22 mm from the other, and the
+    // neighbouring moves' vote refused its file). Only where they meet (ANGLE 180 or 360 deg)
+    // do the moves beside it say.
+    const double ends_apart_mm = 2.0 * r * std::abs(std::sin(a.declared_sweep_rad));
+    if (a.evidence < 0 && a.strong && ends_apart_mm <= 0.01) {
       fail(a.line,
            "MOVARC: the moves before and after it run clockwise about its axis, "
            "against the counter-clockwise sweep it writes");

@@ -231,6 +231,21 @@ TEST_CASE(
   CHECK_THAT(error_of_text("GOTO/10,0,0\nGOTO/0,0,0\nMOVARC/0,5,0,0,0,1,5,ANGLE,180\nGOTO/0,10,0\n"
                            "GOTO/10,10,0\n"),
              Catch::Contains("w.cls:3: MOVARC: the moves before and after it run clockwise"));
+  // Where ANGLE's two readings end apart, the end GOTO decides, whatever the moves beside it
+  // do: a Fusion arc after a 0.112 mm reversed move (a cusp), and one between two moves that
+  // both run against it (refused before), read as written (a quarter of r 5: 7.854 mm).
+  for (const auto& [before, after] :
+       {std::pair<const char*, const char*>{"GOTO/0.112,0,0\nGOTO/0,0,0\n", "GOTO/5,20,0\n"},
+        {"GOTO/10,0,0\nGOTO/0,0,0\n", "GOTO/5,-10,0\n"}}) {
+    INFO(before << after);
+    const Toolpath cusp = parse_cl(std::string(before) + "MOVARC/0,5,0,0,0,1,5,ANGLE,90\nGOTO/5,5,0\n" +
+                                       after,
+                                   "cusp.apt");
+    const auto& q = cusp.operations.at(0).points;
+    double arc = 0.0;
+    for (std::size_t i = 2; i + 1 < q.size(); ++i) arc += (q[i].tip_mm - q[i - 1].tip_mm).norm();
+    CHECK(arc == Approx(0.5 * M_PI * 5.0).epsilon(1e-4));
+  }
 }
 
 TEST_CASE(

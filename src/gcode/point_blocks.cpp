@@ -113,24 +113,45 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
   const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
   const char* plane = axis == 2 ? "G17" : axis == 1 ? "G18" : "G19";
   const char* sense = n[axis] > 0.0 ? "G3" : "G2";
-  std::vector<int> piece_line(static_cast<std::size_t>(pieces));
+  // Each piece as its words will read: start and end rounded, the centre offset rounded. A
+  // controller refuses an arc whose radii to its rounded ends differ (our reader as LinuxCNC:
+  // 0.002 mm + 0.1 %): a 0.05 in arc at 4 decimals in inches came out 1.2723 against 1.2677
+  // mm and refused taxopt's own program. Such an arc is written as chords.
+  struct Piece {
+    Vec3d to, offset;
+  };
+  std::vector<Piece> planned(static_cast<std::size_t>(pieces));
   Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, pose) * scale_) / scale_;
   const Vec3d dir = u0 / r0, side = n.cross(dir);
-  point_ = static_cast<int>(run.end);
   for (int k = 1; k <= pieces; ++k) {
     const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
-    const Vec3d to = k == pieces ? e_out
-                                 : c + (hs + (he - hs) * frac) * n +
-                                       r0 * (std::cos(th) * dir + std::sin(th) * side);
-    const Vec3d offset = (c - from) * scale_;
-    std::string block = std::string(plane) + " " + sense + " " + xyz_words(to);
+    Piece& pc = planned[static_cast<std::size_t>(k - 1)];
+    pc.to = k == pieces ? e_out
+                        : c + (hs + (he - hs) * frac) * n +
+                              r0 * (std::cos(th) * dir + std::sin(th) * side);
+    pc.offset = (c - from) * scale_;
+    const Vec3d to_r = rounded(pc.to * scale_) / scale_;
+    const Vec3d centre_r = from + rounded(pc.offset) / scale_;
+    const auto radius = [&](const Vec3d& p) {
+      const Vec3d d = p - centre_r;
+      return (d - d.dot(n) * n).norm();
+    };
+    const double r_from = radius(from), r_to = radius(to_r);
+    if (std::abs(r_from - r_to) > 0.9 * (0.002 + 1e-3 * r_from)) return false;
+    from = to_r;
+  }
+  std::vector<int> piece_line(static_cast<std::size_t>(pieces));
+  point_ = static_cast<int>(run.end);
+  for (int k = 1; k <= pieces; ++k) {
+    const Piece& pc = planned[static_cast<std::size_t>(k - 1)];
+    std::string block = std::string(plane) + " " + sense + " " + xyz_words(pc.to);
     for (int q = 0; q < 3; ++q) {
-      if (q != axis)
-        block += std::string(" ") + static_cast<char>('I' + q) + dialect_.number(offset[q], d_);
+      if (q != axis) {
+        block += std::string(" ") + static_cast<char>('I' + q) + dialect_.number(pc.offset[q], d_);
+      }
     }
     piece_line[static_cast<std::size_t>(k - 1)] = line(block + feed_word(f), BlockKind::Arc);
     ++prog_.arc_blocks;
-    from = rounded(to * scale_) / scale_;
   }
   for (std::size_t j = run.start + 1; j < run.end; ++j) {
     const double frac =

@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <random>
+#include <sstream>
 #include <set>
 
 #include "support.hpp"
@@ -431,5 +433,58 @@ TEST_CASE(
     c.ac.a_axis_point_mm = Vec3d::Zero();
     CHECK_FALSE(joint_safe_rate_per_s(c.ac, limits, t, Posed{0.0, 0.0}, t,
                                       Posed{deg_to_rad(-20.0), deg_to_rad(90.0)}));
+  }
+}
+
+TEST_CASE(
+    "gcode: a small arc in inches at 4 decimals is written as G2/G3 only where its rounded "
+    "words keep one radius -- 3000 random 0.05 in MOVARCs read back, in inches and in mm",
+    "[io][gcode][arcs]") {
+  // A Fusion inch file's 0.05 in arcs: rounded to 4 decimals some ended 1.2723 mm from their
+  // centre and began 1.2677 mm from it, and taxopt refused its own program.
+  using namespace taxopt::test;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> sweep(20.0, 170.0), heading(0.0, 360.0);
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(6);
+  os << "UNITS/INCHES\nMULTAX/ON\nLOADTL/1\nCUTTER/0.25, 0.125, 0, 0.125, 0, 0, 1\n"
+        "SPINDL/RPM, 20000, CLW\nFEDRAT/20, IPM\nRAPID\nGOTO/0.1, 0.1, 0.5, 0, 0, 1\n"
+        "GOTO/0.1, 0.1, 0.0, 0, 0, 1\n";
+  double x = 0.1, y = 0.1;
+  const double r = 0.05;
+  for (int k = 0; k < 3000; ++k) {
+    const double phi = deg_to_rad(heading(rng)), th = sweep(rng);
+    x += 0.03 * std::cos(phi);
+    y += 0.03 * std::sin(phi);
+    os << "GOTO/" << x << ", " << y << ", 0.0, 0, 0, 1\n";
+    const double cx = x - r * std::sin(phi), cy = y + r * std::cos(phi);
+    const double a1 = std::atan2(y - cy, x - cx) + deg_to_rad(th);
+    const double ex = cx + r * std::cos(a1), ey = cy + r * std::sin(a1);
+    os << "MOVARC/" << cx << ", " << cy << ", 0.0, 0, 0, 1, " << r << ", ANGLE, " << th
+       << "\nGOTO/" << ex << ", " << ey << ", 0.0, 0, 0, 1\n";
+    x = ex - 0.02 * std::sin(a1);
+    y = ey + 0.02 * std::cos(a1);
+    os << "GOTO/" << x << ", " << y << ", 0.0, 0, 0, 1\n";
+    if (std::abs(x) > 3.0 || std::abs(y) > 3.0) {
+      x = y = 0.1;
+      os << "GOTO/0.1, 0.1, 0.0, 0, 0, 1\n";
+    }
+  }
+  TempDir t;
+  write_file(t.path("inch.apt"), os.str());
+  for (const char* units : {"", " --units-out mm"}) {
+    INFO("units:" << units);
+    const RunResult res = run_taxopt("--in " + t.path("inch.apt") +
+                                     " --method none -q --tool-number 1 --gcode " +
+                                     t.path("i.ngc") + units);
+    CHECK(res.code == 0);
+    CHECK_THAT(res.err, !Catch::Contains("differs from the radius"));
+    const std::string nc = read_file(t.path("i.ngc"));
+    CHECK(count_of(nc, " G3 X") > 100);  // arcs that round well stay arcs
+    if (have_rs274()) {
+      std::vector<CanonMove> moves;
+      CHECK(run_rs274(t.path("i.ngc"), moves).code == 0);
+    }
   }
 }

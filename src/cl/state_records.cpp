@@ -27,7 +27,16 @@ Operationd& Reader::current_op() {
 void Reader::tool_changed() {
   if (op_ >= 0) {
     auto& op = tp_.operations[static_cast<std::size_t>(op_)];
-    if (!op.points.empty()) {
+    // A FROM before the first tool is the program's start point, not an operation of its own
+    // (a Makino FF file: FROM, then SELECT/TOOL and LOAD/TOOL; it made a tool-less operation,
+    // refused for its missing tool, or written as an approach, a retract and the approach
+    // again): the tool's operation starts there.
+    const bool only_start =
+        !op.tool.number && !(op.tool.diameter_mm > 0.0) &&
+        std::all_of(op.points.begin(), op.points.end(), [&](const CLPointd& p) {
+          return p.record >= 0 && tp_.records[static_cast<std::size_t>(p.record)].major == "FROM";
+        });
+    if (!op.points.empty() && !only_start) {
       const std::string name = in_block_ ? op.name : std::string();
       op_ = -1;
       pending_name_ = name;

@@ -473,3 +473,29 @@ TEST_CASE(
             .operations[0]
             .tool.number == 12);
 }
+
+TEST_CASE(
+    "cl reader: a FROM before the first tool is the start of that tool's operation, not a "
+    "tool-less operation of its own (Makino FF's layout)",
+    "[io][cl][words]") {
+  // The records as Makino FF writes its start (steptools/STEPNode examples/data/Plane_2.cldata,
+  // Apache-2.0): the start point, then the tool.
+  const Toolpath tp = parse_cl(
+      "PPRINT/APTCL-SPEC,MAKINO-FF,1\nUNITS/MM\nSET/MODE,ABSOL\n"
+      "FROM/0.0,0.0,50.0,0.0,0.0,1.0\nSELECT/TOOL,45\nLOAD/TOOL,45\nRAPID\nGOTO/0.0,0.0,50.0\n"
+      "SPINDL/RPM,1310,CLW\nRAPID\nGOTO/-22.1,7.95,29.0\nFEDRAT/PERMIN,141\nGOTO/-22.1,7.95,28.0\n"
+      "GOTO/-30.0,7.95,28.0\n",
+      "plane.cldata");
+  REQUIRE(tp.operations.size() == 1);
+  const Operationd& op = tp.operations[0];
+  CHECK(op.tool.number == 45);
+  REQUIRE(op.points.size() == 5);
+  CHECK(op.points[0].line == 4);  // the FROM
+  CHECK(op.points[0].motion == Motion::Rapid);
+  // A FROM after a tool's moves still ends nothing: it is a move of that operation.
+  const Toolpath two = parse_cl(
+      "LOADTL/1\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/10,0,5\nFROM/0,0,50\nLOADTL/2\nGOTO/5,5,5\n",
+      "two.cls");
+  REQUIRE(two.operations.size() == 2);
+  CHECK(two.operations[0].points.size() == 3);
+}

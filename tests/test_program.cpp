@@ -4,6 +4,7 @@
 // then down, the rotary axes home at the end; in every dialect, on every real CL file, and through
 // rs274.
 #include <catch2/catch.hpp>
+#include <set>
 #include <cmath>
 #include <iomanip>
 #include <map>
@@ -755,6 +756,17 @@ TEST_CASE(
         index_moves += r.gcode.index_moves;
         linearised += r.gcode.linearised_blocks;
         joint_safe += r.gcode.joint_safe_rapids.size();
+        // Each run of joint-safe rapids follows a comment saying what they are (a machinist's
+        // rapid override does not govern them).
+        const std::vector<std::string> lines = lines_of(r.gcode.text);
+        const std::set<int> safe(r.gcode.joint_safe_rapids.begin(), r.gcode.joint_safe_rapids.end());
+        for (int at : r.gcode.joint_safe_rapids) {
+          int j = at - 1;  // 1-based line before it
+          while (safe.count(j)) --j;
+          REQUIRE(j >= 1);
+          CHECK_THAT(lines[static_cast<std::size_t>(j - 1)],
+                     Catch::Contains("joint-safe rapid: a feed block at the joints' rate"));
+        }
       }
     }
   }

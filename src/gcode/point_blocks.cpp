@@ -289,6 +289,13 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
   // measured at the end of a pass), so a dwell G4 P0 (the controller runs its queue to a
   // stop) stands between such a rapid and a feed block.
   if (last_feed_block_) line("G4 P0", BlockKind::Dwell);
+  // Said where it happens: a machinist's rapid override does not govern a G1 (a machinist's
+  // review of a LinuxCNC program found the F1176.99 blocks unexplained).
+  if (!last_joint_safe_) {
+    raw(dialect_.comment("joint-safe rapid: a feed block at the joints' rate, which the rapid "
+                         "override does not govern"),
+        BlockKind::JointSafeRapid);
+  }
   emitted_[i] = motion(block, BlockKind::JointSafeRapid);
   last_feed_block_ = false;
   last_joint_safe_ = true;

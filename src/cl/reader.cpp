@@ -66,7 +66,45 @@ Toolpath Reader::run(const std::string& input) {
   for (std::size_t k = 0; k < tp_.operations.size(); ++k) {
     if (tp_.operations[k].name.empty()) tp_.operations[k].name = std::to_string(k + 1);
   }
+  if (!options_.units) {
+    for (const Operationd& op : tp_.operations) check_feed_per_revolution(op);
+  }
   return std::move(tp_);
+}
+
+void Reader::check_feed_per_revolution(const Operationd& op) const {
+  // A milling feed per revolution lies within [0.002, 2.5] mm (finishing to face milling).
+  // Outside it, where 25.4 times more or less lies inside, the file's numbers are in the other
+  // unit than it says: a Creo file saying UNITS / INCHES over millimetre numbers posted 1193.66
+  // IPM at 7958 rpm (3.8 mm a revolution, moves of 8.9 m); a Fusion inch file's FEDRAT/35,MMPM
+  // at 30000 rpm is 0.0012 mm (35 in/min: 0.030 mm).
+  if (!(op.spindle_rpm > 0.0)) return;
+  std::vector<std::pair<double, int>> feeds;
+  for (const CLPointd& p : op.points) {
+    if (p.motion == Motion::Feed && p.feed_mm_per_min > 0.0) {
+      feeds.push_back({p.feed_mm_per_min, p.line});
+    }
+  }
+  if (feeds.empty()) return;
+  std::nth_element(feeds.begin(), feeds.begin() + static_cast<std::ptrdiff_t>(feeds.size() / 2),
+                   feeds.end());
+  const auto [feed, line] = feeds[feeds.size() / 2];
+  const auto plausible = [](double mm_per_rev) { return mm_per_rev >= 0.002 && mm_per_rev <= 2.5; };
+  const double per_rev = feed / op.spindle_rpm;
+  if (plausible(per_rev)) return;
+  for (const double k : {1.0 / kMmPerInch, kMmPerInch}) {
+    if (!plausible(per_rev * k)) continue;
+    std::ostringstream os;
+    os << "operation " << op.name << ": its feed, " << std::lround(feed) << " mm/min at "
+       << std::lround(op.spindle_rpm) << " rpm, is ";
+    os.precision(4);
+    os << per_rev << " mm a revolution, no milling feed; read as "
+       << (k < 1.0 ? "millimetres" : "inches") << " it would be " << per_rev * k
+       << " mm: the file's numbers look like " << (k < 1.0 ? "millimetres" : "inches")
+       << " though it reads as " << to_string(tp_.units) << "; --units "
+       << (k < 1.0 ? "mm" : "in") << " reads the whole file so, feed words too";
+    fail(line, os.str());
+  }
 }
 
 void Reader::fail(int line, const std::string& what) const {
@@ -138,22 +176,29 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
       declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
   tp_.units = options_.units ? *options_.units : from_file;
   const char* name = to_string(tp_.units);
+  // --units reads the whole file in its unit, the feed words' too (a Creo file saying UNITS /
+  // INCHES over millimetre numbers, read with --units mm, kept its 1193.66 IPM as 30319 mm/min).
+  const int other_feed_line = tp_.units == LengthUnit::Inch ? mm_feed_line : inch_feed_line;
   if (options_.units && declared && *declared != *options_.units) {
     notice(declared_line, std::string("--units ") + name + " read the file in " + name +
-                              " though it says " + to_string(*declared) + " here");
-  } else if (options_.units && !declared && inch_feed_line && *options_.units != LengthUnit::Inch) {
-    notice(inch_feed_line, std::string("--units ") + name + " read the file in " + name +
-                               " though its feeds are in inches (IPM/IPR) from here");
-  }
-  if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
+                              " though it says " + to_string(*declared) + " here" +
+                              (other_feed_line ? ", its feed words too" : ""));
+  } else if (options_.units && other_feed_line) {
+    notice(other_feed_line, std::string("--units ") + name + " read the file in " + name +
+                                ", its feed words too, though they say " +
+                                (tp_.units == LengthUnit::Inch ? "millimetres (MMPM/MMPR)"
+                                                               : "inches (IPM/IPR)") +
+                                " from here");
+  } else if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
     notice(inch_feed_line,
            "a feed in inches (IPM/IPR) in a file read in millimetres: the "
-           "feed is taken as its word says, the coordinates in mm");
-  }
-  if (tp_.units == LengthUnit::Inch && mm_feed_line) {
+           "feed is taken as its word says, the coordinates in mm (--units mm reads the "
+           "feeds in mm too)");
+  } else if (tp_.units == LengthUnit::Inch && mm_feed_line) {
     notice(mm_feed_line,
            "a feed in millimetres (MMPM/MMPR) in a file read in inches: the feed "
-           "is taken as its word says, the coordinates in inches");
+           "is taken as its word says, the coordinates in inches (--units in reads the feeds "
+           "in inches too)");
   }
 }
 

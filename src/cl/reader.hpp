@@ -153,6 +153,9 @@ class Reader {
   /// to the rapid plane, feed to depth in pecks (back to the rapid plane between them), out.
   void drill_hole(const Vec3d& top, int record, int line);
   void skipped(const std::string& major) { ++tp_.skipped_records[major]; }
+  /// Refuses an operation whose median feed per revolution is no milling feed where the other
+  /// unit's reading is one (a file in the other unit than it says).
+  void check_feed_per_revolution(const Operationd& op) const;
   /// Counts `n` points an arc, spline or drilling hole (at `line`) expands to against the
   /// file's budget of 1e6.
   void count_curve_points(std::size_t n, const std::string& what, int line);

@@ -71,15 +71,15 @@ double Reader::feed_of(const std::vector<std::string>& args, std::size_t from,
       value = v;
       ++count;
     } else if (u == "MMPM") {
-      to_mm = 1.0;
+      to_mm = options_.units ? scale_ : 1.0;  // --units reads the feed words in its unit too
     } else if (u == "IPM") {
-      to_mm = kMmPerInch;
+      to_mm = options_.units ? scale_ : kMmPerInch;
     } else if (u == "PERMIN") {
       to_mm = scale_;
     } else if (u == "MMPR") {
-      to_mm = 1.0, per_rev = true;
+      to_mm = options_.units ? scale_ : 1.0, per_rev = true;
     } else if (u == "IPR") {
-      to_mm = kMmPerInch, per_rev = true;
+      to_mm = options_.units ? scale_ : kMmPerInch, per_rev = true;
     } else if (u == "PERREV") {
       to_mm = scale_, per_rev = true;
     } else {

@@ -439,6 +439,39 @@ TEST_CASE(
   CHECK_NOTHROW(parse_cl("UNITS/INCHES\n" + text.substr(0, text.find("UNITS")), "u.cls"));
 }
 
+TEST_CASE(
+    "cl units: numbers in the other unit than the file says are refused by their feed per "
+    "revolution, naming both readings -- --units reads the whole file in its unit, feed words too",
+    "[io][cl][hostile]") {
+  // Creo's layout: UNITS / INCHES over millimetre numbers (a D6 cutter, 1193.66 at 7958 rpm).
+  const std::string creo =
+      "UNITS / INCHES\nCUTTER / 6.000000\nSPINDL / RPM, 7958.000000, CLW\n"
+      "FEDRAT / 1193.660000, IPM\nGOTO / 0.0, 0.0, 5.0\nGOTO / 40.0, 0.0, 5.0\n"
+      "GOTO / 40.0, 30.0, 5.0\n";
+  CHECK(throws_with([&] { parse_cl(creo, "c.ncl"); },
+                    "its feed, 30319 mm/min at 7958 rpm, is 3.81 mm a revolution, no milling "
+                    "feed; read as millimetres it would be 0.15 mm"));
+  CHECK(throws_with([&] { parse_cl(creo, "c.ncl"); }, "--units mm reads the whole file so"));
+  ClReadOptions mm;
+  mm.units = LengthUnit::Millimetre;
+  const Toolpath read = parse_cl(creo, "c.ncl", mm);
+  CHECK(read.operations.at(0).points.at(1).feed_mm_per_min == Approx(1193.66));
+  CHECK(read.operations.at(0).points.at(1).tip_mm.x() == Approx(40.0));
+  // Fusion's: an inch file whose FEDRAT says MMPM over inches per minute, 30000 rpm.
+  const std::string fusion = "UNITS/INCHES\nSPINDL/RPM, 30000, CLW\nFEDRAT/35., MMPM\n"
+                             "GOTO/0,0,0.2\nGOTO/1,0,0.2\nGOTO/1,1,0.2\n";
+  CHECK(throws_with([&] { parse_cl(fusion, "f.apt"); },
+                    "read as inches it would be 0.02963 mm"));
+  ClReadOptions in;
+  in.units = LengthUnit::Inch;
+  CHECK(parse_cl(fusion, "f.apt", in).operations.at(0).points.at(1).feed_mm_per_min ==
+        Approx(35 * 25.4));
+  // A plausible feed in either reading is left as the file says.
+  CHECK_NOTHROW(parse_cl("UNITS/MM\nSPINDL/RPM, 8000\nFEDRAT/MMPM,800\nGOTO/0,0,5\n"
+                         "GOTO/50,0,5\n",
+                         "ok.cls"));
+}
+
 TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") {
   const Toolpath tp = parse_cl(
       "UNIT/MM\nFEDRAT/500,MMPM\nGOTO/0,0,50\nCYCLE/INIT\n"

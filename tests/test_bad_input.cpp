@@ -826,7 +826,8 @@ TEST_CASE(
                                  "/data/demo/sine.cls --method none -q --gcode " + name +
                                  " --report " + t.path("r.json"));
   CHECK(r.code == 2);
-  CHECK_THAT(r.err, Catch::Contains("--gcode " + name + ": cannot write there: File name too long"));
+  CHECK_THAT(r.err,
+             Catch::Contains("--gcode " + name + ": cannot write there: File name too long"));
   CHECK_FALSE(file_exists(t.path("r.json")));
   // The probe leaves nothing behind.
   std::size_t left = 0;
@@ -845,8 +846,9 @@ TEST_CASE(
   cl.precision(9);
   for (int i = 0; i <= 200; ++i) {
     const double c = taxopt::deg_to_rad(720.0 * i / 200.0), a = taxopt::deg_to_rad(30.0);
-    cl << "GOTO/" << 10 * std::cos(c) << "," << 10 * std::sin(c) << ",0," << std::sin(a) * std::sin(c)
-       << "," << -std::sin(a) * std::cos(c) << "," << std::cos(a) << "\n";
+    cl << "GOTO/" << 10 * std::cos(c) << "," << 10 * std::sin(c) << ",0,"
+       << std::sin(a) * std::sin(c) << "," << -std::sin(a) * std::cos(c) << "," << std::cos(a)
+       << "\n";
   }
   write_file(t.path("rot.cls"), cl.str());
   const std::string machine =

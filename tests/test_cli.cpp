@@ -876,9 +876,9 @@ TEST_CASE(
   write_file(t.path("a.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = 30\nmax_deg = 60\n[axes.C]\n"
              "continuous = true\n[gcode]\nend_pose = \"none\"\n");
-  const auto r = run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) +
-                            "/data/demo/sine.cls --machine " + t.path("a.toml") + " -q --gcode " +
-                            t.path("a.nc"));
+  const auto r =
+      run_taxopt("--in " + std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.cls --machine " +
+                 t.path("a.toml") + " -q --gcode " + t.path("a.nc"));
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("the input axis itself is out of the machine's reach: it "
                                     "needs A 5 or -5 deg, and A runs over [30, 60] deg"));

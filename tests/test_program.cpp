@@ -4,12 +4,12 @@
 // then down, the rotary axes home at the end; in every dialect, on every real CL file, and through
 // rs274.
 #include <catch2/catch.hpp>
-#include <set>
 #include <cmath>
 #include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -759,7 +759,8 @@ TEST_CASE(
         // Each run of joint-safe rapids follows a comment saying what they are (a machinist's
         // rapid override does not govern them).
         const std::vector<std::string> lines = lines_of(r.gcode.text);
-        const std::set<int> safe(r.gcode.joint_safe_rapids.begin(), r.gcode.joint_safe_rapids.end());
+        const std::set<int> safe(r.gcode.joint_safe_rapids.begin(),
+                                 r.gcode.joint_safe_rapids.end());
         for (int at : r.gcode.joint_safe_rapids) {
           int j = at - 1;  // 1-based line before it
           while (safe.count(j)) --j;

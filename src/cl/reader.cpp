@@ -101,8 +101,8 @@ void Reader::check_feed_per_revolution(const Operationd& op) const {
     os << per_rev << " mm a revolution, no milling feed; read as "
        << (k < 1.0 ? "millimetres" : "inches") << " it would be " << per_rev * k
        << " mm: the file's numbers look like " << (k < 1.0 ? "millimetres" : "inches")
-       << " though it reads as " << to_string(tp_.units) << "; --units "
-       << (k < 1.0 ? "mm" : "in") << " reads the whole file so, feed words too";
+       << " though it reads as " << to_string(tp_.units) << "; --units " << (k < 1.0 ? "mm" : "in")
+       << " reads the whole file so, feed words too";
     fail(line, os.str());
   }
 }
@@ -184,11 +184,11 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
                               " though it says " + to_string(*declared) + " here" +
                               (other_feed_line ? ", its feed words too" : ""));
   } else if (options_.units && other_feed_line) {
-    notice(other_feed_line, std::string("--units ") + name + " read the file in " + name +
-                                ", its feed words too, though they say " +
-                                (tp_.units == LengthUnit::Inch ? "millimetres (MMPM/MMPR)"
-                                                               : "inches (IPM/IPR)") +
-                                " from here");
+    notice(other_feed_line,
+           std::string("--units ") + name + " read the file in " + name +
+               ", its feed words too, though they say " +
+               (tp_.units == LengthUnit::Inch ? "millimetres (MMPM/MMPR)" : "inches (IPM/IPR)") +
+               " from here");
   } else if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
     notice(inch_feed_line,
            "a feed in inches (IPM/IPR) in a file read in millimetres: the "

@@ -368,12 +368,12 @@ void Reader::spindle(const std::vector<std::string>& args, int line) {
   spindle_cw_ = cw;
   // A feed per revolution is the spindle's: the feed per minute of the moves after this one.
   if (feed_per_rev_mm_ > 0.0) {
-    feed_mm_per_min_ =
-        rpm > 0.0 ? bounded_feed(feed_per_rev_mm_ * rpm, "SPINDL (the feed per revolution of "
-                                                         "line " +
-                                                             std::to_string(feed_line_) + ")",
-                                 line)
-                  : 0.0;
+    feed_mm_per_min_ = rpm > 0.0 ? bounded_feed(feed_per_rev_mm_ * rpm,
+                                                "SPINDL (the feed per revolution of "
+                                                "line " +
+                                                    std::to_string(feed_line_) + ")",
+                                                line)
+                                 : 0.0;
   }
   ProgramEvent e;
   e.kind = ProgramEvent::Kind::Spindle;

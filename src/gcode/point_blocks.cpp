@@ -126,9 +126,9 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
   for (int k = 1; k <= pieces; ++k) {
     const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
     Piece& pc = planned[static_cast<std::size_t>(k - 1)];
-    pc.to = k == pieces ? e_out
-                        : c + (hs + (he - hs) * frac) * n +
-                              r0 * (std::cos(th) * dir + std::sin(th) * side);
+    pc.to = k == pieces
+                ? e_out
+                : c + (hs + (he - hs) * frac) * n + r0 * (std::cos(th) * dir + std::sin(th) * side);
     pc.offset = (c - from) * scale_;
     const Vec3d to_r = rounded(pc.to * scale_) / scale_;
     const Vec3d centre_r = from + rounded(pc.offset) / scale_;

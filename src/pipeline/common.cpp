@@ -124,8 +124,7 @@ std::vector<double> segment_lengths_mm(const Operationd& op, double ball_radius_
 
 std::vector<double> contact_lengths_mm(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const IndexRange& pass,
-                                       bool facets) {
+                                       double ball_radius_mm, const IndexRange& pass, bool facets) {
   std::vector<double> len = segment_lengths_mm(op, ball_radius_mm, pass);
   const auto at = [&](std::size_t i) -> const Vec3d& {
     return facets ? contacts[i].cc_mm : contacts[i].surface_cc_mm;

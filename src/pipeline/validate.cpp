@@ -106,8 +106,8 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
     const TriangleMesh& m = given.part->mesh();
     std::ostringstream os;
     os << "part mesh: " << m.dropped_degenerate_faces
-       << " zero-area faces (slivers) dropped, the first at (" << m.first_degenerate_mm.x()
-       << ", " << m.first_degenerate_mm.y() << ", " << m.first_degenerate_mm.z()
+       << " zero-area faces (slivers) dropped, the first at (" << m.first_degenerate_mm.x() << ", "
+       << m.first_degenerate_mm.y() << ", " << m.first_degenerate_mm.z()
        << ") in the mesh file's coordinates: they cover no surface, so the part's shape is "
           "whole";
     add_finding(res, FindingCode::MeshSlivers, std::nullopt, 0, os.str());

@@ -74,7 +74,8 @@ void check_turns_in_cut(const Run& run, const OperationContext& o, const Written
     const double da = ax.a_w[i] - ax.a_w[i - 1], dc = ax.c_w[i] - ax.c_w[i - 1];
     if (std::max(std::abs(da), std::abs(dc)) <= 180.0) continue;
     const auto axis_at = [&](double s) {
-      return ac.forward(Posed{deg_to_rad(ax.a_w[i - 1] + s * da), deg_to_rad(ax.c_w[i - 1] + s * dc)});
+      return ac.forward(
+          Posed{deg_to_rad(ax.a_w[i - 1] + s * da), deg_to_rad(ax.c_w[i - 1] + s * dc)});
     };
     const Vec3d v0 = axis_at(0.0), v1 = axis_at(1.0);
     double off = 0.0;
@@ -411,9 +412,9 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
                                           o.metric_feed_mm_per_min, nullptr, true);
   r.paper_after_facets = summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_w, ax.c_w,
                                          o.metric_feed_mm_per_min, nullptr, true);
-  r.paper_gain_claimed = r.paper_after.max_accel_deg_s2 < r.paper_before.max_accel_deg_s2 &&
-                         r.paper_after_facets.max_accel_deg_s2 <
-                             r.paper_before_facets.max_accel_deg_s2;
+  r.paper_gain_claimed =
+      r.paper_after.max_accel_deg_s2 < r.paper_before.max_accel_deg_s2 &&
+      r.paper_after_facets.max_accel_deg_s2 < r.paper_before_facets.max_accel_deg_s2;
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   longer_cycle_finding(machine, o, r, res);

@@ -241,8 +241,9 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     };
     o["paper_metric"] = {{"before", paper_json(r.paper_before)},
                          {"after", paper_json(r.paper_after)},
-                         {"facets", {{"before", paper_json(r.paper_before_facets)},
-                                     {"after", paper_json(r.paper_after_facets)}}},
+                         {"facets",
+                          {{"before", paper_json(r.paper_before_facets)},
+                           {"after", paper_json(r.paper_after_facets)}}},
                          {"claimed", r.paper_gain_claimed},
                          {"what",
                           "eq. 16-18 over the designed surface's contact-point arc lengths "

@@ -107,12 +107,12 @@ TEST_CASE(
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const Vec3d centre = tips[i] + R * axes[i];
     if (centre.x() <= 16.0) {
-      worst_top = std::max(worst_top, rad_to_deg(angle_between(contacts[i].surface_normal,
-                                                                Vec3d(Vec3d::UnitZ()))));
+      worst_top = std::max(
+          worst_top, rad_to_deg(angle_between(contacts[i].surface_normal, Vec3d(Vec3d::UnitZ()))));
     } else {
       const Vec3d truth = (centre - Vec3d(16.0, centre.y(), -4.0)).normalized();
-      worst_fillet = std::max(worst_fillet,
-                              rad_to_deg(angle_between(contacts[i].surface_normal, truth)));
+      worst_fillet =
+          std::max(worst_fillet, rad_to_deg(angle_between(contacts[i].surface_normal, truth)));
     }
     CHECK(contacts[i].place == SurfacePlace::Smooth);
   }

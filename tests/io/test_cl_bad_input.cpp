@@ -101,13 +101,15 @@ TEST_CASE(
     FAIL("accepted");
   } catch (const InputError& e) {
     CHECK(e.line() == 6);
-    CHECK_THAT(e.message(), Catch::Contains("MOVARC: the file's arcs, splines and drilling cycles up to here "
-                                            "expand to") &&
-                                Catch::Contains("more than the 1e6"));
+    CHECK_THAT(e.message(),
+               Catch::Contains("MOVARC: the file's arcs, splines and drilling cycles up to here "
+                               "expand to") &&
+                   Catch::Contains("more than the 1e6"));
   }
   // Forty holes of 1e4 pecks each (3e4 points a hole) from 45 lines.
-  std::string holes = "UNIT/MM\nFEDRAT/500,MMPM\nRAPID\nGOTO/0,0,50\nCYCLE/INIT\n"
-                      "CYCLE/DEEP2,FEDTO,9.99,1STPECK,0.001,SUBPECK,0.001,MMPM,100.,RAPTO,3.\n";
+  std::string holes =
+      "UNIT/MM\nFEDRAT/500,MMPM\nRAPID\nGOTO/0,0,50\nCYCLE/INIT\n"
+      "CYCLE/DEEP2,FEDTO,9.99,1STPECK,0.001,SUBPECK,0.001,MMPM,100.,RAPTO,3.\n";
   for (int k = 0; k < 40; ++k) holes += "GOTO/" + std::to_string(10 * k) + ",0,0\n";
   holes += "CYCLE/OFF\n";
   try {
@@ -117,7 +119,8 @@ TEST_CASE(
     CHECK_THAT(e.message(), Catch::Contains("CYCLE: the file's arcs, splines and drilling cycles"));
   }
   // One such arc of 40 turns at r 10 mm is a helix a program may hold (1,800 chords a turn).
-  CHECK_NOTHROW(parse_cl("FEDRAT/MMPM,500\nRAPID\nGOTO/10,0,0\n"
-                         "MOVARC/0,0,0,0,0,1,10,ANGLE,14400\nGOTO/10,0,0\n",
-                         "helix.cls"));
+  CHECK_NOTHROW(
+      parse_cl("FEDRAT/MMPM,500\nRAPID\nGOTO/10,0,0\n"
+               "MOVARC/0,0,0,0,0,1,10,ANGLE,14400\nGOTO/10,0,0\n",
+               "helix.cls"));
 }

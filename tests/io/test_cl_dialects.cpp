@@ -84,9 +84,9 @@ TEST_CASE(
   const std::string arc =
       "GOTO/20,0,5\nGOTO/20,0,0\nCIRCLE/10,0,0,0,0,1,10\nGOTO/10,10,0\nGOTO/10,10,5\n";
   const double ninety = 10.0 + 0.5 * M_PI * 10.0;
-  for (const char* header : {"PPRINT/POST FOR MAKINO D500\n", "$$ Makino FFCAM\n",
-                             "PARTNO/CATIA and CREO part\n",
-                             "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\n"}) {
+  for (const char* header :
+       {"PPRINT/POST FOR MAKINO D500\n", "$$ Makino FFCAM\n", "PARTNO/CATIA and CREO part\n",
+        "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\n"}) {
     INFO(header);
     const Toolpath tp = parse_cl(std::string(header) + arc, "g.apt");
     CHECK(tp.reading.dialect == ClDialect::Generic);
@@ -426,15 +426,15 @@ TEST_CASE(
     "cl units: a file's first UNITS after its first motion is refused (the moves before it were "
     "read in its units without a word) unless --units says them",
     "[io][cl][hostile]") {
-  const std::string text = "FEDRAT/MMPM,500\nRAPID\nGOTO/0,0,5\nGOTO/50,0,5\nUNITS/INCHES\n"
-                           "GOTO/60,0,5\n";
+  const std::string text =
+      "FEDRAT/MMPM,500\nRAPID\nGOTO/0,0,5\nGOTO/50,0,5\nUNITS/INCHES\n"
+      "GOTO/60,0,5\n";
   CHECK(throws_with([&] { parse_cl(text, "u.cls"); },
                     "u.cls:5: UNITS/INCHES comes after the first motion (line 3): whether the "
                     "moves before it are in inches too is not known; give --units in|mm"));
   ClReadOptions o;
   o.units = LengthUnit::Inch;
-  CHECK(parse_cl(text, "u.cls", o).operations.at(0).points.at(1).tip_mm.x() ==
-        Approx(50 * 25.4));
+  CHECK(parse_cl(text, "u.cls", o).operations.at(0).points.at(1).tip_mm.x() == Approx(50 * 25.4));
   // Before the motion it is the file's units, as always.
   CHECK_NOTHROW(parse_cl("UNITS/INCHES\n" + text.substr(0, text.find("UNITS")), "u.cls"));
 }
@@ -458,18 +458,19 @@ TEST_CASE(
   CHECK(read.operations.at(0).points.at(1).feed_mm_per_min == Approx(1193.66));
   CHECK(read.operations.at(0).points.at(1).tip_mm.x() == Approx(40.0));
   // Fusion's: an inch file whose FEDRAT says MMPM over inches per minute, 30000 rpm.
-  const std::string fusion = "UNITS/INCHES\nSPINDL/RPM, 30000, CLW\nFEDRAT/35., MMPM\n"
-                             "GOTO/0,0,0.2\nGOTO/1,0,0.2\nGOTO/1,1,0.2\n";
-  CHECK(throws_with([&] { parse_cl(fusion, "f.apt"); },
-                    "read as inches it would be 0.02963 mm"));
+  const std::string fusion =
+      "UNITS/INCHES\nSPINDL/RPM, 30000, CLW\nFEDRAT/35., MMPM\n"
+      "GOTO/0,0,0.2\nGOTO/1,0,0.2\nGOTO/1,1,0.2\n";
+  CHECK(throws_with([&] { parse_cl(fusion, "f.apt"); }, "read as inches it would be 0.02963 mm"));
   ClReadOptions in;
   in.units = LengthUnit::Inch;
   CHECK(parse_cl(fusion, "f.apt", in).operations.at(0).points.at(1).feed_mm_per_min ==
         Approx(35 * 25.4));
   // A plausible feed in either reading is left as the file says.
-  CHECK_NOTHROW(parse_cl("UNITS/MM\nSPINDL/RPM, 8000\nFEDRAT/MMPM,800\nGOTO/0,0,5\n"
-                         "GOTO/50,0,5\n",
-                         "ok.cls"));
+  CHECK_NOTHROW(
+      parse_cl("UNITS/MM\nSPINDL/RPM, 8000\nFEDRAT/MMPM,800\nGOTO/0,0,5\n"
+               "GOTO/50,0,5\n",
+               "ok.cls"));
 }
 
 TEST_CASE("cl cycles: a drilling cycle's holes become their moves", "[io][cl]") {

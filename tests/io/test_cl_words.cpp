@@ -238,9 +238,8 @@ TEST_CASE(
        {std::pair<const char*, const char*>{"GOTO/0.112,0,0\nGOTO/0,0,0\n", "GOTO/5,20,0\n"},
         {"GOTO/10,0,0\nGOTO/0,0,0\n", "GOTO/5,-10,0\n"}}) {
     INFO(before << after);
-    const Toolpath cusp = parse_cl(std::string(before) + "MOVARC/0,5,0,0,0,1,5,ANGLE,90\nGOTO/5,5,0\n" +
-                                       after,
-                                   "cusp.apt");
+    const Toolpath cusp = parse_cl(
+        std::string(before) + "MOVARC/0,5,0,0,0,1,5,ANGLE,90\nGOTO/5,5,0\n" + after, "cusp.apt");
     const auto& q = cusp.operations.at(0).points;
     double arc = 0.0;
     for (std::size_t i = 2; i + 1 < q.size(); ++i) arc += (q[i].tip_mm - q[i - 1].tip_mm).norm();

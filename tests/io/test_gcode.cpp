@@ -5,8 +5,8 @@
 #include <fstream>
 #include <iterator>
 #include <random>
-#include <sstream>
 #include <set>
+#include <sstream>
 
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
@@ -461,8 +461,8 @@ TEST_CASE(
     const double cx = x - r * std::sin(phi), cy = y + r * std::cos(phi);
     const double a1 = std::atan2(y - cy, x - cx) + deg_to_rad(th);
     const double ex = cx + r * std::cos(a1), ey = cy + r * std::sin(a1);
-    os << "MOVARC/" << cx << ", " << cy << ", 0.0, 0, 0, 1, " << r << ", ANGLE, " << th
-       << "\nGOTO/" << ex << ", " << ey << ", 0.0, 0, 0, 1\n";
+    os << "MOVARC/" << cx << ", " << cy << ", 0.0, 0, 0, 1, " << r << ", ANGLE, " << th << "\nGOTO/"
+       << ex << ", " << ey << ", 0.0, 0, 0, 1\n";
     x = ex - 0.02 * std::sin(a1);
     y = ey + 0.02 * std::cos(a1);
     os << "GOTO/" << x << ", " << y << ", 0.0, 0, 0, 1\n";
@@ -475,9 +475,9 @@ TEST_CASE(
   write_file(t.path("inch.apt"), os.str());
   for (const char* units : {"", " --units-out mm"}) {
     INFO("units:" << units);
-    const RunResult res = run_taxopt("--in " + t.path("inch.apt") +
-                                     " --method none -q --tool-number 1 --gcode " +
-                                     t.path("i.ngc") + units);
+    const RunResult res =
+        run_taxopt("--in " + t.path("inch.apt") + " --method none -q --tool-number 1 --gcode " +
+                   t.path("i.ngc") + units);
     CHECK(res.code == 0);
     CHECK_THAT(res.err, !Catch::Contains("differs from the radius"));
     const std::string nc = read_file(t.path("i.ngc"));

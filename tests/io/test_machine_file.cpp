@@ -318,8 +318,8 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   // G64 P50 overrode the program's G64 P0.01 Q0 unseen, a bare G64 bounds nothing); M72
   // restores only what M70 saved (rs274 aborts on a footer's M72 alone), M73 is a
   // subroutine's.
-  for (const char* block : {"header = [\"G64 P50\"]", "header = [\"G64\"]",
-                            "tcp_on = [\"G61\"]", "header = [\"G61.1\"]"}) {
+  for (const char* block : {"header = [\"G64 P50\"]", "header = [\"G64\"]", "tcp_on = [\"G61\"]",
+                            "header = [\"G61.1\"]"}) {
     INFO(block);
     expect_error(any + "dialect = \"linuxcnc\"\n" + block + "\n", 9,
                  "the path blending is gcode.blend_tolerance_mm's");

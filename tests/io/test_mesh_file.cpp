@@ -100,8 +100,8 @@ TEST_CASE(
   TriangleMesh m = read_mesh_file(demo + "sine.stl");
   const std::size_t faces = m.faces.size();
   const int a = m.faces[100][0], b = m.faces[100][1];
-  m.vertices.push_back(0.5 * (m.vertices[static_cast<std::size_t>(a)] +
-                              m.vertices[static_cast<std::size_t>(b)]));
+  m.vertices.push_back(
+      0.5 * (m.vertices[static_cast<std::size_t>(a)] + m.vertices[static_cast<std::size_t>(b)]));
   const int mid = static_cast<int>(m.vertices.size()) - 1;
   m.faces.push_back({a, mid, b});
   m.faces.push_back({a, a, b});

@@ -305,6 +305,11 @@ def analyse(path, args, summary):
         for i in range(first + w, last - w + 1):
             if tags[i + w] - tags[i - w] != 2 * w:
                 continue  # a window across lost samples
+            # Only the program's motion: line 0 is the controller before the program runs or
+            # after it ends (its homing, which `set home -1` starts a second before the run;
+            # under a loaded CI a joint "at 424/s" there, with no sample lost).
+            if rows[i - w][10] <= 0 or rows[i + w][10] <= 0:
+                continue
             v = (rows[i + w][j] - rows[i - w][j]) / (2 * w * period)
             a = (rows[i + w][j] - 2 * rows[i][j] + rows[i - w][j]) / ((w * period) ** 2)
             if abs(v) > vmax:

@@ -397,7 +397,8 @@ TEST_CASE(
     "[io][cl][hostile]") {
   const auto feeds = [](const std::string& text) {
     std::vector<double> out;
-    for (const CLPointd& p : parse_cl(text, "r.cls").operations.at(0).points) {
+    const Toolpath tp = parse_cl(text, "r.cls");  // alive while its points are walked
+    for (const CLPointd& p : tp.operations.at(0).points) {
       if (p.motion == Motion::Feed) out.push_back(p.feed_mm_per_min);
     }
     return out;

@@ -58,6 +58,28 @@ double width_across(const TriangleMesh& m, const std::array<int, 3>& f, int a, i
   return (d - d.dot(e) * e).norm();
 }
 
+/// An edge of a face as (low vertex, high vertex, face).
+struct HalfEdge {
+  int a, b, face;
+};
+
+/// Every face's edges, sorted so that the faces sharing an edge stand next to each other.
+std::vector<HalfEdge> sorted_half_edges(const TriangleMesh& m) {
+  std::vector<HalfEdge> edges;
+  edges.reserve(3 * m.faces.size());
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.faces[f][static_cast<std::size_t>(k)];
+      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
+      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
+  });
+  return edges;
+}
+
 /// A turn between two facets from this angle on is a designed edge, not a tessellated curve
 /// (the chordal error's and the smooth normals' one threshold).
 constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
@@ -150,30 +172,21 @@ SurfaceModel surface_model_of(const TriangleMesh& m) {
   }
   // Edges no tessellated curve runs over: not shared by exactly two faces, or turning by
   // kCreaseRad or more between them.
-  std::vector<std::array<int, 3>> edges;  // low, high, face
-  edges.reserve(3 * nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = m.faces[f][static_cast<std::size_t>(k)];
-      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
-    }
-  }
-  std::sort(edges.begin(), edges.end());
+  const std::vector<HalfEdge> edges = sorted_half_edges(m);
   s.feature_vertex.assign(nv, false);
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
-    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1]) ++j;
+    while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
     bool feature = j - i != 2;
     if (!feature) {
-      const Vec3d& n1 = fn[static_cast<std::size_t>(edges[i][2])];
-      const Vec3d& n2 = fn[static_cast<std::size_t>(edges[i + 1][2])];
+      const Vec3d& n1 = fn[static_cast<std::size_t>(edges[i].face)];
+      const Vec3d& n2 = fn[static_cast<std::size_t>(edges[i + 1].face)];
       feature = n1.isZero() || n2.isZero() || std::abs(n1.dot(n2)) < crease_cos;
     }
     if (feature) {
-      s.feature_edges.push_back({edges[i][0], edges[i][1]});
-      s.feature_vertex[static_cast<std::size_t>(edges[i][0])] = true;
-      s.feature_vertex[static_cast<std::size_t>(edges[i][1])] = true;
+      s.feature_edges.push_back({edges[i].a, edges[i].b});
+      s.feature_vertex[static_cast<std::size_t>(edges[i].a)] = true;
+      s.feature_vertex[static_cast<std::size_t>(edges[i].b)] = true;
     }
     i = j;
   }
@@ -196,6 +209,21 @@ bool barycentric(const TriangleMesh& m, const std::array<int, 3>& f, const Vec3d
 
 /// A barycentric weight at or below this: the point lies on the opposite edge.
 constexpr double kOnVertexWeight = 1e-7;
+
+/// The vertices of face f point p does not lie opposite to (weight above kOnVertexWeight):
+/// three inside the face, two on an edge, one (or none: then f's first) at a vertex. False
+/// for a degenerate face.
+bool vertices_at(const TriangleMesh& m, const std::array<int, 3>& f, const Vec3d& p,
+                 std::vector<int>& on) {
+  double w[3];
+  if (!barycentric(m, f, p, w)) return false;
+  on.clear();
+  for (int k = 0; k < 3; ++k) {
+    if (w[k] > kOnVertexWeight) on.push_back(f[static_cast<std::size_t>(k)]);
+  }
+  if (on.empty()) on.push_back(f[0]);
+  return true;
+}
 /// The exact normal of a point on a designed edge turns more than this off its face's: the
 /// ball touches the edge, not the face beside it (1e-4 rad: far above the closest point's
 /// rounding, far below any tessellation's turn).
@@ -217,22 +245,7 @@ namespace {
 
 /// The chordal error estimate of Part::chordal_error_mm.
 double chordal_error_of(const TriangleMesh& m) {
-  // Edges as (low vertex, high vertex, face), sorted so that a shared edge's faces meet.
-  struct HalfEdge {
-    int a, b, face;
-  };
-  std::vector<HalfEdge> edges;
-  edges.reserve(3 * m.faces.size());
-  for (std::size_t f = 0; f < m.faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = m.faces[f][static_cast<std::size_t>(k)];
-      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
-    }
-  }
-  std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
-  });
+  const std::vector<HalfEdge> edges = sorted_half_edges(m);
   // Every edge two facets share, with its turn below 30 deg (sharper is a designed edge).
   struct Turn {
     int a, b, f1, f2;
@@ -344,13 +357,8 @@ Part::MeshCurvature Part::mesh_curvature(const Closest& c, const Vec3d& normal) 
   MeshCurvature out;
   out.curvature.d1 = normal.unitOrthogonal();
   out.curvature.d2 = normal.cross(out.curvature.d1);
-  // Barycentric coordinates of the point in its face: which vertices it lies on.
-  double w[3];
-  if (!barycentric(m, f, c.point, w)) return out;
-  std::vector<int> on;  // the face's vertices whose weight is not ~0
-  for (int k = 0; k < 3; ++k) {
-    if (w[k] > kOnVertexWeight) on.push_back(f[static_cast<std::size_t>(k)]);
-  }
+  std::vector<int> on;  // the face's vertices the point lies at or between
+  if (!vertices_at(m, f, c.point, on)) return out;
   if (on.size() == 3) return out;  // inside the facet: flat
   // The curvature across edge (a, b) of this mesh, from the two faces on it.
   const auto across = [&](int a, int b, double& k, Vec3d& dir) {
@@ -388,7 +396,7 @@ Part::MeshCurvature Part::mesh_curvature(const Closest& c, const Vec3d& normal) 
     edges.push_back({on[0], on[1]});
   } else {
     out.feature = Feature::Vertex;
-    const int v = on.empty() ? f[0] : on[0];
+    const int v = on[0];
     for (int g : faces_within(m.vertices[static_cast<std::size_t>(v)], 1e-9)) {
       for (int u : m.faces[static_cast<std::size_t>(g)]) {
         if (u != v) edges.push_back({std::min(u, v), std::max(u, v)});
@@ -428,14 +436,10 @@ Part::SurfaceNormal Part::surface_normal(const Closest& c, const Vec3d& exact_no
   const std::array<int, 3>& f = m.faces[face];
   SurfaceNormal out;
   out.normal = exact_normal;
-  double w[3];
-  if (!barycentric(m, f, c.point, w)) {
+  std::vector<int> on;
+  if (!vertices_at(m, f, c.point, on)) {
     out.on_feature = true;  // a degenerate face: no surface of its own
     return out;
-  }
-  std::vector<int> on;
-  for (int k = 0; k < 3; ++k) {
-    if (w[k] > kOnVertexWeight) on.push_back(f[static_cast<std::size_t>(k)]);
   }
   out.where = on.size() == 3 ? Feature::Facet : (on.size() == 2 ? Feature::Edge : Feature::Vertex);
   bool on_feature_edge = false;
@@ -443,7 +447,7 @@ Part::SurfaceNormal Part::surface_normal(const Closest& c, const Vec3d& exact_no
     const std::pair<int, int> e{std::min(on[0], on[1]), std::max(on[0], on[1])};
     on_feature_edge = std::binary_search(sm.feature_edges.begin(), sm.feature_edges.end(), e);
   } else if (out.where == Feature::Vertex) {
-    const int v = on.empty() ? f[0] : on[0];
+    const int v = on[0];
     on_feature_edge = sm.feature_vertex[static_cast<std::size_t>(v)];
   }
   Vec3d own = face_normal(m, f);

@@ -34,6 +34,16 @@ struct Refused {
 };
 [[noreturn]] void refuse(const std::string& what, int code = 2) { throw Refused{what, code}; }
 
+/// The input option (--in, --part, --machine) whose file `path` is, else nullopt.
+std::optional<std::pair<std::string, std::string>> input_at(const Args& a,
+                                                            const std::string& path) {
+  for (const auto& [opt, in_path] : std::map<std::string, std::string>{
+           {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
+    if (!in_path.empty() && same_file(path, in_path)) return std::make_pair(opt, in_path);
+  }
+  return std::nullopt;
+}
+
 /// The outputs: given, none of them an input or another output, none in the plots folder, each
 /// writable, checked before any work (a run of minutes must not end in "cannot write").
 void check_outputs(const Args& a) {
@@ -49,12 +59,9 @@ void check_outputs(const Args& a) {
                                                                     {"--out-cls", a.out_cls}}) {
     if (path.empty()) continue;
     // No output may replace an input (the CL file, the part, the machine file).
-    for (const auto& [in_opt, in_path] : std::map<std::string, std::string>{
-             {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
-      if (!in_path.empty() && same_file(path, in_path)) {
-        refuse(opt + " " + path + " is the " + (in_opt == "--in" ? std::string("input") : in_opt) +
-               " file");
-      }
+    if (const auto in = input_at(a, path)) {
+      refuse(opt + " " + path + " is the " +
+             (in->first == "--in" ? std::string("input") : in->first) + " file");
     }
     // Nor may it lie in the plots folder (whose SVGs are written after it) or be that folder.
     if (!a.plots.empty()) {
@@ -272,12 +279,9 @@ void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpat
     for (const auto& [name, svg] : job_plots(result)) {
       // A plot's name may be an input's that lies in the folder: never written over it.
       const std::string path = a.plots + "/" + name;
-      for (const auto& [in_opt, in_path] : std::map<std::string, std::string>{
-               {"--in", a.in}, {"--part", a.part}, {"--machine", a.machine}}) {
-        if (!in_path.empty() && same_file(path, in_path)) {
-          refuse("--plots " + a.plots + ": its plot " + name + " would replace the " + in_opt +
-                 " file " + in_path + "; give the plots a folder of their own");
-        }
+      if (const auto in = input_at(a, path)) {
+        refuse("--plots " + a.plots + ": its plot " + name + " would replace the " + in->first +
+               " file " + in->second + "; give the plots a folder of their own");
       }
       tx.stage(path, svg);
     }

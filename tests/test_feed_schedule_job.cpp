@@ -443,3 +443,80 @@ TEST_CASE(
   }
   CHECK(binding > 0.99);  // the limits bind somewhere: the check is not empty
 }
+
+TEST_CASE(
+    "feed schedule: blocks a few rounding steps long at one programmed feed keep one F word, "
+    "and none runs faster than the CL file programmed it",
+    "[feed][rs274][integration]") {
+  REQUIRE(have_rs274());
+  // 600 blocks of 0.0008 in (8 rounding steps of a 4-decimal inch word) at 30 in/min, the tool
+  // tilting slowly: the rounded lengths swing +-10 % from block to block. LinuxCNC's sample
+  // machine with ten times its rates, so that no limit holds the feed down.
+  std::ostringstream cl;
+  cl << "UNITS/INCHES\nLOADTL/2\nCUTTER/0.25,0.125\nSPINDL/12000,RPM,CLW\nFEDRAT/30,IPM\n";
+  cl << "RAPID\nGOTO/0,0,1,0,0,1\n";
+  const int n = 600;
+  std::vector<Vec3d> tips;
+  cl.precision(10);
+  for (int i = 0; i < n; ++i) {
+    const double tilt = 10.0 * std::sin(i / 100.0) * std::acos(-1.0) / 180.0;
+    tips.emplace_back(0.0008 * i, 0.0003 * std::sin(i / 7.0), 0.0);
+    cl << "GOTO/" << tips.back().x() << "," << tips.back().y() << ",0," << std::sin(tilt) << ",0,"
+       << std::cos(tilt) << "\n";
+  }
+  cl << "FINI\n";
+  std::string machine;
+  {
+    std::istringstream in(
+        read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml"));
+    std::string line;
+    while (std::getline(in, line)) {
+      for (const char* key : {"max_velocity_mm_s = ", "max_accel_mm_s2 = ", "max_velocity_deg_s = ",
+                              "max_accel_deg_s2 = "}) {
+        if (line.rfind(key, 0) == 0) {
+          line = key + std::to_string(10.0 * std::stod(line.substr(std::string(key).size())));
+        }
+      }
+      machine += line + "\n";
+    }
+  }
+  TempDir t;
+  write_file(t.path("tiny.cls"), cl.str());
+  write_file(t.path("m.toml"), machine);
+  const RunResult r = run_taxopt("--in " + t.path("tiny.cls") + " --machine " + t.path("m.toml") +
+                                 " --feed-schedule --method none -q --gcode " + t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  std::vector<CanonMove> points, all;
+  Rs274Options sample;  // the configuration the machine file was made from (its M428-M430)
+  sample.ini = std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini";
+  sample.stub_switchkins = true;
+  const RunResult rs = run_rs274(t.path("o.ngc"), points, sample, &all);
+  INFO(rs.err);
+  REQUIRE(rs.code == 0);
+  // The feed moves from the second CL point on, in order (tcp mode: the words are the tip).
+  std::vector<const CanonMove*> feeds;
+  for (const CanonMove& m : all) {
+    if (m.feed && !m.arc) feeds.push_back(&m);
+  }
+  REQUIRE(feeds.size() >= static_cast<std::size_t>(n - 1));
+  feeds.erase(feeds.begin(), feeds.end() - (n - 1));
+  int changes = 0;
+  for (std::size_t k = 0; k < feeds.size(); ++k) {
+    const CanonMove& m = *feeds[k];
+    const Vec3d at(m.x, m.y, m.z);
+    INFO("feed block " << k);
+    REQUIRE((at - tips[k + 1]).norm() < 1e-4);  // the point it reaches
+    if (k == 0) continue;
+    const CanonMove& was = *feeds[k - 1];
+    if (m.feed_rate != was.feed_rate) ++changes;
+    // Never faster than programmed: the rounded block at its F takes at least the CL block's
+    // time at 30 in/min (rs274 prints F with 4 decimals: within that).
+    const double written_min = (at - Vec3d(was.x, was.y, was.z)).norm() / m.feed_rate;
+    const double programmed_min = (tips[k + 1] - tips[k]).norm() / 30.0;
+    CHECK(written_min >= programmed_min * (1.0 - 1e-4));
+  }
+  // Before: a new F on 598 of 599 blocks (F29.96 ... F30.20); one feed held within the
+  // rounding's own uncertainty instead.
+  CHECK(changes < n / 20);
+}

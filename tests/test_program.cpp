@@ -126,6 +126,14 @@ TEST_CASE(
       const std::string text = read_file(dir.path("o.nc"));
       // No part: the program says so before its first block.
       CHECK(text.substr(0, 1500).find("NOT CHECKED: no part") != std::string::npos);
+      // SOLIDWORKS CAM's INSERT prose: a comment of the dialect, in its operation.
+      if (f.rfind("amorim-", 0) == 0) {
+        const std::string d = dialect;
+        const bool semicolon = d == "siemens" || d == "heidenhain";
+        const std::size_t at = text.find(semicolon ? "; Stock Size X" : "(Stock Size X");
+        CHECK(at != std::string::npos);
+        CHECK(at > text.find("operation "));  // in its operation, not the header
+      }
       const std::vector<GcodeMove> moves =
           read_gcode_moves(text, "o.nc", dialect_of(dialect), {}, 'A');
       const Breaches b = breaches_of(moves, 1.0);

@@ -114,9 +114,10 @@ const std::vector<ClWord>& cl_words() {
        "refused for the other dialects",
        "generic APT", kApt, true},
       {"INSERT", M::Program,
-       "a bracketed operator's note (INSERT/[HOLDER=...]) dropped with a note; other text for "
-       "the controller refused: taxopt does not pass unchecked text into a program "
-       "(--skip-record INSERT drops it)",
+       "a bracketed operator's note (INSERT/[HOLDER=...]) dropped with a note; prose "
+       "(INSERT/Stock Size X135. Y135. Z30.) written as a comment where it stands; address "
+       "words only (INSERT/M00) are code for the controller: refused, taxopt does not pass "
+       "uninterpreted code into a program (--skip-record INSERT drops it)",
        "SOLIDWORKS CAM, generic APT", kApt, true},
       // Structure.
       {"TOOL PATH", M::Structure, "opens an operation (its name and tool)", "NX", kNx, false},

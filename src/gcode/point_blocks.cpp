@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -342,7 +343,9 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
   } else if (g_.mode == GcodeMode::Machine) {
     f = linearised_feed(i, xyz, fb);
   } else if (g_.feed_mode == FeedMode::InverseTime || scheduled) {
-    f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled);
+    // Hold F only where no limit slowed the block (the schedule keeps its programmed time).
+    const bool at_programmed = time_min <= programmed_min * (1.0 + 1e-12);
+    f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled, at_programmed);
   } else {
     f = tcp_feed(i, programmed_min);
   }
@@ -365,7 +368,8 @@ std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const 
 }
 
 std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,
-                                      const Posed& to_pose, double minutes, bool scheduled) const {
+                                      const Posed& to_pose, double minutes, bool scheduled,
+                                      bool may_hold) {
   const auto fmt_feed = [&](double f) {
     return scheduled ? precise_feed(f, fd_, max_fd_) : fmt(f, fd_);
   };
@@ -376,7 +380,30 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
     const double rot = std::hypot(
         round_to(rad_to_deg(to_pose.a_rad), d_) - round_to(rad_to_deg(from_pose.a_rad), d_),
         round_to(rad_to_deg(to_pose.c_rad), d_) - round_to(rad_to_deg(from_pose.c_rad), d_));
-    return fmt_feed((len > 0.0 ? len : rot) / minutes);
+    const double exact = (len > 0.0 ? len : rot) / minutes;
+    // The feed the schedule asks for, before rounding: on blocks a few rounding steps long
+    // the rounded length swings `exact` from block to block at one scheduled feed (a Fusion
+    // inch file: F2.7528 ... F2.8724, +4.2 %, on blocks under 0.001 in). Where the block runs
+    // at its programmed feed (no limit slowed it) and the scheduled feed is the previous
+    // block's, the F in force is held if it is not faster than this block's `exact` and slower
+    // by no more than the block's rounding uncertainty (both ends' words, sqrt(3) 10^-d, of its
+    // length; at most 5 %): never faster than scheduled, and the controller keeps one feed.
+    // Where the schedule ramps or a limit holds the feed down, F follows it block by block:
+    // held over a ramp, the jump after it broke a B axis's acceleration (2027 deg/s^2), and on
+    // arcs at an acceleration limit a held block put X at 300.03 of its 300 mm/s^2.
+    const double joint_len = (to - from).norm() * scale_;
+    const double joint_rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
+                                        rad_to_deg(to_pose.c_rad - from_pose.c_rad));
+    const double asked = (joint_len > 1e-12 ? joint_len : joint_rot) / minutes;
+    const bool steady = std::abs(asked - last_asked_) <= 1e-9 * asked;
+    last_asked_ = asked;
+    if (may_hold && steady && !last_feed_.empty() && exact > 0.0) {
+      const double held = std::strtod(last_feed_.c_str(), nullptr);
+      const double slack = std::min(
+          0.05, std::sqrt(3.0) * std::pow(10.0, -d_) / std::max(len > 0.0 ? len : rot, 1e-300));
+      if (held <= exact && held >= exact * (1.0 - slack)) return last_feed_;
+    }
+    return fmt_feed(exact);
   }
   // Joint-space XYZ moves differ from the tip's: F makes the block take the time of the
   // tip at the programmed feed.

@@ -232,6 +232,7 @@ void ProgramWriter::event(const ProgramEvent& e) {
   switch (e.kind) {
     case ProgramEvent::Kind::Stop: line("M0", BlockKind::Event); break;
     case ProgramEvent::Kind::OptionalStop: line("M1", BlockKind::Event); break;
+    case ProgramEvent::Kind::Comment: raw(dialect_.comment(e.text), BlockKind::Event); break;
     case ProgramEvent::Kind::Dwell:
       if (g_.dialect == GcodeDialect::LinuxCNC) {
         line("G4 P" + fmt(e.dwell_s, 3), BlockKind::Event);  // LinuxCNC: P in seconds

@@ -151,7 +151,8 @@ class ProgramWriter {
   /// F of a joint-space block (machine mode, inverse time, a schedule) from `from` to `to`
   /// that takes `minutes`.
   std::string joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,
-                         const Posed& to_pose, double minutes, bool scheduled) const;
+                         const Posed& to_pose, double minutes, bool scheduled,
+                         bool may_hold = false);
   /// Machine mode: where the joints moving linearly would take the tip off the straight line
   /// by more than the tolerance, blocks in between keep it on. Writes them and returns the F
   /// of the last (the point's own block).
@@ -171,6 +172,8 @@ class ProgramWriter {
   int line_no_ = 0;
   int current_tool_ = -1;
   std::string last_feed_;
+  /// The scheduled feed of the last joint-feed block before rounding (joint_feed).
+  double last_asked_ = -1.0;
   std::string running_spindle_, running_coolant_;
   // --- the operation being written ---------------------------------------------------------
   const PostedOperation* op_ = nullptr;

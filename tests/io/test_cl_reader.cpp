@@ -417,8 +417,8 @@ TEST_CASE("cl reader: tool records beyond the tool options' bounds are refused n
 }
 
 TEST_CASE(
-    "cl reader: SOLIDWORKS CAM's bracketed INSERT note is dropped with a note, other INSERT "
-    "text is refused as unchecked",
+    "cl reader: SOLIDWORKS CAM's bracketed INSERT note is dropped with a note, its prose is "
+    "a comment where it stands and address words are refused as code",
     "[io][cl][words]") {
   const std::string body =
       "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
@@ -429,7 +429,30 @@ TEST_CASE(
   for (const std::string& w : tp.warnings)
     noted = noted || w.find("operator's note") != std::string::npos;
   CHECK(noted);
-  CHECK_THROWS_AS(parse_cl("INSERT/Stock Size X135. Y135. Z30.\n" + body, "s.apt"), InputError);
+  // Prose after the tool (as SOLIDWORKS CAM writes it: tests/data/real/amorim-*.apt line 11):
+  // an event before the operation's first point, its text kept.
+  const std::string tool = "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\n";
+  const Toolpath prose =
+      parse_cl(tool +
+                   "INSERT/Stock Size X135. Y135. Z30.\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n"
+                   "INSERT/(Check the clamps)\nGOTO/50,10,5\n",
+               "s.apt");
+  REQUIRE(prose.operations.size() == 1);
+  const auto& ev = prose.operations.front().events;
+  REQUIRE(ev.size() == 1);
+  CHECK(ev[0].kind == ProgramEvent::Kind::Comment);
+  CHECK(ev[0].text == "Stock Size X135. Y135. Z30.");
+  CHECK(ev[0].before_point == 0);
+  CHECK(ev[0].line == 2);
+  // Address words only are code the file means the controller to run: refused with the line;
+  // so are control characters and text beyond a comment block's length.
+  for (const std::string& bad :
+       std::vector<std::string>{"INSERT/M00", "INSERT/G54 G90", "INSERT/X135. Y135.", "INSERT/",
+                                "INSERT/Stock\x01Size", "INSERT/" + std::string(201, 'a')}) {
+    INFO(bad);
+    CHECK_THAT(taxopt::test::input_error_of([&] { parse_cl(tool + bad + "\n" + body, "s.apt"); }),
+               Catch::StartsWith("s.apt:2: "));
+  }
 }
 
 TEST_CASE(

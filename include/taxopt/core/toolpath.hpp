@@ -138,7 +138,8 @@ enum class ClCoolant { Off, Flood, Mist };
 /// stands, before the block of point `before_point` of its operation (after the last point
 /// when it equals the point count).
 struct ProgramEvent {
-  enum class Kind { Stop, OptionalStop, Dwell, Spindle, Coolant };
+  /// Comment: text for the operator (an INSERT record's prose), written as a comment.
+  enum class Kind { Stop, OptionalStop, Dwell, Spindle, Coolant, Comment };
   Kind kind = Kind::Stop;
   std::size_t before_point = 0;
   double dwell_s = 0.0;
@@ -148,6 +149,8 @@ struct ProgramEvent {
   ClCoolant coolant = ClCoolant::Off;
   /// 1-based line of the record in the CL file.
   int line = 0;
+  /// Comment: its text, printable ASCII.
+  std::string text;
 };
 
 /// One machining operation (an NX `TOOL PATH` block, or the moves of one tool).

@@ -28,7 +28,8 @@ table.summary th { background: #eef2f5; } table.summary td:first-child { text-al
         white-space: pre-wrap; font-size: 12px; }
 #legend-bar { height: 10px; width: 100%; border: 1px solid #0003; }
 .plot { width: 1200px; height: 210px; margin-bottom: 0.6em; }
-.plot-title { font-weight: 600; margin: 0.4em 0 0.1em; }
+.plot-title { font-weight: 600; margin: 0.4em 0 0.1em; min-height: 1.3em; }
+.plot-legend { font-weight: 400; margin-left: 1.5em; }
 #decimation { color: #9a5b00; }
 )CSS";
 
@@ -324,7 +325,14 @@ function plotsOf(k) {
   specs.forEach(spec => {
     const title = document.createElement('div');
     title.className = 'plot-title';
-    title.textContent = `${spec.title} — limits: ${spec.limits.length ? spec.what + ' ' + spec.limits.map(x => fmt(x, 2)).join(' / ') : (spec.what.startsWith('C is') ? spec.what : 'none given')}`;
+    const name = document.createElement('span');
+    name.textContent = `${spec.title} — limits: ${spec.limits.length ? spec.what + ' ' + spec.limits.map(x => fmt(x, 2)).join(' / ') : (spec.what.startsWith('C is') ? spec.what : 'none given')}`;
+    // The values under the pointer on the title's line: a legend that follows the pointer
+    // inside the plot lay over the title of the plot below it (the demo page did).
+    const legend = document.createElement('span');
+    legend.className = 'plot-legend';
+    title.appendChild(name);
+    title.appendChild(legend);
     const div = document.createElement('div');
     div.className = 'plot';
     host.appendChild(title);
@@ -332,7 +340,7 @@ function plotsOf(k) {
     const rows = o.arc_mm.map((x, r) => [x, spec.b[r], spec.a[r]]);
     const chart = new Dygraph(div, rows, {
       labels: ['arc mm', 'before', 'after'], colors: ['#9a9a9a', '#1f5fbf'], strokeWidth: 1.2,
-      connectSeparatedPoints: false, legend: 'follow', xlabel: 'arc length, mm',
+      connectSeparatedPoints: false, legend: 'always', labelsDiv: legend, xlabel: 'arc length, mm',
       underlayCallback: (ctx, area, g) => {
         bands.forEach(([x0, x1, p]) => {
           if (p % 2) return;
@@ -413,6 +421,15 @@ if (D.markers.length) {
   firstMarker = {text: info.textContent, selected_row: (selectPoint(m.op, m.i), charts.length ? charts[0].getSelection() : -1)};
 }
 const peak = (key) => D.operations.reduce((m, o) => o[key].reduce((x, v) => Math.max(x, v), m), 0);
+// Text of the plots (axis labels, ticks, legends) lying over a plot's title: counted.
+const overlaps = (() => {
+  const titles = [...document.querySelectorAll('#plots .plot-title')].map(t => t.getBoundingClientRect());
+  const texts = [...document.querySelectorAll('#plots .plot *')]
+      .filter(e => e.childElementCount === 0 && e.textContent.trim() !== '')
+      .map(e => e.getBoundingClientRect()).filter(r => r.width > 0 && r.height > 0);
+  const meet = (a, b) => a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+  return titles.reduce((n, t) => n + texts.filter(r => meet(t, r)).length, 0);
+})();
 const state = {
   operations: D.operations.length,
   points: D.operations.reduce((s, o) => s + o.points, 0),
@@ -426,6 +443,8 @@ const state = {
   mesh_triangles: D.mesh ? D.mesh.faces.length / 3 : 0,
   part_pixels: partPixels.drawn, drawn_pixels: allPixels.drawn, canvas_pixels: allPixels.of,
   charts: charts.length,
+  label_title_overlaps: overlaps,
+  plot_texts: document.querySelectorAll('#plots .plot-title, #plots .dygraph-axis-label').length,
   first_marker: firstMarker,
   note: window.taxoptNote,
   load_ms: performance.now(),

@@ -141,6 +141,11 @@ def check_page(name, page, report_path, out_dir, screenshot_copy=None):
         check(abs(state[key] - want) <= 1e-3 + 1e-9 * want,
               "%s: %s %.4f = the report's %.4f" % (name, key, state[key], want))
     check(state["charts"] == 5, name + ": five plots drawn")
+    # No axis label, tick or legend over a plot's title (the pointer's legend lay over the next
+    # plot's title); counted over the titles and every text of the plots.
+    check(state["plot_texts"] > 5 and state["label_title_overlaps"] == 0,
+          name + ": %d plot texts over a plot title (of %d titles and tick labels)"
+          % (state["label_title_overlaps"], state["plot_texts"]))
     marked = [m for m in state["marker_counts"] if state["marker_counts"][m]]
     if marked:
         first = state["first_marker"] or {}

@@ -24,6 +24,39 @@ rs274 -g build/consumer/out.ngc > build/consumer/rs274.log
 ./build/consumer/taxopt_consumer data/demo/sine.cls data/demo/sine.stl build/consumer/demo.ngc
 rs274 -g build/consumer/demo.ngc > build/consumer/rs274-demo.log
 
+echo "== the library shared, and both installs through pkg-config"
+# A shared build carries its private dependencies: the consumer finds Eigen only, links
+# libtaxopt alone, and runs the same job. pkg-config builds the consumer against each install
+# (the static one with --static: its private libraries).
+shared="$PWD/build/install-shared"
+rm -rf "$shared" build/consumer-shared build/consumer-pc
+cmake --preset shared
+cmake --build --preset shared -j "$jobs"
+cmake --install build/shared --prefix "$shared"
+cmake -S examples/consumer -B build/consumer-shared -G Ninja -DCMAKE_PREFIX_PATH="$shared"
+cmake --build build/consumer-shared
+needed=$(readelf -d build/consumer-shared/taxopt_consumer | grep NEEDED)
+echo "$needed"
+echo "$needed" | grep -q "libtaxopt.so"
+if echo "$needed" | grep -Eq "tbb|fcl|gmp|mpfr|ccd"; then
+  echo "the consumer of the shared library links a private dependency of taxopt" >&2
+  exit 1
+fi
+./build/consumer-shared/taxopt_consumer data/demo/sine.cls data/demo/sine.stl build/consumer-shared/demo.ngc
+cmp build/consumer/demo.ngc build/consumer-shared/demo.ngc
+mkdir -p build/consumer-pc
+# shellcheck disable=SC2046
+g++ -O1 examples/consumer/main.cpp -o build/consumer-pc/shared \
+  $(PKG_CONFIG_PATH="$shared/lib/pkgconfig" pkg-config --cflags --libs taxopt) -std=c++17 \
+  -Wl,-rpath,"$shared/lib"
+# shellcheck disable=SC2046
+g++ -O1 examples/consumer/main.cpp -o build/consumer-pc/static \
+  $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --static --cflags --libs taxopt) -std=c++17
+for v in shared static; do
+  ./build/consumer-pc/$v data/demo/sine.cls data/demo/sine.stl build/consumer-pc/demo-$v.ngc
+  cmp build/consumer/demo.ngc build/consumer-pc/demo-$v.ngc
+done
+
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
 cmake --preset asan
 cmake --build --preset asan -j "$jobs"

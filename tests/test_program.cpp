@@ -784,3 +784,70 @@ TEST_CASE(
   CHECK(linearised > 0);
   CHECK(joint_safe > 0);
 }
+
+TEST_CASE(
+    "program: a reorientation in rapid steps is one index move that comes down at its last "
+    "step (Creo wrote 11 steps: 8 index cycles) -- a stop between the steps splits it",
+    "[program][rs274][integration]") {
+  REQUIRE(have_rs274());
+  // A pass along X, then the tool turned about X in 11 rapid steps of 6 deg on a 30 mm arc
+  // above the pass's end (as Creo's GPOST file wrote its reorientation), then a pass at 66 deg.
+  const auto goto_at = [](double x, double y, double z, double deg) {
+    const double a = deg * std::acos(-1.0) / 180.0;
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(6) << "GOTO/" << x << "," << y << "," << z << ",0,"
+       << -std::sin(a) << "," << std::cos(a) << "\n";
+    return os.str();
+  };
+  const auto file = [&](int stop_before_step) {
+    std::string cl = "UNITS/MM\nLOADTL/4\nCUTTER/10,5\nSPINDL/8000,RPM,CLW\nFEDRAT/800,MMPM\n";
+    cl += "RAPID\n" + goto_at(0, 0, 50, 0) + goto_at(0, 0, 5, 0) + goto_at(40, 0, 5, 0);
+    for (int s = 1; s <= 11; ++s) {
+      const double a = 6.0 * s * std::acos(-1.0) / 180.0;
+      if (s == stop_before_step) cl += "STOP\n";
+      cl += "RAPID\n" + goto_at(40, 30 * std::sin(a), 5 + 30 * std::cos(a), 6.0 * s);
+    }
+    return cl + goto_at(40, 10, 5, 66) + goto_at(0, 10, 5, 66) + "RAPID\n" +
+           goto_at(0, 10, 60, 66) + "FINI\n";
+  };
+  const std::string machine = std::string(TAXOPT_SOURCE_DIR) + "/data/machines/generic-ac-trt.toml";
+  for (const int stop : {0, 6}) {
+    INFO("STOP before step " << stop);
+    TempDir t;
+    write_file(t.path("c.apt"), file(stop));
+    const RunResult r = run_taxopt("--in " + t.path("c.apt") + " --machine " + machine +
+                                   " --method none -q --gcode " + t.path("o.ngc") + " --report " +
+                                   t.path("r.json"));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto report = nlohmann::json::parse(read_file(t.path("r.json")));
+    // One cycle for the whole reorientation; with the stop, one on each side of it (the stop
+    // happens where the file puts it: at step 5, the tool down there).
+    CHECK(report["gcode"]["index_moves"] == (stop ? 2 : 1));
+    CHECK(report["gcode"]["index_passed_over_points"] == (stop ? 9 : 10));
+    CHECK(report["ok"] == true);
+    CHECK(report["problems"].empty());
+    const std::string text = read_file(t.path("o.ngc"));
+    std::size_t retracts = 0;
+    for (std::size_t at = text.find("G53 G0 Z"); at != std::string::npos;
+         at = text.find("G53 G0 Z", at + 1)) {
+      ++retracts;
+    }
+    CHECK(retracts == (stop ? 4u : 3u));  // the operation's start, the index moves, the end
+    // rs274 runs it; the tool comes down at the last step, tilted 66 deg, and the pass at 66
+    // deg starts there.
+    std::vector<CanonMove> points, all;
+    REQUIRE(run_rs274(t.path("o.ngc"), points, {}, &all).code == 0);
+    const double a66 = 66.0 * std::acos(-1.0) / 180.0;
+    const Vec3d last_step(40, 30 * std::sin(a66), 5 + 30 * std::cos(a66));
+    std::size_t at_last = all.size();
+    for (std::size_t m = 0; m < all.size(); ++m) {
+      if ((Vec3d(all[m].x, all[m].y, all[m].z) - last_step).norm() < 1e-3) at_last = m;
+    }
+    REQUIRE(at_last + 1 < all.size());
+    CHECK(std::abs(all[at_last].a - 66.0) < 1e-6);
+    const CanonMove& cut = all[at_last + 1];
+    CHECK(cut.feed);
+    CHECK((Vec3d(cut.x, cut.y, cut.z) - Vec3d(40, 10, 5)).norm() < 1e-3);
+  }
+}

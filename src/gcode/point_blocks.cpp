@@ -178,10 +178,19 @@ void ProgramWriter::point(std::size_t i) {
   const Posed& pose = op_->poses[i];
   const Vec3d xyz = out_xyz(p.tip_mm, pose);
   const std::string words = xyz_words(xyz) + angle_words(pose);
+  if (i < index_target_) {  // passed over by the index move to index_target_
+    passed_over_.push_back(i);
+    return;
+  }
   if (words == last_words_) return;  // nothing would move
   along_axis_leg_ = false;
-  if (p.motion == Motion::Rapid && have_prev_ && retracts_ && !op_->swept_moves_checked) {
-    index_move_if_turning(pose);
+  if (p.motion == Motion::Rapid && have_prev_ && retracts_ && !op_->swept_moves_checked &&
+      !approach_) {
+    index_target_ = index_move_if_turning(i);
+    if (index_target_ > i) {
+      passed_over_.push_back(i);
+      return;
+    }
   }
   if (approach_) approach(p, pose, xyz);
   if (p.motion == Motion::Rapid) {
@@ -192,17 +201,32 @@ void ProgramWriter::point(std::size_t i) {
   have_prev_ = true;
 }
 
-void ProgramWriter::index_move_if_turning(const Posed& pose) {
+std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
+  const PostedOperation& op = *op_;
+  const Posed& pose = op.poses[i];
   const double turn_deg = std::max(
       std::abs(round_to(rad_to_deg(pose.a_rad), d_) - round_to(rad_to_deg(prev_pose_.a_rad), d_)),
       std::abs(round_to(rad_to_deg(pose.c_rad), d_) - round_to(rad_to_deg(prev_pose_.c_rad), d_)));
-  if (!(turn_deg > g_.program.index_threshold_deg)) return;
+  if (!(turn_deg > g_.program.index_threshold_deg)) return i;
+  // Up at the retract, the rapids after this one up to the next feed (or an event, which
+  // happens where the file puts it) lead nowhere the tool must pass: the cycle turns to the
+  // last of them and comes down there.
+  std::size_t last = i;
+  const auto event_before = [&](std::size_t m) {
+    return std::any_of(op.events.begin(), op.events.end(),
+                       [&](const ProgramEvent& e) { return e.before_point == m; });
+  };
+  while (last + 1 < op.points.size() && op.points[last + 1].motion == Motion::Rapid &&
+         !event_before(last + 1)) {
+    ++last;
+  }
   length_and_tcp_off();
   lines(dialect_.retract(retract_z_), BlockKind::Retract);
-  turn_table(pose);
+  turn_table(op.poses[last]);
   length_and_tcp_on();
   approach_ = true;
   ++prog_.index_moves;
+  return last;
 }
 
 void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz) {

@@ -129,6 +129,8 @@ void ProgramWriter::operation(std::size_t k) {
   point_ = -1;
   operation_start();
   emitted_.assign(op.points.size(), 0);
+  passed_over_.clear();
+  index_target_ = 0;
   own_times_ = programmed_block_times_s(op.points, op.poses);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     point_ = static_cast<int>(i);
@@ -142,6 +144,7 @@ void ProgramWriter::operation(std::size_t k) {
   point_ = -1;
   events_before(op.points.size());
   prog_.emitted.push_back(std::move(emitted_));
+  prog_.passed_over.push_back(std::move(passed_over_));
   operation_end(k + 1 < ops_.size() ? &ops_[k + 1] : nullptr);
 }
 

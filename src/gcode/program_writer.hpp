@@ -117,7 +117,10 @@ class ProgramWriter {
   /// An index move: a rapid that turns the table by more than the threshold goes up to the
   /// retract, turns there and comes down XY first (docs/gcode-dialects.md "Index moves").
   /// With a part model the turns stay in the air: the check verifies their swept moves.
-  void index_move_if_turning(const Posed& pose);
+  /// Rapids that follow the turning one up to the next feed (a CAM system's reorientation in
+  /// steps: Creo wrote 11, which made 8 index cycles) are passed over: one cycle turns to the
+  /// last of them and comes down there. Returns that point's index (i when nothing turns).
+  std::size_t index_move_if_turning(std::size_t i);
   /// The way down from the retract height to point `p`: under TCP straight down to the
   /// clearance height, XY to above the point on its axis, then along the axis (as CAM links an
   /// approach: a tool tilted 90 deg that came straight down in the workpiece's Z swept through
@@ -187,6 +190,10 @@ class ProgramWriter {
   bool approach_ = false, descend_ = false;
   double clearance_z_mm_ = 0.0;
   std::vector<int> emitted_;
+  /// Points of this operation an index move passed over (index_move_if_turning), and the
+  /// point it comes down to.
+  std::vector<std::size_t> passed_over_;
+  std::size_t index_target_ = 0;
   std::vector<double> own_times_;
   std::string last_words_;
   Vec3d prev_xyz_ = Vec3d::Zero(), prev_tip_ = Vec3d::Zero();

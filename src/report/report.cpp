@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 #include "taxopt/core/version.hpp"
 #include "taxopt/cspace/tool_model.hpp"
@@ -192,15 +193,19 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   cl["skipped_by_option"] = toolpath.skipped_by_option;
   cl["notices"] = toolpath.notices;
   j["cl_input"] = cl;
-  j["gcode"] = {{"arcs_kept", result.gcode.arcs_kept},
-                {"arcs_chorded", result.gcode.arcs_chorded},
-                {"linearised_blocks", result.gcode.linearised_blocks},
-                {"arc_blocks", result.gcode.arc_blocks},
-                {"index_moves", result.gcode.index_moves},
-                {"joint_safe_rapids", result.gcode.joint_safe_rapids.size()},
-                {"time_s", result.gcode.time_s},
-                {"time_from_line", result.gcode.time_from_line},
-                {"time_tool_length_mm", result.gcode.time_tool_length_mm}};
+  j["gcode"] = {
+      {"arcs_kept", result.gcode.arcs_kept},
+      {"arcs_chorded", result.gcode.arcs_chorded},
+      {"linearised_blocks", result.gcode.linearised_blocks},
+      {"arc_blocks", result.gcode.arc_blocks},
+      {"index_moves", result.gcode.index_moves},
+      {"index_passed_over_points",
+       std::accumulate(result.gcode.passed_over.begin(), result.gcode.passed_over.end(),
+                       std::size_t{0}, [](std::size_t n, const auto& v) { return n + v.size(); })},
+      {"joint_safe_rapids", result.gcode.joint_safe_rapids.size()},
+      {"time_s", result.gcode.time_s},
+      {"time_from_line", result.gcode.time_from_line},
+      {"time_tool_length_mm", result.gcode.time_tool_length_mm}};
   // LinuxCNC tcp: the joints on the rapids as its planner moves them, by joint name.
   if (result.gcode.tcp_joint_peaks.empty()) {
     j["gcode"]["tcp_joint_peaks"] = nullptr;

@@ -114,7 +114,8 @@ struct GcodeProgram {
   /// program, which the verification and the time model read with the blocks read back.
   std::vector<ProgramBlock> blocks;
   /// emitted[k][i]: 1-based G-code line of point i of operation k; 0 when the point was not
-  /// written because it repeats the previous block exactly (nothing would move); minus the
+  /// written because it repeats the previous block exactly (nothing would move) or an index
+  /// move passed over it (passed_over); minus the
   /// line of the G2/G3 block the point lies on when it is a chord point inside that block.
   std::vector<std::vector<int>> emitted;
   /// CL arcs written as G2/G3 (in arc_blocks blocks), and those left to their chords.
@@ -124,6 +125,10 @@ struct GcodeProgram {
   std::size_t linearised_blocks = 0;
   /// Rapids written as index moves (retract, turn, XY, down; ProgramTemplate).
   std::size_t index_moves = 0;
+  /// passed_over[k]: the points of operation k no block reaches: rapids after an index move's
+  /// turning one up to the next feed, which the tool, up at the retract, has no need to pass
+  /// (the move turns to the last of them and comes down there). Their emitted line is 0.
+  std::vector<std::vector<std::size_t>> passed_over;
   /// LinuxCNC tcp mode: rapids written as feed moves at a joint-safe feed
   /// (joint_safe_rate_per_s), their lines.
   std::vector<int> joint_safe_rapids;

@@ -95,6 +95,29 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "library boundary: one deviation cone per run -- a cone given where run_job does not read "
+    "it is refused naming the field to set",
+    "[library][bad-input]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::Global;
+  options.global.max_deviation_deg = 10.0;
+  CHECK_THAT(input_error_of([&] { (void)run_job(pass_in_code(), default_machine(), options); }),
+             Catch::Contains("JobOptions::global.max_deviation_deg is not read by run_job"));
+  // The run's cone, set where it is read, bounds every written axis.
+  options.global = GlobalOptions{};
+  options.max_deviation_deg = 10.0;
+  const Toolpath tp = pass_in_code();
+  const JobResult r = run_job(tp, default_machine(), options);
+  REQUIRE(r.ok());
+  for (std::size_t i = 0; i < r.operations[0].rows.size(); ++i) {
+    CHECK(rad_to_deg(angle_between(r.operations[0].rows[i].axis,
+                                   tp.operations[0].points[i].axis)) <= 10.0 + 1e-6);
+  }
+}
+
+TEST_CASE(
     "library boundary: no point to post is an InputError, and a feed point 50 mm above the part "
     "mid-pass is a finding naming it",
     "[library][bad-input]") {

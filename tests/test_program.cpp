@@ -502,7 +502,15 @@ TEST_CASE(
     for (std::string l; std::getline(text, l);) lines.push_back(l);
   }
   bool warned = false;
-  for (const auto& f : report["findings"]) warned |= f["code"] == "tcp_joint_limit";
+  for (const auto& f : report["findings"]) {
+    if (f["code"] != "tcp_joint_limit") continue;
+    warned = true;
+    // About a block of the program: its G-code line, no CL line.
+    CHECK(f["line"].is_null());
+    CHECK(f["gcode_line"].get<int>() > 0);
+    CHECK_THAT(f["message"].get<std::string>(),
+               Catch::Contains("G-code line " + std::to_string(f["gcode_line"].get<int>())));
+  }
   bool over = false;
   for (const char* joint : {"X", "Y", "Z", "A", "C"}) {
     INFO(joint);

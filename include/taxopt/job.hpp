@@ -59,7 +59,8 @@ struct JobOptions {
   /// grid (--grid), segmenter and joint smoothing.
   PaperOptions paper;
   /// --method global (global_optimiser.hpp): its objective (--objective) and jerk weight
-  /// (--jerk-weight); its cone is paper.max_deviation_deg. It starts from the paper's axes.
+  /// (--jerk-weight). Its cone is the run's (max_deviation_deg, else paper.max_deviation_deg):
+  /// run_job refuses a global.max_deviation_deg of its own. It starts from the paper's axes.
   GlobalOptions global;
   /// The part (not owned); without it there is no contact recovery and no collision check,
   /// and the deviation cone shrinks to kNoPartMaxDeviationDeg unless `max_deviation_deg` is
@@ -391,14 +392,18 @@ enum class Severity { Safety, Warning, Problem };
 /// "safety", "warning", "problem".
 const char* to_string(Severity severity);
 
-/// One finding: its kind, its severity, where (an operation's index into the toolpath and a
-/// CL line, when known) and a message for display.
+/// One finding: its kind, its severity, where (an operation's index into the toolpath, a CL
+/// line and a line of the written G-code, each when known) and a message for display.
 struct Finding {
   FindingCode code;
   Severity severity;
   std::optional<std::size_t> operation;
+  /// 1-based line of the CL file; 0: no CL line (a finding about the program or its blocks).
   int line = 0;
   std::string message;
+  /// 1-based line of the written G-code the finding is about (a block the writer added, a
+  /// controller limit met at a block), when it is about one.
+  std::optional<int> gcode_line;
 };
 
 /// Result of run_job. `ok()` is false when the output could not be made safe: `problems`

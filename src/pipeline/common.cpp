@@ -38,9 +38,9 @@ Severity severity_of(FindingCode code) {
 
 /// Records a finding, and its message by severity (JobResult's display lists).
 void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
-                 const std::string& message) {
+                 const std::string& message, std::optional<int> gcode_line) {
   const Severity severity = severity_of(code);
-  res.findings.push_back(Finding{code, severity, operation, line, message});
+  res.findings.push_back(Finding{code, severity, operation, line, message, gcode_line});
   (severity == Severity::Problem  ? res.problems
    : severity == Severity::Safety ? res.safety_warnings
                                   : res.warnings)

@@ -257,8 +257,9 @@ std::ptrdiff_t move_index(const std::vector<GcodeMove>& moves, const GcodeMove* 
 std::optional<std::string> outside_travel(const Machine& machine, int q, double v_mm);
 
 /// Records a finding, and its message by severity (JobResult's display lists).
+/// `line`: the CL line (0: none); `gcode_line`: the written G-code's, for a finding about a block.
 void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> operation, int line,
-                 const std::string& message);
+                 const std::string& message, std::optional<int> gcode_line = std::nullopt);
 
 /// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
 double ball_radius_mm(const Operationd& op, const JobOptions& options);

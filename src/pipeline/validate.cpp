@@ -146,6 +146,13 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
     throw InputError("JobOptions::global.jerk_weight_s2 must be a number >= 0 (s^2), got " +
                      shown(options.global.jerk_weight_s2));
   }
+  // One cone per run: plan_pass_global's own field serves callers of the optimiser alone;
+  // run_job sets it from the run's, so a value given there would silently not apply.
+  if (options.global.max_deviation_deg != GlobalOptions{}.max_deviation_deg) {
+    throw InputError(
+        "JobOptions::global.max_deviation_deg is not read by run_job: the run's deviation cone "
+        "is JobOptions::max_deviation_deg (empty: paper.max_deviation_deg); set that one");
+  }
   if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
     throw InputError("JobOptions::max_deviation_deg must be within [0, 90] deg, got " +
                      shown(options.paper.max_deviation_deg));

@@ -74,6 +74,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   const BlockOwner op_of(res.gcode, posted.size());
   struct Breach {
     std::size_t count = 0;
+    std::size_t operation = 0;
     int line = 0;
     std::string what;
   };
@@ -81,6 +82,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   const auto breach = [&](FindingCode code, const GcodeMove& m, const std::string& what) {
     Breach& b = breaches[code];
     if (b.count++ == 0) {
+      b.operation = op_of(m.line);
       b.line = m.line;
       b.what = "operation " + posted[op_of(m.line)].name + ": G-code line " +
                std::to_string(m.line) + " " + what;
@@ -209,8 +211,9 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
                shown(moves.back().c_deg) + " deg, not at their home (gcode.end_pose)");
   }
   for (const auto& [code, b] : breaches) {
-    add_finding(res, code, std::nullopt, 0,
-                b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""));
+    add_finding(res, code, b.operation, 0,
+                b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""),
+                b.line);
   }
 }
 
@@ -337,7 +340,8 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
                     "line " +
                     std::to_string(m.line) + " (" + op_of.what(m.line) + ", " +
                     (m.rapid ? "a rapid" : "a feed block") +
-                    (m.retract ? " in machine coordinates" : "") + ")");
+                    (m.retract ? " in machine coordinates" : "") + ")",
+                m.line);
   }
 }
 

@@ -356,11 +356,12 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
   }
   // One line: what, where, the remedy's name; the report (gcode.tcp_joint_peaks,
   // gcode.tcp_axis_accel_scale) and docs/feed-schedule.md explain it.
-  add_finding(res, FindingCode::TcpJointLimit, std::nullopt, first_line,
+  add_finding(res, FindingCode::TcpJointLimit, std::nullopt, 0,
               "LinuxCNC with TCP on accelerates the program's axes at their [AXIS_*] limits and "
               "drives " +
                   os.str() + "; remedy: " + remedy.str() +
-                  " (gcode.tcp_axis_accel_scale; docs/feed-schedule.md), or machine mode");
+                  " (gcode.tcp_axis_accel_scale; docs/feed-schedule.md), or machine mode",
+              first_line);
 }
 
 }  // namespace

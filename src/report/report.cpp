@@ -160,6 +160,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
                            ? nlohmann::json(toolpath.operations[*f.operation].name)
                            : nlohmann::json();
     one["line"] = f.line > 0 ? nlohmann::json(f.line) : nlohmann::json();
+    one["gcode_line"] = f.gcode_line ? nlohmann::json(*f.gcode_line) : nlohmann::json();
     findings.push_back(one);
   }
   j["findings"] = findings;

@@ -170,7 +170,7 @@ TEST_CASE(
   result.operations.back().rows.resize(3);
   result.operations.back().rows[1].mark(PointMark::CFlip);
   result.findings.push_back(
-      {FindingCode::PointCollision, Severity::Problem, 0, 7, "at </script> line 7 <!--"});
+      {FindingCode::PointCollision, Severity::Problem, 0, 7, "at </script> line 7 <!--", {}});
   result.problems.push_back("at </script> line 7 <!--");
   const std::string hostile =
       html_page(result, Toolpath{}, Machine{}, JobOptions{}, RunInfo{}, nullptr, tiny_assets());

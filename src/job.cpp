@@ -239,9 +239,22 @@ void in_job_arena(const JobOptions& options, const F& f) {
   arena.execute(f);
 }
 
+/// The machine a run's joint model uses: a head's tilt-to-tip length is its pivot length plus
+/// the tool's gauge length (the options', else the machine's holder's; else the pivot alone),
+/// as LinuxCNC's head kinematics add the tool length offset to their pivot length.
+Machine run_machine(const Machine& machine, const JobOptions& options) {
+  Machine m = machine;
+  if (m.ac.layout != RotaryLayout::TableTable) {
+    m.ac.head_length_mm = m.head_pivot_length_mm + options.tool.gauge_length_mm.value_or(
+                                                       m.holder_gauge_length_mm.value_or(0.0));
+  }
+  return m;
+}
+
 }  // namespace
 
-AxisPlan plan_axes(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+AxisPlan plan_axes(const Toolpath& tp, const Machine& given_machine, const JobOptions& options) {
+  const Machine machine = run_machine(given_machine, options);
   AxisPlan out;
   in_job_arena(options, [&] {
     JobResult res;
@@ -305,7 +318,8 @@ JobResult run_with_fallback(const Toolpath& tp, const Machine& machine, const Jo
 
 }  // namespace
 
-JobResult run_job(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
+JobResult run_job(const Toolpath& tp, const Machine& given_machine, const JobOptions& options) {
+  const Machine machine = run_machine(given_machine, options);
   JobResult res;
   in_job_arena(options, [&] { res = run_with_fallback(tp, machine, options); });
   return res;

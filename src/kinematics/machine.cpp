@@ -21,6 +21,24 @@ const char* to_string(GcodeDialect dialect) {
 
 Machine default_machine() { return Machine{}; }
 
+bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout) {
+  static const std::pair<const char*, RotaryLayout> kLayouts[] = {
+      {"-table-table", RotaryLayout::TableTable},
+      {"-head-table", RotaryLayout::HeadTable},
+      {"-head-head", RotaryLayout::HeadHead}};
+  if (name.size() < 2 || (name.compare(0, 2, "ac") != 0 && name.compare(0, 2, "bc") != 0)) {
+    return false;
+  }
+  for (const auto& [suffix, l] : kLayouts) {
+    if (name.substr(2) == suffix) {
+      tilt = name[0] == 'b' ? TiltAxis::Y : TiltAxis::X;
+      layout = l;
+      return true;
+    }
+  }
+  return false;
+}
+
 namespace {
 
 [[noreturn]] void refuse(const std::string& field, const std::string& expected, double got) {
@@ -49,10 +67,25 @@ void check_rotary(const char* name, const RotaryAxis<double>& axis) {
 
 void validate(const Machine& m) {
   const bool bc = m.ac.tilt == TiltAxis::Y;
-  if (m.kinematics != (bc ? "bc-table-table" : "ac-table-table")) {
-    throw InputError("Machine::kinematics '" + m.kinematics + "' does not name this machine: " +
-                     (bc ? "\"bc-table-table\" for a tilt about Y (ac.tilt)"
-                         : "\"ac-table-table\" for a tilt about X (ac.tilt)"));
+  TiltAxis tilt = TiltAxis::X;
+  RotaryLayout layout = RotaryLayout::TableTable;
+  if (!kinematics_layout(m.kinematics, tilt, layout) || tilt != m.ac.tilt ||
+      layout != m.ac.layout) {
+    const char* where = m.ac.layout == RotaryLayout::HeadHead    ? "-head-head"
+                        : m.ac.layout == RotaryLayout::HeadTable ? "-head-table"
+                                                                 : "-table-table";
+    throw InputError("Machine::kinematics '" + m.kinematics + "' does not name this machine: \"" +
+                     (bc ? "bc" : "ac") + where + "\" for a tilt about " + (bc ? "Y" : "X") +
+                     " (ac.tilt) and its ac.layout (" + kKinematicsNames + ")");
+  }
+  if (m.ac.layout != RotaryLayout::TableTable) {
+    check_range("head_pivot_length_mm", m.head_pivot_length_mm, 0.0, 5000.0, "within [0, 5000]");
+    check_range("ac.head_length_mm", m.ac.head_length_mm, 0.0, 10000.0, "within [0, 10000]");
+    if (m.gcode.mode == GcodeMode::Machine) {
+      throw InputError("Machine::gcode.mode Machine on a " + m.kinematics +
+                       " machine is not written (each block would depend on the tool's length "
+                       "about the head's pivot): use GcodeMode::Tcp");
+    }
   }
   check_rotary(bc ? "a (B)" : "a (A)", m.ac.a);
   check_rotary("c", m.ac.c);

@@ -40,12 +40,11 @@ class MachineParser {
     const toml::node* kin = root.get("kinematics");
     if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\" or \"bc-table-table\")");
     m.kinematics = string_of(*kin, "kinematics");
-    if (m.kinematics == "bc-table-table") {
-      m.ac.tilt = TiltAxis::Y;
-    } else if (m.kinematics != "ac-table-table") {
+    if (!kinematics_layout(m.kinematics, m.ac.tilt, m.ac.layout)) {
       fail(line_of(*kin),
-           "kinematics '" + m.kinematics + "' is not supported (ac-table-table, bc-table-table)");
+           "kinematics '" + m.kinematics + "' is not supported (" + kKinematicsNames + ")");
     }
+    const bool head = m.ac.layout != RotaryLayout::TableTable;
     // The tilt axis: A about X, B about Y (ac_machine.hpp).
     const std::string tilt(1, m.ac.tilt_letter());
     const toml::table* axes = table_of(root, "axes", true);
@@ -114,7 +113,19 @@ class MachineParser {
         m.default_tool_number = whole(*n, "defaults.tool_number", 1, 99999, "");
       }
     }
-    if (const toml::table* pivot = table_of(root, "pivot", false)) {
+    if (const toml::table* pivot = table_of(root, "pivot", false); pivot && head) {
+      // A head: its pivot length (tilt axis to the spindle's gauge line), and for a head-table
+      // machine where C turns the table.
+      check_keys(*pivot, "pivot", {"head_pivot_length", "c_axis_x", "c_axis_y"});
+      m.head_pivot_length_mm = length_or(*pivot, "pivot", "head_pivot_length", 0.0);
+      if (!(m.head_pivot_length_mm >= 0.0 && m.head_pivot_length_mm <= 5000.0)) {
+        fail(line_of(*pivot->get("head_pivot_length")),
+             "pivot.head_pivot_length must be within [0, 5000] mm");
+      }
+      m.ac.head_length_mm = m.head_pivot_length_mm;
+      m.ac.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
+                                   length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
+    } else if (pivot) {
       if (m.ac.tilt == TiltAxis::Y) {
         check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
         m.ac.a_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
@@ -162,6 +173,16 @@ class MachineParser {
              m.gcode.dialect);
       choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
              m.gcode.mode);
+      if (m.gcode.mode == GcodeMode::Machine && head) {
+        // In machine mode every block would carry the tip swung about the pivot by the pivot
+        // length plus this tool's length (maxkins, 5axiskins): taxopt writes head machines
+        // with the controller's TCP, which takes the tool length from its own table.
+        fail(line_of(*g->get("mode")),
+             "gcode.mode \"machine\" on a " + m.kinematics +
+                 " machine is not written (each block would depend on the tool's length about "
+                 "the head's pivot): use mode \"tcp\" (the controller's G43.4, TRAORI, M128 or "
+                 "LinuxCNC's head kinematics)");
+      }
       if (m.gcode.mode == GcodeMode::Machine && !table_of(root, "pivot", false)) {
         // Machine mode writes joint positions about the rotary axes' pivots: a file without
         // them would post every point about a pivot at 0, silently (a machinist's review,

@@ -41,6 +41,19 @@ struct RotaryAxis {
 /// machine, "bc-table-table": Haas UMC, Hermle, DMU eVo B/C). docs/kinematics.md.
 enum class TiltAxis { X, Y };
 
+/// Which rotary axes carry the workpiece and which the tool (docs/kinematics.md "Head
+/// machines"):
+/// - TableTable: the tilt and C both turn the table (ac-/bc-table-table);
+/// - HeadTable: the head tilts the tool, the table turns the workpiece about C (a B head on a
+///   C table: LinuxCNC's maxkins, "bc-head-table");
+/// - HeadHead: both turn the tool, C about the vertical and the tilt in a fork (LinuxCNC's
+///   5axiskins bridge mill, "bc-head-head").
+/// The tool axis a pose gives in the workpiece is the same function in all three (the tilt
+/// turns the tool relative to the C frame, C turns that frame relative to the workpiece), so
+/// forward, inverse, branches and poles are shared; what differs is where the linear joints
+/// stand (to_machine_mm): a head swings the tip about its pivot, `head_length_mm` away.
+enum class RotaryLayout { TableTable, HeadTable, HeadHead };
+
 /// Kinematics of a table-table machine whose table tilts about X (A) or Y (B) and turns about
 /// Z (C). With t = s_T T (T the tilt axis's value, A or B) and c = s_C C the tool axis in
 /// workpiece coordinates is
@@ -61,6 +74,11 @@ struct ACMachine {
   /// Below this sin|A| the axis is on the pole A = 0, where every C gives the same axis.
   S pole_tolerance = S(1e-7);
   TiltAxis tilt = TiltAxis::X;
+  RotaryLayout layout = RotaryLayout::TableTable;
+  /// A head (HeadTable, HeadHead): the distance from the tilt axis to the tool tip along the
+  /// tool, mm: the head's pivot length plus the tool's gauge length (LinuxCNC's maxkins and
+  /// 5axiskins: pivot-length plus the tool length offset). At tilt 0 the joints are the tip.
+  S head_length_mm = S(0);
 
   /// The tilt axis's letter in G-code and reports: 'A' or 'B'.
   char tilt_letter() const { return tilt == TiltAxis::X ? 'A' : 'B'; }
@@ -113,11 +131,19 @@ struct ACMachine {
     return tilt == TiltAxis::Y ? Vec3<S>::UnitY() : Vec3<S>::UnitX();
   }
 
-  /// Machine-mode joint position of a workpiece point for a pose (CLI.md), with R_T the
-  /// rotation about the tilt axis: p_m = R_T(-t) (Rot(Z, -c) (p_w - c0) + c0 - t0) + t0.
+  /// Joint position of a workpiece point (the tip) for a pose (CLI.md's machine-mode
+  /// convention), with R_T the rotation about the tilt axis, v = forward(pose), L =
+  /// head_length_mm:
+  ///   TableTable: p_m = R_T(-t) (Rot(Z, -c) (p_w - c0) + c0 - t0) + t0;
+  ///   HeadTable:  p_m = Rot(Z, -c) (p_w - c0) + c0 + L (Rot(Z, -c) v - z)  (maxkins);
+  ///   HeadHead:   p_m = p_w + L (v - z)                                     (5axiskins).
   Vec3<S> to_machine_mm(const Vec3<S>& p_w_mm, const Pose<S>& pose) const {
     const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(-cg, Vec3<S>::UnitZ()).toRotationMatrix();
+    if (layout == RotaryLayout::HeadHead) return p_w_mm + head_swing_mm(pose);
+    if (layout == RotaryLayout::HeadTable) {
+      return rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm + rz * head_swing_mm(pose);
+    }
     const Mat3<S> rt = Eigen::AngleAxis<S>(-ag, tilt_direction()).toRotationMatrix();
     return rt * (rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm - a_axis_point_mm) +
            a_axis_point_mm;
@@ -127,9 +153,19 @@ struct ACMachine {
   Vec3<S> from_machine_mm(const Vec3<S>& p_m_mm, const Pose<S>& pose) const {
     const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(cg, Vec3<S>::UnitZ()).toRotationMatrix();
+    if (layout == RotaryLayout::HeadHead) return p_m_mm - head_swing_mm(pose);
+    if (layout == RotaryLayout::HeadTable) {
+      return rz * (p_m_mm - c_axis_point_mm) + c_axis_point_mm - head_swing_mm(pose);
+    }
     const Mat3<S> rt = Eigen::AngleAxis<S>(ag, tilt_direction()).toRotationMatrix();
     return rz * (rt * (p_m_mm - a_axis_point_mm) + a_axis_point_mm - c_axis_point_mm) +
            c_axis_point_mm;
+  }
+
+  /// A head's offset of the joints from the tip in the workpiece frame, L (v - z): the tip
+  /// swung about the pivot (zero at tilt 0).
+  Vec3<S> head_swing_mm(const Pose<S>& pose) const {
+    return head_length_mm * (forward(pose) - Vec3<S>::UnitZ());
   }
 };
 using ACMachined = ACMachine<double>;

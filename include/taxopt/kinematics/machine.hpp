@@ -126,6 +126,15 @@ int max_feed_decimals(GcodeDialect dialect);
 /// dialect's.
 int feed_decimals(const GcodeSettings& settings);
 
+/// The kinematics names a machine file and Machine::kinematics take: "ac-table-table",
+/// "bc-table-table", "ac-head-table", "bc-head-table", "ac-head-head", "bc-head-head" (the
+/// tilt axis's letter, then where the tilt and C are: docs/kinematics.md).
+inline constexpr const char* kKinematicsNames =
+    "ac-table-table, bc-table-table, ac-head-table, bc-head-table, ac-head-head, bc-head-head";
+/// The tilt axis and layout a kinematics name stands for; false for a name not in
+/// kKinematicsNames.
+bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout);
+
 /// A machine: name, kinematics and how to write its G-code.
 struct Machine {
   std::string name = "generic-ac-trt";
@@ -160,6 +169,11 @@ struct Machine {
   std::optional<double> default_spindle_rpm;
   std::optional<int> default_tool_number;
   GcodeSettings gcode;
+  /// A head machine ([pivot] head_pivot_length): from the tilt axis to the spindle's gauge
+  /// line, mm. run_job adds the tool's gauge length (JobOptions::tool.gauge_length_mm, else
+  /// the machine's holder_gauge_length_mm, else none) into ac.head_length_mm for its joint
+  /// model: the travel, the rapids' and the controller's times.
+  double head_pivot_length_mm = 0.0;
 };
 
 /// X Y Z as the G-code writes the tip `tip_mm` at `pose`: the tip itself (tcp mode) or the

@@ -41,7 +41,18 @@ SAMPLE_ROOT = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/
 SAMPLES = {
     "xyzac": (SAMPLE_ROOT + "/table-rotary-tilting", "xyzac-trt.ini", "ac"),
     "xyzbc": (SAMPLE_ROOT + "/table-rotary-tilting", "xyzbc-trt.ini", "bc"),
+    # The head-head bridge mill (5axiskins, XYZBCWY, seven joints: W and a second Y beside
+    # X Y Z B C); its pivot length is its GUI's 250 mm plus the tool length offset.
+    "bridgemill": (SAMPLE_ROOT + "/bridgemill", "5axis.ini", "bc"),
 }
+# The bridge mill's pivot length without its GUI: as its 5axisgui.hal computes it (the GUI's
+# pivot_len, 250 by default, plus motion.tooloffset.z) into 5axiskins.pivot-length.
+BRIDGEMILL_PIVOT_HAL = """loadrt sum2 names=pivotsum
+addf pivotsum servo-thread
+setp pivotsum.in0 250
+net :tool-len motion.tooloffset.z => pivotsum.in1
+net :pivot-len pivotsum.out => 5axiskins.pivot-length
+"""
 
 
 def scaled_ini_lines(lines, axis_accel_scale):
@@ -85,6 +96,8 @@ def make_config(work, kins, tool_length, axis_accel_scale=1.0):
                 # The simulated machine (its servo thread), then our sampler on that thread.
                 out.append("HALFILE = LIB:basic_sim.tcl -no_use_hal_manualtoolchange")
                 line = "HALFILE = sampler.hal"
+            elif section == "[HAL]" and key == "HALFILE" and "5axisgui" in s:
+                line = "HALFILE = pivot.hal"  # the GUI's pins go, its pivot sum stays
             elif section == "[HAL]" and key == "HALCMD" and "-gui" in s:
                 # The vismach window's pins go; the kinematics' nets stay.
                 if "loadusr" in s:
@@ -100,11 +113,14 @@ def make_config(work, kins, tool_length, axis_accel_scale=1.0):
             out.append(line)
     with open(os.path.join(cfg, "m.ini"), "w") as f:
         f.write("\n".join(out) + "\n")
+    with open(os.path.join(cfg, "pivot.hal"), "w") as f:
+        f.write(BRIDGEMILL_PIVOT_HAL)
     with open(os.path.join(cfg, "tool.tbl"), "w") as f:
         for t in range(1, 100):
             f.write("T%d P%d Z%g D6 ;\n" % (t, t, tool_length))
     joints = ["joint.%d.pos-cmd" % j for j in range(5)]
     letters = "xyzac" if kins == "xyzac" else "xyzbc"
+    # The bridge mill's joints: 0-4 are X Y Z B C as in the others (5 W, 6 the second Y).
     axes = ["axis.%s.pos-cmd" % a for a in letters]
     with open(os.path.join(cfg, "sampler.hal"), "w") as f:
         f.write("loadrt sampler depth=16384 cfg=ffffffffffs\n")

@@ -23,6 +23,13 @@ cmake --build build/consumer
 rs274 -g build/consumer/out.ngc > build/consumer/rs274.log
 ./build/consumer/taxopt_consumer data/demo/sine.cls data/demo/sine.stl build/consumer/demo.ngc
 rs274 -g build/consumer/demo.ngc > build/consumer/rs274-demo.log
+# A post with nothing read from files: points, part and two machines (A/C table-table, B/C
+# head-head) in code, one plan, a verified program for each.
+rm -rf build/in-memory-post
+cmake -S examples/in_memory_post -B build/in-memory-post -G Ninja -DCMAKE_PREFIX_PATH="$prefix"
+cmake --build build/in-memory-post
+./build/in-memory-post/taxopt_in_memory_post build/in-memory-post/ac.ngc build/in-memory-post/head.ngc
+for p in ac head; do rs274 -g build/in-memory-post/$p.ngc > build/in-memory-post/rs274-$p.log; done
 
 echo "== the library shared, and both installs through pkg-config"
 # A shared build carries its private dependencies: the consumer finds Eigen only, links

@@ -31,6 +31,8 @@ class TempDir {
 
 std::string read_file(const std::string& path);
 void write_file(const std::string& path, const std::string& content);
+/// `text` with the first `from` replaced by `to`; `from` must be there (REQUIRE).
+std::string replaced_once(std::string text, const std::string& from, const std::string& to);
 bool file_exists(const std::string& path);
 std::string real_data(const std::string& name);
 

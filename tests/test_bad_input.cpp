@@ -500,10 +500,7 @@ TEST_CASE(
   const std::string sample =
       read_file(std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini");
   const auto with = [&](const std::string& from, const std::string& to) {
-    std::string s = sample;
-    const std::size_t at = s.find(from);
-    REQUIRE(at != std::string::npos);
-    return s.replace(at, from.size(), to);
+    return taxopt::test::replaced_once(sample, from, to);
   };
   const struct {
     std::string ini;

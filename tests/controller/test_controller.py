@@ -29,7 +29,9 @@ retracts). Asserted, for each program:
   same part with no tcp_joint_limit warning, and on the controller so configured every joint
   stays within its MAX_ACCELERATION (0.5 %).
 
-By default (ctest label `controller`) the A/C tcp G94 program and the remedy run (about 4
+By default (ctest label `controller`) the A/C tcp G94 program, the same part on LinuxCNC's
+head-head bridge mill (its 5axiskins sample, data/machines/linuxcnc-5axis-bridgemill.toml:
+the head swings the tip about its pivot, 250 mm plus the tool's 50) and the remedy run (about 5
 minutes); `--set sine-more` (label `long`, TAXOPT_LONG=1) the machine-mode, G93, B/C and
 programmed-feed programs (about 7 minutes).
 
@@ -103,6 +105,7 @@ def cases(exe, src, work, which):
     run, and the failures met making them."""
     preset = os.path.join(src, "data/machines/linuxcnc-xyzac-trt.toml")
     bc = os.path.join(src, "data/machines/linuxcnc-xyzbc-trt-sample.toml")
+    bridgemill = os.path.join(src, "data/machines/linuxcnc-5axis-bridgemill.toml")
     demo = ["--in", os.path.join(src, "data/demo/sine.cls"), "--part",
             os.path.join(src, "data/demo/sine.stl"), "--gauge-length", "50"]
     demos = [("demo, A/C", demo + ["--machine", preset], "xyzac", 1.0),
@@ -144,7 +147,9 @@ def cases(exe, src, work, which):
              common + ["--machine", preset, "--no-schedule"], "xyzac", 1.0)]
     if which == "sine-more":
         return more, []
-    out = [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac", 1.0)]
+    out = [("sine, A/C, tcp, G94", common + ["--machine", preset], "xyzac", 1.0),
+           ("sine, B/C head-head (bridge mill), tcp, G94", common + ["--machine", bridgemill],
+            "bridgemill", 1.0)]
     remedy = remedy_case(exe, src, work, "sine", common, preset)
     if isinstance(remedy, str):
         return out, [remedy]
@@ -206,7 +211,7 @@ def main():
         # plans with TCP on the joints may pass theirs. Every such overshoot must be covered by
         # the report's prediction (gcode.tcp_joint_peaks, within 2 %) and warned of
         # (tcp_joint_limit); anywhere else a joint past its limit fails.
-        names = ["X", "Y", "Z", "B" if kins == "xyzbc" else "A", "C"]
+        names = ["X", "Y", "Z", "A" if kins == "xyzac" else "B", "C"]
         tcp_peaks = rep["gcode"].get("tcp_joint_peaks") or {}
         warned = any(f["code"] == "tcp_joint_limit" for f in rep["findings"])
         if share != 1.0 and warned:

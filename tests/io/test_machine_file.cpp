@@ -49,10 +49,8 @@ void expect_error(const std::string& text, int line, const std::string& says) {
   }
 }
 
-std::string replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  REQUIRE(at != std::string::npos);
-  return s.replace(at, from.size(), to);
+std::string replace(const std::string& s, const std::string& from, const std::string& to) {
+  return taxopt::test::replaced_once(s, from, to);
 }
 
 }  // namespace

@@ -127,10 +127,7 @@ TEST_CASE(
   const std::string text =
       read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-5axis-bridgemill.toml");
   const auto edited = [&](const std::string& from, const std::string& to) {
-    std::string t = text;
-    const std::size_t at = t.find(from);
-    REQUIRE(at != std::string::npos);
-    return t.replace(at, from.size(), to);
+    return replaced_once(text, from, to);
   };
   const auto error_of = [](const std::string& toml) {
     return input_error_of([&] { (void)parse_machine_toml(toml, "m.toml"); });

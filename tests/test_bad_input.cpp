@@ -530,6 +530,15 @@ TEST_CASE(
   REQUIRE(named.code == 0);
   const taxopt::Machine m = taxopt::read_machine_file(t.path("n.toml"));
   CHECK(m.name == "my_mill_x");
+  // A HAL file named past the system's NAME_MAX (a fuzzed INI: filesystem_error went through
+  // the importer and ended the process): not read, and said.
+  write_file(t.path("long.ini"),
+             with("[HAL]\n", "[HAL]\nHALFILE = " + std::string(300, 'h') + ".hal\n"));
+  const RunResult long_name = run_taxopt("machine --from-linuxcnc-ini " + t.path("long.ini") +
+                                         " --out " + t.path("l.toml"));
+  INFO(long_name.err);
+  CHECK(long_name.code == 0);
+  CHECK_THAT(long_name.err, Catch::Contains("not read (not a .hal file here)"));
   // A FIFO is no configuration file: refused, not waited on.
   REQUIRE(run("mkfifo " + t.path("f.ini")).code == 0);
   const RunResult fifo = run_taxopt("machine --from-linuxcnc-ini " + t.path("f.ini"));

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <system_error>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/types.hpp"
@@ -161,7 +162,10 @@ ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path) {
       if (key == "HALFILE" || key == "POSTGUI_HALFILE") {
         if (v.text.rfind("LIB:", 0) == 0) continue;  // LinuxCNC's own library files
         const std::filesystem::path f = dir / v.text;
-        if (!std::filesystem::exists(f) || f.extension() != ".hal") {
+        // The error_code form: a name the system refuses (longer than NAME_MAX: a fuzzed INI)
+        // threw filesystem_error through the importer.
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(f, ec) || f.extension() != ".hal") {
           out.assumptions.push_back("HAL file " + v.text + " not read (not a .hal file here)");
           continue;
         }

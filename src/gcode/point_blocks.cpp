@@ -397,14 +397,20 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
   const auto fmt_feed = [&](double f) {
     return scheduled ? precise_feed(f, fd_, max_fd_) : fmt(f, fd_);
   };
+  // The feed of the unrounded move: its joint-space XYZ length (or, where X Y Z stand still,
+  // its turn in deg) over the block's time, in the program's units.
+  const double joint = (to - from).norm();
+  const double rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
+                                rad_to_deg(to_pose.c_rad - from_pose.c_rad));
+  const double unrounded = joint > 1e-9 ? joint * scale_ / minutes : rot / minutes;
   if (g_.feed_mode == FeedMode::InverseTime) return fmt_feed(1.0 / minutes);
   if (scheduled) {
     // The controller times the block from the written (rounded) words: so does F.
     const double len = (rounded(to * scale_) - rounded(from * scale_)).norm();
-    const double rot = std::hypot(
+    const double rounded_rot = std::hypot(
         round_to(rad_to_deg(to_pose.a_rad), d_) - round_to(rad_to_deg(from_pose.a_rad), d_),
         round_to(rad_to_deg(to_pose.c_rad), d_) - round_to(rad_to_deg(from_pose.c_rad), d_));
-    const double exact = (len > 0.0 ? len : rot) / minutes;
+    const double exact = (len > 0.0 ? len : rounded_rot) / minutes;
     // The feed the schedule asks for, before rounding: on blocks a few rounding steps long
     // the rounded length swings `exact` from block to block at one scheduled feed (a Fusion
     // inch file: F2.7528 ... F2.8724, +4.2 %, on blocks under 0.001 in). Where the block runs
@@ -415,26 +421,19 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
     // Where the schedule ramps or a limit holds the feed down, F follows it block by block:
     // held over a ramp, the jump after it broke a B axis's acceleration (2027 deg/s^2), and on
     // arcs at an acceleration limit a held block put X at 300.03 of its 300 mm/s^2.
-    const double joint_len = (to - from).norm() * scale_;
-    const double joint_rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
-                                        rad_to_deg(to_pose.c_rad - from_pose.c_rad));
-    const double asked = (joint_len > 1e-12 ? joint_len : joint_rot) / minutes;
-    const bool steady = std::abs(asked - last_asked_) <= 1e-9 * asked;
-    last_asked_ = asked;
+    const bool steady = std::abs(unrounded - last_asked_) <= 1e-9 * unrounded;
+    last_asked_ = unrounded;
     if (may_hold && steady && !last_feed_.empty() && exact > 0.0) {
       const double held = std::strtod(last_feed_.c_str(), nullptr);
-      const double slack = std::min(
-          0.05, std::sqrt(3.0) * std::pow(10.0, -d_) / std::max(len > 0.0 ? len : rot, 1e-300));
+      const double slack = std::min(0.05, std::sqrt(3.0) * std::pow(10.0, -d_) /
+                                              std::max(len > 0.0 ? len : rounded_rot, 1e-300));
       if (held <= exact && held >= exact * (1.0 - slack)) return last_feed_;
     }
     return fmt_feed(exact);
   }
   // Joint-space XYZ moves differ from the tip's: F makes the block take the time of the
   // tip at the programmed feed.
-  const double joint = (to - from).norm();
-  const double rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
-                                rad_to_deg(to_pose.c_rad - from_pose.c_rad));
-  return fmt(joint > 1e-9 ? joint * scale_ / minutes : rot / minutes, fd_);
+  return fmt(unrounded, fd_);
 }
 
 std::string ProgramWriter::linearised_feed(std::size_t i, const Vec3d& xyz, const FeedBlock& fb) {

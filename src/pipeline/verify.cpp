@@ -57,6 +57,16 @@ struct WrittenAxes {
   std::vector<Vec3d> xyz_w;
 };
 
+/// Point i's row of the CSV: the point as posted, its axes as written (WrittenAxes).
+void set_point_row(const CLPointd& posted, std::size_t i, const WrittenAxes& ax, PointRow& row) {
+  row.index = i;
+  row.line = posted.line;
+  row.tip_mm = posted.tip_mm;
+  row.axis = posted.axis;
+  row.a_deg = ax.a_w[i];
+  row.c_deg = ax.c_w[i];
+}
+
 /// A rotary axis that turns more than half a turn between two CL points of a feed move (a
 /// limited C unwinding there: an audit's C of [-200, 200] deg turned 356 deg inside a G1) sweeps
 /// the tool round while it cuts, part or no part: a problem where the ball's centre leaves its
@@ -179,13 +189,7 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
   }
   r.max_axis_change_deg =
       std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
-  PointRow& row = r.rows[i];
-  row.index = i;
-  row.line = want.line;
-  row.tip_mm = want.tip_mm;
-  row.axis = want.axis;
-  row.a_deg = ax.a_w[i];
-  row.c_deg = ax.c_w[i];
+  set_point_row(want, i, ax, r.rows[i]);
 }
 
 /// The round trip held to the written decimals' rounding, and that rounding to a finishing
@@ -389,13 +393,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     ax.a_w[i] = round_to(rad_to_deg(po.poses[i].a_rad), decimals);
     ax.c_w[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
     ax.xyz_w[i] = written_xyz_mm(machine, po.points[i].tip_mm, po.poses[i]);
-    PointRow& row = r.rows[i];
-    row.index = i;
-    row.line = po.points[i].line;
-    row.tip_mm = po.points[i].tip_mm;
-    row.axis = po.points[i].axis;
-    row.a_deg = ax.a_w[i];
-    row.c_deg = ax.c_w[i];
+    set_point_row(po.points[i], i, ax, r.rows[i]);
   }
   check_round_trip(run, o, po, r, res);
   check_turns_in_cut(run, o, ax, res);

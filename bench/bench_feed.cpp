@@ -20,7 +20,7 @@ namespace {
 
 FeedChain sine_chain(std::size_t n) {
   FeedChain c;
-  const ACMachined ac = default_ac_machine();
+  const MachineKinematicsd ac = default_machine_kinematics();
   const double w = 2.0 * Constants<double>::pi() / 40.0, step_mm = 0.2;
   Posed prev{};
   for (std::size_t i = 0; i < n; ++i) {
@@ -36,12 +36,12 @@ FeedChain sine_chain(std::size_t n) {
     for (Posed p : ac.inverse(normal)) {
       p.c_rad += 2.0 * Constants<double>::pi() *
                  std::round((prev.c_rad - p.c_rad) / (2.0 * Constants<double>::pi()));
-      const double e = std::hypot(p.a_rad - prev.a_rad, p.c_rad - prev.c_rad);
+      const double e = std::hypot(p.tilt_rad - prev.tilt_rad, p.c_rad - prev.c_rad);
       if (e < d) d = e, best = p;
     }
     prev = best;
     const Vec3d m = ac.to_machine_mm(tip, best);
-    c.joints.push_back({m.x(), m.y(), m.z(), rad_to_deg(best.a_rad), rad_to_deg(best.c_rad)});
+    c.joints.push_back({m.x(), m.y(), m.z(), rad_to_deg(best.tilt_rad), rad_to_deg(best.c_rad)});
     if (i > 0) c.min_time_s.push_back(60.0 * step_mm / 2000.0);  // 2000 mm/min
   }
   return c;

@@ -39,7 +39,7 @@ struct Case {
 Case slow_rotary(Case k) {
   k.name += ", slow A/C";
   k.machine.limits = default_joint_limits();
-  for (Joint j : {Joint::A, Joint::C}) {
+  for (Joint j : {Joint::Tilt, Joint::C}) {
     k.machine.limits[static_cast<std::size_t>(j)] = {20.0, 40.0, 0.0};
   }
   k.feed_schedule = true;

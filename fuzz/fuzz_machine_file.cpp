@@ -38,7 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const auto moves =
       taxopt::read_gcode_moves(prog.text, "fuzz program", m.gcode.dialect, prog.verbatim_lines,
-                               m.ac.tilt_letter(), prog.tool_calls);
+                               m.rotary.tilt_letter(), prog.tool_calls);
   for (const auto& g : moves) {
     if (!g.rapid && (!g.spindle_on || g.tool != 3)) __builtin_trap();
   }

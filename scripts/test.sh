@@ -34,12 +34,27 @@ for p in ac head; do rs274 -g build/in-memory-post/$p.ngc > build/in-memory-post
 echo "== the library shared, and both installs through pkg-config"
 # A shared build carries its private dependencies: the consumer finds Eigen only, links
 # libtaxopt alone, and runs the same job. pkg-config builds the consumer against each install
-# (the static one with --static: its private libraries).
+# (the static one with --static: its private libraries). The shared library exports what the
+# public headers declare TAXOPT_API and nothing else; the CLI, linked to it, is a user of that
+# API only and writes the same files as the static build's.
 shared="$PWD/build/install-shared"
-rm -rf "$shared" build/consumer-shared build/consumer-pc
+rm -rf "$shared" build/consumer-shared build/consumer-pc build/cli-shared
 cmake --preset shared
 cmake --build --preset shared -j "$jobs"
+python3 scripts/check_exports.py build/shared/libtaxopt.so include/taxopt
+for v in release shared; do
+  mkdir -p build/cli-shared/$v
+  ./build/$v/taxopt --in data/demo/sine.cls --part data/demo/sine.stl --quiet \
+    --gcode build/cli-shared/$v/demo.nc --points-csv build/cli-shared/$v/points.csv \
+    --out-cls build/cli-shared/$v/out.cls --html build/cli-shared/$v/demo.html
+done
+for f in demo.nc points.csv out.cls; do cmp build/cli-shared/release/$f build/cli-shared/shared/$f; done
 cmake --install build/shared --prefix "$shared"
+# Every installed header stands alone (a consumer includes any one first).
+for h in $(cd "$shared/include" && find taxopt -name '*.hpp' | sort); do
+  echo "#include <$h>" | g++ -std=c++17 -fsyntax-only -x c++ - -I"$shared/include" \
+    $(pkg-config --cflags eigen3)
+done
 cmake -S examples/consumer -B build/consumer-shared -G Ninja -DCMAKE_PREFIX_PATH="$shared"
 cmake --build build/consumer-shared
 needed=$(readelf -d build/consumer-shared/taxopt_consumer | grep NEEDED)

@@ -95,21 +95,22 @@ Sweep sweep(const std::vector<GcodeMove>& moves, const Machine& machine, const T
     if (a.positioning || b.positioning) continue;  // after a retract: not known in the part
     REQUIRE_FALSE(b.arc);
     ++s.blocks;
-    const Posed pa{a.a_deg * kDeg, a.c_deg * kDeg}, pb{b.a_deg * kDeg, b.c_deg * kDeg};
+    const Posed pa{a.tilt_deg * kDeg, a.c_deg * kDeg}, pb{b.tilt_deg * kDeg, b.c_deg * kDeg};
     const Vec3d tip_a = tip_of_written_mm(machine, a.xyz_mm, pa);
     const Vec3d tip_b = tip_of_written_mm(machine, b.xyz_mm, pb);
     const int n =
-        1 + static_cast<int>(
-                std::max((tip_b - tip_a).norm() / 0.25,
-                         std::max(std::abs(b.a_deg - a.a_deg), std::abs(b.c_deg - a.c_deg)) / 0.5));
+        1 + static_cast<int>(std::max(
+                (tip_b - tip_a).norm() / 0.25,
+                std::max(std::abs(b.tilt_deg - a.tilt_deg), std::abs(b.c_deg - a.c_deg)) / 0.5));
     for (int k = 0; k <= n; ++k) {
       const double u = static_cast<double>(k) / n;
-      const Posed pose{pa.a_rad + u * (pb.a_rad - pa.a_rad), pa.c_rad + u * (pb.c_rad - pa.c_rad)};
+      const Posed pose{pa.tilt_rad + u * (pb.tilt_rad - pa.tilt_rad),
+                       pa.c_rad + u * (pb.c_rad - pa.c_rad)};
       // TCP: the tip on the line; machine mode: the joints on theirs.
       const Vec3d tip =
           tcp ? Vec3d(tip_a + u * (tip_b - tip_a))
               : tip_of_written_mm(machine, a.xyz_mm + u * (b.xyz_mm - a.xyz_mm), pose);
-      const Vec3d axis = machine.ac.forward(pose);
+      const Vec3d axis = machine.rotary.forward(pose);
       const Vec3d centre = tip + kBallR * axis;
       ++s.samples;
       const double ball = distance_to(mesh, centre) - kBallR;
@@ -162,10 +163,10 @@ TEST_CASE(
         swept += o.verification.blocks_swept;
       }
       CHECK(swept > 0);
-      check_blocks(r.gcode, c.dialect, machine.ac.tilt_letter());
+      check_blocks(r.gcode, c.dialect, machine.rotary.tilt_letter());
       const std::vector<GcodeMove> moves =
           read_gcode_moves(r.gcode.text, "lip.nc", c.dialect, r.gcode.verbatim_lines,
-                           machine.ac.tilt_letter(), r.gcode.tool_calls);
+                           machine.rotary.tilt_letter(), r.gcode.tool_calls);
       const Sweep s = sweep(moves, machine, mesh);
       INFO("blocks " << s.blocks << ", samples " << s.samples << "; least ball gap "
                      << s.least_ball_gap_mm << " mm at G-code line " << s.worst_ball_line

@@ -53,8 +53,8 @@ TEST_CASE(
 
   // A tilt range the 20 deg axes cannot reach: a problem at the first point that fails.
   Machine narrow = default_machine();
-  narrow.ac.a.min_rad = deg_to_rad(-5.0);
-  narrow.ac.a.max_rad = deg_to_rad(5.0);
+  narrow.rotary.tilt.min_rad = deg_to_rad(-5.0);
+  narrow.rotary.tilt.max_rad = deg_to_rad(5.0);
   const JobResult out = run_job(tp, narrow, options);
   CHECK_FALSE(out.ok());
   REQUIRE(out.has(FindingCode::UnreachablePose));
@@ -70,7 +70,7 @@ TEST_CASE(
 
   // A slow rotary table at the programmed feed: velocity or acceleration above the limit.
   Machine slow = default_machine();
-  slow.limits[static_cast<std::size_t>(Joint::A)] = {0.5, 1.0, 0.0};
+  slow.limits[static_cast<std::size_t>(Joint::Tilt)] = {0.5, 1.0, 0.0};
   slow.limits[static_cast<std::size_t>(Joint::C)] = {0.5, 1.0, 0.0};
   options.method = Method::Paper;
   options.max_deviation_deg = 5.0;

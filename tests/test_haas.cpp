@@ -12,7 +12,7 @@
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/io/machine_file.hpp"
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -55,10 +55,10 @@ std::vector<Position> positions(const std::string& text, const std::string& star
   return out;
 }
 
-ACMachined machine_with(TiltAxis tilt) {
-  ACMachined m = default_ac_machine();
-  m.tilt = tilt;
-  m.a_axis_point_mm = tilt == TiltAxis::X ? Vec3d(0.0, 12.5, -80.0) : Vec3d(7.5, 0.0, -60.0);
+MachineKinematicsd machine_with(TiltAxis tilt) {
+  MachineKinematicsd m = default_machine_kinematics();
+  m.tilt_about = tilt;
+  m.tilt_axis_point_mm = tilt == TiltAxis::X ? Vec3d(0.0, 12.5, -80.0) : Vec3d(7.5, 0.0, -60.0);
   m.c_axis_point_mm = Vec3d(4.0, -3.0, 0.0);
   return m;
 }
@@ -72,15 +72,15 @@ TEST_CASE(
   std::mt19937 rng(19);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (TiltAxis tilt : {TiltAxis::X, TiltAxis::Y}) {
-    const ACMachined m = machine_with(tilt);
+    const MachineKinematicsd m = machine_with(tilt);
     INFO("tilt axis " << m.tilt_letter());
     int checked = 0;
     for (int trial = 0; trial < 500; ++trial) {
       const Vec3d v = Vec3d(u(rng), u(rng), u(rng)).normalized();
       if (!v.allFinite()) continue;
       const auto both = m.inverse(v);
-      CHECK(both[0].a_rad >= 0.0);
-      CHECK(both[1].a_rad <= 0.0);
+      CHECK(both[0].tilt_rad >= 0.0);
+      CHECK(both[1].tilt_rad <= 0.0);
       for (const Posed& p : both) {
         CHECK((m.forward(p) - v).norm() < 1e-12);
         // The tool axis, carried into the machine's frame with the part, is the spindle: +Z.
@@ -91,23 +91,22 @@ TEST_CASE(
         CHECK((m.from_machine_mm(m.to_machine_mm(q, p), p) - q).norm() < 1e-9);
       }
       // The mirror pose (-T, C + 180 deg) is the same axis.
-      const Posed mirror{-both[0].a_rad, both[0].c_rad + Constants<double>::pi()};
+      const Posed mirror{-both[0].tilt_rad, both[0].c_rad + Constants<double>::pi()};
       CHECK((m.forward(mirror) - v).norm() < 1e-12);
       ++checked;
     }
     CHECK(checked > 400);
     // The pole: every C gives the same axis, and the inverse puts A (or B) = 0.
     const auto pole = m.inverse(Vec3d::UnitZ());
-    CHECK(pole[0].a_rad == 0.0);
+    CHECK(pole[0].tilt_rad == 0.0);
     CHECK(m.at_pole(m.forward(Posed{0.0, 1.234})));
   }
   // B/C at (t, c) is A/C at (t, c + 90 deg).
-  const ACMachined ac = machine_with(TiltAxis::X), bc = machine_with(TiltAxis::Y);
+  const MachineKinematicsd ac = machine_with(TiltAxis::X), bc = machine_with(TiltAxis::Y);
   for (int trial = 0; trial < 100; ++trial) {
     const Posed p{u(rng) * 2.0, u(rng) * 3.0};
-    CHECK(
-        (bc.forward(p) - ac.forward(Posed{p.a_rad, p.c_rad + Constants<double>::pi() / 2})).norm() <
-        1e-12);
+    CHECK((bc.forward(p) - ac.forward(Posed{p.tilt_rad, p.c_rad + Constants<double>::pi() / 2}))
+              .norm() < 1e-12);
   }
 }
 
@@ -118,12 +117,12 @@ TEST_CASE("machine file: bc-table-table takes [axes.B] and the B pivot, refuses 
       "max_velocity_deg_s = 100\n[axes.C]\ncontinuous = true\n[pivot]\nb_axis_x = 1.5\n"
       "b_axis_z = -40\nc_axis_x = 2\nc_axis_y = 3\n[gcode]\ndialect = \"haas\"\n",
       "m.toml");
-  CHECK(m.ac.tilt == TiltAxis::Y);
-  CHECK(m.ac.tilt_letter() == 'B');
-  CHECK(m.ac.a.min_rad == Approx(deg_to_rad(-35.0)));
-  CHECK(m.ac.a_axis_point_mm.x() == 1.5);
-  CHECK(m.ac.a_axis_point_mm.z() == -40.0);
-  CHECK(m.limits[static_cast<std::size_t>(Joint::A)].max_velocity_per_s == 100.0);
+  CHECK(m.rotary.tilt_about == TiltAxis::Y);
+  CHECK(m.rotary.tilt_letter() == 'B');
+  CHECK(m.rotary.tilt.min_rad == Approx(deg_to_rad(-35.0)));
+  CHECK(m.rotary.tilt_axis_point_mm.x() == 1.5);
+  CHECK(m.rotary.tilt_axis_point_mm.z() == -40.0);
+  CHECK(m.limits[static_cast<std::size_t>(Joint::Tilt)].max_velocity_per_s == 100.0);
   CHECK(m.gcode.dialect == GcodeDialect::Haas);
   CHECK_THROWS_AS(parse_machine_toml("kinematics = \"bc-table-table\"\n[axes.A]\nmin_deg = -35\n"
                                      "max_deg = 120\n[axes.C]\ncontinuous = true\n",
@@ -225,7 +224,7 @@ TEST_CASE(
   for (std::size_t i = 0; i < moves.size(); ++i) {
     CHECK(moves[i].a == 0.0);  // no A axis on this machine: rs274's A stays put
     worst = std::max(
-        {worst, std::abs(moves[i].b - points[i].a_deg), std::abs(moves[i].c - points[i].c_deg)});
+        {worst, std::abs(moves[i].b - points[i].tilt_deg), std::abs(moves[i].c - points[i].c_deg)});
   }
   CHECK(worst < 1e-4);
   // The optimisers, the schedule and the checks work on the B/C machine as on the A/C.

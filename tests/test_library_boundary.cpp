@@ -182,16 +182,16 @@ TEST_CASE(
   const std::vector<Bad> bad = {
       {"A min above max",
        [](Machine& m) {
-         m.ac.a.min_rad = 1.0;
-         m.ac.a.max_rad = -1.0;
+         m.rotary.tilt.min_rad = 1.0;
+         m.rotary.tilt.max_rad = -1.0;
        },
-       "Machine::ac.a (A).min_rad must be <= max_rad"},
+       "Machine::rotary.tilt.min_rad must be <= max_rad"},
       {"a NaN C limit",
        [](Machine& m) {
-         m.ac.c.continuous = false;
-         m.ac.c.max_rad = kNaN;
+         m.rotary.c.continuous = false;
+         m.rotary.c.max_rad = kNaN;
        },
-       "Machine::ac.c.max_rad must be a number"},
+       "Machine::rotary.c.max_rad must be a number"},
       {"a NaN velocity limit", [](Machine& m) { m.limits[3].max_velocity_per_s = kNaN; },
        "Machine::limits[A].max_velocity_per_s"},
       {"a negative acceleration", [](Machine& m) { m.limits[0].max_accel_per_s2 = -1.0; },
@@ -210,9 +210,9 @@ TEST_CASE(
        "not written for the heidenhain dialect"},
       {"a free kinematics label", [](Machine& m) { m.kinematics = "head-table"; },
        "Machine::kinematics 'head-table' does not name this machine"},
-      {"B tilt named A/C", [](Machine& m) { m.ac.tilt = TiltAxis::Y; },
+      {"B tilt named A/C", [](Machine& m) { m.rotary.tilt_about = TiltAxis::Y; },
        "\"bc-table-table\" for a tilt about Y"},
-      {"a sense of 0", [](Machine& m) { m.ac.c.sense = 0; }, "Machine::ac.c.sense"},
+      {"a sense of 0", [](Machine& m) { m.rotary.c.sense = 0; }, "Machine::rotary.c.sense"},
       {"a feed ratio below 1", [](Machine& m) { m.gcode.max_feed_ratio = 0.5; },
        "Machine::gcode.max_feed_ratio"},
       {"a park outside the travel",

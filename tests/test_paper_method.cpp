@@ -14,7 +14,7 @@
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/io/mesh_file.hpp"
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -128,7 +128,7 @@ struct Judged {
 
 Judged judge(const std::vector<CanonMove>& moves, const GeneratedCl& cl, const TriangleMesh& mesh,
              const std::vector<FaceSphere>& spheres, const ToolOverrides& overrides) {
-  const ACMachined machine = default_ac_machine();
+  const MachineKinematicsd machine = default_machine_kinematics();
   // The bodies grown here by taxopt's default clearances (shank 0.5 mm, holder 1 mm, also
   // below its face): a point counts as a hit when the shank or holder comes closer than that.
   // The flutes are judged exact.

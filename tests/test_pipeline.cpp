@@ -12,12 +12,12 @@
 #include <sstream>
 
 #include "pipeline/stages.hpp"
+#include "plan/slerp.hpp"
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/job.hpp"
-#include "taxopt/plan/slerp.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -96,8 +96,8 @@ TEST_CASE(
       const PostedOperation& po = (*posted)[k];
       const Operationd& op = *ops[k].op;
       for (std::size_t i = 0; i < po.points.size(); ++i) {
-        CHECK(angle_between(machine.ac.forward(po.poses[i]), po.points[i].axis) < 1e-9);
-        CHECK(machine.ac.a.contains(po.poses[i].a_rad));
+        CHECK(angle_between(machine.rotary.forward(po.poses[i]), po.points[i].axis) < 1e-9);
+        CHECK(machine.rotary.tilt.contains(po.poses[i].tilt_rad));
         const Vec3d centre_in = op.points[i].tip_mm + 3.0 * op.points[i].axis;
         const Vec3d centre_out = po.points[i].tip_mm + 3.0 * po.points[i].axis;
         CHECK((centre_in - centre_out).norm() < 1e-9);
@@ -112,7 +112,7 @@ TEST_CASE(
       REQUIRE(w.point_moves[k].size() == po.points.size());
       for (std::size_t i = 0; i < po.points.size(); ++i) {
         const GcodeMove& m = *w.point_moves[k][i];
-        CHECK(std::abs(m.a_deg - rad_to_deg(po.poses[i].a_rad)) <= half_unit + 1e-9);
+        CHECK(std::abs(m.tilt_deg - rad_to_deg(po.poses[i].tilt_rad)) <= half_unit + 1e-9);
         CHECK(std::abs(m.c_deg - rad_to_deg(po.poses[i].c_rad)) <= half_unit + 1e-9);
         CHECK((m.xyz_mm - po.points[i].tip_mm).norm() <= std::sqrt(3.0) * half_unit + 1e-9);
       }
@@ -164,7 +164,8 @@ TEST_CASE(
         for (std::size_t i = 0; i < po.points.size(); ++i) {
           CHECK((po.points[i].axis - r.rows[i].axis).norm() == 0.0);
           CHECK((po.points[i].tip_mm - r.rows[i].tip_mm).norm() == 0.0);
-          CHECK(std::abs(rad_to_deg(po.poses[i].a_rad) - r.rows[i].a_deg) <= half_unit + 1e-9);
+          CHECK(std::abs(rad_to_deg(po.poses[i].tilt_rad) - r.rows[i].tilt_axis_deg) <=
+                half_unit + 1e-9);
           CHECK(std::abs(rad_to_deg(po.poses[i].c_rad) - r.rows[i].c_deg) <= half_unit + 1e-9);
           turned = turned || angle_between(po.points[i].axis, tp.operations[k].points[i].axis) >
                                  deg_to_rad(0.5);
@@ -184,8 +185,8 @@ TEST_CASE(
   const GeneratedCl g = raster_cl(parts.front(), 3.0, 20.0, 1, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0);
   const Toolpath tp = parse_cl(g.text, "p.cls");
   Machine narrow = machine;
-  narrow.ac.a.min_rad = deg_to_rad(-5.0);
-  narrow.ac.a.max_rad = deg_to_rad(5.0);
+  narrow.rotary.tilt.min_rad = deg_to_rad(-5.0);
+  narrow.rotary.tilt.max_rad = deg_to_rad(5.0);
   JobOptions options;
   options.method = Method::None;
   const AxisPlan bad = plan_axes(tp, narrow, options);

@@ -56,7 +56,7 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
     if (!m.retract && m.tool <= 0) ++b.no_tool;
     if (!m.rapid && !m.spindle_on) ++b.spindle_off;
     if (prev && m.rapid && !m.positioning && !prev->positioning &&
-        std::max(std::abs(m.a_deg - prev->a_deg), std::abs(m.c_deg - prev->c_deg)) >
+        std::max(std::abs(m.tilt_deg - prev->tilt_deg), std::abs(m.c_deg - prev->c_deg)) >
             threshold_deg + 1e-9) {
       ++b.index;
     }
@@ -65,12 +65,12 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
       after_retract = true;
       xy_given = false;
     } else if (after_retract && (m.given & 4u) && !(m.given & 3u) && !xy_given &&
-               !(prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
+               !(prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg))) {
       // straight down to the clearance height
     } else if (after_retract && (m.given & 4u)) {
       // Straight down from the XY move, or along the tool axis (A/C: i = sin A sin C,
       // j = -sin A cos C, k = cos A), as CAM links an approach.
-      const double a = m.a_deg * M_PI / 180.0, c = m.c_deg * M_PI / 180.0;
+      const double a = m.tilt_deg * M_PI / 180.0, c = m.c_deg * M_PI / 180.0;
       const Vec3d axis(std::sin(a) * std::sin(c), -std::sin(a) * std::cos(c), std::cos(a));
       const Vec3d d = prev ? Vec3d(m.xyz_mm - prev->xyz_mm) : Vec3d::Zero();
       const bool along = d.norm() > 1e-9 && std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
@@ -83,7 +83,7 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
     }
     prev = &m;
   }
-  b.home_at_end = !moves.empty() && moves.back().a_deg == 0.0 && moves.back().c_deg == 0.0;
+  b.home_at_end = !moves.empty() && moves.back().tilt_deg == 0.0 && moves.back().c_deg == 0.0;
   return b;
 }
 
@@ -693,7 +693,7 @@ TEST_CASE(
       CHECK(moves.back().line == static_cast<int>(at) + 1);
       CHECK(moves.back().retract);
       CHECK(moves.back().given == 3u);  // X and Y
-      CHECK(moves[moves.size() - 2].a_deg == 0.0);
+      CHECK(moves[moves.size() - 2].tilt_deg == 0.0);
       CHECK(moves[moves.size() - 2].c_deg == 0.0);
       if (std::string(dialect) == "linuxcnc" && have_rs274()) {
         std::vector<CanonMove> pts, all;
@@ -767,7 +767,7 @@ TEST_CASE(
           continue;
         }
         REQUIRE_FALSE(r.gcode.text.empty());
-        check_blocks(r.gcode, machine.gcode.dialect, machine.ac.tilt_letter());
+        check_blocks(r.gcode, machine.gcode.dialect, machine.rotary.tilt_letter());
         arcs += r.gcode.arcs_kept;
         index_moves += r.gcode.index_moves;
         linearised += r.gcode.linearised_blocks;

@@ -49,11 +49,11 @@ Checked check_against(const std::string& ngc, const GeneratedCl& g, const Machin
   for (const CanonMove& cm : out.moves) {
     const Posed pose{deg_to_rad(cm.a), deg_to_rad(cm.c)};
     const Vec3d xyz = Vec3d(cm.x, cm.y, cm.z) * unit_mm;
-    const Vec3d tip = machine ? m.ac.from_machine_mm(xyz, pose) : xyz;
+    const Vec3d tip = machine ? m.rotary.from_machine_mm(xyz, pose) : xyz;
     // In machine mode compare in the machine's own coordinates, as the convention defines them.
     const double off = i >= g.tips_mm.size() ? 1e9
-                       : machine             ? (xyz - m.ac.to_machine_mm(g.tips_mm[i], pose)).norm()
-                                             : (tip - g.tips_mm[i]).norm();
+                       : machine ? (xyz - m.rotary.to_machine_mm(g.tips_mm[i], pose)).norm()
+                                 : (tip - g.tips_mm[i]).norm();
     if (machine && off > 0.002 && i > 0 && i < g.tips_mm.size()) {
       const Vec3d a = g.tips_mm[i - 1], b = g.tips_mm[i];
       const double w = std::clamp((tip - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
@@ -73,7 +73,7 @@ Checked check_against(const std::string& ngc, const GeneratedCl& g, const Machin
     REQUIRE((cm.feed == !g.rapid[i] || joint_safe_rapid));
     out.max_tip_mm = std::max(out.max_tip_mm, off);
     out.max_axis_deg =
-        std::max(out.max_axis_deg, rad_to_deg(angle_between(m.ac.forward(pose), g.axes[i])));
+        std::max(out.max_axis_deg, rad_to_deg(angle_between(m.rotary.forward(pose), g.axes[i])));
     if (i > 0 && cm.feed) {
       out.max_c_step_feed_deg = std::max(out.max_c_step_feed_deg, std::abs(cm.c - last_c));
     }
@@ -175,7 +175,7 @@ TEST_CASE("rs274: sense -1 writes mirrored A and C for the same tool axes",
   for (std::size_t i = 0; i < plus.size(); ++i) {
     CHECK(minus[i].a == Approx(-plus[i].a).margin(1e-4));
     CHECK(minus[i].c == Approx(-plus[i].c).margin(1e-4));
-    const Vec3d v = mm.ac.forward({deg_to_rad(minus[i].a), deg_to_rad(minus[i].c)});
+    const Vec3d v = mm.rotary.forward({deg_to_rad(minus[i].a), deg_to_rad(minus[i].c)});
     CHECK(rad_to_deg(angle_between(v, g.axes[i])) <= 0.01);
   }
 }
@@ -217,7 +217,7 @@ TEST_CASE("rs274: every real CL file posts to G-code rs274 accepts, move for mov
     }
     REQUIRE(moves.size() == ours.size());
     for (std::size_t i = 0; i < ours.size(); ++i) {
-      REQUIRE(moves[i].a == Approx(ours[i].a_deg).margin(1e-4));
+      REQUIRE(moves[i].a == Approx(ours[i].tilt_deg).margin(1e-4));
       REQUIRE(moves[i].c == Approx(ours[i].c_deg).margin(1e-4));
     }
     // The whole path as rs274 moves the tip (TCP mode), from the first point on.
@@ -443,23 +443,23 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   const Machine preset =
       read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
   // The sample's HAL: y-offset 20, z-offset 10, rot points 0; its [AXIS_*] limits.
-  CHECK(imported.ac.a_axis_point_mm.isApprox(Vec3d(0, 20, 10)));
-  CHECK(imported.ac.c_axis_point_mm.norm() == 0.0);
-  CHECK(rad_to_deg(imported.ac.a.min_rad) == Approx(-100));
-  CHECK(rad_to_deg(imported.ac.a.max_rad) == Approx(50));
-  CHECK(imported.ac.a.sense == -1);
-  CHECK(imported.ac.c.sense == -1);
-  CHECK(imported.limits[static_cast<std::size_t>(Joint::A)].max_velocity_per_s == 30.0);
+  CHECK(imported.rotary.tilt_axis_point_mm.isApprox(Vec3d(0, 20, 10)));
+  CHECK(imported.rotary.c_axis_point_mm.norm() == 0.0);
+  CHECK(rad_to_deg(imported.rotary.tilt.min_rad) == Approx(-100));
+  CHECK(rad_to_deg(imported.rotary.tilt.max_rad) == Approx(50));
+  CHECK(imported.rotary.tilt.sense == -1);
+  CHECK(imported.rotary.c.sense == -1);
+  CHECK(imported.limits[static_cast<std::size_t>(Joint::Tilt)].max_velocity_per_s == 30.0);
   CHECK(imported.linear_range[1].min_mm == -100.0);
   CHECK(imported.gcode.program.tcp_on == std::vector<std::string>{"M428"});
   CHECK(imported.gcode.program.retract_z_mm == 120.0);
   // The preset says the same.
-  CHECK(preset.ac.a_axis_point_mm == imported.ac.a_axis_point_mm);
-  CHECK(preset.ac.c_axis_point_mm == imported.ac.c_axis_point_mm);
-  CHECK(preset.ac.a.min_rad == imported.ac.a.min_rad);
-  CHECK(preset.ac.a.max_rad == imported.ac.a.max_rad);
-  CHECK(preset.ac.c.min_rad == imported.ac.c.min_rad);
-  CHECK(preset.ac.c.max_rad == imported.ac.c.max_rad);
+  CHECK(preset.rotary.tilt_axis_point_mm == imported.rotary.tilt_axis_point_mm);
+  CHECK(preset.rotary.c_axis_point_mm == imported.rotary.c_axis_point_mm);
+  CHECK(preset.rotary.tilt.min_rad == imported.rotary.tilt.min_rad);
+  CHECK(preset.rotary.tilt.max_rad == imported.rotary.tilt.max_rad);
+  CHECK(preset.rotary.c.min_rad == imported.rotary.c.min_rad);
+  CHECK(preset.rotary.c.max_rad == imported.rotary.c.max_rad);
   for (std::size_t j = 0; j < kJointCount; ++j) {
     CHECK(preset.limits[j].max_velocity_per_s == imported.limits[j].max_velocity_per_s);
     CHECK(preset.limits[j].max_accel_per_s2 == imported.limits[j].max_accel_per_s2);
@@ -514,15 +514,15 @@ TEST_CASE(
   const Machine imported = read_machine_file(dir.path("m.toml"));
   const Machine preset = read_machine_file(std::string(TAXOPT_SOURCE_DIR) +
                                            "/data/machines/linuxcnc-xyzbc-trt-sample.toml");
-  CHECK(imported.ac.tilt == TiltAxis::Y);
+  CHECK(imported.rotary.tilt_about == TiltAxis::Y);
   // trtfuncs.c: joints = Rot(Y, B)(Rot(Z, C)(p - rot) - d) + d + rot, d = (x-offset 0 z-offset)
   // with the sample's x-offset -20, z-offset -15: the B axis through (-20, 0, -15).
-  CHECK(imported.ac.a_axis_point_mm.isApprox(Vec3d(-20, 0, -15)));
-  CHECK(imported.ac.a.sense == -1);
-  CHECK(imported.ac.c.sense == -1);
+  CHECK(imported.rotary.tilt_axis_point_mm.isApprox(Vec3d(-20, 0, -15)));
+  CHECK(imported.rotary.tilt.sense == -1);
+  CHECK(imported.rotary.c.sense == -1);
   // [AXIS_B] gives +-36000, joint 3 (B in COORDINATES = XYZBC) -100 .. 50.
-  CHECK(rad_to_deg(imported.ac.a.min_rad) == Approx(-100));
-  CHECK(rad_to_deg(imported.ac.a.max_rad) == Approx(50));
+  CHECK(rad_to_deg(imported.rotary.tilt.min_rad) == Approx(-100));
+  CHECK(rad_to_deg(imported.rotary.tilt.max_rad) == Approx(50));
   CHECK(imported.gcode.program.tcp_on == std::vector<std::string>{"M428"});
   // The machine-mode convention reproduces trtfuncs.c's inverse kinematics (written out here
   // from its formula) at a few poses.
@@ -536,15 +536,15 @@ TEST_CASE(
                        -std::cos(c) * std::sin(b) * p.x() + std::sin(c) * std::sin(b) * p.y() +
                            std::cos(b) * p.z() + std::sin(b) * dx - std::cos(b) * dz + dz);
       // Written B and C are the machine's values: the pose holds them (sense on the axes).
-      const Vec3d ours = imported.ac.to_machine_mm(p, Posed{b, c});
+      const Vec3d ours = imported.rotary.to_machine_mm(p, Posed{b, c});
       CHECK((ours - lcnc).norm() < 1e-9);
     }
   }
-  CHECK(preset.ac.a_axis_point_mm == imported.ac.a_axis_point_mm);
-  CHECK(preset.ac.a.min_rad == imported.ac.a.min_rad);
-  CHECK(preset.ac.a.max_rad == imported.ac.a.max_rad);
-  CHECK(preset.ac.a.sense == imported.ac.a.sense);
-  CHECK(preset.ac.c.sense == imported.ac.c.sense);
+  CHECK(preset.rotary.tilt_axis_point_mm == imported.rotary.tilt_axis_point_mm);
+  CHECK(preset.rotary.tilt.min_rad == imported.rotary.tilt.min_rad);
+  CHECK(preset.rotary.tilt.max_rad == imported.rotary.tilt.max_rad);
+  CHECK(preset.rotary.tilt.sense == imported.rotary.tilt.sense);
+  CHECK(preset.rotary.c.sense == imported.rotary.c.sense);
   for (std::size_t j = 0; j < kJointCount; ++j) {
     CHECK(preset.limits[j].max_velocity_per_s == imported.limits[j].max_velocity_per_s);
     CHECK(preset.limits[j].max_accel_per_s2 == imported.limits[j].max_accel_per_s2);

@@ -105,14 +105,14 @@ taxopt::Machine bridge_mill() {
   taxopt::Machine m = taxopt::default_machine();
   m.name = "bridge-mill-in-code";
   m.kinematics = "bc-head-head";
-  m.ac.tilt = taxopt::TiltAxis::Y;
-  m.ac.layout = taxopt::RotaryLayout::HeadHead;
+  m.rotary.tilt_about = taxopt::TiltAxis::Y;
+  m.rotary.layout = taxopt::RotaryLayout::HeadHead;
   const double deg = std::acos(-1.0) / 180.0;
-  m.ac.a.min_rad = -120.0 * deg;
-  m.ac.a.max_rad = 120.0 * deg;
-  m.ac.a.sense = -1;
-  m.ac.c.continuous = true;
-  m.ac.c.sense = 1;
+  m.rotary.tilt.min_rad = -120.0 * deg;
+  m.rotary.tilt.max_rad = 120.0 * deg;
+  m.rotary.tilt.sense = -1;
+  m.rotary.c.continuous = true;
+  m.rotary.c.sense = 1;
   m.head_pivot_length_mm = 250.0;
   return m;
 }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/stop.hpp"
 #include "taxopt/core/toolpath.hpp"
 #include "taxopt/core/version.hpp"
@@ -27,7 +28,7 @@ namespace taxopt {
 /// Tool-axis method. `None` keeps the input axes (post-processing only).
 enum class Method { None, Paper, Global };
 /// "none", "paper", "global".
-const char* to_string(Method method);
+TAXOPT_API const char* to_string(Method method);
 
 /// Clearances the shank (past the flutes) and the holder keep from the part when neither the
 /// options nor the machine file give them, mm.
@@ -172,9 +173,9 @@ inline constexpr PointMark kAllPointMarks[] = {
 /// "point_collision", "flute_gouge", "move_collision", "kept_collision", "kept_peak_rate",
 /// "kept_join", "no_free_axis", "axis_limit", "travel_exceeded", "c_flip", "c_flip_before",
 /// "not_checked".
-const char* to_string(PointMark mark);
+TAXOPT_API const char* to_string(PointMark mark);
 /// The marks set in `marks`, in bit order, joined by `;` (the CSV's `findings`).
-std::string point_marks_text(std::uint32_t marks);
+TAXOPT_API std::string point_marks_text(std::uint32_t marks);
 
 /// Per-point values for the CSV (after optimisation).
 struct PointRow {
@@ -188,7 +189,7 @@ struct PointRow {
   double arc_mm = 0.0;
   Vec3d tip_mm = Vec3d::Zero();
   Vec3d axis = Vec3d::UnitZ();
-  double a_deg = 0.0, c_deg = 0.0;
+  double tilt_axis_deg = 0.0, c_deg = 0.0;
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
   /// Contact geometry, when a part was given and the ball touches it here: the designed
   /// surface's contact and normal (ContactPoint::surface_cc_mm, surface_normal), the input
@@ -201,7 +202,7 @@ struct PointRow {
   SurfacePlace place = SurfacePlace::Smooth;
   double normal_uncertainty_deg = 0.0;
   /// The same with the input axes as the machine would have run them (the "before").
-  double a_before_deg = 0.0, c_before_deg = 0.0;
+  double tilt_axis_before_deg = 0.0, c_before_deg = 0.0;
   double omega_before_deg_s = 0.0, accel_before_deg_s2 = 0.0;
   /// A key point of the optimiser: an end of one of its intervals (segment boundary).
   bool key = false;
@@ -386,11 +387,11 @@ enum class FindingCode {
   EndPoseNotHome,       ///< end_pose "home": the program ends away from the rotaries' home
 };
 /// "no_part", "no_free_axis", ...: the report's `findings[].code`.
-const char* to_string(FindingCode code);
+TAXOPT_API const char* to_string(FindingCode code);
 
 enum class Severity { Safety, Warning, Problem };
 /// "safety", "warning", "problem".
-const char* to_string(Severity severity);
+TAXOPT_API const char* to_string(Severity severity);
 
 /// One finding: its kind, its severity, where (an operation's index into the toolpath, a CL
 /// line and a line of the written G-code, each when known) and a message for display.
@@ -408,7 +409,7 @@ struct Finding {
 
 /// Result of run_job. `ok()` is false when the output could not be made safe: `problems`
 /// says why (one line each, with the CL line); the G-code is then not to be used.
-struct JobResult {
+struct TAXOPT_API JobResult {
   std::vector<OperationResult> operations;
   /// Everything below as structured findings, in the order found.
   std::vector<Finding> findings;
@@ -425,7 +426,7 @@ struct JobResult {
   std::string out_cls;
   LengthUnit gcode_units = LengthUnit::Millimetre;
   /// The machine's tilt axis letter, 'A' (A/C) or 'B' (B/C): the plots' titles name it (the rows
-  /// keep its value in a_deg, the CSV in A_deg: docs/kinematics.md).
+  /// keep its value in tilt_deg, the CSV in A_deg: docs/kinematics.md).
   char tilt_letter = 'A';
   bool ok() const { return problems.empty(); }
 };
@@ -440,9 +441,9 @@ struct JobResult {
 /// sampled feed points is taken, and `note` says which and why. @throws InputError when the
 /// file's applied MSYS records name different frames (one mesh cannot be in all of them), when
 /// the mesh fits the points in neither frame, or when a vertex is not finite.
-TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units,
-                           std::string* note = nullptr,
-                           std::optional<double> ball_radius_mm = std::nullopt);
+TAXOPT_API TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh,
+                                      LengthUnit mesh_units, std::string* note = nullptr,
+                                      std::optional<double> ball_radius_mm = std::nullopt);
 
 /// Tool dimensions as a user gives them, in one length unit (the CLI: the CL file's).
 struct ToolDimensions {
@@ -452,27 +453,28 @@ struct ToolDimensions {
 };
 /// The same in mm, as JobOptions::tool takes them. @throws InputError for one that is not a
 /// positive number.
-ToolOverrides tool_overrides(const ToolDimensions& given);
+TAXOPT_API ToolOverrides tool_overrides(const ToolDimensions& given);
 
 /// Runs the job. @throws InputError for options that cannot apply (a method this build
 /// lacks) and for a part that does not fit the CL file (no point touches it, or a ball cuts
 /// into it: the CL line is named). Outcomes (out of limits, failed verification) are in
 /// JobResult::problems.
-JobResult run_job(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
+TAXOPT_API JobResult run_job(const Toolpath& toolpath, const Machine& machine,
+                             const JobOptions& options);
 
 /// The options a run applies, all defaults made explicit: the deviation cone (as given, else
 /// the paper's default with a part and at most kNoPartMaxDeviationDeg without one), the
 /// machine file's holder where the options name none (its radius, length and gauge length),
 /// and the clearances (as given, else the machine file's [checks], else the defaults). run_job
 /// runs with these; the report records them.
-JobOptions resolved_options(const JobOptions& given, const Machine& machine);
+TAXOPT_API JobOptions resolved_options(const JobOptions& given, const Machine& machine);
 
 /// The tool axes and machine poses of a run without G-code, for a post-processor that writes
 /// its own program: the stages of run_job up to posting (the options checked, the contacts, the
 /// method's axes with their guards, the machine's poses with the turns between passes), the
 /// same axes and poses run_job writes. Nothing here is verified as written (no read-back, no
 /// FCL check of the output, no dynamic limits): run_job does that.
-struct AxisPlan {
+struct TAXOPT_API AxisPlan {
   /// Per operation: the points with the planned axes and tips (the ball centres where the CL
   /// file put them; feeds as posted) and per point the machine's pose; empty when a pose is
   /// unreachable (a finding with FindingCode::UnreachablePose names the line).
@@ -485,7 +487,8 @@ struct AxisPlan {
   bool ok() const;
 };
 /// @throws InputError as run_job.
-AxisPlan plan_axes(const Toolpath& toolpath, const Machine& machine, const JobOptions& options);
+TAXOPT_API AxisPlan plan_axes(const Toolpath& toolpath, const Machine& machine,
+                              const JobOptions& options);
 
 /// What a report records of the run itself, so that it can be reproduced (given by the
 /// caller: the library does not know its command line or clock).
@@ -504,10 +507,11 @@ struct RunInfo {
 /// (resolved_options of the ones given) and every operation's tool model are recorded too; a null
 /// value comes with its reason
 /// (`null_reasons`); numbers are written with 12 significant digits at most, never -0.
-std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                        const JobOptions& options, const RunInfo& run = {});
+TAXOPT_API std::string report_json(const JobResult& result, const Toolpath& toolpath,
+                                   const Machine& machine, const JobOptions& options,
+                                   const RunInfo& run = {});
 
 /// Per-point CSV (CLI.md column names).
-std::string points_csv(const JobResult& result);
+TAXOPT_API std::string points_csv(const JobResult& result);
 
 }  // namespace taxopt

@@ -28,7 +28,7 @@ double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from, const
                               const Posed& to, double feed_mm_per_min) {
   const double tip_mm = (to_tip_mm - from_tip_mm).norm();
   const double rot_deg =
-      std::hypot(rad_to_deg(to.a_rad - from.a_rad), rad_to_deg(to.c_rad - from.c_rad));
+      std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
   // A move too small to time still gets a positive time: its words may differ after
   // rounding, and a feed schedule needs a bound for every move.
   return 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / feed_mm_per_min;

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "taxopt/core/types.hpp"
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt::controller {
 

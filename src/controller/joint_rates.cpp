@@ -9,7 +9,7 @@
 
 namespace taxopt {
 
-std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& from_tip_mm,
+std::vector<double> linearise_fractions(const MachineKinematicsd& machine, const Vec3d& from_tip_mm,
                                         const Posed& from, const Vec3d& to_tip_mm, const Posed& to,
                                         double tolerance_mm) {
   std::vector<double> at = {0.0, 1.0};
@@ -19,7 +19,7 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
   // Largest distance of the tip from the straight line between t0 and t1 while the joints
   // run linearly from their values at t0 to those at t1 (sampled; the deviation is smooth).
   const auto joints_at = [&](double t) {
-    const Posed pose{from.a_rad + t * (to.a_rad - from.a_rad),
+    const Posed pose{from.tilt_rad + t * (to.tilt_rad - from.tilt_rad),
                      from.c_rad + t * (to.c_rad - from.c_rad)};
     const Vec3d xyz =
         (t == 0.0 || t == 1.0)
@@ -36,7 +36,8 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
     constexpr int kSamples = 16;
     for (int s = 1; s < kSamples; ++s) {
       const double u = static_cast<double>(s) / kSamples;
-      const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad), p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+      const Posed pose{p0.tilt_rad + u * (p1.tilt_rad - p0.tilt_rad),
+                       p0.c_rad + u * (p1.c_rad - p0.c_rad)};
       const Vec3d tip = machine.from_machine_mm(x0 + u * (x1 - x0), pose);
       const Vec3d ab = b - a;
       const double len2 = ab.squaredNorm();
@@ -62,12 +63,13 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
   return at;
 }
 
-std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+std::pair<double, Joint> joint_velocity_rate_per_s(const MachineKinematicsd& ac,
+                                                   const JointLimits& limits,
                                                    const Vec3d& from_tip_mm, const Posed& from,
                                                    const Vec3d& to_tip_mm, const Posed& to) {
   // With A and C held the joints are an affine map of the tip: they move linearly, and the
   // chord (the schedule's own model) is exact.
-  const double turn_rad = std::hypot(to.a_rad - from.a_rad, to.c_rad - from.c_rad);
+  const double turn_rad = std::hypot(to.tilt_rad - from.tilt_rad, to.c_rad - from.c_rad);
   if (turn_rad == 0.0) return {std::numeric_limits<double>::infinity(), Joint::X};
   // Steps of at most 0.25 deg of turn (at most 64): the joints' rate of change varies by less
   // than the step's turn (in rad) relative within a step, which the margin below covers.
@@ -78,7 +80,7 @@ std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const J
   Vec3d prev = ac.to_machine_mm(from_tip_mm, from);
   for (int s = 1; s <= steps; ++s) {
     const double u = static_cast<double>(s) / steps;
-    const Posed pose{from.a_rad + u * (to.a_rad - from.a_rad),
+    const Posed pose{from.tilt_rad + u * (to.tilt_rad - from.tilt_rad),
                      from.c_rad + u * (to.c_rad - from.c_rad)};
     const Vec3d q = ac.to_machine_mm(from_tip_mm + u * d, pose);
     for (std::size_t j = 0; j < 3; ++j) {
@@ -95,11 +97,11 @@ std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const J
   return {rate * (1.0 - 1e-3 - turn_rad / steps), by};
 }
 
-std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
+std::optional<double> joint_safe_rate_per_s(const MachineKinematicsd& ac, const JointLimits& limits,
                                             const Vec3d& from_tip_mm, const Posed& from,
                                             const Vec3d& to_tip_mm, const Posed& to,
                                             bool held_pose) {
-  const double da_deg = rad_to_deg(to.a_rad - from.a_rad);
+  const double da_deg = rad_to_deg(to.tilt_rad - from.tilt_rad);
   const double dc_deg = rad_to_deg(to.c_rad - from.c_rad);
   const Vec3d d = to_tip_mm - from_tip_mm;
   const double axis_delta[kJointCount] = {d.x(), d.y(), d.z(), da_deg, dc_deg};

@@ -19,7 +19,7 @@ namespace taxopt::controller {
 /// block of X Y Z alone: LinuxCNC may blend it parabolically too (at half).
 void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_scale,
                      std::vector<JointPeak>& peaks) {
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   // The path u in [0, 1]: its velocity and acceleration limits from the axes that move.
   double u_vel = b.rate_per_s > 0.0 ? b.rate_per_s : std::numeric_limits<double>::infinity();
@@ -65,7 +65,7 @@ void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_sca
     JointPosition p{};
     for (std::size_t j = 0; j < kJointCount; ++j) p[j] = b.from[j] + u * (b.to[j] - b.from[j]);
     const Posed pose{deg_to_rad(p[kA]), deg_to_rad(p[kC])};
-    const Vec3d m = machine.ac.to_machine_mm(Vec3d(p[0], p[1], p[2]), pose);
+    const Vec3d m = machine.rotary.to_machine_mm(Vec3d(p[0], p[1], p[2]), pose);
     return JointPosition{m.x(), m.y(), m.z(), p[kA], p[kC]};
   };
   // The joints once per servo period from two windows before the block to two after it, the

@@ -526,11 +526,11 @@ std::vector<Vec3d> free_axes_of(const CSpaceGrid& grid, const ContactPoint& cp) 
 }
 
 std::vector<Posed> free_poses_of(const CSpaceGrid& grid, const ContactPoint& cp,
-                                 const ACMachined& machine) {
+                                 const MachineKinematicsd& machine) {
   std::vector<Posed> out;
   for (const Vec3d& v : free_axes_of(grid, cp)) {
     for (const Posed& p : machine.inverse(v)) {
-      if (machine.a.contains(p.a_rad)) {
+      if (machine.tilt.contains(p.tilt_rad)) {
         out.push_back(p);
         break;
       }

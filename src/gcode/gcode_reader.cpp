@@ -477,7 +477,7 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
   const double xyz_mm = to.arc ? arc_length_mm(from.xyz_mm, to) : (to.xyz_mm - from.xyz_mm).norm();
   // A move whose XYZ words repeat has a rounded distance of exactly zero.
   if (xyz_mm > 0.0) return 60.0 * xyz_mm / (to.feed * mm_per_unit(units));
-  return 60.0 * std::hypot(to.a_deg - from.a_deg, to.c_deg - from.c_deg) / to.feed;
+  return 60.0 * std::hypot(to.tilt_deg - from.tilt_deg, to.c_deg - from.c_deg) / to.feed;
 }
 
 }  // namespace taxopt

@@ -205,7 +205,8 @@ std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
   const PostedOperation& op = *op_;
   const Posed& pose = op.poses[i];
   const double turn_deg = std::max(
-      std::abs(round_to(rad_to_deg(pose.a_rad), d_) - round_to(rad_to_deg(prev_pose_.a_rad), d_)),
+      std::abs(round_to(rad_to_deg(pose.tilt_rad), d_) -
+               round_to(rad_to_deg(prev_pose_.tilt_rad), d_)),
       std::abs(round_to(rad_to_deg(pose.c_rad), d_) - round_to(rad_to_deg(prev_pose_.c_rad), d_)));
   if (!(turn_deg > g_.program.index_threshold_deg)) return i;
   // Up at the retract, the rapids after this one up to the next feed (or an event, which
@@ -258,12 +259,12 @@ void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& 
 }
 
 std::vector<double> ProgramWriter::linearised(const Vec3d& tip, const Posed& pose) const {
-  return linearise_fractions(machine_.ac, prev_tip_, prev_pose_, tip, pose,
+  return linearise_fractions(machine_.rotary, prev_tip_, prev_pose_, tip, pose,
                              g_.program.linearise_tolerance_mm);
 }
 
 Posed ProgramWriter::pose_at(const Posed& pose, double t) const {
-  return Posed{prev_pose_.a_rad + t * (pose.a_rad - prev_pose_.a_rad),
+  return Posed{prev_pose_.tilt_rad + t * (pose.tilt_rad - prev_pose_.tilt_rad),
                prev_pose_.c_rad + t * (pose.c_rad - prev_pose_.c_rad)};
 }
 
@@ -284,7 +285,7 @@ bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& wo
   }
   if (joint_safe_ && have_prev_) {
     const std::optional<double> rate = joint_safe_rate_per_s(
-        machine_.ac, limits_, prev_tip_, prev_pose_, p.tip_mm, pose, along_axis_leg_);
+        machine_.rotary, limits_, prev_tip_, prev_pose_, p.tip_mm, pose, along_axis_leg_);
     if (rate) {
       joint_safe_rapid(i, xyz, words, *rate);
       return true;
@@ -299,7 +300,7 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
   const CLPointd& p = op_->points[i];
   const Posed& pose = op_->poses[i];
   const double tip_mm = (p.tip_mm - prev_tip_).norm();
-  const double rot_deg = std::hypot(rad_to_deg(pose.a_rad - prev_pose_.a_rad),
+  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
                                     rad_to_deg(pose.c_rad - prev_pose_.c_rad));
   const double per_min = 60.0 * rate_per_s;
   const double feed = g_.feed_mode == FeedMode::InverseTime
@@ -384,7 +385,7 @@ std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const 
   const CLPointd& p = op_->points[i];
   const Posed& pose = op_->poses[i];
   const double tip_mm = (p.tip_mm - prev_tip_).norm();
-  const double rot_deg = std::hypot(rad_to_deg(pose.a_rad - prev_pose_.a_rad),
+  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
                                     rad_to_deg(pose.c_rad - prev_pose_.c_rad));
   const double tip_feed = tip_mm > 1e-9 ? tip_mm / programmed_min : rot_deg / programmed_min;
   const bool own = std::abs(tip_feed - p.feed_mm_per_min) <= 1e-9 * p.feed_mm_per_min;
@@ -400,7 +401,7 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
   // The feed of the unrounded move: its joint-space XYZ length (or, where X Y Z stand still,
   // its turn in deg) over the block's time, in the program's units.
   const double joint = (to - from).norm();
-  const double rot = std::hypot(rad_to_deg(to_pose.a_rad - from_pose.a_rad),
+  const double rot = std::hypot(rad_to_deg(to_pose.tilt_rad - from_pose.tilt_rad),
                                 rad_to_deg(to_pose.c_rad - from_pose.c_rad));
   const double unrounded = joint > 1e-9 ? joint * scale_ / minutes : rot / minutes;
   if (g_.feed_mode == FeedMode::InverseTime) return fmt_feed(1.0 / minutes);
@@ -408,7 +409,7 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
     // The controller times the block from the written (rounded) words: so does F.
     const double len = (rounded(to * scale_) - rounded(from * scale_)).norm();
     const double rounded_rot = std::hypot(
-        round_to(rad_to_deg(to_pose.a_rad), d_) - round_to(rad_to_deg(from_pose.a_rad), d_),
+        round_to(rad_to_deg(to_pose.tilt_rad), d_) - round_to(rad_to_deg(from_pose.tilt_rad), d_),
         round_to(rad_to_deg(to_pose.c_rad), d_) - round_to(rad_to_deg(from_pose.c_rad), d_));
     const double exact = (len > 0.0 ? len : rounded_rot) / minutes;
     // The feed the schedule asks for, before rounding: on blocks a few rounding steps long

@@ -54,7 +54,7 @@ Vec3d ProgramWriter::out_xyz(const Vec3d& tip, const Posed& pose) const {
 }
 
 std::string ProgramWriter::angle_words(const Posed& pose) const {
-  return tilt_word_ + dialect_.number(rad_to_deg(pose.a_rad), d_) + " C" +
+  return tilt_word_ + dialect_.number(rad_to_deg(pose.tilt_rad), d_) + " C" +
          dialect_.number(rad_to_deg(pose.c_rad), d_);
 }
 
@@ -269,7 +269,7 @@ void ProgramWriter::event(const ProgramEvent& e) {
 
 void ProgramWriter::turn_table(const Posed& pose) {
   if (!retracts_) return;
-  line(dialect_.rapid() + tilt_word_ + dialect_.number(rad_to_deg(pose.a_rad), d_) + " C" +
+  line(dialect_.rapid() + tilt_word_ + dialect_.number(rad_to_deg(pose.tilt_rad), d_) + " C" +
            dialect_.number(rad_to_deg(pose.c_rad), d_),
        BlockKind::TableTurn);
 }

@@ -37,7 +37,7 @@ class ProgramWriter {
         limits_(effective_limits(machine)),
         retract_z_(dialect_.number(g_.program.retract_z_mm * scale_, d_)),
         // The tilt axis's word: A or B (ac_machine.hpp).
-        tilt_word_(std::string(" ") + machine.ac.tilt_letter()) {}
+        tilt_word_(std::string(" ") + machine.rotary.tilt_letter()) {}
   GcodeProgram write(const std::vector<std::string>& comments) {
     program_start(comments);
     for (std::size_t k = 0; k < ops_.size(); ++k) operation(k);

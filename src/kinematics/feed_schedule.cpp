@@ -52,7 +52,7 @@ const char* to_string(Joint joint) {
 }
 
 std::string joint_name(Joint joint, char tilt_letter) {
-  return joint == Joint::A ? std::string(1, tilt_letter) : std::string(to_string(joint));
+  return joint == Joint::Tilt ? std::string(1, tilt_letter) : std::string(to_string(joint));
 }
 
 double FeedSchedule::total_time_s() const {

@@ -53,7 +53,7 @@ void check_range(const std::string& field, double v, double lo, double hi,
 }
 
 void check_rotary(const char* name, const RotaryAxis<double>& axis) {
-  const std::string f = std::string("ac.") + name;
+  const std::string f = std::string("rotary.") + name;
   if (axis.sense != 1 && axis.sense != -1) {
     refuse(f + ".sense", "+1 or -1", static_cast<double>(axis.sense));
   }
@@ -66,32 +66,34 @@ void check_rotary(const char* name, const RotaryAxis<double>& axis) {
 }  // namespace
 
 void validate(const Machine& m) {
-  const bool bc = m.ac.tilt == TiltAxis::Y;
+  const bool bc = m.rotary.tilt_about == TiltAxis::Y;
   TiltAxis tilt = TiltAxis::X;
   RotaryLayout layout = RotaryLayout::TableTable;
-  if (!kinematics_layout(m.kinematics, tilt, layout) || tilt != m.ac.tilt ||
-      layout != m.ac.layout) {
-    const char* where = m.ac.layout == RotaryLayout::HeadHead    ? "-head-head"
-                        : m.ac.layout == RotaryLayout::HeadTable ? "-head-table"
-                                                                 : "-table-table";
+  if (!kinematics_layout(m.kinematics, tilt, layout) || tilt != m.rotary.tilt_about ||
+      layout != m.rotary.layout) {
+    const char* where = m.rotary.layout == RotaryLayout::HeadHead    ? "-head-head"
+                        : m.rotary.layout == RotaryLayout::HeadTable ? "-head-table"
+                                                                     : "-table-table";
     throw InputError("Machine::kinematics '" + m.kinematics + "' does not name this machine: \"" +
                      (bc ? "bc" : "ac") + where + "\" for a tilt about " + (bc ? "Y" : "X") +
-                     " (ac.tilt) and its ac.layout (" + kKinematicsNames + ")");
+                     " (rotary.tilt_about) and its rotary.layout (" + kKinematicsNames + ")");
   }
-  if (m.ac.layout != RotaryLayout::TableTable) {
+  if (m.rotary.layout != RotaryLayout::TableTable) {
     check_range("head_pivot_length_mm", m.head_pivot_length_mm, 0.0, 5000.0, "within [0, 5000]");
-    check_range("ac.head_length_mm", m.ac.head_length_mm, 0.0, 10000.0, "within [0, 10000]");
+    check_range("rotary.head_length_mm", m.rotary.head_length_mm, 0.0, 10000.0,
+                "within [0, 10000]");
     if (m.gcode.mode == GcodeMode::Machine) {
       throw InputError("Machine::gcode.mode Machine on a " + m.kinematics +
                        " machine is not written (each block would depend on the tool's length "
                        "about the head's pivot): use GcodeMode::Tcp");
     }
   }
-  check_rotary(bc ? "a (B)" : "a (A)", m.ac.a);
-  check_rotary("c", m.ac.c);
+  check_rotary("tilt", m.rotary.tilt);
+  check_rotary("c", m.rotary.c);
   for (int q = 0; q < 3; ++q) {
-    const std::string f = std::string("ac.") + (q == 0 ? "c_axis_point_mm" : "a_axis_point_mm");
-    const Vec3d& p = q == 0 ? m.ac.c_axis_point_mm : m.ac.a_axis_point_mm;
+    const std::string f =
+        std::string("rotary.") + (q == 0 ? "c_axis_point_mm" : "tilt_axis_point_mm");
+    const Vec3d& p = q == 0 ? m.rotary.c_axis_point_mm : m.rotary.tilt_axis_point_mm;
     if (!p.allFinite()) refuse(f, "finite", p.norm());
   }
   const char* joint = "XYZAC";
@@ -137,7 +139,7 @@ void validate(const Machine& m) {
               "within [0, 1000]");
   check_range("gcode.program.index_threshold_deg", t.index_threshold_deg, 0.0, 360.0,
               "within [0, 360]");
-  if (t.end_pose == EndPose::Home && (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+  if (t.end_pose == EndPose::Home && (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
     throw InputError(
         "Machine::gcode.program.end_pose Home turns the rotaries to 0, outside their ranges");
   }
@@ -172,7 +174,7 @@ JointLimits default_joint_limits() {
   JointLimits l;
   for (Joint j : {Joint::X, Joint::Y, Joint::Z})
     l[static_cast<std::size_t>(j)] = {500.0, 3000.0, 0.0};
-  l[static_cast<std::size_t>(Joint::A)] = {150.0, 1000.0, 0.0};
+  l[static_cast<std::size_t>(Joint::Tilt)] = {150.0, 1000.0, 0.0};
   l[static_cast<std::size_t>(Joint::C)] = {240.0, 1500.0, 0.0};
   return l;
 }

@@ -7,10 +7,10 @@ namespace taxopt {
 
 std::vector<double> segment_times_s(const std::vector<double>& length_mm,
                                     const std::vector<double>& feed_mm_per_min,
-                                    const std::vector<double>& a_deg,
+                                    const std::vector<double>& tilt_deg,
                                     const std::vector<double>& c_deg) {
   const std::size_t m = length_mm.size();
-  if (feed_mm_per_min.size() != m || a_deg.size() != m + 1 || c_deg.size() != m + 1) {
+  if (feed_mm_per_min.size() != m || tilt_deg.size() != m + 1 || c_deg.size() != m + 1) {
     throw std::invalid_argument("segment_times_s: sizes do not match");
   }
   std::vector<double> t(m, 0.0);
@@ -20,54 +20,54 @@ std::vector<double> segment_times_s(const std::vector<double>& length_mm,
     if (length_mm[i] > 1e-9) {
       t[i] = length_mm[i] / per_s;
     } else {
-      const double rot = std::hypot(a_deg[i + 1] - a_deg[i], c_deg[i + 1] - c_deg[i]);
+      const double rot = std::hypot(tilt_deg[i + 1] - tilt_deg[i], c_deg[i + 1] - c_deg[i]);
       t[i] = rot / per_s;
     }
   }
   return t;
 }
 
-RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
+RotaryKinematics rotary_kinematics(const std::vector<double>& tilt_deg,
                                    const std::vector<double>& c_deg,
                                    const std::vector<double>& length_mm,
                                    const std::vector<double>& feed_mm_per_min) {
-  const std::size_t n = a_deg.size();
+  const std::size_t n = tilt_deg.size();
   RotaryKinematics k;
-  for (auto* v : {&k.omega_a_deg_s, &k.omega_c_deg_s, &k.omega_deg_s, &k.accel_a_deg_s2,
+  for (auto* v : {&k.omega_tilt_deg_s, &k.omega_c_deg_s, &k.omega_deg_s, &k.accel_tilt_deg_s2,
                   &k.accel_c_deg_s2, &k.accel_deg_s2}) {
     v->assign(n, 0.0);
   }
   if (n < 2) return k;
-  return rotary_kinematics_from_times(a_deg, c_deg,
-                                      segment_times_s(length_mm, feed_mm_per_min, a_deg, c_deg));
+  return rotary_kinematics_from_times(tilt_deg, c_deg,
+                                      segment_times_s(length_mm, feed_mm_per_min, tilt_deg, c_deg));
 }
 
-RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& a_deg,
+RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& tilt_deg,
                                               const std::vector<double>& c_deg,
                                               const std::vector<double>& t) {
-  const std::size_t n = a_deg.size();
+  const std::size_t n = tilt_deg.size();
   if (c_deg.size() != n || (n > 0 && t.size() + 1 != n)) {
     throw std::invalid_argument("rotary_kinematics_from_times: sizes do not match");
   }
   RotaryKinematics k;
-  for (auto* v : {&k.omega_a_deg_s, &k.omega_c_deg_s, &k.omega_deg_s, &k.accel_a_deg_s2,
+  for (auto* v : {&k.omega_tilt_deg_s, &k.omega_c_deg_s, &k.omega_deg_s, &k.accel_tilt_deg_s2,
                   &k.accel_c_deg_s2, &k.accel_deg_s2}) {
     v->assign(n, 0.0);
   }
   for (std::size_t i = 0; i + 1 < n; ++i) {
     if (t[i] > 0.0) {
-      k.omega_a_deg_s[i] = (a_deg[i + 1] - a_deg[i]) / t[i];
+      k.omega_tilt_deg_s[i] = (tilt_deg[i + 1] - tilt_deg[i]) / t[i];
       k.omega_c_deg_s[i] = (c_deg[i + 1] - c_deg[i]) / t[i];
     }
-    k.omega_deg_s[i] = std::hypot(k.omega_a_deg_s[i], k.omega_c_deg_s[i]);
+    k.omega_deg_s[i] = std::hypot(k.omega_tilt_deg_s[i], k.omega_c_deg_s[i]);
   }
   for (std::size_t i = 1; i + 1 < n; ++i) {
     const double dt = 0.5 * (t[i - 1] + t[i]);
     if (dt > 0.0) {
-      k.accel_a_deg_s2[i] = (k.omega_a_deg_s[i] - k.omega_a_deg_s[i - 1]) / dt;
+      k.accel_tilt_deg_s2[i] = (k.omega_tilt_deg_s[i] - k.omega_tilt_deg_s[i - 1]) / dt;
       k.accel_c_deg_s2[i] = (k.omega_c_deg_s[i] - k.omega_c_deg_s[i - 1]) / dt;
     }
-    k.accel_deg_s2[i] = std::hypot(k.accel_a_deg_s2[i], k.accel_c_deg_s2[i]);
+    k.accel_deg_s2[i] = std::hypot(k.accel_tilt_deg_s2[i], k.accel_c_deg_s2[i]);
   }
   return k;
 }
@@ -76,7 +76,7 @@ PeakRates peak_rates(const std::vector<Posed>& poses, const std::vector<double>&
                      const std::vector<double>& feed_mm_per_min) {
   std::vector<double> a, c;
   for (const Posed& p : poses) {
-    a.push_back(rad_to_deg(p.a_rad));
+    a.push_back(rad_to_deg(p.tilt_rad));
     c.push_back(rad_to_deg(p.c_rad));
   }
   const RotaryKinematics k = rotary_kinematics(a, c, length_mm, feed_mm_per_min);

@@ -21,10 +21,10 @@ struct Candidate {
 /// Candidate poses of a non-pole axis within the machine's ranges. With a continuous C the
 /// winding is left to the unwrapping after the programme (nearest turn is always optimal);
 /// with a bounded C every turn within the range is a candidate.
-std::vector<Candidate> candidates(const ACMachined& m, const Vec3d& axis) {
+std::vector<Candidate> candidates(const MachineKinematicsd& m, const Vec3d& axis) {
   std::vector<Candidate> out;
   for (const Posed& p : m.inverse(axis)) {
-    if (!m.a.contains(p.a_rad)) continue;
+    if (!m.tilt.contains(p.tilt_rad)) continue;
     if (m.c.continuous) {
       out.push_back({p});
       continue;
@@ -50,7 +50,7 @@ std::vector<Candidate> candidates(const ACMachined& m, const Vec3d& axis) {
 
 }  // namespace
 
-PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
+PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
                     const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
                     const PosePlanOptions& options,
                     const std::vector<std::optional<Posed>>& preferred) {
@@ -74,7 +74,7 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
   // Points on the pole that the caller gave a pose keep its C, as key points.
   const auto free_pole = [&](std::size_t i) { return m.at_pole(axes[i]) && !preferred_at(i); };
   for (std::size_t i = 0; i < n; ++i) {
-    if (m.at_pole(axes[i]) && preferred_at(i) && m.a.contains(0.0)) {
+    if (m.at_pole(axes[i]) && preferred_at(i) && m.tilt.contains(0.0)) {
       const double c = preferred_at(i)->c_rad;
       cand[i] = {Candidate{Posed{0.0, c}, 1},
                  Candidate{Posed{0.0, c + Constants<double>::pi()}, 2}};
@@ -82,7 +82,7 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       continue;
     }
     if (m.at_pole(axes[i])) {
-      if (!m.a.contains(0.0)) {
+      if (!m.tilt.contains(0.0)) {
         plan.status = PosePlan::Status::OutOfLimits;
         plan.failed_index = i;
         const std::string t(1, m.tilt_letter());
@@ -102,10 +102,10 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       for (Candidate c : cand[i]) {
         const double dc = wrap_pi(c.pose.c_rad - want->c_rad);
         const double dm = wrap_pi(c.pose.c_rad - want->c_rad - Constants<double>::pi());
-        if (std::abs(c.pose.a_rad - want->a_rad) < 1e-6 && std::abs(dc) < 1e-6) {
+        if (std::abs(c.pose.tilt_rad - want->tilt_rad) < 1e-6 && std::abs(dc) < 1e-6) {
           c.side = 1;
           kept.push_back(c);
-        } else if (m.c.continuous && std::abs(c.pose.a_rad + want->a_rad) < 1e-6 &&
+        } else if (m.c.continuous && std::abs(c.pose.tilt_rad + want->tilt_rad) < 1e-6 &&
                    std::abs(dm) < 1e-6) {
           c.side = 2;
           kept.push_back(c);
@@ -119,7 +119,7 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
       const auto both = m.inverse(axes[i]);
       std::ostringstream os;
       os << "no pose within the axis ranges: " << m.tilt_letter() << " would be "
-         << rad_to_deg(both[0].a_rad) << " or " << rad_to_deg(both[1].a_rad) << " deg";
+         << rad_to_deg(both[0].tilt_rad) << " or " << rad_to_deg(both[1].tilt_rad) << " deg";
       if (!m.c.continuous) {
         os << ", C " << rad_to_deg(both[0].c_rad) << " or " << rad_to_deg(both[1].c_rad)
            << " deg (plus turns)";
@@ -144,7 +144,7 @@ PosePlan plan_poses(const ACMachined& m, const std::vector<Vec3d>& axes,
   // where A passes through 0 and C is spread evenly over the steps).
   const auto travel = [&](const Posed& p, const Posed& q, std::size_t steps) {
     const double da =
-        steps > 1 ? std::abs(p.a_rad) + std::abs(q.a_rad) : std::abs(q.a_rad - p.a_rad);
+        steps > 1 ? std::abs(p.tilt_rad) + std::abs(q.tilt_rad) : std::abs(q.tilt_rad - p.tilt_rad);
     const double c = dc(p.c_rad, q.c_rad);
     const double jump = c / static_cast<double>(steps) > options.c_jump_threshold_rad
                             ? options.c_jump_penalty_rad

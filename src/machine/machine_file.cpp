@@ -40,20 +40,20 @@ class MachineParser {
     const toml::node* kin = root.get("kinematics");
     if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\" or \"bc-table-table\")");
     m.kinematics = string_of(*kin, "kinematics");
-    if (!kinematics_layout(m.kinematics, m.ac.tilt, m.ac.layout)) {
+    if (!kinematics_layout(m.kinematics, m.rotary.tilt_about, m.rotary.layout)) {
       fail(line_of(*kin),
            "kinematics '" + m.kinematics + "' is not supported (" + kKinematicsNames + ")");
     }
-    const bool head = m.ac.layout != RotaryLayout::TableTable;
+    const bool head = m.rotary.layout != RotaryLayout::TableTable;
     // The tilt axis: A about X, B about Y (ac_machine.hpp).
-    const std::string tilt(1, m.ac.tilt_letter());
+    const std::string tilt(1, m.rotary.tilt_letter());
     const toml::table* axes = table_of(root, "axes", true);
     check_keys(*axes, "axes", {"X", "Y", "Z", tilt, "C"});
     const toml::table* a_table = table_of(*axes, tilt, true, "axes.");
     const toml::table* c_table = table_of(*axes, "C", true, "axes.");
-    parse_axis(*a_table, "axes." + tilt, m.ac.a, false);
-    parse_axis(*c_table, "axes.C", m.ac.c, true);
-    parse_limits(*a_table, "axes." + tilt, "deg", m, Joint::A);
+    parse_axis(*a_table, "axes." + tilt, m.rotary.tilt, false);
+    parse_axis(*c_table, "axes.C", m.rotary.c, true);
+    parse_limits(*a_table, "axes." + tilt, "deg", m, Joint::Tilt);
     parse_limits(*c_table, "axes.C", "deg", m, Joint::C);
     for (Joint j : {Joint::X, Joint::Y, Joint::Z}) {
       const std::string name = to_string(j);
@@ -122,21 +122,21 @@ class MachineParser {
         fail(line_of(*pivot->get("head_pivot_length")),
              "pivot.head_pivot_length must be within [0, 5000] mm");
       }
-      m.ac.head_length_mm = m.head_pivot_length_mm;
-      m.ac.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
-                                   length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
+      m.rotary.head_length_mm = m.head_pivot_length_mm;
+      m.rotary.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
+                                       length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     } else if (pivot) {
-      if (m.ac.tilt == TiltAxis::Y) {
+      if (m.rotary.tilt_about == TiltAxis::Y) {
         check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
-        m.ac.a_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
-                                     length_or(*pivot, "pivot", "b_axis_z", 0.0));
+        m.rotary.tilt_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
+                                            length_or(*pivot, "pivot", "b_axis_z", 0.0));
       } else {
         check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
-        m.ac.a_axis_point_mm = Vec3d(0.0, length_or(*pivot, "pivot", "a_axis_y", 0.0),
-                                     length_or(*pivot, "pivot", "a_axis_z", 0.0));
+        m.rotary.tilt_axis_point_mm = Vec3d(0.0, length_or(*pivot, "pivot", "a_axis_y", 0.0),
+                                            length_or(*pivot, "pivot", "a_axis_z", 0.0));
       }
-      m.ac.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
-                                   length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
+      m.rotary.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
+                                       length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
     if (const toml::table* g = table_of(root, "gcode", false)) {
       check_keys(*g, "gcode",
@@ -187,11 +187,12 @@ class MachineParser {
         // Machine mode writes joint positions about the rotary axes' pivots: a file without
         // them would post every point about a pivot at 0, silently (a machinist's review,
         // tests/test_program.cpp).
-        fail(line_of(*g->get("mode")),
-             std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
-                 (m.ac.tilt == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
-                 ", c_axis_x, c_axis_y: where the rotary axes lie in machine coordinates, from "
-                 "the machine's kinematics); give it, even as zeros, or use mode \"tcp\"");
+        fail(
+            line_of(*g->get("mode")),
+            std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
+                (m.rotary.tilt_about == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
+                ", c_axis_x, c_axis_y: where the rotary axes lie in machine coordinates, from "
+                "the machine's kinematics); give it, even as zeros, or use mode \"tcp\"");
       }
       choose(
           *g, "gcode", "feed_mode",
@@ -280,8 +281,9 @@ class MachineParser {
       }
       choose(*g, "gcode", "end_pose", {{"home", EndPose::Home}, {"none", EndPose::None}},
              t.end_pose);
-      if (t.end_pose == EndPose::Home && (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
-        fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.ac.tilt_letter() +
+      if (t.end_pose == EndPose::Home &&
+          (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
+        fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.rotary.tilt_letter() +
                               " and C to 0, outside this machine's axis ranges; use \"none\" "
                               "(and home them in the footer)");
       }
@@ -335,9 +337,9 @@ class MachineParser {
         }
       }
     } else if (m.gcode.program.end_pose == EndPose::Home &&
-               (!m.ac.a.contains(0.0) || !m.ac.c.contains(0.0))) {
+               (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
       // The default end pose as the key would be checked: no program ends outside the ranges.
-      fail(0, std::string("gcode.end_pose \"home\" (the default) turns ") + m.ac.tilt_letter() +
+      fail(0, std::string("gcode.end_pose \"home\" (the default) turns ") + m.rotary.tilt_letter() +
                   " and C to 0, outside this machine's axis ranges; give [gcode] end_pose = "
                   "\"none\" (and home them in the footer)");
     }

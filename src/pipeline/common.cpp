@@ -147,7 +147,7 @@ BlockTiming block_timing(const Operationd& op, const Machine& machine,
   if (machine.gcode.feed_reference != FeedReference::CutterPath) return timing;
   std::vector<Vec3d> axes;
   for (const CLPointd& p : op.points) axes.push_back(p.axis);
-  const PosePlan input = plan_poses(machine.ac, axes, rapid_into_of(op), {}, pose_options);
+  const PosePlan input = plan_poses(machine.rotary, axes, rapid_into_of(op), {}, pose_options);
   if (!input.ok()) return timing;
   timing.kept_s.assign(op.points.size(), 0.0);
   for (std::size_t i = 1; i < op.points.size(); ++i) {
@@ -158,9 +158,9 @@ BlockTiming block_timing(const Operationd& op, const Machine& machine,
   return timing;
 }
 
-std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
-                                 const std::vector<Posed>& poses, const BlockTiming& timing,
-                                 const IndexRange& range) {
+std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm,
+                                 const MachineKinematicsd& ac, const std::vector<Posed>& poses,
+                                 const BlockTiming& timing, const IndexRange& range) {
   std::vector<double> t;
   Vec3d from = Vec3d::Zero();
   for (std::size_t i = range.begin; i < range.end; ++i) {
@@ -176,12 +176,12 @@ namespace {
 /// Adds the passes of `op` to a summary with each move's time from `time_of(pass)`; fills the
 /// rows' omega and accel (before or after) and, with `arc_mm`, their arc length.
 template <class TimeOf>
-RotarySummary summarise_passes(const Operationd& op, const std::vector<double>& a_deg,
+RotarySummary summarise_passes(const Operationd& op, const std::vector<double>& tilt_deg,
                                const std::vector<double>& c_deg, const TimeOf& time_of,
                                std::vector<PointRow>* rows, bool rows_before) {
   RotarySummary summary;
   for (const IndexRange& pass : feed_passes(op)) {
-    const std::vector<double> a = slice(a_deg, pass.begin, pass.end);
+    const std::vector<double> a = slice(tilt_deg, pass.begin, pass.end);
     const std::vector<double> c = slice(c_deg, pass.begin, pass.end);
     const RotaryKinematics k = rotary_kinematics_from_times(a, c, time_of(pass));
     accumulate(summary, k, c);
@@ -202,24 +202,24 @@ RotarySummary summarise_passes(const Operationd& op, const std::vector<double>& 
 
 }  // namespace
 
-RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& a_deg,
+RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& tilt_deg,
                               const std::vector<double>& c_deg,
                               const std::vector<double>& time_into_s, std::vector<PointRow>* rows,
                               bool rows_before) {
   return summarise_passes(
-      op, a_deg, c_deg,
+      op, tilt_deg, c_deg,
       [&](const IndexRange& pass) { return slice(time_into_s, pass.begin + 1, pass.end); }, rows,
       rows_before);
 }
 
 RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                              double ball_radius_mm, const std::vector<double>& a_deg,
+                              double ball_radius_mm, const std::vector<double>& tilt_deg,
                               const std::vector<double>& c_deg,
                               const std::vector<double>& metric_feed, std::vector<PointRow>* rows,
                               bool facets) {
   double arc = 0.0;
   return summarise_passes(
-      op, a_deg, c_deg,
+      op, tilt_deg, c_deg,
       [&](const IndexRange& pass) {
         const std::vector<double> len =
             contact_lengths_mm(op, contacts, ball_radius_mm, pass, facets);
@@ -229,7 +229,7 @@ RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoi
             (*rows)[pass.begin + j].arc_mm = arc;
           }
         }
-        const std::vector<double> a = slice(a_deg, pass.begin, pass.end);
+        const std::vector<double> a = slice(tilt_deg, pass.begin, pass.end);
         const std::vector<double> c = slice(c_deg, pass.begin, pass.end);
         return segment_times_s(len, pass_feeds(metric_feed, pass), a, c);
       },
@@ -238,12 +238,13 @@ RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoi
 
 /// Joint positions (X Y Z mm, A C deg) of tips and poses: the machine-mode convention of
 /// CLI.md, which is where the joints are whatever the G-code mode.
-std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
+std::vector<JointPosition> joints_of(const MachineKinematicsd& ac,
+                                     const std::vector<Vec3d>& tips_mm,
                                      const std::vector<Posed>& poses) {
   std::vector<JointPosition> q(tips_mm.size());
   for (std::size_t i = 0; i < q.size(); ++i) {
     const Vec3d m = ac.to_machine_mm(tips_mm[i], poses[i]);
-    q[i] = {m.x(), m.y(), m.z(), rad_to_deg(poses[i].a_rad), rad_to_deg(poses[i].c_rad)};
+    q[i] = {m.x(), m.y(), m.z(), rad_to_deg(poses[i].tilt_rad), rad_to_deg(poses[i].c_rad)};
   }
   return q;
 }
@@ -263,7 +264,7 @@ std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
-                                     const JointLimits& limits, const ACMachined& ac,
+                                     const JointLimits& limits, const MachineKinematicsd& ac,
                                      const std::vector<Linearised>* via,
                                      const std::vector<Posed>* tcp_poses) {
   OperationSchedule out;
@@ -336,7 +337,7 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
       const double t = rapid_time_s(joints[i - 1], joints[i], limits);
       // The same move without the turn: the rotary joints held where the move starts, the
       // linear ones taking the tip to its point under that pose.
-      constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+      constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
       constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
       const Posed start{deg_to_rad(joints[i - 1][kA]), deg_to_rad(joints[i - 1][kC])};
       const Vec3d xyz = ac.to_machine_mm(points[i].tip_mm, start);
@@ -396,13 +397,13 @@ std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolMode
 
 /// Index i of every move from point i-1 to point i during which the tool hits the part, with
 /// the machine moving linearly in its joints between the values written (`xyz_w` as written,
-/// `a_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
+/// `tilt_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
 /// only the bodies above the ball are checked (the ball's path between contacts is the CAM
 /// system's chord tolerance); where either end is in the air, the ball too.
 
 std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel& tool,
                                          const Machine& machine, const std::vector<Vec3d>& xyz_w,
-                                         const std::vector<double>& a_deg,
+                                         const std::vector<double>& tilt_deg,
                                          const std::vector<double>& c_deg,
                                          const std::vector<ContactPoint>& contacts,
                                          detail::StageProgress* progress,
@@ -420,23 +421,23 @@ std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel
     const bool in_air = contacts[i - 1].state != ContactState::Touching ||
                         contacts[i].state != ContactState::Touching;
     // The move as the machine runs it: joint-linear between the written blocks.
-    std::vector<WayPoint> chain = {{xyz_w[i - 1], a_deg[i - 1], c_deg[i - 1]}};
+    std::vector<WayPoint> chain = {{xyz_w[i - 1], tilt_deg[i - 1], c_deg[i - 1]}};
     if (between && i < between->size()) {
       chain.insert(chain.end(), (*between)[i].begin(), (*between)[i].end());
     }
-    chain.push_back({xyz_w[i], a_deg[i], c_deg[i]});
+    chain.push_back({xyz_w[i], tilt_deg[i], c_deg[i]});
     for (std::size_t k = 1; k < chain.size(); ++k) {
       const WayPoint &p0 = chain[k - 1], &p1 = chain[k];
-      const double da = p1.a_deg - p0.a_deg, dc = p1.c_deg - p0.c_deg;
+      const double da = p1.tilt_deg - p0.tilt_deg, dc = p1.c_deg - p0.c_deg;
       const double dx = (p1.xyz - p0.xyz).norm();
       const int steps = static_cast<int>(
           std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
       for (int s = (k == 1 ? 1 : 0); s < steps; ++s) {
         const double t = static_cast<double>(s) / steps;
-        const Posed pose{deg_to_rad(p0.a_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
+        const Posed pose{deg_to_rad(p0.tilt_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
         const Vec3d xyz = p0.xyz + t * (p1.xyz - p0.xyz);
         const Vec3d tip = tip_of_written_mm(machine, xyz, pose);
-        const Vec3d axis = machine.ac.forward(pose);
+        const Vec3d axis = machine.rotary.forward(pose);
         if (model.collides(tool, tip + R * axis, axis, in_air)) {
           return true;
         }

@@ -7,12 +7,12 @@
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
+#include "plan/air_turn.hpp"
+#include "plan/pole_passage.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/pole_passage.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
@@ -22,15 +22,15 @@ namespace {
 /// Where the input axis itself lies outside the machine's rotary ranges, what it needs: the
 /// range, not the cone, is then what stops the point (a machine with A in [30, 60] deg said
 /// only "no tool axis within 1 deg").
-std::string out_of_reach(const ACMachined& ac, const Vec3d& axis) {
+std::string out_of_reach(const MachineKinematicsd& ac, const Vec3d& axis) {
   if (ac.reachable(axis)) return "";
   const auto poses = ac.inverse(axis);
   std::ostringstream os;
   os << "; the input axis itself is out of the machine's reach: it needs " << ac.tilt_letter()
-     << " " << rad_to_deg(poses[0].a_rad) << " or " << rad_to_deg(poses[1].a_rad) << " deg";
-  if (!ac.a.continuous) {
-    os << ", and " << ac.tilt_letter() << " runs over [" << rad_to_deg(ac.a.min_rad) << ", "
-       << rad_to_deg(ac.a.max_rad) << "] deg";
+     << " " << rad_to_deg(poses[0].tilt_rad) << " or " << rad_to_deg(poses[1].tilt_rad) << " deg";
+  if (!ac.tilt.continuous) {
+    os << ", and " << ac.tilt_letter() << " runs over [" << rad_to_deg(ac.tilt.min_rad) << ", "
+       << rad_to_deg(ac.tilt.max_rad) << "] deg";
   }
   if (!ac.c.continuous) {
     os << ", C " << rad_to_deg(poses[0].c_rad) << " or " << rad_to_deg(poses[1].c_rad)
@@ -88,7 +88,7 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
       path_machine.gcode.mode = GcodeMode::Tcp;
     }
     const auto hits = [&](const OptimisedOperation& plan) -> std::size_t {
-      const PosePlan pp = plan_poses(run.machine.ac, plan.axes, rapid_into_of(op), {},
+      const PosePlan pp = plan_poses(run.machine.rotary, plan.axes, rapid_into_of(op), {},
                                      options.pose_options, plan.preferred);
       if (!pp.ok()) return 0;  // unposable axes are the verification's to report
       const std::vector<char> hit =
@@ -139,7 +139,7 @@ void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& 
                                 "operation " + op.name + ": no tool axis within " +
                                     std::to_string(options.paper.max_deviation_deg) +
                                     " deg of the input axis is reachable and collision-free here" +
-                                    out_of_reach(run.machine.ac, op.points[i].axis)));
+                                    out_of_reach(run.machine.rotary, op.points[i].axis)));
   }
   o.optimise_s = seconds_since(t0);
   if (options.log) {

@@ -6,12 +6,12 @@
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
+#include "plan/air_turn.hpp"
+#include "plan/pole_passage.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/pole_passage.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
@@ -30,14 +30,19 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
                    const TimeContext* time, const GuardReference* reference) {
   const std::size_t n = op.points.size();
   const std::vector<IndexRange> passes = feed_passes(op);
-  const PosePlan warm = plan_poses(machine.ac, out.axes, rapid_into_of(op), {}, pose_options);
+  const PosePlan warm = plan_poses(machine.rotary, out.axes, rapid_into_of(op), {}, pose_options);
   if (!warm.ok()) {
     for (std::size_t q = 0; q < passes.size(); ++q) progress.advance();
     return;
   }
   const GuardReference paper{out.axes, {}};
-  const Acceptance acceptable_at{
-      op, contacts, ball_radius_mm, model, tool, machine.ac, deg_to_rad(options.max_deviation_deg)};
+  const Acceptance acceptable_at{op,
+                                 contacts,
+                                 ball_radius_mm,
+                                 model,
+                                 tool,
+                                 machine.rotary,
+                                 deg_to_rad(options.max_deviation_deg)};
   // Each pass's cut: from the first to the last contact of the pass (all of it without a part).
   // The points in the air before and after keep the axis of the nearest contact, as with the
   // paper method: the tool comes down and leaves along the axis it cuts with.
@@ -45,16 +50,17 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     const IndexRange pass = contact_span(contacts, whole);
     if (pass.size() < 3) return std::nullopt;
     GlobalPassProblem problem;
-    std::vector<double> a_deg, c_deg;
+    std::vector<double> tilt_deg, c_deg;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       problem.input_axes.push_back(op.points[i].axis);
       problem.warm_start.push_back(warm.poses[i]);
-      a_deg.push_back(rad_to_deg(warm.poses[i].a_rad));
+      tilt_deg.push_back(rad_to_deg(warm.poses[i].tilt_rad));
       c_deg.push_back(rad_to_deg(warm.poses[i].c_rad));
     }
     // The program's own timing with the warm start's tips (move_times_s: the report's and the
     // guard's); a move too short to time gets a floor (it would divide).
-    problem.segment_time_s = move_times_s(op, ball_radius_mm, machine.ac, warm.poses, timing, pass);
+    problem.segment_time_s =
+        move_times_s(op, ball_radius_mm, machine.rotary, warm.poses, timing, pass);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
@@ -64,9 +70,10 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
       // under the fixed ball centre, carried by the table.
       problem.joints_at = [&op, &machine, ball_radius_mm, b = pass.begin](std::size_t j,
                                                                           const Posed& pose) {
-        const Vec3d tip = tip_for_axis(op.points[b + j], ball_radius_mm, machine.ac.forward(pose));
-        const Vec3d xyz = machine.ac.to_machine_mm(tip, pose);
-        return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.a_rad),
+        const Vec3d tip =
+            tip_for_axis(op.points[b + j], ball_radius_mm, machine.rotary.forward(pose));
+        const Vec3d xyz = machine.rotary.to_machine_mm(tip, pose);
+        return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.tilt_rad),
                              rad_to_deg(pose.c_rad)};
       };
       problem.programmed_time_s = slice(time->programmed_s, pass.begin + 1, pass.end);
@@ -75,12 +82,14 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
         std::vector<Posed> poses = slice(alt, pass.begin, pass.end);
         bool ok = true;
         for (std::size_t j = 0; ok && j < poses.size(); ++j) {
-          ok = machine.ac.a.contains(poses[j].a_rad) && acceptable(j, machine.ac.forward(poses[j]));
+          ok = machine.rotary.tilt.contains(poses[j].tilt_rad) &&
+               acceptable(j, machine.rotary.forward(poses[j]));
         }
         if (ok) problem.alternatives.push_back(std::move(poses));
       }
     }
-    std::optional<GlobalPassPlan> plan = plan_pass_global(machine.ac, problem, acceptable, options);
+    std::optional<GlobalPassPlan> plan =
+        plan_pass_global(machine.rotary, problem, acceptable, options);
     if (!plan) return std::nullopt;
     return PassAxes{pass, std::move(plan->axes), std::move(plan->poses)};
   };
@@ -105,11 +114,12 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
   // The point as the machine's joints reach it (what the schedule times: in TCP mode too the
   // linear joints follow the turning table), and as the G-code writes it.
   const auto tip_at = [&](std::size_t i, const Posed& pose) {
-    return tip_for_axis(op.points[i], ball_radius_mm, machine.ac.forward(pose));
+    return tip_for_axis(op.points[i], ball_radius_mm, machine.rotary.forward(pose));
   };
   const auto joints_at = [&](std::size_t i, const Posed& pose) {
-    const Vec3d xyz = machine.ac.to_machine_mm(tip_at(i, pose), pose);
-    return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.a_rad), rad_to_deg(pose.c_rad)};
+    const Vec3d xyz = machine.rotary.to_machine_mm(tip_at(i, pose), pose);
+    return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.tilt_rad),
+                         rad_to_deg(pose.c_rad)};
   };
   // A chain's time: its rapids on their trapezoids, its feed moves at their feed.
   // `chain[k]` is the pose of point a - 1 + k (k = 0 .. b - a + 1).
@@ -150,9 +160,9 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     bool rapid_turn = true;
     std::vector<double> linear_s, now;  // per move: its time without the turn, its share now
     std::vector<bool> rapid;
-    const double turn_rad = std::abs(to.a_rad - from.a_rad) + std::abs(to.c_rad - from.c_rad);
+    const double turn_rad = std::abs(to.tilt_rad - from.tilt_rad) + std::abs(to.c_rad - from.c_rad);
     for (std::size_t j = first; j <= b; ++j) {
-      const double turned = std::abs(po.poses[j].a_rad - po.poses[j - 1].a_rad) +
+      const double turned = std::abs(po.poses[j].tilt_rad - po.poses[j - 1].tilt_rad) +
                             std::abs(po.poses[j].c_rad - po.poses[j - 1].c_rad);
       rapid.push_back(op.points[j].motion == Motion::Rapid);
       if (turned > 1e-12 && !rapid.back()) rapid_turn = false;
@@ -171,14 +181,14 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
       double f = 0.0;
       for (std::size_t j = first; j < b; ++j) {
         f += share[j - first];
-        cand[j - first + 1] = Posed{from.a_rad + f * (to.a_rad - from.a_rad),
+        cand[j - first + 1] = Posed{from.tilt_rad + f * (to.tilt_rad - from.tilt_rad),
                                     from.c_rad + f * (to.c_rad - from.c_rad)};
       }
       return cand;
     };
     std::vector<std::vector<double>> starts = {now};
     const std::vector<double> by_capacity =
-        spread_turn(linear_s, rapid, rad_to_deg(to.a_rad - from.a_rad),
+        spread_turn(linear_s, rapid, rad_to_deg(to.tilt_rad - from.tilt_rad),
                     rad_to_deg(to.c_rad - from.c_rad), limits);
     if (!by_capacity.empty()) starts.push_back(by_capacity);
     const std::vector<double> share = best_turn_shares(
@@ -188,10 +198,10 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     bool ok = true;
     for (std::size_t j = first; j < b && ok; ++j) {
       const Posed& pose = cand[j - first + 1];
-      ok =
-          angle_between(machine.ac.forward(pose), op.points[j].axis) <= max_deviation_rad + 1e-12 &&
-          machine.ac.a.contains(pose.a_rad) &&
-          (machine.ac.c.continuous || machine.ac.c.contains(pose.c_rad));
+      ok = angle_between(machine.rotary.forward(pose), op.points[j].axis) <=
+               max_deviation_rad + 1e-12 &&
+           machine.rotary.tilt.contains(pose.tilt_rad) &&
+           (machine.rotary.c.continuous || machine.rotary.c.contains(pose.c_rad));
     }
     if (!ok || chain_time(first, b, cand) >= chain_time(first, b, current) - 1e-6) continue;
     std::copy(cand.begin() + 1, cand.end() - 1, trial.begin() + static_cast<long>(first));
@@ -209,12 +219,12 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
                 check_move.begin() + static_cast<long>(b) + 1, 1);
     }
     std::vector<Vec3d> axes, xyz;
-    std::vector<double> a_deg, c_deg;
+    std::vector<double> tilt_deg, c_deg;
     for (std::size_t i = 0; i < n; ++i) {
-      axes.push_back(machine.ac.forward(trial[i]));
+      axes.push_back(machine.rotary.forward(trial[i]));
       const Vec3d tip = tip_at(i, trial[i]);
       xyz.push_back(written_xyz_mm(machine, tip, trial[i]));
-      a_deg.push_back(rad_to_deg(trial[i].a_rad));
+      tilt_deg.push_back(rad_to_deg(trial[i].tilt_rad));
       c_deg.push_back(rad_to_deg(trial[i].c_rad));
     }
     std::vector<ContactPoint> air(n);  // no contacts known: every point in the air
@@ -223,8 +233,8 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     for (std::size_t i : colliding_points(*model, tool, op, axes, state, nullptr, &check_point)) {
       hit[i] = 1;
     }
-    for (std::size_t i : colliding_moves(*model, tool, machine, xyz, a_deg, c_deg, state, nullptr,
-                                         nullptr, &check_move)) {
+    for (std::size_t i : colliding_moves(*model, tool, machine, xyz, tilt_deg, c_deg, state,
+                                         nullptr, nullptr, &check_move)) {
       hit[i] = 1;
     }
     for (const auto& [first, b] : changed) {
@@ -237,8 +247,8 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (trial[i].a_rad == po.poses[i].a_rad && trial[i].c_rad == po.poses[i].c_rad) continue;
-    po.points[i].axis = machine.ac.forward(trial[i]);
+    if (trial[i].tilt_rad == po.poses[i].tilt_rad && trial[i].c_rad == po.poses[i].c_rad) continue;
+    po.points[i].axis = machine.rotary.forward(trial[i]);
     po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, po.points[i].axis);
   }
   po.poses = std::move(trial);

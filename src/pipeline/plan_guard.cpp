@@ -6,12 +6,12 @@
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
+#include "plan/air_turn.hpp"
+#include "plan/pole_passage.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/pole_passage.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
@@ -36,7 +36,7 @@ std::vector<char> points_and_moves_hit(const Operationd& op,
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
     xyz.push_back(written_xyz_mm(machine, tip, poses[i]));
-    a.push_back(rad_to_deg(poses[i].a_rad));
+    a.push_back(rad_to_deg(poses[i].tilt_rad));
     c.push_back(rad_to_deg(poses[i].c_rad));
   }
   std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
@@ -64,7 +64,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
   const std::vector<std::optional<Posed>> in_preferred =
       reference ? reference->preferred : std::vector<std::optional<Posed>>{};
   const PosePlan in_plan =
-      plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options, in_preferred);
+      plan_poses(machine.rotary, in_axes, rapid_into, {}, pose_options, in_preferred);
   if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n, KeptWhy::None)};
   // In machine mode with linearisation the tip runs the straight line as in TCP mode.
   Machine path_machine = machine;
@@ -90,11 +90,11 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
   const auto rates = [&](const IndexRange& pass, const std::vector<Posed>& poses) {
     std::vector<double> a, c;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
-      a.push_back(rad_to_deg(poses[i].a_rad));
+      a.push_back(rad_to_deg(poses[i].tilt_rad));
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
     PassRates r{rotary_kinematics_from_times(
-                    a, c, move_times_s(op, ball_radius_mm, machine.ac, poses, timing, pass)),
+                    a, c, move_times_s(op, ball_radius_mm, machine.rotary, poses, timing, pass)),
                 {}};
     accumulate(r.summary, r.k, c);
     return r;
@@ -129,7 +129,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
                                  std::vector<char>(passes.size(), 0)};
     std::vector<PointVerdict>& verdict = out_verdicts.points;
     const PosePlan plan =
-        plan_poses(machine.ac, axes, rapid_into, {}, pose_options, preferred_of(why));
+        plan_poses(machine.rotary, axes, rapid_into, {}, pose_options, preferred_of(why));
     if (!plan.ok()) {
       for (std::size_t i = 0; i < n; ++i) {
         if (check[i]) verdict[i] = PointVerdict::Hits;

@@ -6,12 +6,12 @@
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
+#include "plan/air_turn.hpp"
+#include "plan/pole_passage.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/pole_passage.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
@@ -48,7 +48,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
-  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.ac, max_dev_rad};
+  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.rotary, max_dev_rad};
   std::vector<PassPlan> plans(feed_passes(op).size());
   std::vector<std::size_t> pole_stretches(plans.size(), 0);
   const auto plan_pass = [&](std::size_t q, const IndexRange& pass) {
@@ -82,13 +82,13 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
     PassPlan plan = plan_pass_paper(problem, acceptable, options);
     std::vector<bool> rapid_into(pass.size(), false);
     rapid_into[0] = true;
-    const PosePlan poses = plan_poses(machine.ac, plan.axes, rapid_into, {}, pose_options);
+    const PosePlan poses = plan_poses(machine.rotary, plan.axes, rapid_into, {}, pose_options);
     if (poses.ok()) {
       const AxisTest in_cone = [&](std::size_t j, const Vec3d& axis) {
         return acceptable_at.in_cone(pass.begin + j, axis);
       };
       PolePassage pole =
-          smooth_pole_passages(machine.ac, plan.axes, poses.poses, problem.segment_mm,
+          smooth_pole_passages(machine.rotary, plan.axes, poses.poses, problem.segment_mm,
                                pass_feeds(metric_feed, pass), in_cone);
       plan.axes = std::move(pole.axes);
       pole_stretches[q] = pole.stretches;

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "pipeline/stages.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 
 namespace taxopt::pipeline {
@@ -23,7 +23,7 @@ struct Acceptance {
   double ball_radius_mm;
   const PartCheck* model;
   const ToolModel* tool;
-  const ACMachined& machine;
+  const MachineKinematicsd& machine;
   /// The deviation cone's half-angle, rad (--max-deviation).
   double max_deviation_rad;
   bool operator()(std::size_t i, const Vec3d& axis) const {

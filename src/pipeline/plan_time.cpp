@@ -5,12 +5,12 @@
 
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
+#include "plan/air_turn.hpp"
+#include "plan/pole_passage.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/plan/air_turn.hpp"
 #include "taxopt/plan/global_optimiser.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/pole_passage.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 
@@ -28,7 +28,7 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
                          const PosePlanOptions& pose_options, double fallback_feed,
                          const std::vector<double>& programmed_s) {
   const PosePlan plan =
-      plan_poses(machine.ac, axes, rapid_into_of(op), {}, pose_options, preferred);
+      plan_poses(machine.rotary, axes, rapid_into_of(op), {}, pose_options, preferred);
   if (!plan.ok()) return std::numeric_limits<double>::infinity();
   PostedOperation po;
   po.points = posted_feeds(op, fallback_feed);
@@ -46,8 +46,8 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
     // The input block's time, within the feed ratio (as posted: kept_block_times_s).
     programmed = kept_block_times_s(programmed_s, programmed, machine.gcode.max_feed_ratio);
   }
-  return schedule_operation(po.points, joints_of(machine.ac, tips, po.poses), programmed,
-                            effective_limits(machine), machine.ac, nullptr,
+  return schedule_operation(po.points, joints_of(machine.rotary, tips, po.poses), programmed,
+                            effective_limits(machine), machine.rotary, nullptr,
                             machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr)
       .summary.cycle_time_s;
 }
@@ -85,9 +85,9 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   const std::vector<bool> rapid_into = rapid_into_of(op);
   std::vector<Vec3d> in_axes;
   for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
-  const PosePlan in_plan = plan_poses(machine.ac, in_axes, rapid_into, {}, pose_options);
+  const PosePlan in_plan = plan_poses(machine.rotary, in_axes, rapid_into, {}, pose_options);
   const PosePlan smooth_plan =
-      plan_poses(machine.ac, smooth.axes, rapid_into, {}, pose_options, smooth.preferred);
+      plan_poses(machine.rotary, smooth.axes, rapid_into, {}, pose_options, smooth.preferred);
   TimeContext time;
   time.limits = effective_limits(machine);
   // Every feed block keeps the time the input block takes at its feed (cutter-path), as
@@ -131,15 +131,16 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
   // The peak a of a plan's passes, each move timed as the controller takes it from the words
   // (move_times_s), as the report measures it.
   const auto peak_a = [&](const OptimisedOperation& o) {
-    const PosePlan pp = plan_poses(machine.ac, o.axes, rapid_into, {}, pose_options, o.preferred);
+    const PosePlan pp =
+        plan_poses(machine.rotary, o.axes, rapid_into, {}, pose_options, o.preferred);
     if (!pp.ok()) return std::numeric_limits<double>::infinity();
     std::vector<double> a, c;
     for (const Posed& q : pp.poses) {
-      a.push_back(rad_to_deg(q.a_rad));
+      a.push_back(rad_to_deg(q.tilt_rad));
       c.push_back(rad_to_deg(q.c_rad));
     }
     std::vector<double> into = {0.0};
-    for (double t : move_times_s(op, ball_radius_mm, machine.ac, pp.poses, timing,
+    for (double t : move_times_s(op, ball_radius_mm, machine.rotary, pp.poses, timing,
                                  IndexRange{0, op.points.size()})) {
       into.push_back(t);
     }

@@ -63,12 +63,12 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       in_axes.push_back(op.points[i].axis);
     }
     const PosePlan plan =
-        plan_poses(machine.ac, axes, rapid_into, start, options.pose_options,
+        plan_poses(machine.rotary, axes, rapid_into, start, options.pose_options,
                    o.optimised ? o.optimised->preferred : std::vector<std::optional<Posed>>{});
     // The input axes as the machine would have run them, for the "before" metrics.
     if (o.optimised) {
       const PosePlan before =
-          plan_poses(machine.ac, in_axes, rapid_into, input_start, options.pose_options);
+          plan_poses(machine.rotary, in_axes, rapid_into, input_start, options.pose_options);
       if (before.ok()) input_start = before.poses.back();
       o.input_poses = before.ok() ? before.poses : std::vector<Posed>{};
     } else {

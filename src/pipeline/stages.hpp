@@ -19,12 +19,12 @@
 #include <vector>
 
 #include "controller/block_time.hpp"
+#include "plan/stretch_guard.hpp"
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/cspace/cspace.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/job.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
-#include "taxopt/plan/stretch_guard.hpp"
 #include "util/progress.hpp"
 
 namespace taxopt::pipeline {
@@ -135,7 +135,7 @@ struct Linearised {
 /// written (machine or tip by the mode), A and C in degrees.
 struct WayPoint {
   Vec3d xyz = Vec3d::Zero();
-  double a_deg = 0.0, c_deg = 0.0;
+  double tilt_deg = 0.0, c_deg = 0.0;
 };
 
 /// What the write stage gives the checks: the program read back, per operation and point the
@@ -307,25 +307,26 @@ BlockTiming block_timing(const Operationd& op, const Machine& machine,
 /// controller takes it from the written words (BlockTiming), with the tool along `poses` (of
 /// the whole operation) and the ball centres where the CL file has them: the program's own
 /// timing, as the report measures it.
-std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm, const ACMachined& ac,
-                                 const std::vector<Posed>& poses, const BlockTiming& timing,
-                                 const IndexRange& range);
-/// Rotary kinematics of every pass of an operation for the axis angles a_deg, c_deg of its
+std::vector<double> move_times_s(const Operationd& op, double ball_radius_mm,
+                                 const MachineKinematicsd& ac, const std::vector<Posed>& poses,
+                                 const BlockTiming& timing, const IndexRange& range);
+/// Rotary kinematics of every pass of an operation for the axis angles tilt_deg, c_deg of its
 /// points, each move taking `time_into_s` (per point, the move into it: the program's own
 /// timing); fills the rows' omega and accel (before or after) when given.
-RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& a_deg,
+RotarySummary summarise_timed(const Operationd& op, const std::vector<double>& tilt_deg,
                               const std::vector<double>& c_deg,
                               const std::vector<double>& time_into_s,
                               std::vector<PointRow>* rows = nullptr, bool rows_before = false);
 /// The paper's metric (eq. 16-18 over contact_lengths_mm at the metric feeds): the paper's
 /// comparison, never the headline; fills the rows' arc lengths when given.
 RotarySummary summarise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                              double ball_radius_mm, const std::vector<double>& a_deg,
+                              double ball_radius_mm, const std::vector<double>& tilt_deg,
                               const std::vector<double>& c_deg,
                               const std::vector<double>& metric_feed,
                               std::vector<PointRow>* rows = nullptr, bool facets = false);
 /// Joint positions (X Y Z mm, A C deg) of tips and poses, in machine coordinates.
-std::vector<JointPosition> joints_of(const ACMachined& ac, const std::vector<Vec3d>& tips_mm,
+std::vector<JointPosition> joints_of(const MachineKinematicsd& ac,
+                                     const std::vector<Vec3d>& tips_mm,
                                      const std::vector<Posed>& poses);
 /// The chains of feed moves of an operation: runs [begin, end) of points i >= 1 reached by a
 /// feed move; a chain's joints are those of points begin - 1 .. end - 1.
@@ -339,7 +340,7 @@ std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points);
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
-                                     const JointLimits& limits, const ACMachined& ac,
+                                     const JointLimits& limits, const MachineKinematicsd& ac,
                                      const std::vector<Linearised>* via = nullptr,
                                      const std::vector<Posed>* tcp_poses = nullptr);
 /// The points with every feed move's feed set (`fallback_feed` where the file gives none).
@@ -355,7 +356,7 @@ std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolMode
 /// Index i of every move from point i-1 to point i during which the tool hits the part.
 std::vector<std::size_t> colliding_moves(
     const PartCheck& model, const ToolModel& tool, const Machine& machine,
-    const std::vector<Vec3d>& xyz_w, const std::vector<double>& a_deg,
+    const std::vector<Vec3d>& xyz_w, const std::vector<double>& tilt_deg,
     const std::vector<double>& c_deg, const std::vector<ContactPoint>& contacts,
     detail::StageProgress* progress = nullptr,
     const std::vector<std::vector<WayPoint>>* between = nullptr,

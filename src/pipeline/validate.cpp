@@ -82,7 +82,7 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
   check_points(tp);
   JobOptions options = resolved_options(given, machine);
   res.collision_checked = given.part != nullptr;
-  res.tilt_letter = machine.ac.tilt_letter();
+  res.tilt_letter = machine.rotary.tilt_letter();
   if (!given.part) {
     std::ostringstream os;
     os << "no part (--part): the tool and holder are not checked against the part";

@@ -63,7 +63,7 @@ void set_point_row(const CLPointd& posted, std::size_t i, const WrittenAxes& ax,
   row.line = posted.line;
   row.tip_mm = posted.tip_mm;
   row.axis = posted.axis;
-  row.a_deg = ax.a_w[i];
+  row.tilt_axis_deg = ax.a_w[i];
   row.c_deg = ax.c_w[i];
 }
 
@@ -75,7 +75,7 @@ void set_point_row(const CLPointd& posted, std::size_t i, const WrittenAxes& ax,
 void check_turns_in_cut(const Run& run, const OperationContext& o, const WrittenAxes& ax,
                         JobResult& res) {
   const Operationd& op = *o.op;
-  const ACMachined& ac = run.machine.ac;
+  const MachineKinematicsd& ac = run.machine.rotary;
   const double R = o.ball_radius_mm > 0.0 ? o.ball_radius_mm : 0.5 * op.tool.diameter_mm;
   std::size_t count = 0, first = 0;
   double first_turn = 0.0, first_off = 0.0;
@@ -131,15 +131,15 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
     }
     r.verification.tool_length_active = false;
   }
-  ax.a_w[i] = last->a_deg;
+  ax.a_w[i] = last->tilt_deg;
   ax.xyz_w[i] = last->xyz_mm;
   ax.c_w[i] = last->c_deg;
   if (!o.input_poses.empty()) {
-    ax.a_in[i] = round_to(rad_to_deg(o.input_poses[i].a_rad), decimals);
+    ax.a_in[i] = round_to(rad_to_deg(o.input_poses[i].tilt_rad), decimals);
     ax.c_in[i] = round_to(rad_to_deg(o.input_poses[i].c_rad), decimals);
   }
-  const Posed written{deg_to_rad(last->a_deg), deg_to_rad(last->c_deg)};
-  const Vec3d axis = machine.ac.forward(written);
+  const Posed written{deg_to_rad(last->tilt_deg), deg_to_rad(last->c_deg)};
+  const Vec3d axis = machine.rotary.forward(written);
   const Vec3d tip = tip_of_written_mm(machine, last->xyz_mm, written);
   const CLPointd& want = po.points[i];
   r.verification.roundtrip_max_mm =
@@ -152,17 +152,19 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
     return !range.continuous &&
            (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
   };
-  if (at_limit(machine.ac.a, written.a_rad) || at_limit(machine.ac.c, written.c_rad)) {
+  if (at_limit(machine.rotary.tilt, written.tilt_rad) ||
+      at_limit(machine.rotary.c, written.c_rad)) {
     r.rows[i].mark(PointMark::AxisLimit);
   }
-  if (!machine.ac.a.contains(written.a_rad) || !machine.ac.c.contains(written.c_rad)) {
+  if (!machine.rotary.tilt.contains(written.tilt_rad) ||
+      !machine.rotary.c.contains(written.c_rad)) {
     if (r.verification.within_axis_limits) {
-      add_finding(
-          res, FindingCode::AxisRangeExceeded, k, want.line,
-          format_location(run.tp.source, want.line,
-                          "operation " + op.name + ": written " + machine.ac.tilt_letter() + " " +
-                              std::to_string(last->a_deg) + " / C " + std::to_string(last->c_deg) +
-                              " deg is outside the machine's axis ranges"));
+      add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
+                  format_location(
+                      run.tp.source, want.line,
+                      "operation " + op.name + ": written " + machine.rotary.tilt_letter() + " " +
+                          std::to_string(last->tilt_deg) + " / C " + std::to_string(last->c_deg) +
+                          " deg is outside the machine's axis ranges"));
     }
     r.verification.within_axis_limits = false;
   }
@@ -209,8 +211,9 @@ void check_round_trip(const Run& run, const OperationContext& o, const PostedOpe
   if (machine.gcode.mode == GcodeMode::Machine) {
     for (const auto& p : po.points) {
       lever_mm =
-          std::max(lever_mm, (p.tip_mm - machine.ac.c_axis_point_mm).norm() +
-                                 (machine.ac.c_axis_point_mm - machine.ac.a_axis_point_mm).norm());
+          std::max(lever_mm,
+                   (p.tip_mm - machine.rotary.c_axis_point_mm).norm() +
+                       (machine.rotary.c_axis_point_mm - machine.rotary.tilt_axis_point_mm).norm());
     }
   }
   // 10 nm for the arithmetic of unit conversions (a Fusion inch file's arc missed by 3 nm).
@@ -390,7 +393,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       continue;
     }
     const int decimals = machine.gcode.decimals;
-    ax.a_w[i] = round_to(rad_to_deg(po.poses[i].a_rad), decimals);
+    ax.a_w[i] = round_to(rad_to_deg(po.poses[i].tilt_rad), decimals);
     ax.c_w[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
     ax.xyz_w[i] = written_xyz_mm(machine, po.points[i].tip_mm, po.poses[i]);
     set_point_row(po.points[i], i, ax, r.rows[i]);
@@ -418,7 +421,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   r.paper_before =
       summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_in, ax.c_in, o.metric_feed_mm_per_min);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
-    r.rows[i].a_before_deg = ax.a_in[i];
+    r.rows[i].tilt_axis_before_deg = ax.a_in[i];
     r.rows[i].c_before_deg = ax.c_in[i];
   }
   if (o.optimised) {
@@ -445,7 +448,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   check_dynamic_limits(r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves,
                        res, run.tp.source,
                        options.feed_schedule ? effective_limits(machine) : machine.limits,
-                       options.feed_schedule, machine.ac.tilt_letter(), k,
+                       options.feed_schedule, machine.rotary.tilt_letter(), k,
                        [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); });
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);

@@ -137,7 +137,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
     }
     if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
         t.retract != SafeRetract::None &&
-        std::max(std::abs(m.a_deg - prev->a_deg), std::abs(m.c_deg - prev->c_deg)) >
+        std::max(std::abs(m.tilt_deg - prev->tilt_deg), std::abs(m.c_deg - prev->c_deg)) >
             threshold_deg) {
       breach(FindingCode::IndexWithoutRetract, m,
              "turns the table by more than " + shown(t.index_threshold_deg) +
@@ -148,7 +148,7 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
       xy_set = false;
     } else if (after_retract) {
       const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
-      const bool turns = prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg);
+      const bool turns = prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg);
       if (gives_z && !gives_xy && !xy_set && !turns) {
         // Straight down (or up) to the clearance height, where it is: not the way in yet.
       } else if (gives_xy && !gives_z) {
@@ -162,11 +162,12 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
           if (!prev || !m.tcp || !prev->tcp) return false;
           const Vec3d d = m.xyz_mm - prev->xyz_mm;
           if (d.norm() < 1e-9) return false;
-          const Vec3d axis = machine.ac.forward(Posed{deg_to_rad(m.a_deg), deg_to_rad(m.c_deg)});
+          const Vec3d axis =
+              machine.rotary.forward(Posed{deg_to_rad(m.tilt_deg), deg_to_rad(m.c_deg)});
           return std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
         };
         if (!xy_set || ((m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1]) && !along_axis()) ||
-            (prev && (m.a_deg != prev->a_deg || m.c_deg != prev->c_deg))) {
+            (prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg))) {
           breach(FindingCode::DiagonalApproach, m,
                  "leaves the retract height otherwise than XY first, then down");
         }
@@ -205,9 +206,9 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
     }
   }
   if (t.end_pose == EndPose::Home && t.retract != SafeRetract::None &&
-      (moves.back().a_deg != 0.0 || moves.back().c_deg != 0.0)) {
+      (moves.back().tilt_deg != 0.0 || moves.back().c_deg != 0.0)) {
     breach(FindingCode::EndPoseNotHome, moves.back(),
-           "ends with the rotary axes at " + shown(moves.back().a_deg) + " / " +
+           "ends with the rotary axes at " + shown(moves.back().tilt_deg) + " / " +
                shown(moves.back().c_deg) + " deg, not at their home (gcode.end_pose)");
   }
   for (const auto& [code, b] : breaches) {
@@ -265,7 +266,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
     }
   }
   const Machine& machine = run.machine;
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   std::vector<double> flute_tolerance_mm(ops.size(), 0.0);
   for (std::size_t k = 0; k < ops.size(); ++k) {
@@ -289,8 +290,8 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
         const Posed p0{deg_to_rad(q0[kA]), deg_to_rad(q0[kC])};
         const Posed p1{deg_to_rad(q1[kA]), deg_to_rad(q1[kC])};
         const Vec3d m0(q0[0], q0[1], q0[2]), m1(q1[0], q1[1], q1[2]);
-        const Vec3d t0 = machine.ac.from_machine_mm(m0, p0),
-                    t1 = machine.ac.from_machine_mm(m1, p1);
+        const Vec3d t0 = machine.rotary.from_machine_mm(m0, p0),
+                    t1 = machine.rotary.from_machine_mm(m1, p1);
         const bool tip_linear = w.tip_linear[j] != 0;
         // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
         // thinnest body's radius (a wall the body could pass between two samples is thinner
@@ -304,11 +305,11 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
                                 travel / step_mm, 1.0})));
         for (int s = 1; s <= steps; ++s) {
           const double u = static_cast<double>(s) / steps;
-          const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad),
+          const Posed pose{p0.tilt_rad + u * (p1.tilt_rad - p0.tilt_rad),
                            p0.c_rad + u * (p1.c_rad - p0.c_rad)};
           const Vec3d tip = tip_linear ? Vec3d(t0 + u * (t1 - t0))
-                                       : machine.ac.from_machine_mm(m0 + u * (m1 - m0), pose);
-          const Vec3d axis = machine.ac.forward(pose);
+                                       : machine.rotary.from_machine_mm(m0 + u * (m1 - m0), pose);
+          const Vec3d axis = machine.rotary.forward(pose);
           // The block's end at a contact point: the flutes judged as at every CL point.
           const bool at_contact = s == steps && touching_end[j];
           if (run.collision->collides(at_contact ? tool : air, tip + R * axis, axis, !at_contact)) {

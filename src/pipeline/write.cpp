@@ -25,8 +25,9 @@ using controller::TcpBlock;
 /// that split an arc at 180 deg belong to no point and are stepped over.
 void read_back(const Machine& machine, const std::vector<PostedOperation>& posted,
                const GcodeProgram& program, Written& w) {
-  w.moves = read_gcode_moves(program.text, "written G-code", machine.gcode.dialect,
-                             program.verbatim_lines, machine.ac.tilt_letter(), program.tool_calls);
+  w.moves =
+      read_gcode_moves(program.text, "written G-code", machine.gcode.dialect,
+                       program.verbatim_lines, machine.rotary.tilt_letter(), program.tool_calls);
   w.on_arcs.clear();
   w.way_points.assign(posted.size(), {});
   w.point_moves.assign(posted.size(), {});
@@ -44,7 +45,7 @@ void read_back(const Machine& machine, const std::vector<PostedOperation>& poste
         while (next < moves.size() && moves[next].line < std::abs(line)) {
           const GcodeMove& m = moves[next++];
           if (i > 0 && !m.arc && !m.positioning) {
-            w.way_points[k][i].push_back({m.xyz_mm, m.a_deg, m.c_deg});
+            w.way_points[k][i].push_back({m.xyz_mm, m.tilt_deg, m.c_deg});
           }
           last = &m;
         }
@@ -104,9 +105,9 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
                        Written& w) {
   const auto turn_s = [&](const Posed& from, const Posed& to) {
     JointPosition a{}, b{};
-    a[static_cast<std::size_t>(Joint::A)] = rad_to_deg(from.a_rad);
+    a[static_cast<std::size_t>(Joint::Tilt)] = rad_to_deg(from.tilt_rad);
     a[static_cast<std::size_t>(Joint::C)] = rad_to_deg(from.c_rad);
-    b[static_cast<std::size_t>(Joint::A)] = rad_to_deg(to.a_rad);
+    b[static_cast<std::size_t>(Joint::Tilt)] = rad_to_deg(to.tilt_rad);
     b[static_cast<std::size_t>(Joint::C)] = rad_to_deg(to.c_rad);
     return rapid_time_s(a, b, limits);
   };
@@ -136,7 +137,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   const Machine& machine = run.machine;
   const ProgramTemplate& t = machine.gcode.program;
   const double length_mm = run.options.tool.gauge_length_mm.value_or(0.0);
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::A);
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   double feed_s = 0.0, rapid_s = 0.0;
   for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
@@ -191,7 +192,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     JointPosition to = q;
     const bool gives[5] = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
                            (m.given & 8u) != 0, (m.given & 16u) != 0};
-    if (gives[3]) to[kA] = m.a_deg;
+    if (gives[3]) to[kA] = m.tilt_deg;
     if (gives[4]) to[kC] = m.c_deg;
     const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
     const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
@@ -233,12 +234,12 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
     const bool switched = machine.gcode.dialect == GcodeDialect::LinuxCNC && !t.tcp_on.empty();
     if (machine.gcode.mode == GcodeMode::Tcp && m.tcp && (!switched || m.length_offset)) {
       // The program's axes: the tip where the joints stand, the words given replacing it.
-      Vec3d tip = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
+      Vec3d tip = machine.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
       const Vec3d written_tip = tip_of_written_mm(machine, m.xyz_mm, to_pose);
       for (int k = 0; k < 3; ++k) {
         if (gives[k]) tip[k] = written_tip[k];
       }
-      const Vec3d xyz = machine.ac.to_machine_mm(tip, to_pose);
+      const Vec3d xyz = machine.rotary.to_machine_mm(tip, to_pose);
       to[0] = xyz.x();
       to[1] = xyz.y();
       to[2] = xyz.z();
@@ -248,7 +249,7 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
       if (tip_set[0] && tip_set[1] && tip_set[2]) set[0] = set[1] = set[2] = true;
       const bool safe_rapid =
           std::binary_search(g.joint_safe_rapids.begin(), g.joint_safe_rapids.end(), m.line);
-      const Vec3d was = machine.ac.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
+      const Vec3d was = machine.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
       const JointPosition a{was.x(), was.y(), was.z(), q[kA], q[kC]};
       const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
       // The written F as a rate of the block a second: the tip's distance (the rotary one when
@@ -321,7 +322,7 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
   int over = 0, first_line = 0;
   bool accel_over = false, velocity_over = false;
   for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
-    const std::string name = joint_name(static_cast<Joint>(j), machine.ac.tilt_letter());
+    const std::string name = joint_name(static_cast<Joint>(j), machine.rotary.tilt_letter());
     const std::string unit = j < 3 ? "mm" : "deg";
     const double v_max = limits[j].max_velocity_per_s;
     const double a_max = joint_accel_limit(machine, limits, j);
@@ -370,9 +371,9 @@ std::vector<JointPosition> written_joints(const Machine& machine,
                                           const std::vector<const GcodeMove*>& at) {
   std::vector<JointPosition> q;
   for (const GcodeMove* m : at) {
-    const Posed pose{deg_to_rad(m->a_deg), deg_to_rad(m->c_deg)};
+    const Posed pose{deg_to_rad(m->tilt_deg), deg_to_rad(m->c_deg)};
     const Vec3d xyz = joints_of_written_mm(machine, m->xyz_mm, pose);
-    q.push_back({xyz.x(), xyz.y(), xyz.z(), m->a_deg, m->c_deg});
+    q.push_back({xyz.x(), xyz.y(), xyz.z(), m->tilt_deg, m->c_deg});
   }
   return q;
 }
@@ -445,7 +446,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                                     : po.programmed_time_s);
     w.schedule_after.push_back(schedule_operation(
         po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
-        machine.ac, &via, tcp ? &po.poses : nullptr));
+        machine.rotary, &via, tcp ? &po.poses : nullptr));
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -459,8 +460,8 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     w.schedule_before.push_back(
         input_poses.empty()
             ? w.schedule_after.back()
-            : schedule_operation(in_points, joints_of(machine.ac, in_tips, input_poses),
-                                 w.time_into_before.back(), limits, machine.ac, nullptr,
+            : schedule_operation(in_points, joints_of(machine.rotary, in_tips, input_poses),
+                                 w.time_into_before.back(), limits, machine.rotary, nullptr,
                                  tcp ? &input_poses : nullptr));
   }
   if (run.options.feed_schedule) {

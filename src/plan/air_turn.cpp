@@ -1,4 +1,4 @@
-#include "taxopt/plan/air_turn.hpp"
+#include "plan/air_turn.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -20,7 +20,7 @@ std::vector<double> spread_turn(const std::vector<double>& linear_time_s,
   const std::size_t m = linear_time_s.size();
   if (rapid.size() != m) throw std::invalid_argument("spread_turn: one flag per move");
   if (std::abs(turn_a_deg) + std::abs(turn_c_deg) < 1e-12) return {};
-  const JointLimit& la = limits[static_cast<std::size_t>(Joint::A)];
+  const JointLimit& la = limits[static_cast<std::size_t>(Joint::Tilt)];
   const JointLimit& lc = limits[static_cast<std::size_t>(Joint::C)];
   std::vector<double> capacity(m, 0.0);
   double total = 0.0;

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt::detail {
 

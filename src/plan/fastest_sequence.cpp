@@ -87,7 +87,7 @@ std::vector<std::size_t> fastest_candidate_sequence(
           fastest = std::max(fastest, std::abs(e.w[j]) * inv_a[j]);
         }
         e.quiet = 2.0 * fastest <= tau;
-        e.wa = (q[s].a_rad - p[r].a_rad) / t[i];
+        e.wa = (q[s].tilt_rad - p[r].tilt_rad) / t[i];
         const double step = q[s].c_rad - p[r].c_rad;
         e.wc = (wrap_c ? wrap_pi(step) : step) / t[i];
       }

@@ -42,13 +42,13 @@ double scalar(const Value& v, GlobalObjective objective) {
 /// metrics.hpp; 0 at the ends).
 void accelerations(const std::vector<Posed>& poses, const std::vector<double>& t,
                    std::vector<double>& aa, std::vector<double>& ac) {
-  std::vector<double> a_deg, c_deg;
+  std::vector<double> tilt_deg, c_deg;
   for (const Posed& p : poses) {
-    a_deg.push_back(rad_to_deg(p.a_rad));
+    tilt_deg.push_back(rad_to_deg(p.tilt_rad));
     c_deg.push_back(rad_to_deg(p.c_rad));
   }
-  RotaryKinematics k = rotary_kinematics_from_times(a_deg, c_deg, t);
-  aa = std::move(k.accel_a_deg_s2);
+  RotaryKinematics k = rotary_kinematics_from_times(tilt_deg, c_deg, t);
+  aa = std::move(k.accel_tilt_deg_s2);
   ac = std::move(k.accel_c_deg_s2);
 }
 
@@ -101,16 +101,17 @@ Eigen::SparseMatrix<double> second_difference(const std::vector<double>& t,
 
 /// The candidate poses of point i for the programme (C in (-pi, pi] for a continuous C, else
 /// every turn within its range); the warm start's pose first.
-std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const Posed& warm,
-                                 const std::vector<Posed>& extra,
+std::vector<Posed> candidates_at(const MachineKinematicsd& machine, std::size_t i,
+                                 const Posed& warm, const std::vector<Posed>& extra,
                                  const std::vector<Vec3d>& grid_axes, bool both_branches,
                                  const AxisTest& acceptable) {
   std::vector<Posed> out;
   const auto add = [&](Posed p) {
-    if (!machine.a.contains(p.a_rad)) return;
+    if (!machine.tilt.contains(p.tilt_rad)) return;
     const auto push = [&](const Posed& q) {
       for (const Posed& o : out) {
-        if (std::abs(o.a_rad - q.a_rad) < 1e-9 && std::abs(wrap_pi(o.c_rad - q.c_rad)) < 1e-9) {
+        if (std::abs(o.tilt_rad - q.tilt_rad) < 1e-9 &&
+            std::abs(wrap_pi(o.c_rad - q.c_rad)) < 1e-9) {
           return;
         }
       }
@@ -123,13 +124,13 @@ std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const
     }
     const double two_pi = Constants<double>::two_pi();
     for (int turn = -2; turn <= 2; ++turn) {
-      const Posed q{p.a_rad, wrap_pi(p.c_rad) + turn * two_pi};
+      const Posed q{p.tilt_rad, wrap_pi(p.c_rad) + turn * two_pi};
       if (machine.c.contains(q.c_rad)) push(q);
     }
   };
   add(warm);
   for (const Posed& p : extra) add(p);
-  const bool warm_positive = warm.a_rad >= 0.0;
+  const bool warm_positive = warm.tilt_rad >= 0.0;
   for (const Vec3d& axis : grid_axes) {
     if (!acceptable(i, axis)) continue;
     if (machine.at_pole(axis)) {
@@ -137,7 +138,7 @@ std::vector<Posed> candidates_at(const ACMachined& machine, std::size_t i, const
       continue;
     }
     for (const Posed& p : machine.inverse(axis)) {
-      if (both_branches || (p.a_rad >= 0.0) == warm_positive) add(p);
+      if (both_branches || (p.tilt_rad >= 0.0) == warm_positive) add(p);
     }
   }
   return out;
@@ -192,7 +193,7 @@ std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<P
     wc.resize(p.size() * q.size());
     for (std::size_t r = 0; r < p.size(); ++r) {
       for (std::size_t s = 0; s < q.size(); ++s) {
-        wa[r * q.size() + s] = (q[s].a_rad - p[r].a_rad) / t[i];
+        wa[r * q.size() + s] = (q[s].tilt_rad - p[r].tilt_rad) / t[i];
         const double step = q[s].c_rad - p[r].c_rad;
         wc[r * q.size() + s] = (wrap_c ? wrap_pi(step) : step) / t[i];
       }
@@ -260,7 +261,7 @@ double pass_time_s(const std::vector<JointPosition>& joints,
   return pass_schedule(joints, programmed_time_s, limits).total_time_s();
 }
 
-GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProblem& problem,
+GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine, const GlobalPassProblem& problem,
                                 const AxisTest& acceptable, const GlobalOptions& options) {
   const std::size_t n = problem.warm_start.size();
   if (problem.input_axes.size() != n || (n > 0 && problem.segment_time_s.size() + 1 != n)) {
@@ -315,7 +316,7 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
   // Both branches only where the pass comes within reach of the pole.
   bool near_pole = false;
   for (const Posed& p : problem.warm_start) {
-    near_pole = near_pole || std::abs(p.a_rad) <= 2.0 * radius + step;
+    near_pole = near_pole || std::abs(p.tilt_rad) <= 2.0 * radius + step;
   }
   std::vector<std::vector<Posed>> cand(n);
   std::vector<Posed> extra;
@@ -382,7 +383,7 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
   // (2) Continuous refinement from `plan.poses`, minimising `obj` at segment times `tt`; a step
   // is taken only where `admissible` (if given) accepts it. Returns the steps taken.
   const auto feasible = [&](std::size_t i, const Posed& p) {
-    if (!machine.a.contains(p.a_rad)) return false;
+    if (!machine.tilt.contains(p.tilt_rad)) return false;
     if (!machine.c.continuous && !machine.c.contains(p.c_rad)) return false;
     return acceptable(i, machine.forward(p));
   };
@@ -406,7 +407,7 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
       Eigen::SparseMatrix<double> h = (m.transpose() * m).pruned();
       Eigen::VectorXd xa(static_cast<long>(n)), xc(static_cast<long>(n));
       for (std::size_t i = 0; i < n; ++i) {
-        xa[static_cast<long>(i)] = plan.poses[i].a_rad;
+        xa[static_cast<long>(i)] = plan.poses[i].tilt_rad;
         xc[static_cast<long>(i)] = plan.poses[i].c_rad;
       }
       Eigen::SparseMatrix<double> lhs = h;
@@ -426,7 +427,7 @@ GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProbl
         if (std::abs(sa) + std::abs(sc) < 1e-12) continue;
         double f = 1.0;
         for (int b = 0; b <= options.bisection_steps; ++b, f *= 0.5) {
-          const Posed p{plan.poses[i].a_rad + f * sa, plan.poses[i].c_rad + f * sc};
+          const Posed p{plan.poses[i].tilt_rad + f * sa, plan.poses[i].c_rad + f * sc};
           if (feasible(i, p)) {
             trial[i] = p;
             break;

@@ -7,7 +7,7 @@
 #include <numeric>
 #include <optional>
 
-#include "taxopt/plan/slerp.hpp"
+#include "plan/slerp.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
 

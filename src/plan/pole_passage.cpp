@@ -1,4 +1,4 @@
-#include "taxopt/plan/pole_passage.hpp"
+#include "plan/pole_passage.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@ enum class Shape { Linear, Hermite };
 
 /// Poses with C re-planned in every stretch of |A| < rho whose new axes are all acceptable;
 /// `stretches` counts those.
-std::vector<Posed> replan(const ACMachined& machine, const std::vector<Posed>& poses,
+std::vector<Posed> replan(const MachineKinematicsd& machine, const std::vector<Posed>& poses,
                           const std::vector<double>& arc_mm, const AxisTest& acceptable,
                           double rho_rad, Shape shape, std::size_t& stretches) {
   const std::size_t n = poses.size();
@@ -26,12 +26,12 @@ std::vector<Posed> replan(const ACMachined& machine, const std::vector<Posed>& p
   };
   std::size_t b = 0;
   while (b < n) {
-    if (std::abs(poses[b].a_rad) >= rho_rad) {
+    if (std::abs(poses[b].tilt_rad) >= rho_rad) {
       ++b;
       continue;
     }
     std::size_t e = b;  // the stretch is [b, e)
-    while (e < n && std::abs(poses[e].a_rad) < rho_rad) ++e;
+    while (e < n && std::abs(poses[e].tilt_rad) < rho_rad) ++e;
     const bool has_before = b > 0, has_after = e < n;
     if (has_before || has_after) {
       // C and its rate at the two anchors; an end of the pass holds its one neighbour's C.
@@ -68,7 +68,7 @@ std::vector<Posed> replan(const ACMachined& machine, const std::vector<Posed>& p
 
 }  // namespace
 
-PolePassage smooth_pole_passages(const ACMachined& machine, const std::vector<Vec3d>& axes,
+PolePassage smooth_pole_passages(const MachineKinematicsd& machine, const std::vector<Vec3d>& axes,
                                  const std::vector<Posed>& poses,
                                  const std::vector<double>& segment_mm,
                                  const std::vector<double>& feed_mm_min, const AxisTest& acceptable,

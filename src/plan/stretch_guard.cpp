@@ -1,8 +1,8 @@
-#include "taxopt/plan/stretch_guard.hpp"
+#include "plan/stretch_guard.hpp"
 
 #include <algorithm>
 
-#include "taxopt/plan/slerp.hpp"
+#include "plan/slerp.hpp"
 
 namespace taxopt {
 namespace {

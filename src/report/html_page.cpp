@@ -245,8 +245,8 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
   data["collision_checked"] = result.collision_checked;
   const JointLimits limits = effective_limits(machine);
   data["machine"] = {{"name", machine.name},
-                     {"tilt_range_deg", range_json(machine.ac.a)},
-                     {"c_range_deg", range_json(machine.ac.c)},
+                     {"tilt_range_deg", range_json(machine.rotary.tilt)},
+                     {"c_range_deg", range_json(machine.rotary.c)},
                      {"tilt_limits", limit_json(limits[3])},
                      {"c_limits", limit_json(limits[4])}};
   std::size_t total_points = 0;
@@ -319,8 +319,8 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
       idx.push_back(i);
       line.push_back(p.line);
       arc.push_back(rounded(arc_mm));
-      ab.push_back(rounded(p.a_before_deg));
-      aa.push_back(rounded(p.a_deg));
+      ab.push_back(rounded(p.tilt_axis_before_deg));
+      aa.push_back(rounded(p.tilt_axis_deg));
       cb.push_back(rounded(p.c_before_deg));
       ca.push_back(rounded(p.c_deg));
       wb.push_back(rounded(p.omega_before_deg_s));
@@ -359,8 +359,8 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
     json axes = json::array();
     for (std::size_t i = 0; i < r.rows.size(); i += axes_every) {
       const PointRow& p = r.rows[i];
-      const Vec3d before =
-          machine.ac.forward(Posed{deg_to_rad(p.a_before_deg), deg_to_rad(p.c_before_deg)});
+      const Vec3d before = machine.rotary.forward(
+          Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
       axes.push_back({i, vec_json(p.tip_mm, 3), vec_json(before, 4), vec_json(p.axis, 4),
                       rounded(p.accel_before_deg_s2), rounded(p.accel_deg_s2)});
     }
@@ -375,17 +375,17 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
       if (m == 0) continue;
       ++marker_total;
       if (markers.size() >= budget.max_markers) continue;
-      const Vec3d before =
-          machine.ac.forward(Posed{deg_to_rad(p.a_before_deg), deg_to_rad(p.c_before_deg)});
+      const Vec3d before = machine.rotary.forward(
+          Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
       markers.push_back({{"op", k},
                          {"i", i},
                          {"line", p.line},
                          {"marks", point_marks_text(m)},
                          {"tip", vec_json(p.tip_mm, 3)},
                          {"arc_mm", rounded(p.arc_mm)},
-                         {"tilt_before", rounded(p.a_before_deg)},
+                         {"tilt_before", rounded(p.tilt_axis_before_deg)},
                          {"c_before", rounded(p.c_before_deg)},
-                         {"tilt_after", rounded(p.a_deg)},
+                         {"tilt_after", rounded(p.tilt_axis_deg)},
                          {"c_after", rounded(p.c_deg)},
                          {"axis_before", vec_json(before, 4)},
                          {"axis_after", vec_json(p.axis, 4)}});

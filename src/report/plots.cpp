@@ -315,7 +315,7 @@ std::vector<std::pair<std::string, std::string>> job_plots(const JobResult& resu
     };
     out.emplace_back(stem + "angles-a.svg",
                      make(std::string(1, result.tilt_letter) + " angle", "deg",
-                          &PointRow::a_before_deg, &PointRow::a_deg, false));
+                          &PointRow::tilt_axis_before_deg, &PointRow::tilt_axis_deg, false));
     out.emplace_back(stem + "angles-c.svg",
                      make("C angle", "deg", &PointRow::c_before_deg, &PointRow::c_deg, false));
     out.emplace_back(stem + "omega.svg",

@@ -364,7 +364,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       l["max_jerk_" + unit + "_s3"] = effective[q].max_jerk_per_s3;
     if (machine.joint_max_accel_per_s2[q] > 0.0)
       l["joint_max_accel_" + unit + "_s2"] = machine.joint_max_accel_per_s2[q];
-    limits[joint_name(static_cast<Joint>(q), machine.ac.tilt_letter())] = l;
+    limits[joint_name(static_cast<Joint>(q), machine.rotary.tilt_letter())] = l;
   }
   j["axis_limits"] = limits;
   tidy_numbers(j);
@@ -417,8 +417,8 @@ std::string points_csv(const JobResult& result) {
       } else {
         out += ",,,,,,,,";
       }
-      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,", p.a_deg, p.c_deg, p.omega_deg_s,
-                    p.accel_deg_s2);
+      std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,", p.tilt_axis_deg, p.c_deg,
+                    p.omega_deg_s, p.accel_deg_s2);
       no_negative_zero(buf);
       out += buf;
       if (p.free_cells) out += std::to_string(*p.free_cells);

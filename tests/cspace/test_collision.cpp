@@ -56,8 +56,8 @@ TEST_CASE("collision: on a flat part everything is free until the holder reaches
       return Vec3d(std::sin(a) * std::cos(yaw), std::sin(a) * std::sin(yaw), std::cos(a));
     };
     const Vec3d c(1.0, -2.0, 3.0);
-    for (double a_deg = 0.0; a_deg < rad_to_deg(a_star) - 0.3; a_deg += 5.0) {
-      CHECK_FALSE(part.collides(tool, c, axis(deg_to_rad(a_deg))));
+    for (double tilt_deg = 0.0; tilt_deg < rad_to_deg(a_star) - 0.3; tilt_deg += 5.0) {
+      CHECK_FALSE(part.collides(tool, c, axis(deg_to_rad(tilt_deg))));
     }
     CHECK_FALSE(part.collides(tool, c, axis(a_star - deg_to_rad(0.3))));
     CHECK(part.collides(tool, c, axis(a_star + deg_to_rad(0.3))));

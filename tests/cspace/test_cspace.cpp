@@ -134,12 +134,12 @@ TEST_CASE("cspace: on a flat part the free cells are the tilts below the holder'
     CHECK(v.norm() == Approx(1.0));
     CHECK(rad_to_deg(angle_between(v, cp.normal)) < a_star_deg);
   }
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const std::vector<Posed> poses = free_poses_of(g, cp, m);
   REQUIRE(poses.size() == axes.size());
   for (std::size_t k = 0; k < axes.size(); ++k) {
     CHECK(angle_between(m.forward(poses[k]), axes[k]) < 1e-9);
-    CHECK(m.a.contains(poses[k].a_rad));
+    CHECK(m.tilt.contains(poses[k].tilt_rad));
   }
   // The deviation cone bounds the free set too.
   opt.max_deviation_deg = 20.0;

@@ -41,7 +41,7 @@ PostedOperation simple_op() {
     axes.push_back(p.axis);
     rapid.push_back(p.motion == Motion::Rapid);
   }
-  op.poses = plan_poses(m.ac, axes, rapid).poses;
+  op.poses = plan_poses(m.rotary, axes, rapid).poses;
   return op;
 }
 
@@ -61,8 +61,8 @@ TEST_CASE("gcode: what is written reads back as the same tips and axes, in every
           m.gcode.mode = mode;
           m.gcode.feed_mode = fm;
           m.gcode.decimals = std::min(5, max_decimals(dialect));
-          m.ac.c_axis_point_mm = Vec3d(20, 5, 0);
-          m.ac.a_axis_point_mm = Vec3d(0, -3, 40);
+          m.rotary.c_axis_point_mm = Vec3d(20, 5, 0);
+          m.rotary.tilt_axis_point_mm = Vec3d(0, -3, 40);
           const PostedOperation op = simple_op();
           const GcodeProgram prog = write_gcode({op}, m, u, {"test"});
           std::vector<GcodeMove> moves;  // the point's blocks and those between (linearised)
@@ -83,11 +83,11 @@ TEST_CASE("gcode: what is written reads back as the same tips and axes, in every
               std::sqrt(3.0) * 0.5 * std::pow(10.0, -m.gcode.decimals) * mm_per_unit(u) + 1e-4;
           for (std::size_t i = 0; i < at.size(); ++i) {
             const GcodeMove& w = moves[at[i]];
-            const Posed pose{deg_to_rad(w.a_deg), deg_to_rad(w.c_deg)};
+            const Posed pose{deg_to_rad(w.tilt_deg), deg_to_rad(w.c_deg)};
             const Vec3d tip =
-                mode == GcodeMode::Machine ? m.ac.from_machine_mm(w.xyz_mm, pose) : w.xyz_mm;
+                mode == GcodeMode::Machine ? m.rotary.from_machine_mm(w.xyz_mm, pose) : w.xyz_mm;
             CHECK((tip - op.points[i].tip_mm).norm() < tip_tol);
-            CHECK(rad_to_deg(angle_between(m.ac.forward(pose), op.points[i].axis)) < 1e-4);
+            CHECK(rad_to_deg(angle_between(m.rotary.forward(pose), op.points[i].axis)) < 1e-4);
             CHECK(w.rapid == (i == 0));
             CHECK(w.line == prog.emitted[0][i]);
             CHECK(w.length_offset);
@@ -107,9 +107,9 @@ TEST_CASE("gcode: what is written reads back as the same tips and axes, in every
                   got_min += tip_mm / mm_per_unit(u) / f;
                 }
                 // Machine mode: every block between keeps the tip on the straight line.
-                const Posed pj{deg_to_rad(moves[j].a_deg), deg_to_rad(moves[j].c_deg)};
+                const Posed pj{deg_to_rad(moves[j].tilt_deg), deg_to_rad(moves[j].c_deg)};
                 const Vec3d tj = mode == GcodeMode::Machine
-                                     ? m.ac.from_machine_mm(moves[j].xyz_mm, pj)
+                                     ? m.rotary.from_machine_mm(moves[j].xyz_mm, pj)
                                      : moves[j].xyz_mm;
                 const Vec3d a = op.points[i - 1].tip_mm, b = op.points[i].tip_mm;
                 CHECK((tj - a).cross(b - a).norm() / (b - a).norm() < tip_tol);
@@ -225,8 +225,8 @@ TEST_CASE("gcode: golden programs of each dialect, mode and feed mode", "[io][gc
     m.gcode.dialect = c.dialect;
     m.gcode.mode = c.mode;
     m.gcode.feed_mode = c.feed;
-    m.ac.c_axis_point_mm = Vec3d(20, 5, 0);
-    m.ac.a_axis_point_mm = Vec3d(0, -3, 40);
+    m.rotary.c_axis_point_mm = Vec3d(20, 5, 0);
+    m.rotary.tilt_axis_point_mm = Vec3d(0, -3, 40);
     PostedOperation op = simple_op();
     if (c.scheduled) op.block_time_s = {0.0, 1.5, 2.25, 3.0, 4.0};  // slower than programmed
     const GcodeProgram prog = write_gcode({op}, m, c.units, {"golden " + std::string(c.file)});
@@ -295,7 +295,7 @@ TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][g
     const std::size_t descent = w.dialect == GcodeDialect::Fanuc ? 0 : 1;
     CHECK(positioning == 2 * (3 + descent) + 2);
     CHECK(moves.back().positioning);
-    CHECK(moves.back().a_deg == 0.0);
+    CHECK(moves.back().tilt_deg == 0.0);
     CHECK(moves.back().c_deg == 0.0);
     // From the retract: XY first (no Z word), then down to the first point with the same X Y
     // (tests/test_program.cpp: no diagonal rapid from the retract height).
@@ -308,7 +308,7 @@ TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][g
       CHECK(xy.given == 3u);  // X and Y only
       CHECK(moves[at].xyz_mm.x() == xy.xyz_mm.x());
       CHECK(moves[at].xyz_mm.y() == xy.xyz_mm.y());
-      CHECK(moves[at].a_deg == xy.a_deg);
+      CHECK(moves[at].tilt_deg == xy.tilt_deg);
       CHECK(moves[at].c_deg == xy.c_deg);
       CHECK(moves[at].tool == (k == 0 ? 3 : 4));
       CHECK(moves[at].spindle_on);
@@ -382,11 +382,12 @@ TEST_CASE(
                               double rate) {
     double worst = 0.0;
     constexpr int kSteps = 4000;
-    Vec3d prev = m.ac.to_machine_mm(t0, p0);
+    Vec3d prev = m.rotary.to_machine_mm(t0, p0);
     for (int s = 1; s <= kSteps; ++s) {
       const double u = static_cast<double>(s) / kSteps;
-      const Posed pose{p0.a_rad + u * (p1.a_rad - p0.a_rad), p0.c_rad + u * (p1.c_rad - p0.c_rad)};
-      const Vec3d q = m.ac.to_machine_mm(t0 + u * (t1 - t0), pose);
+      const Posed pose{p0.tilt_rad + u * (p1.tilt_rad - p0.tilt_rad),
+                       p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+      const Vec3d q = m.rotary.to_machine_mm(t0 + u * (t1 - t0), pose);
       for (int j = 0; j < 3; ++j) {
         worst = std::max(worst, std::abs(q[j] - prev[j]) * kSteps * rate /
                                     limits[static_cast<std::size_t>(j)].max_velocity_per_s);
@@ -398,7 +399,7 @@ TEST_CASE(
   // The axis rate of the rapid: every program axis within its own limit.
   const auto axis_rate = [&](const Vec3d& t0, const Posed& p0, const Vec3d& t1, const Posed& p1) {
     const double d[5] = {t1.x() - t0.x(), t1.y() - t0.y(), t1.z() - t0.z(),
-                         rad_to_deg(p1.a_rad - p0.a_rad), rad_to_deg(p1.c_rad - p0.c_rad)};
+                         rad_to_deg(p1.tilt_rad - p0.tilt_rad), rad_to_deg(p1.c_rad - p0.c_rad)};
     double r = 1e300;
     for (std::size_t k = 0; k < 5; ++k) {
       if (d[k] != 0.0) r = std::min(r, limits[k].max_velocity_per_s / std::abs(d[k]));
@@ -410,7 +411,7 @@ TEST_CASE(
     const Posed p0{deg_to_rad(-23.75), deg_to_rad(-180.0)},
         p1{deg_to_rad(-24.76), deg_to_rad(-179.76)};
     CHECK(peak_ratio(t0, p0, t1, p1, axis_rate(t0, p0, t1, p1)) > 1.0);  // G0 would breach
-    const std::optional<double> rate = joint_safe_rate_per_s(m.ac, limits, t0, p0, t1, p1);
+    const std::optional<double> rate = joint_safe_rate_per_s(m.rotary, limits, t0, p0, t1, p1);
     REQUIRE(rate);
     CHECK(peak_ratio(t0, p0, t1, p1, *rate) <= 1.0);
     CHECK(peak_ratio(t0, p0, t1, p1, *rate) > 0.99);  // not slower than it needs
@@ -419,19 +420,19 @@ TEST_CASE(
     const Vec3d t0(60.0, 0.0, 5.0), t1(60.0, 0.0, 5.0);
     const Posed p0{deg_to_rad(-30.0), 0.0}, p1{deg_to_rad(-30.0), deg_to_rad(180.0)};
     CHECK(peak_ratio(t0, p0, t1, p1, axis_rate(t0, p0, t1, p1)) > 1.0);
-    const std::optional<double> rate = joint_safe_rate_per_s(m.ac, limits, t0, p0, t1, p1);
+    const std::optional<double> rate = joint_safe_rate_per_s(m.rotary, limits, t0, p0, t1, p1);
     REQUIRE(rate);
     CHECK(peak_ratio(t0, p0, t1, p1, *rate) <= 1.0);
   }
   SECTION("no turn: the joints move as the axes, the rapid stays") {
     const Posed p{deg_to_rad(-30.0), deg_to_rad(40.0)};
-    CHECK_FALSE(joint_safe_rate_per_s(m.ac, limits, Vec3d(0, 0, 5), p, Vec3d(30, 10, 50), p));
+    CHECK_FALSE(joint_safe_rate_per_s(m.rotary, limits, Vec3d(0, 0, 5), p, Vec3d(30, 10, 50), p));
   }
   SECTION("a turn about the tip on the pivot: slow enough already") {
     const Vec3d t(0.0, 0.0, 0.0);
     Machine c = m;
-    c.ac.a_axis_point_mm = Vec3d::Zero();
-    CHECK_FALSE(joint_safe_rate_per_s(c.ac, limits, t, Posed{0.0, 0.0}, t,
+    c.rotary.tilt_axis_point_mm = Vec3d::Zero();
+    CHECK_FALSE(joint_safe_rate_per_s(c.rotary, limits, t, Posed{0.0, 0.0}, t,
                                       Posed{deg_to_rad(-20.0), deg_to_rad(90.0)}));
   }
 }

@@ -58,14 +58,14 @@ std::string replace(const std::string& s, const std::string& from, const std::st
 TEST_CASE("machine file: the example of CLI.md reads completely", "[io][machine]") {
   const Machine m = parse_machine_toml(kFull, "m.toml");
   CHECK(m.name == "generic-ac-trt");
-  CHECK(rad_to_deg(m.ac.a.min_rad) == Approx(-120.0));
+  CHECK(rad_to_deg(m.rotary.tilt.min_rad) == Approx(-120.0));
   CHECK(m.limits[3].max_accel_per_s2 == 36000.0);
   CHECK(m.limits[4].max_velocity_per_s == 7200.0);
   CHECK(m.limits[0].max_velocity_per_s == 0.0);  // not given
-  CHECK(m.ac.c.continuous);
-  CHECK(m.ac.c.sense == -1);
-  CHECK(m.ac.a_axis_point_mm == Vec3d(0, 1.5, -2.0));
-  CHECK(m.ac.c_axis_point_mm == Vec3d(3.0, 4.0, 0));
+  CHECK(m.rotary.c.continuous);
+  CHECK(m.rotary.c.sense == -1);
+  CHECK(m.rotary.tilt_axis_point_mm == Vec3d(0, 1.5, -2.0));
+  CHECK(m.rotary.c_axis_point_mm == Vec3d(3.0, 4.0, 0));
   CHECK(m.gcode.mode == GcodeMode::Machine);
   CHECK(m.gcode.feed_mode == FeedMode::InverseTime);
   CHECK(m.gcode.feed_reference == FeedReference::Tip);

@@ -9,10 +9,10 @@ using namespace taxopt;
 
 namespace {
 
-JointLimits uniform_limits(double v_mm, double a_mm, double v_deg, double a_deg) {
+JointLimits uniform_limits(double v_mm, double a_mm, double v_deg, double tilt_deg) {
   JointLimits l;
   for (int j = 0; j < 3; ++j) l[j] = {v_mm, a_mm, 0.0};
-  for (int j = 3; j < 5; ++j) l[j] = {v_deg, a_deg, 0.0};
+  for (int j = 3; j < 5; ++j) l[j] = {v_deg, tilt_deg, 0.0};
   return l;
 }
 

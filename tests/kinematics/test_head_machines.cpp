@@ -57,33 +57,33 @@ TEST_CASE(
   for (const char* name : {"linuxcnc-max5", "linuxcnc-5axis-bridgemill"}) {
     INFO(name);
     Machine m = shipped(name);
-    const bool head_head = m.ac.layout == RotaryLayout::HeadHead;
-    CHECK(m.ac.layout == (head_head ? RotaryLayout::HeadHead : RotaryLayout::HeadTable));
-    CHECK(m.ac.tilt_letter() == 'B');
+    const bool head_head = m.rotary.layout == RotaryLayout::HeadHead;
+    CHECK(m.rotary.layout == (head_head ? RotaryLayout::HeadHead : RotaryLayout::HeadTable));
+    CHECK(m.rotary.tilt_letter() == 'B');
     for (const double l : {0.0, 250.0, 317.5}) {
-      m.ac.head_length_mm = l;
+      m.rotary.head_length_mm = l;
       for (int trial = 0; trial < 200; ++trial) {
         const Vec3d tip(u(rng), u(rng), u(rng));
         const double b = ub(rng), c = uc(rng);
         const Posed pose{deg_to_rad(b), deg_to_rad(c)};
-        const Vec3d joints = m.ac.to_machine_mm(tip, pose);
+        const Vec3d joints = m.rotary.to_machine_mm(tip, pose);
         const Vec3d want =
             head_head ? fiveaxiskins_joints(tip, b, c, l) : maxkins_joints(tip, b, c, l);
         INFO("L " << l << " B " << b << " C " << c);
         CHECK((joints - want).norm() < 1e-9);
-        CHECK((m.ac.from_machine_mm(joints, pose) - tip).norm() < 1e-9);
+        CHECK((m.rotary.from_machine_mm(joints, pose) - tip).norm() < 1e-9);
         // The tool axis the modules' swing implies: (tip - joints) / L + z (at L > 0).
         if (l > 0.0) {
           const Vec3d swing = head_head ? joints - tip
                                         : Eigen::AngleAxisd(deg_to_rad(c), Vec3d::UnitZ()) *
                                               (joints - maxkins_joints(tip, 0.0, c, l));
-          CHECK((swing / l + Vec3d::UnitZ() - m.ac.forward(pose)).norm() < 1e-9);
+          CHECK((swing / l + Vec3d::UnitZ() - m.rotary.forward(pose)).norm() < 1e-9);
         }
       }
       // At B = 0 the joints are the tip (head-head) or the tip turned with the table.
       const Vec3d tip(12.0, -7.0, 3.0);
       const Posed flat{0.0, deg_to_rad(30.0)};
-      CHECK((m.ac.to_machine_mm(tip, flat) -
+      CHECK((m.rotary.to_machine_mm(tip, flat) -
              (head_head ? tip : Eigen::AngleAxisd(deg_to_rad(-30.0), Vec3d::UnitZ()) * tip))
                 .norm() < 1e-12);
     }
@@ -101,18 +101,18 @@ TEST_CASE(
     const Machine m = shipped(name);
     for (int trial = 0; trial < 500; ++trial) {
       const Vec3d axis = Vec3d(n(rng), n(rng), n(rng)).normalized();
-      const auto branches = m.ac.inverse(axis);
-      for (const Posed& p : branches) CHECK((m.ac.forward(p) - axis).norm() < 1e-9);
+      const auto branches = m.rotary.inverse(axis);
+      for (const Posed& p : branches) CHECK((m.rotary.forward(p) - axis).norm() < 1e-9);
       // Both branches tilt by the same angle, on either side.
-      CHECK(std::abs(branches[0].a_rad + branches[1].a_rad) < 1e-12);
+      CHECK(std::abs(branches[0].tilt_rad + branches[1].tilt_rad) < 1e-12);
       // B within +-90 (max5) reaches the upper hemisphere only; +-120 (bridge mill) beyond.
       const double tilt_deg = rad_to_deg(std::acos(std::clamp(axis.z(), -1.0, 1.0)));
-      const double b_max = rad_to_deg(m.ac.a.max_rad);
-      CHECK(m.ac.reachable(axis) == (tilt_deg <= b_max + 1e-6));
+      const double b_max = rad_to_deg(m.rotary.tilt.max_rad);
+      CHECK(m.rotary.reachable(axis) == (tilt_deg <= b_max + 1e-6));
     }
-    CHECK(m.ac.at_pole(Vec3d::UnitZ()));
-    const auto pole = m.ac.inverse(Vec3d::UnitZ());
-    CHECK(pole[0].a_rad == 0.0);
+    CHECK(m.rotary.at_pole(Vec3d::UnitZ()));
+    const auto pole = m.rotary.inverse(Vec3d::UnitZ());
+    CHECK(pole[0].tilt_rad == 0.0);
   }
 }
 

@@ -12,16 +12,16 @@ TEST_CASE("metrics: eq. 16-18 against a hand computation", "[kinematics][metrics
   const std::vector<double> feed = {60.0, 60.0, 60.0};
   const RotaryKinematics k = rotary_kinematics(a, c, len, feed);
   // omega_i = v (theta_{i+1} - theta_i) / L_i
-  CHECK(k.omega_a_deg_s[0] == Approx(1.0));
-  CHECK(k.omega_a_deg_s[1] == Approx(2.0));
+  CHECK(k.omega_tilt_deg_s[0] == Approx(1.0));
+  CHECK(k.omega_tilt_deg_s[1] == Approx(2.0));
   CHECK(k.omega_c_deg_s[1] == Approx(1.5));
   CHECK(k.omega_c_deg_s[2] == Approx(4.0));
   CHECK(k.omega_deg_s[1] == Approx(2.5));  // sqrt(2^2 + 1.5^2)
   CHECK(k.omega_deg_s[3] == 0.0);
   // a_i = 2 v (omega_i - omega_{i-1}) / (L_{i-1} + L_i)  (erratum of eq. 18: L, not T)
-  CHECK(k.accel_a_deg_s2[1] == Approx(2.0 * (2.0 - 1.0) / 3.0));
+  CHECK(k.accel_tilt_deg_s2[1] == Approx(2.0 * (2.0 - 1.0) / 3.0));
   CHECK(k.accel_c_deg_s2[1] == Approx(2.0 * (1.5 - 0.0) / 3.0));
-  CHECK(k.accel_a_deg_s2[2] == Approx(2.0 * (0.0 - 2.0) / 3.0));
+  CHECK(k.accel_tilt_deg_s2[2] == Approx(2.0 * (0.0 - 2.0) / 3.0));
   CHECK(k.accel_c_deg_s2[2] == Approx(2.0 * (4.0 - 1.5) / 3.0));
   CHECK(k.accel_deg_s2[2] == Approx(std::hypot(4.0 / 3.0, 5.0 / 3.0)));
   CHECK(k.accel_deg_s2[0] == 0.0);

@@ -21,11 +21,11 @@ double max_c_step_deg(const std::vector<Posed>& poses) {
   return m;
 }
 
-void require_axes(const ACMachined& m, const std::vector<Posed>& poses,
+void require_axes(const MachineKinematicsd& m, const std::vector<Posed>& poses,
                   const std::vector<Vec3d>& axes) {
   for (std::size_t i = 0; i < axes.size(); ++i) {
     REQUIRE((m.forward(poses[i]) - axes[i]).norm() < 1e-9);
-    REQUIRE(m.a.contains(poses[i].a_rad));
+    REQUIRE(m.tilt.contains(poses[i].tilt_rad));
     REQUIRE(m.c.contains(poses[i].c_rad));
   }
 }
@@ -34,14 +34,14 @@ void require_axes(const ACMachined& m, const std::vector<Posed>& poses,
 // (t, c) gives the axis A/C gives at (t, c + 90 deg), so a path written for A/C, turned a
 // quarter about Z, asks the B/C machine for the same poses: the tests below check the same
 // poses of both.
-std::vector<ACMachined> both_kinematics(const ACMachined& ac) {
-  ACMachined bc = ac;
-  bc.tilt = TiltAxis::Y;
+std::vector<MachineKinematicsd> both_kinematics(const MachineKinematicsd& ac) {
+  MachineKinematicsd bc = ac;
+  bc.tilt_about = TiltAxis::Y;
   return {ac, bc};
 }
 
-std::vector<Vec3d> for_machine(const ACMachined& m, std::vector<Vec3d> axes) {
-  if (m.tilt == TiltAxis::Y) {
+std::vector<Vec3d> for_machine(const MachineKinematicsd& m, std::vector<Vec3d> axes) {
+  if (m.tilt_about == TiltAxis::Y) {
     for (Vec3d& v : axes) v = Eigen::AngleAxisd(Constants<double>::pi() / 2, Vec3d::UnitZ()) * v;
   }
   return axes;
@@ -51,27 +51,27 @@ std::vector<Vec3d> for_machine(const ACMachined& m, std::vector<Vec3d> axes) {
 
 TEST_CASE("planner: the paper's eight axes give its eight (A, C) with A from -110 to 30 deg",
           "[kinematics][paper]") {
-  ACMachined m = default_ac_machine();
-  m.a.min_rad = deg_to_rad(-110.0);
-  m.a.max_rad = deg_to_rad(30.0);
+  MachineKinematicsd m = default_machine_kinematics();
+  m.tilt.min_rad = deg_to_rad(-110.0);
+  m.tilt.max_rad = deg_to_rad(30.0);
   const double ij[8][2] = {{-0.3281, 0.9447}, {-0.6063, 0.7952}, {-0.7259, 0.6878},
                            {-0.7870, 0.6169}, {-0.8267, 0.5626}, {-0.8500, 0.5268},
                            {-0.8679, 0.4968}, {-0.8804, 0.4742}};
-  const double a_deg[8] = {-19.1507, -37.3222, -46.5477, -51.9082,
-                           -55.7644, -58.2102, -60.2138, -61.6904};
+  const double tilt_deg[8] = {-19.1507, -37.3222, -46.5477, -51.9082,
+                              -55.7644, -58.2102, -60.2138, -61.6904};
   std::vector<Vec3d> axes;
   for (const auto& v : ij) axes.push_back(Vec3d(0, v[0], v[1]).normalized());
   const PosePlan plan = plan_poses(m, axes, feeds(8));
   REQUIRE(plan.ok());
   for (int i = 0; i < 8; ++i) {
-    CHECK(rad_to_deg(plan.poses[i].a_rad) == Approx(a_deg[i]).margin(0.01));
+    CHECK(rad_to_deg(plan.poses[i].tilt_rad) == Approx(tilt_deg[i]).margin(0.01));
     CHECK(std::abs(rad_to_deg(plan.poses[i].c_rad)) == Approx(180.0).margin(0.01));
   }
 }
 
 TEST_CASE("planner: crossing the pole A = 0 flips A's sign, C does not jump, A/C and B/C",
           "[kinematics][bc]") {
-  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+  for (const MachineKinematicsd& m : both_kinematics(default_machine_kinematics())) {
     INFO("tilt " << m.tilt_letter());
     std::vector<Vec3d> axes;
     for (int i = -10; i <= 10; ++i) {
@@ -82,13 +82,13 @@ TEST_CASE("planner: crossing the pole A = 0 flips A's sign, C does not jump, A/C
     REQUIRE(plan.ok());
     require_axes(m, plan.poses, axes);
     CHECK(max_c_step_deg(plan.poses) < 1e-9);
-    CHECK(plan.poses.front().a_rad * plan.poses.back().a_rad < 0.0);
-    CHECK(plan.poses[10].a_rad == 0.0);
+    CHECK(plan.poses.front().tilt_rad * plan.poses.back().tilt_rad < 0.0);
+    CHECK(plan.poses[10].tilt_rad == 0.0);
   }
 }
 
 TEST_CASE("planner: passing close to the pole does not swing C, A/C and B/C", "[kinematics][bc]") {
-  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+  for (const MachineKinematicsd& m : both_kinematics(default_machine_kinematics())) {
     INFO("tilt " << m.tilt_letter());
     for (double offset_deg : {0.001, 0.05, 0.5}) {
       std::vector<Vec3d> axes;
@@ -109,7 +109,7 @@ TEST_CASE("planner: passing close to the pole does not swing C, A/C and B/C", "[
 
 TEST_CASE("planner: C unwinds past +-180 deg on a continuous axis, A/C and B/C",
           "[kinematics][bc]") {
-  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+  for (const MachineKinematicsd& m : both_kinematics(default_machine_kinematics())) {
     INFO("tilt " << m.tilt_letter());
     std::vector<Vec3d> axes;
     for (int i = 0; i <= 3 * 72; ++i) {  // three full turns of the azimuth, 5 deg a step
@@ -129,11 +129,11 @@ TEST_CASE("planner: C unwinds past +-180 deg on a continuous axis, A/C and B/C",
 
 TEST_CASE("planner: a bounded C stays in range and turns back where it must, A/C and B/C",
           "[kinematics][bc]") {
-  ACMachined bounded = default_ac_machine();
+  MachineKinematicsd bounded = default_machine_kinematics();
   bounded.c.continuous = false;
   bounded.c.min_rad = deg_to_rad(-200.0);
   bounded.c.max_rad = deg_to_rad(200.0);
-  for (const ACMachined& m : both_kinematics(bounded)) {
+  for (const MachineKinematicsd& m : both_kinematics(bounded)) {
     INFO("tilt " << m.tilt_letter());
     std::vector<Vec3d> axes;
     for (int i = 0; i <= 144; ++i) {  // two turns
@@ -150,10 +150,10 @@ TEST_CASE("planner: a bounded C stays in range and turns back where it must, A/C
 
 TEST_CASE("planner: an axis out of the tilt range is reported at its index, by its letter",
           "[kinematics][bc]") {
-  ACMachined narrow = default_ac_machine();
-  narrow.a.min_rad = deg_to_rad(-30.0);
-  narrow.a.max_rad = deg_to_rad(30.0);
-  for (const ACMachined& m : both_kinematics(narrow)) {
+  MachineKinematicsd narrow = default_machine_kinematics();
+  narrow.tilt.min_rad = deg_to_rad(-30.0);
+  narrow.tilt.max_rad = deg_to_rad(30.0);
+  for (const MachineKinematicsd& m : both_kinematics(narrow)) {
     const std::vector<Vec3d> axes =
         for_machine(m, {Vec3d::UnitZ(), Vec3d(0, -std::sin(0.3), std::cos(0.3)),
                         Vec3d(0, -std::sin(0.9), std::cos(0.9))});
@@ -168,11 +168,11 @@ TEST_CASE("planner: a branch change goes where the move is a rapid, A/C and B/C"
           "[kinematics][bc]") {
   // Pass 1 reachable only with A > 0, pass 2 only with A < 0 (A range [-100, 100], tilts of
   // 60 deg towards opposite sides with C limited to [-10, 10]).
-  ACMachined bounded = default_ac_machine();
+  MachineKinematicsd bounded = default_machine_kinematics();
   bounded.c.continuous = false;
   bounded.c.min_rad = deg_to_rad(-10.0);
   bounded.c.max_rad = deg_to_rad(10.0);
-  for (const ACMachined& m : both_kinematics(bounded)) {
+  for (const MachineKinematicsd& m : both_kinematics(bounded)) {
     INFO("tilt " << m.tilt_letter());
     const Vec3d left(0, -std::sin(1.0), std::cos(1.0)), right(0, std::sin(1.0), std::cos(1.0));
     const std::vector<Vec3d> axes = for_machine(m, {left, left, left, right, right, right});
@@ -180,17 +180,17 @@ TEST_CASE("planner: a branch change goes where the move is a rapid, A/C and B/C"
     const PosePlan plan = plan_poses(m, axes, rapid);
     REQUIRE(plan.ok());
     require_axes(m, plan.poses, axes);
-    CHECK(plan.poses[0].a_rad > 0.0);
-    CHECK(plan.poses[5].a_rad < 0.0);
+    CHECK(plan.poses[0].tilt_rad > 0.0);
+    CHECK(plan.poses[5].tilt_rad < 0.0);
   }
 }
 
 TEST_CASE("planner: a 3-axis path stays at A = 0 with C held", "[kinematics]") {
   const std::vector<Vec3d> axes(5, Vec3d::UnitZ());
-  const PosePlan plan = plan_poses(default_ac_machine(), axes, feeds(5), Posed{0.0, 1.25});
+  const PosePlan plan = plan_poses(default_machine_kinematics(), axes, feeds(5), Posed{0.0, 1.25});
   REQUIRE(plan.ok());
   for (const auto& p : plan.poses) {
-    CHECK(p.a_rad == 0.0);
+    CHECK(p.tilt_rad == 0.0);
     CHECK(p.c_rad == 1.25);
   }
 }
@@ -198,7 +198,7 @@ TEST_CASE("planner: a 3-axis path stays at A = 0 with C held", "[kinematics]") {
 TEST_CASE("planner: random smooth paths never jump C by 90 deg, A/C and B/C", "[kinematics][bc]") {
   std::mt19937 rng(4242);
   std::normal_distribution<double> n(0.0, 1.0);
-  for (const ACMachined& m : both_kinematics(default_ac_machine())) {
+  for (const MachineKinematicsd& m : both_kinematics(default_machine_kinematics())) {
     INFO("tilt " << m.tilt_letter());
     for (int trial = 0; trial < 200; ++trial) {
       std::vector<Vec3d> axes;

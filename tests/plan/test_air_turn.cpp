@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "taxopt/plan/air_turn.hpp"
+#include "plan/air_turn.hpp"
 
 using namespace taxopt;
 
@@ -11,13 +11,13 @@ TEST_CASE("air turn: a rapid of time T carries exactly the turn it reaches in T"
   // rest_to_rest_reach inverts rapid_time_s for one joint, on both sides of the trapezoid's
   // corner (d = v^2 / a).
   JointLimits limits{};
-  limits[static_cast<std::size_t>(Joint::A)] = {20.0, 40.0, 0.0};
+  limits[static_cast<std::size_t>(Joint::Tilt)] = {20.0, 40.0, 0.0};
   for (double d : {0.5, 5.0, 10.0, 33.0, 180.0}) {
     JointPosition from{}, to{};
-    to[static_cast<std::size_t>(Joint::A)] = d;
+    to[static_cast<std::size_t>(Joint::Tilt)] = d;
     const double t = rapid_time_s(from, to, limits);
     INFO("d " << d << " t " << t);
-    CHECK(rest_to_rest_reach(t, limits[static_cast<std::size_t>(Joint::A)]) ==
+    CHECK(rest_to_rest_reach(t, limits[static_cast<std::size_t>(Joint::Tilt)]) ==
           Approx(d).epsilon(1e-12));
   }
   CHECK(rest_to_rest_reach(0.0, limits[3]) == 0.0);
@@ -26,7 +26,7 @@ TEST_CASE("air turn: a rapid of time T carries exactly the turn it reaches in T"
 
 TEST_CASE("air turn: shares by capacity hide a turn the rapids can carry", "[air_turn]") {
   JointLimits limits{};
-  limits[static_cast<std::size_t>(Joint::A)] = {150.0, 1000.0, 0.0};
+  limits[static_cast<std::size_t>(Joint::Tilt)] = {150.0, 1000.0, 0.0};
   limits[static_cast<std::size_t>(Joint::C)] = {240.0, 1500.0, 0.0};
   // Retract, rise, traverse, descent (rapids) and a plunge at feed.
   const std::vector<double> linear = {0.12, 0.06, 0.33, 0.06, 2.4};
@@ -44,7 +44,7 @@ TEST_CASE("air turn: shares by capacity hide a turn the rapids can carry", "[air
   // up to more than the turn here), and the longest move carries the most.
   for (std::size_t k = 0; k < 4; ++k) {
     JointPosition from{}, to{};
-    to[static_cast<std::size_t>(Joint::A)] = 30.0 * share[k];
+    to[static_cast<std::size_t>(Joint::Tilt)] = 30.0 * share[k];
     CHECK(rapid_time_s(from, to, limits) <= linear[k] * (1.0 + 1e-9));
   }
   CHECK(share[2] > share[0]);

@@ -76,7 +76,7 @@ BesideObstacle beside_obstacle(double offset_deg, double half_mm) {
 
 /// A pass problem: the input axes, the machine's poses of `start` as the warm start (the pass
 /// entered by a rapid), every segment `segment_s` long.
-GlobalPassProblem pass_problem(const ACMachined& m, const std::vector<Vec3d>& input,
+GlobalPassProblem pass_problem(const MachineKinematicsd& m, const std::vector<Vec3d>& input,
                                const std::vector<Vec3d>& start, double segment_s) {
   std::vector<bool> rapid_into(input.size(), false);
   rapid_into[0] = true;
@@ -143,7 +143,7 @@ TEST_CASE(
     "global: from a feasible start it never leaves the free space and never ends worse -- near "
     "the pole it lowers the acceleration",
     "[plan][global][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   for (double offset : {0.5, 2.0, 6.0}) {
     for (GlobalObjective objective : {GlobalObjective::SumSquares, GlobalObjective::Peak}) {
       INFO("offset " << offset << " deg, " << to_string(objective));
@@ -171,7 +171,7 @@ TEST_CASE(
       for (std::size_t i = 0; i < n; ++i) {
         CHECK(free(i, plan.axes[i]));
         CHECK((plan.axes[i] - m.forward(plan.poses[i])).norm() < 1e-12);
-        CHECK(m.a.contains(plan.poses[i].a_rad));
+        CHECK(m.tilt.contains(plan.poses[i].tilt_rad));
         if (i > 0) CHECK(std::abs(plan.poses[i].c_rad - plan.poses[i - 1].c_rad) < 3.2);
       }
       CHECK(plan.objective <= plan.objective_warm);
@@ -185,7 +185,7 @@ TEST_CASE(
 
 TEST_CASE("global: warm-started from its own result it stays where it is or improves",
           "[plan][global]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const std::vector<Vec3d> input = grazing_axes(1.0, 15.0);
   const std::size_t n = input.size();
   const AxisTest cone = [&](std::size_t i, const Vec3d& axis) {
@@ -202,7 +202,7 @@ TEST_CASE("global: warm-started from its own result it stays where it is or impr
   // Deterministic: the same problem gives the same poses.
   const GlobalPassPlan again = plan_pass_global(m, problem, cone, options);
   for (std::size_t i = 0; i < n; ++i) {
-    CHECK(again.poses[i].a_rad == second.poses[i].a_rad);
+    CHECK(again.poses[i].tilt_rad == second.poses[i].tilt_rad);
     CHECK(again.poses[i].c_rad == second.poses[i].c_rad);
   }
 }
@@ -213,7 +213,7 @@ TEST_CASE(
     "[plan][global][pyramid]") {
   // Passes grazing the pole with a forbidden cone placed at random beside them: the coarse
   // caps (15 deg) see the free space only in big steps.
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int lowered = 0, trials = 0;
@@ -311,7 +311,7 @@ JointPosition made_up_joints(std::size_t i, const Posed& p) {
   const double x = -10.0 + 0.5 * static_cast<double>(i), y = 20.0;
   const double xc = std::cos(p.c_rad) * x + std::sin(p.c_rad) * y;
   const double yc = -std::sin(p.c_rad) * x + std::cos(p.c_rad) * y;
-  return {xc, std::cos(p.a_rad) * yc, -std::sin(p.a_rad) * yc, rad_to_deg(p.a_rad),
+  return {xc, std::cos(p.tilt_rad) * yc, -std::sin(p.tilt_rad) * yc, rad_to_deg(p.tilt_rad),
           rad_to_deg(p.c_rad)};
 }
 
@@ -446,7 +446,7 @@ TEST_CASE(
     "global, objective time: the pass's schedule is never slower than its starts, stays in the "
     "free space, and near the pole on slow rotary axes it is much faster",
     "[plan][global][time][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const JointLimits lim = slow_rotary_limits();
   for (double offset : {0.5, 2.0, 6.0}) {
     INFO("offset " << offset << " deg");
@@ -475,7 +475,7 @@ TEST_CASE(
                  << plan.objective << " s");
     for (std::size_t i = 0; i < n; ++i) {
       CHECK(free(i, plan.axes[i]));
-      CHECK(m.a.contains(plan.poses[i].a_rad));
+      CHECK(m.tilt.contains(plan.poses[i].tilt_rad));
     }
     CHECK(plan.objective == Approx(time_of(plan.poses)).epsilon(1e-12));
     CHECK(plan.objective <= plan.objective_warm * (1.0 + 1e-9));
@@ -488,7 +488,7 @@ TEST_CASE(
 }
 
 TEST_CASE("global: bad problems are refused", "[plan][global][bad-input]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const AxisTest any = [](std::size_t, const Vec3d&) { return true; };
   GlobalPassProblem p;
   p.input_axes = {Vec3d::UnitZ(), Vec3d::UnitZ(), Vec3d::UnitZ()};

@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "plan/slerp.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
-#include "taxopt/plan/slerp.hpp"
 
 using namespace taxopt;
 

@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include "plan/pole_passage.hpp"
 #include "support.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
-#include "taxopt/plan/pole_passage.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;
@@ -32,7 +32,7 @@ Pass grazing_pass(double offset_deg, double rate_deg_mm = 1.0, double half_mm = 
   return p;
 }
 
-std::vector<Posed> poses_of(const ACMachined& m, const std::vector<Vec3d>& axes) {
+std::vector<Posed> poses_of(const MachineKinematicsd& m, const std::vector<Vec3d>& axes) {
   std::vector<bool> rapid_into(axes.size(), false);
   rapid_into[0] = true;
   const PosePlan plan = plan_poses(m, axes, rapid_into);
@@ -46,7 +46,7 @@ const AxisTest any_axis = [](std::size_t, const Vec3d&) { return true; };
 
 TEST_CASE("pole passage: a pass grazing the pole turns C slowly, each axis within 2|A| of its own",
           "[plan][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   for (double offset : {0.3, 1.0, 2.5}) {
     INFO("offset " << offset << " deg");
     const Pass p = grazing_pass(offset);
@@ -63,12 +63,12 @@ TEST_CASE("pole passage: a pass grazing the pole turns C slowly, each axis withi
     std::vector<std::size_t> changed;
     for (std::size_t i = 0; i < p.axes.size(); ++i) {
       // A is kept; the axis turns by at most 2|A| (on the circle of constant A).
-      CHECK(r.poses[i].a_rad == poses[i].a_rad);
-      CHECK(angle_between(r.axes[i], p.axes[i]) <= 2.0 * std::abs(poses[i].a_rad) + 1e-12);
+      CHECK(r.poses[i].tilt_rad == poses[i].tilt_rad);
+      CHECK(angle_between(r.axes[i], p.axes[i]) <= 2.0 * std::abs(poses[i].tilt_rad) + 1e-12);
       CHECK(angle_between(r.axes[i], m.forward(r.poses[i])) < 1e-12);
       if (r.poses[i].c_rad != poses[i].c_rad) {
         changed.push_back(i);
-        CHECK(std::abs(poses[i].a_rad) < deg_to_rad(r.radius_deg));
+        CHECK(std::abs(poses[i].tilt_rad) < deg_to_rad(r.radius_deg));
       } else {
         CHECK(r.axes[i] == p.axes[i]);  // untouched points keep their axis bit for bit
       }
@@ -91,7 +91,7 @@ TEST_CASE("pole passage: a pass grazing the pole turns C slowly, each axis withi
 
 TEST_CASE("pole passage: a stretch whose new axes are not acceptable keeps its axes",
           "[plan][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const Pass p = grazing_pass(1.0);
   const std::vector<Posed> poses = poses_of(m, p.axes);
   // Acceptable only where the axis has not moved: no stretch can change.
@@ -108,7 +108,7 @@ TEST_CASE("pole passage: a stretch whose new axes are not acceptable keeps its a
 
 TEST_CASE("pole passage: far from the pole and straight through it nothing changes",
           "[plan][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   SECTION("far: the axis stays 20 deg or more from the pole") {
     const Pass p = grazing_pass(20.0);
     const std::vector<Posed> poses = poses_of(m, p.axes);
@@ -132,7 +132,7 @@ TEST_CASE("pole passage: far from the pole and straight through it nothing chang
 
 TEST_CASE("pole passage: a stretch at the end of a pass holds C at its one neighbour",
           "[plan][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   Pass p = grazing_pass(1.0);
   // Keep the first half only: the pass ends next to the pole.
   const std::size_t n = p.axes.size() / 2 + 2;
@@ -155,7 +155,7 @@ TEST_CASE("pole passage: a stretch at the end of a pass holds C at its one neigh
 }
 
 TEST_CASE("pole passage: sizes that do not match are refused", "[plan][pole]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const Pass p = grazing_pass(1.0);
   const std::vector<Posed> poses = poses_of(m, p.axes);
   std::vector<double> short_feed(p.feed_mm_min.begin(), p.feed_mm_min.end() - 1);

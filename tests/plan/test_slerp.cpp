@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "taxopt/plan/slerp.hpp"
+#include "plan/slerp.hpp"
 
 using namespace taxopt;
 

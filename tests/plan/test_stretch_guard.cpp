@@ -4,7 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "taxopt/plan/stretch_guard.hpp"
+#include "plan/stretch_guard.hpp"
 
 using namespace taxopt;
 

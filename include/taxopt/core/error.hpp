@@ -5,12 +5,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
 /// Bad input: a malformed file, an impossible option value. Carries the file and the
 /// 1-based line (0 when no line applies) so that the CLI can print
 /// `taxopt: error: FILE:LINE: what`.
-class InputError : public std::runtime_error {
+class TAXOPT_API InputError : public std::runtime_error {
  public:
   InputError(std::string file, int line, const std::string& what);
   explicit InputError(const std::string& what) : InputError("", 0, what) {}
@@ -27,6 +29,6 @@ class InputError : public std::runtime_error {
 };
 
 /// Formats `FILE:LINE: what` (parts left out when empty) for error lines.
-std::string format_location(const std::string& file, int line, const std::string& what);
+TAXOPT_API std::string format_location(const std::string& file, int line, const std::string& what);
 
 }  // namespace taxopt

@@ -7,11 +7,13 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
 /// A job its caller stopped (JobOptions::stop): run_job and plan_axes throw it and return no
 /// result, so nothing is written from them.
-class Cancelled : public std::runtime_error {
+class TAXOPT_API Cancelled : public std::runtime_error {
  public:
   Cancelled() : std::runtime_error("the job was stopped by its caller (JobOptions::stop)") {}
 };
@@ -21,7 +23,7 @@ class Cancelled : public std::runtime_error {
 /// and ends with Cancelled -- or with the exception a progress callback threw, which stops
 /// the job the same way (the callback runs on the job's threads, where it cannot be thrown
 /// through).
-class StopSource {
+class TAXOPT_API StopSource {
  public:
   StopSource() : state_(std::make_shared<State>()) {}
 

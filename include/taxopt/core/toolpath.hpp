@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/types.hpp"
 
 namespace taxopt {
@@ -21,20 +22,20 @@ enum class LengthUnit { Millimetre, Inch };
 /// Millimetres in one `unit`.
 inline double mm_per_unit(LengthUnit unit) { return unit == LengthUnit::Inch ? kMmPerInch : 1.0; }
 /// "mm" or "in".
-const char* to_string(LengthUnit unit);
+TAXOPT_API const char* to_string(LengthUnit unit);
 
 /// The CAM system a CL file comes from, as the reader recognises it by its records and
 /// comments (docs/cl-files.md lists the markers and what each dialect's records mean).
 enum class ClDialect { Generic, SiemensNx, MakinoFfcam, Catia, SolidworksCam, Creo };
 /// "generic-apt", "siemens-nx", "makino-ffcam", "catia-v5", "solidworks-cam", "creo".
-const char* to_string(ClDialect dialect);
+TAXOPT_API const char* to_string(ClDialect dialect);
 
 /// Sense in which a CIRCLE record's arc runs about its axis (i,j,k), looking from the tip of
 /// (i,j,k) down onto the arc's plane. `Auto`: the dialect's documented convention, checked
 /// against the tangents of the moves before and after each arc.
 enum class ArcDirection { Auto, Clockwise, CounterClockwise };
 /// "auto", "cw", "ccw".
-const char* to_string(ArcDirection direction);
+TAXOPT_API const char* to_string(ArcDirection direction);
 
 /// What the reader made of the motion records of a file: how arcs were read and why, and how
 /// much motion splines, drilling cycles and frames contributed. The report carries it.
@@ -90,7 +91,7 @@ using CLPointd = CLPoint<double>;
 
 /// Cutting tool as far as a CL file describes it (TLDATA/MILL or APT CUTTER), plus the
 /// parts above the flutes that taxopt needs for collision checks (filled from options).
-struct Tool {
+struct TAXOPT_API Tool {
   int number = 0;
   std::string name;
   double diameter_mm = 0.0;
@@ -260,6 +261,6 @@ struct Toolpath {
 };
 
 /// Number of CL points over all operations.
-std::size_t point_count(const Toolpath& toolpath);
+TAXOPT_API std::size_t point_count(const Toolpath& toolpath);
 
 }  // namespace taxopt

@@ -9,6 +9,7 @@
 
 #include <memory>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 
@@ -17,7 +18,7 @@ namespace taxopt {
 /// Whether the tool at one pose meets the part. Two implementations: CollisionModel (FCL,
 /// the reference every output is verified with) and CSpaceRasteriser (cspace.hpp: the
 /// occlusion map's tree and exact triangle tests, 5-25x faster, what the optimisers ask).
-class PartCheck {
+class TAXOPT_API PartCheck {
  public:
   virtual ~PartCheck() = default;
   /// True when any body of `tool` placed with ball centre `centre_mm` and unit axis `axis`
@@ -27,7 +28,7 @@ class PartCheck {
 };
 
 /// The part for FCL (BVH of oriented bounding boxes).
-class CollisionModel : public PartCheck {
+class TAXOPT_API CollisionModel : public PartCheck {
  public:
   explicit CollisionModel(const TriangleMesh& mesh);
   ~CollisionModel();

@@ -12,11 +12,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/contact.hpp"
 #include "taxopt/geometry/part.hpp"
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt {
 
@@ -29,7 +30,7 @@ struct CSpaceOptions {
 };
 
 /// Bitset of free cells, tilt-major.
-class CSpaceGrid {
+class TAXOPT_API CSpaceGrid {
  public:
   CSpaceGrid() = default;
   /// @throws InputError when 180 / cell_deg is not a whole number or the cell is not in (0, 90].
@@ -69,7 +70,7 @@ class CSpaceGrid {
 ///   only the open cells of its possible ring (a thin band where faces are small).
 /// Spans are rounded outward for possible rings and inward for certain ones. The result does
 /// not depend on the order of the walk. free_axes may be called from several threads at once.
-class CSpaceRasteriser : public PartCheck {
+class TAXOPT_API CSpaceRasteriser : public PartCheck {
  public:
   explicit CSpaceRasteriser(const TriangleMesh& mesh);
 
@@ -103,31 +104,34 @@ class CSpaceRasteriser : public PartCheck {
 
 /// One-off convenience: builds a CSpaceRasteriser for `part` and asks it once. Build the
 /// rasteriser yourself to ask for many points.
-CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool, const ContactPoint& contact,
-                               const Vec3d& ball_centre, const Vec3d& input_axis,
-                               const CSpaceOptions& options = {});
+TAXOPT_API CSpaceGrid rasterise_free_axes(const Part& part, const ToolModel& tool,
+                                          const ContactPoint& contact, const Vec3d& ball_centre,
+                                          const Vec3d& input_axis,
+                                          const CSpaceOptions& options = {});
 
 /// The unit tool axis, workpiece coordinates, at the centre of cell (i, j) of a contact's
 /// grid: V = N cos a + sin a (T cos b + K sin b) (eq. 11).
-Vec3d cell_axis(const CSpaceGrid& grid, int i, int j, const ContactPoint& contact);
+TAXOPT_API Vec3d cell_axis(const CSpaceGrid& grid, int i, int j, const ContactPoint& contact);
 
 /// The free axes of a contact's grid, each once (the cells of tilt >= 0), workpiece
 /// coordinates, tilt-major.
-std::vector<Vec3d> free_axes_of(const CSpaceGrid& grid, const ContactPoint& contact);
+TAXOPT_API std::vector<Vec3d> free_axes_of(const CSpaceGrid& grid, const ContactPoint& contact);
 
 /// The same as machine poses (A, C): for each free axis the inverse solution with A within
 /// the machine's range (branch A >= 0 first); axes the machine cannot reach are left out.
-std::vector<Posed> free_poses_of(const CSpaceGrid& grid, const ContactPoint& contact,
-                                 const ACMachined& machine);
+TAXOPT_API std::vector<Posed> free_poses_of(const CSpaceGrid& grid, const ContactPoint& contact,
+                                            const MachineKinematicsd& machine);
 
 /// The same grid by brute force: one FCL collision query per cell (the reference).
-CSpaceGrid brute_force_free_axes(const CollisionModel& model, const ToolModel& tool,
-                                 const ContactPoint& contact, const Vec3d& ball_centre,
-                                 const Vec3d& input_axis, const CSpaceOptions& options = {});
+TAXOPT_API CSpaceGrid brute_force_free_axes(const CollisionModel& model, const ToolModel& tool,
+                                            const ContactPoint& contact, const Vec3d& ball_centre,
+                                            const Vec3d& input_axis,
+                                            const CSpaceOptions& options = {});
 
 /// True when the solid cylinder of radius r about the axis from `origin` along unit `dir`,
 /// between `start` and `end` along it, meets triangle (a, b, c). Exact up to rounding.
-bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& origin,
-                             const Vec3d& dir, double r, double start, double end);
+TAXOPT_API bool triangle_meets_cylinder(const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                        const Vec3d& origin, const Vec3d& dir, double r,
+                                        double start, double end);
 
 }  // namespace taxopt

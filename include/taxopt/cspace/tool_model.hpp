@@ -15,6 +15,7 @@
 #include <optional>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/toolpath.hpp"
 
 namespace taxopt {
@@ -44,7 +45,7 @@ struct ToolOverrides {
 };
 
 /// The bodies of a ball-end mill.
-struct ToolModel {
+struct TAXOPT_API ToolModel {
   double ball_radius_mm = 0.0;
   std::vector<ToolBody> bodies;
 

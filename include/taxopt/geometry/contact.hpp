@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/toolpath.hpp"
 #include "taxopt/geometry/part.hpp"
 
@@ -26,7 +27,7 @@ enum class CurvatureSource {
   Edge,    ///< the mesh: on an edge (the turn of its two facets across it)
   Vertex,  ///< the mesh: at a vertex (its most concave and most convex edges)
 };
-const char* to_string(CurvatureSource source);
+TAXOPT_API const char* to_string(CurvatureSource source);
 
 /// Where a contact lies on the designed surface the mesh stands for (Part::surface_normal).
 enum class SurfacePlace {
@@ -34,7 +35,7 @@ enum class SurfacePlace {
   Edge,    ///< on a crease, a border or a non-manifold edge, the ball rolling over it
   Corner,  ///< at a vertex of such edges
 };
-const char* to_string(SurfacePlace place);
+TAXOPT_API const char* to_string(SurfacePlace place);
 
 /// Geometry at one CL point (the vectors are meaningful when Touching), in two estimates, each
 /// for its use (docs/method.md, "Contacts"):
@@ -90,9 +91,9 @@ inline void tilt_yaw_of(const Vec3d& v, const Vec3d& n, const Vec3d& t, double& 
 
 /// Recovers the contact geometry of every point of an operation cut by a ball of radius
 /// ball_radius_mm (parallel over points; the result does not depend on the thread count).
-std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
-                                           double ball_radius_mm,
-                                           const ContactOptions& options = {});
+TAXOPT_API std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
+                                                      double ball_radius_mm,
+                                                      const ContactOptions& options = {});
 
 /// The smallest default contact tolerance, mm: the order of CAM finishing tolerances and CAD
 /// export chordal errors where nothing better is known.
@@ -101,11 +102,11 @@ constexpr double kContactToleranceFloorMm = 0.05;
 /// The tolerance recover_contacts uses for `options` on `part`, for an operation whose CL file
 /// keeps its path within `cam_tolerance_mm` of the surface (Operation::cam_tolerance_mm): as
 /// given, else max(0.05 mm, the mesh's chordal error + that band).
-double contact_tolerance_mm(const Part& part, const ContactOptions& options,
-                            std::optional<double> cam_tolerance_mm = std::nullopt);
+TAXOPT_API double contact_tolerance_mm(const Part& part, const ContactOptions& options,
+                                       std::optional<double> cam_tolerance_mm = std::nullopt);
 /// Where contact_tolerance_mm's value comes from, for a message: "the mesh's chordal error
 /// 0.031 mm + the CL file's tolerance (...) 0.02 mm", "the floor ...", "as given".
-std::string contact_tolerance_source(const Part& part, const ContactOptions& options,
-                                     std::optional<double> cam_tolerance_mm);
+TAXOPT_API std::string contact_tolerance_source(const Part& part, const ContactOptions& options,
+                                                std::optional<double> cam_tolerance_mm);
 
 }  // namespace taxopt

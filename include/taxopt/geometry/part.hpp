@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/geometry/surface.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 
@@ -21,7 +22,7 @@ struct LocalFit {
   int samples = 0;
 };
 
-class Part {
+class TAXOPT_API Part {
  public:
   /// Builds the search structures. @throws std::invalid_argument for an empty mesh.
   explicit Part(TriangleMesh mesh);

@@ -9,10 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
 /// A set of output files committed together.
-class OutputTransaction {
+class TAXOPT_API OutputTransaction {
  public:
   OutputTransaction() = default;
   OutputTransaction(const OutputTransaction&) = delete;
@@ -47,10 +49,10 @@ class OutputTransaction {
 
 /// True when `a` and `b` name the same existing file, or the same path once made absolute and
 /// resolved (links, ".", "..") as far as it exists.
-bool same_file(const std::string& a, const std::string& b);
+TAXOPT_API bool same_file(const std::string& a, const std::string& b);
 
 /// Why an output file cannot be written at `path` ("" when it can): a folder, a missing
 /// folder, a folder without write permission. Checked before any work is done.
-std::string writable_output_problem(const std::string& path);
+TAXOPT_API std::string writable_output_problem(const std::string& path);
 
 }  // namespace taxopt

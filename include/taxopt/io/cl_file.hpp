@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/toolpath.hpp"
 
 namespace taxopt {
@@ -41,20 +42,21 @@ struct ClReadOptions {
 
 /// Parses CL text. `source` names the file in errors and warnings.
 /// @throws InputError with the file and line of the first malformed record.
-Toolpath parse_cl(const std::string& text, const std::string& source,
-                  const ClReadOptions& options = {});
+TAXOPT_API Toolpath parse_cl(const std::string& text, const std::string& source,
+                             const ClReadOptions& options = {});
 
 /// Reads a CL file from disk. @throws InputError (unreadable file, malformed record).
-Toolpath read_cl_file(const std::string& path, const ClReadOptions& options = {});
+TAXOPT_API Toolpath read_cl_file(const std::string& path, const ClReadOptions& options = {});
 
 /// Writes a toolpath back as CL text in the file's own units and line ends. Every record of
 /// `original` is written as it was, except the motion records whose points differ in
 /// `operations` (same shape as original.operations): those are written as new GOTOs.
 /// A CIRCLE whose arc points changed is written as the GOTOs of its chords.
-std::string format_cl(const Toolpath& original, const std::vector<Operationd>& operations);
+TAXOPT_API std::string format_cl(const Toolpath& original,
+                                 const std::vector<Operationd>& operations);
 
 /// Writes operations as a new NX CLSF text in millimetres (TOOL PATH, TLDATA, SPINDL, FEDRAT,
 /// RAPID, GOTO/x,y,z,i,j,k on every point, END-OF-PATH), as `taxopt generate` does.
-std::string format_new_cl(const std::vector<Operationd>& operations);
+TAXOPT_API std::string format_new_cl(const std::vector<Operationd>& operations);
 
 }  // namespace taxopt

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
 /// What a record word does to the program taxopt writes.
@@ -33,14 +35,14 @@ struct ClWord {
 };
 
 /// Every word the reader knows, in the order docs/cl-files.md lists them.
-const std::vector<ClWord>& cl_words();
+TAXOPT_API const std::vector<ClWord>& cl_words();
 
 /// The entry of `major` (upper case, blanks folded), or nullptr.
-const ClWord* find_cl_word(const std::string& major);
+TAXOPT_API const ClWord* find_cl_word(const std::string& major);
 
-const char* to_string(ClWordMeaning meaning);
+TAXOPT_API const char* to_string(ClWordMeaning meaning);
 
 /// The table as docs/cl-files.md shows it (Markdown, one row per word).
-std::string cl_words_markdown();
+TAXOPT_API std::string cl_words_markdown();
 
 }  // namespace taxopt

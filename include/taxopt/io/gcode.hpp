@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/toolpath.hpp"
 #include "taxopt/kinematics/machine.hpp"
 
@@ -57,21 +58,22 @@ struct PostedOperation {
 /// `tip_mm`: on the axis at the clearance height where the axis rises within 60 deg of the
 /// vertical, else `safe_distance_mm` along it (below the clearance height: the writer comes
 /// straight down to it first).
-Vec3d approach_tip_mm(const Vec3d& tip_mm, const Vec3d& axis, double clearance_z_mm,
-                      double safe_distance_mm);
+TAXOPT_API Vec3d approach_tip_mm(const Vec3d& tip_mm, const Vec3d& axis, double clearance_z_mm,
+                                 double safe_distance_mm);
 
 /// Time of one feed move at `feed_mm_per_min`, s, as a controller times it under TCP: the tip
 /// distance over the feed, or the rotary distance (deg) over the feed read as deg/min when
 /// only A and C turn (1e-9 of either at the least: a move too small to time still takes time).
-double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from, const Vec3d& to_tip_mm,
-                              const Posed& to, double feed_mm_per_min);
+TAXOPT_API double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from,
+                                         const Vec3d& to_tip_mm, const Posed& to,
+                                         double feed_mm_per_min);
 
 /// Time of the feed move into each point at its programmed feed, s, as a controller times it
 /// under TCP: the tip distance over the feed, or the rotary distance (deg) over the feed read
 /// as deg/min when only A and C turn. 0 for the first point, rapids and feed moves without a
 /// feed; a feed move too small to time (below 1e-9 mm and deg) gets 1e-9 over its feed.
-std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
-                                             const std::vector<Posed>& poses);
+TAXOPT_API std::vector<double> programmed_block_times_s(const std::vector<CLPointd>& points,
+                                                        const std::vector<Posed>& poses);
 
 /// A joint's peak velocity and acceleration, per second (mm for X Y Z, deg for A C), and the
 /// G-code lines where they occur (0: none).
@@ -172,9 +174,10 @@ struct GcodeProgram {
 /// the joints moving linearly between them (A and C at the same fractions of their change,
 /// the tip on the straight line there), the tip stays within `tolerance_mm` of the straight
 /// line. {0, 1} when it does already or the tolerance is 0 (off).
-std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& from_tip_mm,
-                                        const Posed& from, const Vec3d& to_tip_mm, const Posed& to,
-                                        double tolerance_mm);
+TAXOPT_API std::vector<double> linearise_fractions(const MachineKinematicsd& machine,
+                                                   const Vec3d& from_tip_mm, const Posed& from,
+                                                   const Vec3d& to_tip_mm, const Posed& to,
+                                                   double tolerance_mm);
 
 /// A rapid in tcp mode: LinuxCNC with its kinematics on plans G0 in the program's axes (X Y Z
 /// of the tip, A, C), each at its own limits, and the joints follow through the kinematics,
@@ -187,10 +190,11 @@ std::vector<double> linearise_fractions(const ACMachined& machine, const Vec3d& 
 /// what the tilted table does to the joints) unless `held_pose`: then the rate that keeps the
 /// joints' straight lines within their limits (an approach's last leg along a tilted tool
 /// axis, which is the spindle's Z alone).
-std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLimits& limits,
-                                            const Vec3d& from_tip_mm, const Posed& from,
-                                            const Vec3d& to_tip_mm, const Posed& to,
-                                            bool held_pose = false);
+TAXOPT_API std::optional<double> joint_safe_rate_per_s(const MachineKinematicsd& ac,
+                                                       const JointLimits& limits,
+                                                       const Vec3d& from_tip_mm, const Posed& from,
+                                                       const Vec3d& to_tip_mm, const Posed& to,
+                                                       bool held_pose = false);
 
 /// The same bound for any tcp move, with the joint that sets it: the largest rate along the
 /// move (fraction per second, the tip on its line and A, C in proportion, as a tcp controller
@@ -199,20 +203,21 @@ std::optional<double> joint_safe_rate_per_s(const ACMachined& ac, const JointLim
 /// and C stay (the joints then move linearly, as the schedule's chords say). A
 /// feed schedule made on the joints at the points alone (their chords) misses this where the
 /// table turns within a block.
-std::pair<double, Joint> joint_velocity_rate_per_s(const ACMachined& ac, const JointLimits& limits,
-                                                   const Vec3d& from_tip_mm, const Posed& from,
-                                                   const Vec3d& to_tip_mm, const Posed& to);
+TAXOPT_API std::pair<double, Joint> joint_velocity_rate_per_s(
+    const MachineKinematicsd& ac, const JointLimits& limits, const Vec3d& from_tip_mm,
+    const Posed& from, const Vec3d& to_tip_mm, const Posed& to);
 
 /// Writes G-code. Feed moves need a positive feed. `comments` go into the header.
 /// @param units units of the output (G20/G21); coordinates inside are mm.
-GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
-                         LengthUnit units, const std::vector<std::string>& comments);
+TAXOPT_API GcodeProgram write_gcode(const std::vector<PostedOperation>& operations,
+                                    const Machine& machine, LengthUnit units,
+                                    const std::vector<std::string>& comments);
 
 /// One motion block read back from G-code (millimetres and degrees).
 struct GcodeMove {
   bool rapid = false;
   Vec3d xyz_mm = Vec3d::Zero();
-  double a_deg = 0.0;
+  double tilt_deg = 0.0;
   double c_deg = 0.0;
   /// F word in force: units/min (G94) or 1/min (G93), in the file's units.
   double feed = 0.0;
@@ -252,13 +257,13 @@ struct GcodeMove {
 
 /// The point of the arc of `to` (a G2/G3 move starting at `from_mm`) at the same angle as
 /// `near_mm`, clamped to the arc; and the arc's length from its start to there, mm.
-Vec3d point_on_arc(const Vec3d& from_mm, const GcodeMove& to, const Vec3d& near_mm);
-double arc_length_mm(const Vec3d& from_mm, const GcodeMove& to);
+TAXOPT_API Vec3d point_on_arc(const Vec3d& from_mm, const GcodeMove& to, const Vec3d& near_mm);
+TAXOPT_API double arc_length_mm(const Vec3d& from_mm, const GcodeMove& to);
 
 /// Time the controller takes for the feed move `to` from `from` (both read back, `units` the
 /// program's): under G94 the XYZ distance over F, or the rotary distance (deg) over F when
 /// only A and C move; under G93 one over F minutes.
-double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units);
+TAXOPT_API double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units);
 
 /// Reads the motion blocks of G-code in the subset taxopt writes for `dialect` (G0/G1, G2/G3
 /// with incremental I J K in G17/G18/G19 (not Heidenhain),
@@ -269,12 +274,11 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
 /// (LinuxCNC `G53 G0 Z`, Fanuc `G91 G28 Z0.` + `G90`, Sinumerik `G0 SUPA Z D0`, TNC
 /// `G00 Z M91`) and the end's park of X Y (`G53 G0 X Y` on LinuxCNC, Fanuc, Haas) are read as
 /// positioning moves. Haas as Fanuc, with G234 H (tool centre point control). The tilt axis's word
-/// is `tilt_letter` (A, or B on a B/C machine; GcodeMove::a_deg holds it); the other is refused.
+/// is `tilt_letter` (A, or B on a B/C machine; GcodeMove::tilt_deg holds it); the other is refused.
 /// `tool_calls` (GcodeProgram::tool_calls) are the verbatim lines that change the tool.
-std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::string& source,
-                                        GcodeDialect dialect = GcodeDialect::LinuxCNC,
-                                        const std::vector<int>& verbatim_lines = {},
-                                        char tilt_letter = 'A',
-                                        const std::vector<std::pair<int, int>>& tool_calls = {});
+TAXOPT_API std::vector<GcodeMove> read_gcode_moves(
+    const std::string& text, const std::string& source,
+    GcodeDialect dialect = GcodeDialect::LinuxCNC, const std::vector<int>& verbatim_lines = {},
+    char tilt_letter = 'A', const std::vector<std::pair<int, int>>& tool_calls = {});
 
 }  // namespace taxopt

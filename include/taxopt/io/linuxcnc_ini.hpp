@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
 /// A machine file made from a LinuxCNC configuration, and what was assumed on the way.
@@ -24,6 +26,6 @@ struct ImportedMachine {
 /// beside the INI. A is the kinematics' A (sense -1, as C); the retract goes to Z's
 /// MAX_LIMIT. @throws InputError naming the file and line (another kinematics, a missing
 /// axis, a value that is no number).
-ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path);
+TAXOPT_API ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path);
 
 }  // namespace taxopt

@@ -4,15 +4,16 @@
 
 #include <string>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/kinematics/machine.hpp"
 
 namespace taxopt {
 
 /// Parses a machine file. Unknown keys, wrong types, missing sections, min > max are errors.
 /// @throws InputError naming `source` and the line.
-Machine parse_machine_toml(const std::string& text, const std::string& source);
+TAXOPT_API Machine parse_machine_toml(const std::string& text, const std::string& source);
 
 /// Reads a machine file from disk. @throws InputError
-Machine read_machine_file(const std::string& path);
+TAXOPT_API Machine read_machine_file(const std::string& path);
 
 }  // namespace taxopt

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 
 namespace taxopt {
@@ -12,9 +13,10 @@ namespace taxopt {
 /// indexed mesh). Zero-area faces (CAD exports' slivers) cover no surface: dropped and counted
 /// (TriangleMesh::dropped_degenerate_faces). @throws InputError naming the file: unreadable or
 /// garbled, empty, non-finite coordinates, no face of any area.
-TriangleMesh read_mesh_file(const std::string& path);
+TAXOPT_API TriangleMesh read_mesh_file(const std::string& path);
 
 /// Binary STL of a mesh (normals from the vertex order), as bytes.
-std::string format_stl_binary(const TriangleMesh& mesh, const std::string& header = "taxopt");
+TAXOPT_API std::string format_stl_binary(const TriangleMesh& mesh,
+                                         const std::string& header = "taxopt");
 
 }  // namespace taxopt

@@ -44,18 +44,21 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
+
 namespace taxopt {
 
-/// The five joints of an A/C machine, in this order everywhere.
-enum class Joint : std::uint8_t { X, Y, Z, A, C };
+/// The five joints of the machine, in this order everywhere: X, Y, Z, the tilt axis (A on an
+/// A/C machine, B on a B/C one) and C.
+enum class Joint : std::uint8_t { X, Y, Z, Tilt, C };
 inline constexpr std::size_t kJointCount = 5;
-/// "X", "Y", "Z", "A", "C".
-const char* to_string(Joint joint);
+/// "X", "Y", "Z", "A", "C" (joint_name names the tilt by its letter).
+TAXOPT_API const char* to_string(Joint joint);
 /// The joint's letter on a machine whose tilt axis is `tilt_letter` (A, or B on a B/C machine:
-/// Joint::A is the tilt axis whatever its letter).
-std::string joint_name(Joint joint, char tilt_letter);
+/// Joint::Tilt is the tilt axis whatever its letter).
+TAXOPT_API std::string joint_name(Joint joint, char tilt_letter);
 
-/// Joint positions of one point: X, Y, Z in mm, A, C in degrees (C unwound).
+/// Joint positions of one point: X, Y, Z in mm, the tilt and C in degrees (C unwound).
 using JointPosition = std::array<double, kJointCount>;
 
 /// Dynamic limits of one joint, per second: mm for X Y Z, degrees for A C; 0: no limit.
@@ -87,7 +90,7 @@ struct ScheduleOptions {
 };
 
 /// Result of schedule_feed.
-struct FeedSchedule {
+struct TAXOPT_API FeedSchedule {
   /// n - 1 segment times, s; a segment that moves no joint takes 0.
   std::vector<double> time_s;
   /// What bounds each segment, and which joint (for Velocity and Acceleration).
@@ -100,8 +103,8 @@ struct FeedSchedule {
 
 /// The greatest feasible feed profile of a chain (see the file comment).
 /// @throws std::invalid_argument when sizes disagree or a moving segment has no positive time
-FeedSchedule schedule_feed(const FeedChain& chain, const JointLimits& limits,
-                           const ScheduleOptions& options = {});
+TAXOPT_API FeedSchedule schedule_feed(const FeedChain& chain, const JointLimits& limits,
+                                      const ScheduleOptions& options = {});
 
 /// Peak velocity and acceleration of each joint along a chain run with segment times
 /// `time_s` (the model of the file comment, rests included), and the segment or point where
@@ -112,11 +115,13 @@ struct JointRates {
 };
 /// Segments of zero time are skipped (they move nothing). Jerk is the change of
 /// acceleration between consecutive points over the time between them.
-JointRates joint_rates(const std::vector<JointPosition>& joints, const std::vector<double>& time_s,
-                       bool start_at_rest = true, bool end_at_rest = true);
+TAXOPT_API JointRates joint_rates(const std::vector<JointPosition>& joints,
+                                  const std::vector<double>& time_s, bool start_at_rest = true,
+                                  bool end_at_rest = true);
 
 /// Time of a rest-to-rest move (a rapid) with every joint on its own trapezoid at its
 /// velocity and acceleration limits: the slowest joint's. Joints without limits take no time.
-double rapid_time_s(const JointPosition& from, const JointPosition& to, const JointLimits& limits);
+TAXOPT_API double rapid_time_s(const JointPosition& from, const JointPosition& to,
+                               const JointLimits& limits);
 
 }  // namespace taxopt

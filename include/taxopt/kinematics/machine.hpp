@@ -10,8 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/core/export.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt {
 
@@ -22,7 +23,7 @@ namespace taxopt {
 /// G234 tool centre point control (docs/gcode-dialects.md).
 enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain, Haas };
 /// "linuxcnc", "fanuc", "siemens", "heidenhain", "haas".
-const char* to_string(GcodeDialect dialect);
+TAXOPT_API const char* to_string(GcodeDialect dialect);
 /// tcp: X Y Z are the tool tip in workpiece coordinates (the controller does TCP);
 /// machine: X Y Z are the joint positions after the table rotation (CLI.md convention).
 enum class GcodeMode { Tcp, Machine };
@@ -118,13 +119,13 @@ struct GcodeSettings {
 
 /// The most decimals a controller takes for positions and angles: LinuxCNC 8, Fanuc 4
 /// (IS-C, 0.0001 mm), Siemens 6, Heidenhain TNC ISO 4 (0.0001 mm).
-int max_decimals(GcodeDialect dialect);
+TAXOPT_API int max_decimals(GcodeDialect dialect);
 /// Decimals of an F word the controller takes: Heidenhain TNC ISO 3; the others 15 (no
 /// limit of theirs is known to taxopt; a feed schedule writes 8 significant digits).
-int max_feed_decimals(GcodeDialect dialect);
+TAXOPT_API int max_feed_decimals(GcodeDialect dialect);
 /// The F decimals written: settings.feed_decimals, else the least of max(decimals, 3) and the
 /// dialect's.
-int feed_decimals(const GcodeSettings& settings);
+TAXOPT_API int feed_decimals(const GcodeSettings& settings);
 
 /// The kinematics names a machine file and Machine::kinematics take: "ac-table-table",
 /// "bc-table-table", "ac-head-table", "bc-head-table", "ac-head-head", "bc-head-head" (the
@@ -133,13 +134,13 @@ inline constexpr const char* kKinematicsNames =
     "ac-table-table, bc-table-table, ac-head-table, bc-head-table, ac-head-head, bc-head-head";
 /// The tilt axis and layout a kinematics name stands for; false for a name not in
 /// kKinematicsNames.
-bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout);
+TAXOPT_API bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout);
 
 /// A machine: name, kinematics and how to write its G-code.
 struct Machine {
   std::string name = "generic-ac-trt";
   std::string kinematics = "ac-table-table";
-  ACMachined ac = default_ac_machine();
+  MachineKinematicsd rotary = default_machine_kinematics();
   /// Velocity, acceleration and jerk limits of X Y Z (mm) and A C (deg) as the machine file
   /// gives them; 0: not given (effective_limits fills in the defaults).
   JointLimits limits{};
@@ -171,7 +172,7 @@ struct Machine {
   GcodeSettings gcode;
   /// A head machine ([pivot] head_pivot_length): from the tilt axis to the spindle's gauge
   /// line, mm. run_job adds the tool's gauge length (JobOptions::tool.gauge_length_mm, else
-  /// the machine's holder_gauge_length_mm, else none) into ac.head_length_mm for its joint
+  /// the machine's holder_gauge_length_mm, else none) into rotary.head_length_mm for its joint
   /// model: the travel, the rapids' and the controller's times.
   double head_pivot_length_mm = 0.0;
 };
@@ -179,25 +180,27 @@ struct Machine {
 /// X Y Z as the G-code writes the tip `tip_mm` at `pose`: the tip itself (tcp mode) or the
 /// machine's joints (machine mode, the convention of cli.md).
 inline Vec3d written_xyz_mm(const Machine& machine, const Vec3d& tip_mm, const Posed& pose) {
-  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.to_machine_mm(tip_mm, pose) : tip_mm;
+  return machine.gcode.mode == GcodeMode::Machine ? machine.rotary.to_machine_mm(tip_mm, pose)
+                                                  : tip_mm;
 }
 /// The tip that written X Y Z `xyz_mm` mean at `pose` (the inverse of written_xyz_mm).
 inline Vec3d tip_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
-  return machine.gcode.mode == GcodeMode::Machine ? machine.ac.from_machine_mm(xyz_mm, pose)
+  return machine.gcode.mode == GcodeMode::Machine ? machine.rotary.from_machine_mm(xyz_mm, pose)
                                                   : xyz_mm;
 }
 /// The machine's linear joints for written X Y Z at `pose`, whatever the mode.
 inline Vec3d joints_of_written_mm(const Machine& machine, const Vec3d& xyz_mm, const Posed& pose) {
-  return machine.gcode.mode == GcodeMode::Machine ? xyz_mm : machine.ac.to_machine_mm(xyz_mm, pose);
+  return machine.gcode.mode == GcodeMode::Machine ? xyz_mm
+                                                  : machine.rotary.to_machine_mm(xyz_mm, pose);
 }
 
 /// Limits of a typical mid-size A/C trunnion machine, used where the machine file gives
 /// none: X Y Z 500 mm/s (30 m/min) and 3000 mm/s^2; A 150 deg/s (25 rpm) and 1000 deg/s^2;
 /// C 240 deg/s (40 rpm) and 1500 deg/s^2; no jerk limit.
-JointLimits default_joint_limits();
+TAXOPT_API JointLimits default_joint_limits();
 
 /// The machine's limits where its file gives them, else default_joint_limits().
-JointLimits effective_limits(const Machine& machine);
+TAXOPT_API JointLimits effective_limits(const Machine& machine);
 
 /// Joint `j`'s own acceleration limit: machine.joint_max_accel_per_s2 where given, else the
 /// axis's (`effective`, from effective_limits).
@@ -208,7 +211,7 @@ inline double joint_accel_limit(const Machine& machine, const JointLimits& effec
 }
 
 /// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
-Machine default_machine();
+TAXOPT_API Machine default_machine();
 
 /// Checks a machine made in code as the machine file's reader checks a file: the kinematics
 /// name against its tilt axis, the rotary ranges (min <= max, no NaN) and senses, the limits
@@ -216,6 +219,6 @@ Machine default_machine();
 /// (decimals and F decimals within the dialect's, inverse time where the dialect writes it,
 /// the feed ratio, the tolerances, the end pose and park within the ranges). run_job calls it
 /// before any work. @throws InputError naming the field and what was expected.
-void validate(const Machine& machine);
+TAXOPT_API void validate(const Machine& machine);
 
 }  // namespace taxopt

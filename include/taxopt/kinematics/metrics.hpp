@@ -17,14 +17,15 @@
 #include <cstddef>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/core/export.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt {
 
 /// Per-point rotary kinematics of one pass, degree units as in the paper.
 struct RotaryKinematics {
-  std::vector<double> omega_a_deg_s, omega_c_deg_s, omega_deg_s;
-  std::vector<double> accel_a_deg_s2, accel_c_deg_s2, accel_deg_s2;
+  std::vector<double> omega_tilt_deg_s, omega_c_deg_s, omega_deg_s;
+  std::vector<double> accel_tilt_deg_s2, accel_c_deg_s2, accel_deg_s2;
 };
 
 /// Summary of the rotary kinematics of one or more passes.
@@ -44,23 +45,23 @@ struct RotarySummary {
 };
 
 /// Segment times in seconds. @param length_mm n-1 segment lengths
-/// @param feed_mm_per_min n-1 feeds (> 0) @param a_deg,c_deg n axis values
-std::vector<double> segment_times_s(const std::vector<double>& length_mm,
-                                    const std::vector<double>& feed_mm_per_min,
-                                    const std::vector<double>& a_deg,
-                                    const std::vector<double>& c_deg);
+/// @param feed_mm_per_min n-1 feeds (> 0) @param tilt_deg,c_deg n axis values
+TAXOPT_API std::vector<double> segment_times_s(const std::vector<double>& length_mm,
+                                               const std::vector<double>& feed_mm_per_min,
+                                               const std::vector<double>& tilt_deg,
+                                               const std::vector<double>& c_deg);
 
-/// Rotary kinematics of one pass (eq. 16-18). All vectors of a pass: a_deg and c_deg have
+/// Rotary kinematics of one pass (eq. 16-18). All vectors of a pass: tilt_deg and c_deg have
 /// n values, length_mm and feed_mm_per_min n-1.
-RotaryKinematics rotary_kinematics(const std::vector<double>& a_deg,
-                                   const std::vector<double>& c_deg,
-                                   const std::vector<double>& length_mm,
-                                   const std::vector<double>& feed_mm_per_min);
+TAXOPT_API RotaryKinematics rotary_kinematics(const std::vector<double>& tilt_deg,
+                                              const std::vector<double>& c_deg,
+                                              const std::vector<double>& length_mm,
+                                              const std::vector<double>& feed_mm_per_min);
 
 /// The same from the segment times t_i (n - 1, s) instead of lengths and feeds.
-RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& a_deg,
-                                              const std::vector<double>& c_deg,
-                                              const std::vector<double>& segment_time_s);
+TAXOPT_API RotaryKinematics rotary_kinematics_from_times(const std::vector<double>& tilt_deg,
+                                                         const std::vector<double>& c_deg,
+                                                         const std::vector<double>& segment_time_s);
 
 /// Peak synthetic omega (deg/s) and a (deg/s^2) of one pass.
 struct PeakRates {
@@ -69,11 +70,12 @@ struct PeakRates {
 
 /// Peaks of one pass given by its machine poses (radians, C unwound), n of them;
 /// length_mm and feed_mm_per_min n-1 as for rotary_kinematics.
-PeakRates peak_rates(const std::vector<Posed>& poses, const std::vector<double>& length_mm,
-                     const std::vector<double>& feed_mm_per_min);
+TAXOPT_API PeakRates peak_rates(const std::vector<Posed>& poses,
+                                const std::vector<double>& length_mm,
+                                const std::vector<double>& feed_mm_per_min);
 
 /// Adds one pass to a summary (maxima, RMS of a over interior points, C jumps).
-void accumulate(RotarySummary& summary, const RotaryKinematics& k,
-                const std::vector<double>& c_deg);
+TAXOPT_API void accumulate(RotarySummary& summary, const RotaryKinematics& k,
+                           const std::vector<double>& c_deg);
 
 }  // namespace taxopt

@@ -15,7 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/core/export.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 namespace taxopt {
 
@@ -50,9 +51,10 @@ struct PosePlan {
 /// @param preferred  empty, or per point a pose the caller has chosen (its branch, and its C
 ///                   on the pole; a continuous C still takes the turn nearest the previous
 ///                   point's): `--method global` decides these by its own objective
-PosePlan plan_poses(const ACMachined& machine, const std::vector<Vec3d>& axes,
-                    const std::vector<bool>& rapid_into, const std::optional<Posed>& start = {},
-                    const PosePlanOptions& options = {},
-                    const std::vector<std::optional<Posed>>& preferred = {});
+TAXOPT_API PosePlan plan_poses(const MachineKinematicsd& machine, const std::vector<Vec3d>& axes,
+                               const std::vector<bool>& rapid_into,
+                               const std::optional<Posed>& start = {},
+                               const PosePlanOptions& options = {},
+                               const std::vector<std::optional<Posed>>& preferred = {});
 
 }  // namespace taxopt

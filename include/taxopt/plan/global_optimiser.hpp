@@ -36,8 +36,9 @@
 #include <functional>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/core/export.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 
 namespace taxopt {
@@ -46,7 +47,7 @@ namespace taxopt {
 /// with the sum of squares as the tie-breaker (docs/global-method.md, "--objective time").
 enum class GlobalObjective { SumSquares, Peak, Time };
 /// "sum-squares", "peak", "time".
-const char* to_string(GlobalObjective objective);
+TAXOPT_API const char* to_string(GlobalObjective objective);
 
 /// Options of plan_pass_global.
 struct GlobalOptions {
@@ -114,17 +115,17 @@ struct GlobalPassPlan {
 /// The objective of poses (continuous C) over segment times: J or P of the file comment,
 /// degrees and seconds. GlobalObjective::Time needs the machine's joints: pass_time_s
 /// (std::invalid_argument here).
-double rotary_objective(const std::vector<Posed>& poses, const std::vector<double>& segment_time_s,
-                        GlobalObjective objective, double jerk_weight_s2 = 0.0);
+TAXOPT_API double rotary_objective(const std::vector<Posed>& poses,
+                                   const std::vector<double>& segment_time_s,
+                                   GlobalObjective objective, double jerk_weight_s2 = 0.0);
 
 /// The exact minimiser over discrete candidates: one index per point into `candidates[i]`,
 /// by the programme of the file comment; `value` gets the objective of the sequence (jerk not
 /// counted). With `wrap_c` (a continuous C) C is taken modulo a turn: each step of C is
 /// wrapped to (-180, 180] deg. Candidates per point: 1 to 255.
-std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<Posed>>& candidates,
-                                                 const std::vector<double>& segment_time_s,
-                                                 GlobalObjective objective, double* value,
-                                                 bool wrap_c = true);
+TAXOPT_API std::vector<std::size_t> best_candidate_sequence(
+    const std::vector<std::vector<Posed>>& candidates, const std::vector<double>& segment_time_s,
+    GlobalObjective objective, double* value, bool wrap_c = true);
 
 /// The time objective's programme (docs/global-method.md): one index per point into
 /// `candidates[i]` minimising the surrogate time sum_i tau_i + sum_i e_i, where
@@ -133,7 +134,7 @@ std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<P
 /// those times adds when both segments stretch alike; ties broken by the sum of squared rotary
 /// accelerations at `segment_time_s`. `joints[i][k]` are the joints of `candidates[i][k]`;
 /// `surrogate_s` gets the sequence's surrogate time. Exact over the candidates.
-std::vector<std::size_t> fastest_candidate_sequence(
+TAXOPT_API std::vector<std::size_t> fastest_candidate_sequence(
     const std::vector<std::vector<Posed>>& candidates,
     const std::vector<std::vector<JointPosition>>& joints,
     const std::vector<double>& programmed_time_s, const std::vector<double>& segment_time_s,
@@ -141,12 +142,15 @@ std::vector<std::size_t> fastest_candidate_sequence(
 
 /// Scheduled time, s, of a pass run rest to rest through `joints` (n) with least segment times
 /// `programmed_time_s` (n - 1): schedule_feed's total.
-double pass_time_s(const std::vector<JointPosition>& joints,
-                   const std::vector<double>& programmed_time_s, const JointLimits& limits);
+TAXOPT_API double pass_time_s(const std::vector<JointPosition>& joints,
+                              const std::vector<double>& programmed_time_s,
+                              const JointLimits& limits);
 
 /// Plans one pass. `acceptable(i, axis)` may be called from several threads at once for
 /// different passes; the result does not depend on the thread count.
-GlobalPassPlan plan_pass_global(const ACMachined& machine, const GlobalPassProblem& problem,
-                                const AxisTest& acceptable, const GlobalOptions& options = {});
+TAXOPT_API GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine,
+                                           const GlobalPassProblem& problem,
+                                           const AxisTest& acceptable,
+                                           const GlobalOptions& options = {});
 
 }  // namespace taxopt

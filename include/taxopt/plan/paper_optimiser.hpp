@@ -32,6 +32,7 @@
 #include <functional>
 #include <vector>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/types.hpp"
 #include "taxopt/plan/segmenter.hpp"
 
@@ -88,8 +89,8 @@ struct PassPlan {
 /// Plans the axes of one pass. Deterministic: the same input gives the same axes whatever
 /// the thread count (`is_free` may be called in parallel; its answers must not depend on
 /// the order of calls).
-PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
-                         const PaperOptions& options = {});
+TAXOPT_API PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
+                                    const PaperOptions& options = {});
 
 /// Unit axes on a cap around unit `centre`: rings at multiples of `step_rad` up to
 /// `radius_rad`, each with points about `step_rad` apart; the centre first, rings outwards.
@@ -97,11 +98,11 @@ PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
 /// axes turn there, so that the grid turns with the part and a path through the pole keeps
 /// candidates on its own great circle); where that is nil, in a direction fixed by the
 /// world's X or Y axis.
-std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad,
-                            const Vec3d& along = Vec3d::Zero());
+TAXOPT_API std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad,
+                                       const Vec3d& along = Vec3d::Zero());
 
 /// The tangent direction at `centre` in which `along` points (unit, across the centre), else a
 /// fixed one from the world's X or Y axis: the frame of cap_grid and of a pattern search.
-Vec3d tangent_towards(const Vec3d& centre, const Vec3d& along);
+TAXOPT_API Vec3d tangent_towards(const Vec3d& centre, const Vec3d& along);
 
 }  // namespace taxopt

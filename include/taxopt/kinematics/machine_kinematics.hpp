@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "taxopt/core/export.hpp"
 #include "taxopt/core/types.hpp"
 
 namespace taxopt {
@@ -15,7 +16,7 @@ namespace taxopt {
 /// Machine rotary-axis values as written to the G-code, radians.
 template <class S>
 struct Pose {
-  S a_rad = S(0);
+  S tilt_rad = S(0);
   S c_rad = S(0);
 };
 using Posed = Pose<double>;
@@ -61,19 +62,20 @@ enum class RotaryLayout { TableTable, HeadTable, HeadHead };
 ///   B/C: v = Rot(Z, c) Rot(Y, t) [0 0 1]^T = (sin t cos c,  sin t sin c, cos t)
 /// (the convention of a real NX post for the Haas UMC-750, checked against its output:
 /// tests/test_haas.cpp). The two differ only by the tilt axis (the B/C axis is the A/C axis at
-/// C + 90 deg), so every stage that works in (tilt, C) works for both: `Pose::a_rad` is the
-/// tilt axis's value (A or B), `a` its range, `a_axis_point_mm` a point on it.
+/// C + 90 deg), so every stage that works in (tilt, C) works for both: `Pose::tilt_rad` is the
+/// tilt axis's value (A or B), `tilt` its range and sense, `tilt_about` its direction,
+/// `tilt_axis_point_mm` a point on it.
 template <class S>
-struct ACMachine {
-  RotaryAxis<S> a;
+struct MachineKinematics {
+  RotaryAxis<S> tilt;
   RotaryAxis<S> c;
   /// A point on the C axis (x, y, 0) and a point on the tilt axis: (0, y, z) for A, (x, 0, z)
   /// for B; workpiece mm.
   Vec3<S> c_axis_point_mm = Vec3<S>::Zero();
-  Vec3<S> a_axis_point_mm = Vec3<S>::Zero();
+  Vec3<S> tilt_axis_point_mm = Vec3<S>::Zero();
   /// Below this sin|A| the axis is on the pole A = 0, where every C gives the same axis.
   S pole_tolerance = S(1e-7);
-  TiltAxis tilt = TiltAxis::X;
+  TiltAxis tilt_about = TiltAxis::X;
   RotaryLayout layout = RotaryLayout::TableTable;
   /// A head (HeadTable, HeadHead): the distance from the tilt axis to the tool tip along the
   /// tool, mm: the head's pivot length plus the tool's gauge length (LinuxCNC's maxkins and
@@ -81,12 +83,12 @@ struct ACMachine {
   S head_length_mm = S(0);
 
   /// The tilt axis's letter in G-code and reports: 'A' or 'B'.
-  char tilt_letter() const { return tilt == TiltAxis::X ? 'A' : 'B'; }
+  char tilt_letter() const { return tilt_about == TiltAxis::X ? 'A' : 'B'; }
 
   /// Tool axis for machine values (tilt, C). @param pose radians
   Vec3<S> forward(const Pose<S>& pose) const {
-    const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
-    if (tilt == TiltAxis::Y) {
+    const S ag = S(tilt.sense) * pose.tilt_rad, cg = S(c.sense) * pose.c_rad;
+    if (tilt_about == TiltAxis::Y) {
       return Vec3<S>(std::sin(ag) * std::cos(cg), std::sin(ag) * std::sin(cg), std::cos(ag));
     }
     return Vec3<S>(std::sin(ag) * std::sin(cg), -std::sin(ag) * std::cos(cg), std::cos(ag));
@@ -105,11 +107,11 @@ struct ACMachine {
     const S k = std::max(S(-1), std::min(S(1), axis.z()));
     // atan2 of (sin, cos) keeps accuracy near the pole where acos(k) loses it.
     const S ag = std::atan2(std::hypot(axis.x(), axis.y()), k);
-    const bool y = tilt == TiltAxis::Y;
+    const bool y = tilt_about == TiltAxis::Y;
     S c_pos = y ? std::atan2(axis.y(), axis.x()) : std::atan2(axis.x(), -axis.y());
     S c_neg = y ? std::atan2(-axis.y(), -axis.x()) : std::atan2(-axis.x(), axis.y());
     if (at_pole(axis)) c_pos = c_neg = S(0);
-    const S sa = S(a.sense), sc = S(c.sense);
+    const S sa = S(tilt.sense), sc = S(c.sense);
     return {Pose<S>{sa * ag, wrap_pi(sc * c_pos)}, Pose<S>{-sa * ag, wrap_pi(sc * c_neg)}};
   }
 
@@ -117,7 +119,7 @@ struct ACMachine {
   /// range (on the pole any C will do).
   bool reachable(const Vec3<S>& axis) const {
     for (const Pose<S>& p : inverse(axis)) {
-      if (!a.contains(p.a_rad)) continue;
+      if (!tilt.contains(p.tilt_rad)) continue;
       if (c.continuous || (at_pole(axis) && c.min_rad <= c.max_rad)) return true;
       for (int turn = -2; turn <= 2; ++turn) {
         if (c.contains(p.c_rad + S(turn) * Constants<S>::two_pi())) return true;
@@ -128,7 +130,7 @@ struct ACMachine {
 
   /// The tilt axis's direction: X or Y.
   Vec3<S> tilt_direction() const {
-    return tilt == TiltAxis::Y ? Vec3<S>::UnitY() : Vec3<S>::UnitX();
+    return tilt_about == TiltAxis::Y ? Vec3<S>::UnitY() : Vec3<S>::UnitX();
   }
 
   /// Joint position of a workpiece point (the tip) for a pose (CLI.md's machine-mode
@@ -138,27 +140,27 @@ struct ACMachine {
   ///   HeadTable:  p_m = Rot(Z, -c) (p_w - c0) + c0 + L (Rot(Z, -c) v - z)  (maxkins);
   ///   HeadHead:   p_m = p_w + L (v - z)                                     (5axiskins).
   Vec3<S> to_machine_mm(const Vec3<S>& p_w_mm, const Pose<S>& pose) const {
-    const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
+    const S ag = S(tilt.sense) * pose.tilt_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(-cg, Vec3<S>::UnitZ()).toRotationMatrix();
     if (layout == RotaryLayout::HeadHead) return p_w_mm + head_swing_mm(pose);
     if (layout == RotaryLayout::HeadTable) {
       return rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm + rz * head_swing_mm(pose);
     }
     const Mat3<S> rt = Eigen::AngleAxis<S>(-ag, tilt_direction()).toRotationMatrix();
-    return rt * (rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm - a_axis_point_mm) +
-           a_axis_point_mm;
+    return rt * (rz * (p_w_mm - c_axis_point_mm) + c_axis_point_mm - tilt_axis_point_mm) +
+           tilt_axis_point_mm;
   }
 
   /// Inverse of to_machine_mm: the workpiece point at joint position p_m for a pose.
   Vec3<S> from_machine_mm(const Vec3<S>& p_m_mm, const Pose<S>& pose) const {
-    const S ag = S(a.sense) * pose.a_rad, cg = S(c.sense) * pose.c_rad;
+    const S ag = S(tilt.sense) * pose.tilt_rad, cg = S(c.sense) * pose.c_rad;
     const Mat3<S> rz = Eigen::AngleAxis<S>(cg, Vec3<S>::UnitZ()).toRotationMatrix();
     if (layout == RotaryLayout::HeadHead) return p_m_mm - head_swing_mm(pose);
     if (layout == RotaryLayout::HeadTable) {
       return rz * (p_m_mm - c_axis_point_mm) + c_axis_point_mm - head_swing_mm(pose);
     }
     const Mat3<S> rt = Eigen::AngleAxis<S>(ag, tilt_direction()).toRotationMatrix();
-    return rz * (rt * (p_m_mm - a_axis_point_mm) + a_axis_point_mm - c_axis_point_mm) +
+    return rz * (rt * (p_m_mm - tilt_axis_point_mm) + tilt_axis_point_mm - c_axis_point_mm) +
            c_axis_point_mm;
   }
 
@@ -168,9 +170,9 @@ struct ACMachine {
     return head_length_mm * (forward(pose) - Vec3<S>::UnitZ());
   }
 };
-using ACMachined = ACMachine<double>;
+using MachineKinematicsd = MachineKinematics<double>;
 
 /// The built-in generic A/C table-table machine of CLI.md: A in [-120, 120] deg, C continuous.
-ACMachined default_ac_machine();
+TAXOPT_API MachineKinematicsd default_machine_kinematics();
 
 }  // namespace taxopt

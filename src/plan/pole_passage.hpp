@@ -23,7 +23,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 #include "taxopt/plan/paper_optimiser.hpp"
 
 namespace taxopt {
@@ -56,7 +56,7 @@ struct PolePassage {
 /// @param segment_mm  path length from point i to i + 1, n - 1
 /// @param feed_mm_min feed of the move from point i to i + 1, n - 1 (the metrics' feed)
 /// @param acceptable  whether an axis is acceptable at point i of the pass
-PolePassage smooth_pole_passages(const ACMachined& machine, const std::vector<Vec3d>& axes,
+PolePassage smooth_pole_passages(const MachineKinematicsd& machine, const std::vector<Vec3d>& axes,
                                  const std::vector<Posed>& poses,
                                  const std::vector<double>& segment_mm,
                                  const std::vector<double>& feed_mm_min, const AxisTest& acceptable,

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "taxopt/kinematics/ac_machine.hpp"
+#include "taxopt/kinematics/machine_kinematics.hpp"
 
 using namespace taxopt;
 
@@ -16,11 +16,11 @@ Vec3d random_axis(std::mt19937& rng, double min_z = -1.0) {
   }
 }
 
-ACMachined machine_with_sense(int sa, int sc, TiltAxis tilt = TiltAxis::X) {
-  ACMachined m = default_ac_machine();
-  m.a.sense = sa;
+MachineKinematicsd machine_with_sense(int sa, int sc, TiltAxis tilt = TiltAxis::X) {
+  MachineKinematicsd m = default_machine_kinematics();
+  m.tilt.sense = sa;
   m.c.sense = sc;
-  m.tilt = tilt;
+  m.tilt_about = tilt;
   return m;
 }
 
@@ -32,7 +32,7 @@ constexpr TiltAxis kTilts[] = {TiltAxis::X, TiltAxis::Y};
 }  // namespace
 
 TEST_CASE("kinematics: forward is eq. 14", "[kinematics]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const double a = deg_to_rad(30.0), c = deg_to_rad(40.0);
   const Vec3d v = m.forward({a, c});
   CHECK(v.x() == Approx(std::sin(a) * std::sin(c)));
@@ -45,7 +45,7 @@ TEST_CASE("kinematics: inverse undoes forward on both branches and every sense",
   for (int sa : {1, -1}) {
     for (int sc : {1, -1}) {
       for (TiltAxis tilt : kTilts) {
-        const ACMachined m = machine_with_sense(sa, sc, tilt);
+        const MachineKinematicsd m = machine_with_sense(sa, sc, tilt);
         INFO("tilt " << m.tilt_letter() << ", senses " << sa << ", " << sc);
         for (int k = 0; k < 2000; ++k) {
           const Vec3d v = random_axis(rng);
@@ -56,13 +56,13 @@ TEST_CASE("kinematics: inverse undoes forward on both branches and every sense",
             REQUIRE(p.c_rad <= Constants<double>::pi() + 1e-12);
           }
           // Branch [0] has s_A A >= 0, branch [1] s_A A <= 0.
-          REQUIRE(sa * both[0].a_rad >= 0.0);
-          REQUIRE(sa * both[1].a_rad <= 0.0);
+          REQUIRE(sa * both[0].tilt_rad >= 0.0);
+          REQUIRE(sa * both[1].tilt_rad <= 0.0);
         }
         // The pole: A = 0 on both branches, and every C gives the same axis.
         const auto pole = m.inverse(Vec3d::UnitZ());
-        CHECK(pole[0].a_rad == 0.0);
-        CHECK(pole[1].a_rad == 0.0);
+        CHECK(pole[0].tilt_rad == 0.0);
+        CHECK(pole[1].tilt_rad == 0.0);
         for (double c : {-3.0, -1.0, 0.5, 2.9}) CHECK(m.at_pole(m.forward(Posed{0.0, c})));
         CHECK_FALSE(m.at_pole(m.forward(Posed{1e-5, 0.3})));
       }
@@ -74,16 +74,16 @@ TEST_CASE("kinematics: forward of any pose comes back through the inverse", "[ki
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> ua(-2.0, 2.0), uc(-10.0, 10.0);
   for (TiltAxis tilt : kTilts) {
-    const ACMachined m = machine_with_sense(1, 1, tilt);
+    const MachineKinematicsd m = machine_with_sense(1, 1, tilt);
     INFO("tilt " << m.tilt_letter());
     for (int k = 0; k < 2000; ++k) {
       const Posed p{ua(rng), uc(rng)};
       const Vec3d v = m.forward(p);
       bool matched = false;
       for (const Posed& q : m.inverse(v)) {
-        const bool same_a = std::abs(q.a_rad - p.a_rad) < 1e-9;
+        const bool same_a = std::abs(q.tilt_rad - p.tilt_rad) < 1e-9;
         const bool same_c =
-            std::abs(wrap_pi(q.c_rad - p.c_rad)) < 1e-9 || std::abs(std::sin(p.a_rad)) < 1e-9;
+            std::abs(wrap_pi(q.c_rad - p.c_rad)) < 1e-9 || std::abs(std::sin(p.tilt_rad)) < 1e-9;
         matched = matched || (same_a && same_c);
       }
       REQUIRE(matched);
@@ -93,22 +93,22 @@ TEST_CASE("kinematics: forward of any pose comes back through the inverse", "[ki
 
 TEST_CASE("kinematics: the paper's first axis has the A <= 0 solution of its table",
           "[kinematics][paper]") {
-  const ACMachined m = default_ac_machine();
+  const MachineKinematicsd m = default_machine_kinematics();
   const auto both = m.inverse(Vec3d(0, -0.3281, 0.9447).normalized());
-  CHECK(rad_to_deg(both[1].a_rad) == Approx(-19.1507).margin(0.01));
+  CHECK(rad_to_deg(both[1].tilt_rad) == Approx(-19.1507).margin(0.01));
   CHECK(std::abs(rad_to_deg(both[1].c_rad)) == Approx(180.0).margin(1e-9));
-  CHECK(rad_to_deg(both[0].a_rad) == Approx(19.1507).margin(0.01));
+  CHECK(rad_to_deg(both[0].tilt_rad) == Approx(19.1507).margin(0.01));
   CHECK(rad_to_deg(both[0].c_rad) == Approx(0.0).margin(1e-9));
 }
 
 TEST_CASE("kinematics: sense -1 mirrors A and C and keeps the tool axis", "[kinematics]") {
   std::mt19937 rng(99);
-  const ACMachined pos = machine_with_sense(1, 1), neg = machine_with_sense(-1, -1);
+  const MachineKinematicsd pos = machine_with_sense(1, 1), neg = machine_with_sense(-1, -1);
   for (int k = 0; k < 500; ++k) {
     const Vec3d v = random_axis(rng, 0.0);
     const auto p = pos.inverse(v), q = neg.inverse(v);
     for (int b = 0; b < 2; ++b) {
-      CHECK(q[b].a_rad == Approx(-p[b].a_rad).margin(1e-12));
+      CHECK(q[b].tilt_rad == Approx(-p[b].tilt_rad).margin(1e-12));
       CHECK(std::abs(wrap_pi(q[b].c_rad + p[b].c_rad)) < 1e-12);
       CHECK((neg.forward(q[b]) - v).norm() < 1e-12);
     }
@@ -125,11 +125,11 @@ TEST_CASE("kinematics: machine mode puts the tool axis on the machine's +Z", "[k
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   for (int sa : {1, -1}) {
     for (TiltAxis tilt : kTilts) {
-      ACMachined m = machine_with_sense(sa, sa, tilt);
+      MachineKinematicsd m = machine_with_sense(sa, sa, tilt);
       INFO("tilt " << m.tilt_letter() << ", sense " << sa);
       const bool b = tilt == TiltAxis::Y;
       m.c_axis_point_mm = Vec3d(u(rng), u(rng), 0.0);
-      m.a_axis_point_mm = b ? Vec3d(u(rng), 0.0, u(rng)) : Vec3d(0.0, u(rng), u(rng));
+      m.tilt_axis_point_mm = b ? Vec3d(u(rng), 0.0, u(rng)) : Vec3d(0.0, u(rng), u(rng));
       for (int k = 0; k < 300; ++k) {
         const Vec3d v = random_axis(rng, 0.0);
         const Posed pose = m.inverse(v)[static_cast<std::size_t>(k % 2)];
@@ -141,8 +141,8 @@ TEST_CASE("kinematics: machine mode puts the tool axis on the machine's +Z", "[k
         REQUIRE((m.from_machine_mm(pm, pose) - p).norm() < 1e-9);
         // A point on both rotary axes does not move.
         const Vec3d fixed =
-            b ? Vec3d(m.a_axis_point_mm.x(), m.c_axis_point_mm.y(), m.a_axis_point_mm.z())
-              : Vec3d(m.c_axis_point_mm.x(), m.a_axis_point_mm.y(), m.a_axis_point_mm.z());
+            b ? Vec3d(m.tilt_axis_point_mm.x(), m.c_axis_point_mm.y(), m.tilt_axis_point_mm.z())
+              : Vec3d(m.c_axis_point_mm.x(), m.tilt_axis_point_mm.y(), m.tilt_axis_point_mm.z());
         if (std::abs(pose.c_rad) < 1e-12)
           REQUIRE((m.to_machine_mm(fixed, pose) - fixed).norm() < 1e-9);
       }
@@ -151,15 +151,15 @@ TEST_CASE("kinematics: machine mode puts the tool axis on the machine's +Z", "[k
 }
 
 TEST_CASE("kinematics: the machine-mode formula of CLI.md, written out", "[kinematics]") {
-  ACMachined m = default_ac_machine();
+  MachineKinematicsd m = default_machine_kinematics();
   m.c_axis_point_mm = Vec3d(5, -3, 0);
-  m.a_axis_point_mm = Vec3d(0, 2, -7);
+  m.tilt_axis_point_mm = Vec3d(0, 2, -7);
   const Posed pose{deg_to_rad(-35.0), deg_to_rad(120.0)};
   const Vec3d pw(12, 4, 9);
   const Mat3d rz = Eigen::AngleAxisd(-pose.c_rad, Vec3d::UnitZ()).toRotationMatrix();
-  const Mat3d rx = Eigen::AngleAxisd(-pose.a_rad, Vec3d::UnitX()).toRotationMatrix();
+  const Mat3d rx = Eigen::AngleAxisd(-pose.tilt_rad, Vec3d::UnitX()).toRotationMatrix();
   const Vec3d expect =
-      rx * (rz * (pw - m.c_axis_point_mm) + m.c_axis_point_mm - m.a_axis_point_mm) +
-      m.a_axis_point_mm;
+      rx * (rz * (pw - m.c_axis_point_mm) + m.c_axis_point_mm - m.tilt_axis_point_mm) +
+      m.tilt_axis_point_mm;
   CHECK((m.to_machine_mm(pw, pose) - expect).norm() < 1e-12);
 }

@@ -99,7 +99,7 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
       throw InputError(toolpath.source + ": its MSYS records name different frames (lines " +
                        std::to_string(f.line) + " and " + std::to_string(g.line) +
                        "): one part cannot be in all of them; read the file with its MSYS "
-                       "records ignored (ClReadOptions::apply_msys = false; --msys ignore) or "
+                       "records ignored (ClReadOptions::apply_msys = false) or "
                        "split it");
     }
   }
@@ -109,12 +109,8 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
 
 ToolOverrides tool_overrides(const ToolDimensions& given) {
   const double u = mm_per_unit(given.units);
+  // Converted only: check_options (and run_job) check each dimension in mm, naming its field.
   const auto mm = [u](const std::optional<double>& v) -> std::optional<double> {
-    // A tool is no larger than a metre: larger dimensions make the checks hang
-    // (tests/test_bad_input.cpp).
-    if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
-      throw InputError("tool dimensions must be within (0, 1000] mm");
-    }
     return v ? std::optional<double>(*v * u) : std::nullopt;
   };
   ToolOverrides o;
@@ -229,10 +225,7 @@ namespace {
 /// ends it at once.
 template <class F>
 void in_job_arena(const JobOptions& options, const F& f) {
-  if (options.threads > 1024) {
-    throw InputError("JobOptions::threads must be within [0, 1024] (0: all cores), got " +
-                     std::to_string(options.threads));
-  }
+  check_options(options);
   options.stop.throw_if_stop_requested();
   tbb::task_arena arena(options.threads ? static_cast<int>(options.threads)
                                         : tbb::task_arena::automatic);

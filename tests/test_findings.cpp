@@ -139,6 +139,14 @@ TEST_CASE(
   CHECK(*o.ball_radius_mm == Approx(3.175));
   CHECK(*o.holder_radius_mm == Approx(19.05));
   CHECK_FALSE(o.shank_radius_mm);
+  // Converted as given; the job's check names the field a bad one is in (in mm).
   d.gauge_length = -1.0;
-  CHECK_THROWS_AS(tool_overrides(d), InputError);
+  JobOptions options;
+  options.tool = tool_overrides(d);
+  CHECK(*options.tool.gauge_length_mm == Approx(-25.4));
+  CHECK_THROWS_WITH(check_options(options),
+                    "JobOptions::tool.gauge_length_mm must be within (0, 1000] mm, got -25.4");
+  options.option_names = {{"JobOptions::tool.gauge_length_mm", "--gauge-length"}};
+  CHECK_THROWS_WITH(check_options(options),
+                    "--gauge-length must be within (0, 1000] mm, got -25.4");
 }

@@ -231,13 +231,13 @@ TEST_CASE(
   const auto none = run_taxopt("--in " + t.path("bare.cls") + out);
   CHECK(none.code == 2);
   CHECK_THAT(none.err, Catch::Contains("bare.cls:4: operation T: the CL file calls no tool"));
-  CHECK_THAT(none.err, Catch::Contains("--tool-number N, or tool_number in the machine file"));
+  CHECK_THAT(none.err, Catch::Contains("give --tool-number, or tool_number in the machine file"));
   CHECK_FALSE(file_exists(t.path("o.ngc")));
   const auto no_speed = run_taxopt("--in " + t.path("bare.cls") + " --tool-number 3" + out);
   CHECK(no_speed.code == 2);
   CHECK_THAT(no_speed.err, Catch::Contains("bare.cls:6: operation T: feed moves without a "
                                            "spindle speed"));
-  CHECK_THAT(no_speed.err, Catch::Contains("--spindle-rpm N, or spindle_rpm in the machine"));
+  CHECK_THAT(no_speed.err, Catch::Contains("give --spindle-rpm, or spindle_rpm in the machine"));
   // The command line.
   const auto cli =
       run_taxopt("--in " + t.path("bare.cls") + " --tool-number 3 --spindle-rpm 4500" + out);

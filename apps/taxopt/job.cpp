@@ -92,24 +92,35 @@ void check_outputs(const Args& a) {
   }
 }
 
-/// The method's numbers, before any file is read (the library refuses them too, naming the
-/// JobOptions field).
-void check_method_numbers(const Args& a) {
-  if (a.jerk_weight && !(*a.jerk_weight >= 0.0 && std::isfinite(*a.jerk_weight))) {
-    refuse("--jerk-weight must be a number >= 0 (s^2)");
-  }
-  if (a.max_deviation && !(*a.max_deviation >= 0.0 && *a.max_deviation <= 90.0)) {
-    refuse("--max-deviation must be within [0, 90] deg");
-  }
-  if (a.grid && !(*a.grid >= 0.1 && *a.grid <= 10.0)) {
-    refuse("--grid must be within [0.1, 10] deg");
-  }
-  if (a.feed_mm_per_min && !(*a.feed_mm_per_min >= 0.01 && *a.feed_mm_per_min <= 1e6))
-    refuse("--feed must be within [0.01, 1e6] mm/min");
-  if (a.spindle_rpm && !(*a.spindle_rpm >= 1.0 && *a.spindle_rpm <= 2e5))
-    refuse("--spindle-rpm must be within [1, 200000] rpm");
-  if (a.tool_number && !(*a.tool_number >= 1 && *a.tool_number <= 99999))
-    refuse("--tool-number must be a whole number from 1 to 99999");
+/// The library's option fields as this command line names them: its messages then name the
+/// flag to give (taxopt/core/option_names.hpp).
+const OptionNames& cli_option_names() {
+  static const OptionNames names = {
+      {"JobOptions::part", "--part"},
+      {"JobOptions::max_deviation_deg", "--max-deviation"},
+      {"JobOptions::paper.grid_deg", "--grid"},
+      {"JobOptions::global.jerk_weight_s2", "--jerk-weight"},
+      {"JobOptions::feed_mm_per_min", "--feed"},
+      {"JobOptions::feed_schedule", "--feed-schedule"},
+      {"JobOptions::contact.tolerance_mm", "--contact-tolerance"},
+      {"JobOptions::part_tolerance_mm", "--part-tolerance"},
+      {"JobOptions::shank_clearance_mm", "--shank-clearance"},
+      {"JobOptions::holder_clearance_mm", "--holder-clearance"},
+      {"JobOptions::tool.ball_radius_mm", "--tool-radius"},
+      {"JobOptions::tool.shank_radius_mm", "--shank-radius"},
+      {"JobOptions::tool.flute_length_mm", "--flute-length"},
+      {"JobOptions::tool.holder_radius_mm", "--holder-radius"},
+      {"JobOptions::tool.holder_length_mm", "--holder-length"},
+      {"JobOptions::tool.gauge_length_mm", "--gauge-length"},
+      {"JobOptions::spindle_rpm", "--spindle-rpm"},
+      {"JobOptions::tool_number", "--tool-number"},
+      {"JobOptions::threads", "--threads"},
+      {"ClReadOptions::skip_records", "--skip-record"},
+      {"ClReadOptions::arc_direction", "--arc-direction"},
+      {"ClReadOptions::units", "--units"},
+      {"ClReadOptions::apply_msys", "--msys apply"},
+  };
+  return names;
 }
 
 /// The machine: its file (else the built-in one), with --dialect over its gcode.dialect.
@@ -150,6 +161,7 @@ Machine machine_of(const Args& a) {
 
 ClReadOptions read_options_of(const Args& a) {
   ClReadOptions read_options;
+  read_options.option_names = cli_option_names();
   read_options.units = parse_unit(a.units, "--units");
   read_options.arc_direction = a.arc_direction == "cw"    ? ArcDirection::Clockwise
                                : a.arc_direction == "ccw" ? ArcDirection::CounterClockwise
@@ -176,40 +188,17 @@ std::optional<Part> part_of(const Args& a, const Toolpath& toolpath) {
   return part;
 }
 
-/// The job's options from the command line, the tool's and the checks' bounded.
-JobOptions job_options_of(const Args& a, const Toolpath& toolpath) {
+/// The job's options from the command line (the tool's dimensions come with the CL file's
+/// units: tool_dimensions_of). The library checks every value (check_options), naming the flag.
+JobOptions job_options_of(const Args& a) {
   JobOptions options;
+  options.option_names = cli_option_names();
   // The job's own arena: --threads workers, else all cores.
   options.threads = a.threads > 0 ? static_cast<std::size_t>(a.threads) : 0;
   options.count_free_cells = !a.points_csv.empty();
   options.cspace_maps = !a.plots.empty();
   options.feed_schedule = a.feed_schedule;
-  {
-    // Tool dimensions are in the CL file's units; none larger than a metre.
-    const double u = mm_per_unit(toolpath.units);
-    for (const auto& [name, v] : {std::make_pair("--tool-radius", a.tool_radius),
-                                  std::make_pair("--shank-radius", a.shank_radius),
-                                  std::make_pair("--flute-length", a.flute_length),
-                                  std::make_pair("--holder-radius", a.holder_radius),
-                                  std::make_pair("--holder-length", a.holder_length),
-                                  std::make_pair("--gauge-length", a.gauge_length)}) {
-      if (v && !(*v > 0.0 && *v * u <= 1000.0)) {
-        refuse(std::string(name) + " must be within (0, 1000] mm (in the CL file's " +
-               to_string(toolpath.units) + ")");
-      }
-    }
-    options.tool = tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
-                                   a.holder_radius, a.holder_length, a.gauge_length});
-    // The machine file's holder and clearances apply where these name none (the library's
-    // resolved_options).
-  }
-  if (a.contact_tolerance) {
-    // Beyond a millimetre a contact is no contact: the gouge and flute checks would be off.
-    if (!(*a.contact_tolerance > 0.0 && *a.contact_tolerance <= 1.0)) {
-      refuse("--contact-tolerance must be within (0, 1] mm");
-    }
-    options.contact.tolerance_mm = *a.contact_tolerance;
-  }
+  if (a.contact_tolerance) options.contact.tolerance_mm = *a.contact_tolerance;
   options.method = a.method == "none"    ? Method::None
                    : a.method == "paper" ? Method::Paper
                                          : Method::Global;
@@ -219,18 +208,6 @@ JobOptions job_options_of(const Args& a, const Toolpath& toolpath) {
   if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
   if (a.grid) options.paper.grid_deg = *a.grid;
   options.max_deviation_deg = a.max_deviation;
-  // Clearances a machine keeps (50 mm is more than any holder's), and a part tolerance that
-  // is still one (1 mm): larger values turn the checks off or make them hang.
-  for (const auto& [name, v, most] :
-       {std::make_tuple("--shank-clearance", a.shank_clearance_mm, 50.0),
-        std::make_tuple("--holder-clearance", a.holder_clearance_mm, 50.0),
-        std::make_tuple("--part-tolerance", a.part_tolerance, 1.0)}) {
-    if (v && !(*v >= 0.0 && *v <= most)) {
-      std::ostringstream os;
-      os << name << " must be within [0, " << most << "] mm";
-      refuse(os.str());
-    }
-  }
   options.shank_clearance_mm = a.shank_clearance_mm;
   options.holder_clearance_mm = a.holder_clearance_mm;
   options.part_tolerance_mm = a.part_tolerance;
@@ -239,6 +216,12 @@ JobOptions job_options_of(const Args& a, const Toolpath& toolpath) {
   options.tool_number = a.tool_number;
   options.units_out = parse_unit(a.units_out, "--units-out");
   return options;
+}
+
+/// The tool's dimensions (--tool-radius ...), given in the CL file's units, in mm.
+ToolOverrides tool_dimensions_of(const Args& a, const Toolpath& toolpath) {
+  return tool_overrides({toolpath.units, a.tool_radius, a.shank_radius, a.flute_length,
+                         a.holder_radius, a.holder_length, a.gauge_length});
 }
 
 /// The report's and page's account of the run.
@@ -310,7 +293,9 @@ std::optional<LengthUnit> parse_unit(const std::string& s, const char* option) {
 int run_main_job(Args& a, const Invocation& how) {
   try {
     check_outputs(a);
-    check_method_numbers(a);
+    // Every option's value checked before any file is read (the library's rules and words).
+    JobOptions options = job_options_of(a);
+    check_options(options);
     const Machine machine = machine_of(a);
     const ClReadOptions read_options = read_options_of(a);
     // The page's libraries are read before any work: a run must not end in "cannot embed".
@@ -320,7 +305,6 @@ int run_main_job(Args& a, const Invocation& how) {
       html_assets = load_html_assets(dir && *dir ? dir : kDefaultJavascriptDir);
     }
     const Toolpath toolpath = read_cl_file(a.in, read_options);
-    if (a.tool_radius && !(*a.tool_radius > 0.0)) refuse("--tool-radius must be positive");
     // Plots: five SVG files an operation (and C-space maps); 20,000 operations wrote 100,000
     // files, 468 MB. A page of plots beyond a few hundred operations helps no one.
     constexpr std::size_t kMostPlottedOperations = 200;
@@ -331,7 +315,8 @@ int run_main_job(Args& a, const Invocation& how) {
              " (about 5 SVG files each): split the file, or leave out --plots");
     }
     const std::optional<Part> part = part_of(a, toolpath);
-    JobOptions options = job_options_of(a, toolpath);
+    options.tool = tool_dimensions_of(a, toolpath);
+    check_options(options);
     if (part) options.part = &*part;
     ProgressPrinter printer(!a.quiet && isatty(STDERR_FILENO), !a.quiet && a.verbose > 0);
     if (!a.quiet) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "taxopt/core/export.hpp"
+#include "taxopt/core/option_names.hpp"
 #include "taxopt/core/stop.hpp"
 #include "taxopt/core/toolpath.hpp"
 #include "taxopt/core/version.hpp"
@@ -105,7 +106,17 @@ struct JobOptions {
   /// Worker threads of the job (its own task arena; other jobs and the caller's own TBB work
   /// are not limited by it); 0: all cores. The result does not depend on it.
   std::size_t threads = 0;
+  /// How the caller names these fields in its messages (option_names.hpp): run_job's errors
+  /// and findings that say which option to set name it so ("JobOptions::part" unless mapped).
+  OptionNames option_names;
 };
+
+/// Checks the options' values as run_job does first (each number within its documented
+/// range: the cone, the grid, the feed, the tool's dimensions, the tolerances, the clearances,
+/// the spindle speed, the tool number, the threads), without a toolpath or a machine: a caller
+/// can check them before it reads any file. @throws InputError naming the field (as
+/// options.option_names names it) and the value.
+TAXOPT_API void check_options(const JobOptions& options);
 
 /// What run_job proved about its output.
 struct Verification {
@@ -451,8 +462,8 @@ struct ToolDimensions {
   std::optional<double> ball_radius, shank_radius, flute_length, holder_radius, holder_length,
       gauge_length;
 };
-/// The same in mm, as JobOptions::tool takes them. @throws InputError for one that is not a
-/// positive number.
+/// The same in mm, as JobOptions::tool takes them (check_options checks them there, each
+/// within (0, 1000] mm).
 TAXOPT_API ToolOverrides tool_overrides(const ToolDimensions& given);
 
 /// Runs the job. @throws InputError for options that cannot apply (a method this build

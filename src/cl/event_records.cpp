@@ -76,7 +76,8 @@ void Reader::insert(const ClRecordArgs& r) {
   } else if (text.empty() || all_nc_words(text)) {
     fail(line, shown +
                    ": code for the controller, which taxopt does not pass uninterpreted into "
-                   "a program; --skip-record INSERT drops it");
+                   "a program; " +
+                   named("skip_records") + " INSERT drops it");
   } else if (text.size() > 200) {
     fail(line, "INSERT text of " + std::to_string(text.size()) +
                    " characters: longer than the 200 a comment block is written with");

@@ -336,16 +336,15 @@ void Reader::msys(const ClRecordArgs& r) {
   if (!options_.apply_msys) {
     tp_.declared_frames.push_back(f);
     notice(line, os.str() +
-                     ": the coordinates are posted as written (NX writes them in this MCS; "
-                     "--msys apply takes them as absolute and moves them into it)");
+                     ": the coordinates are posted as written (NX writes them in this MCS; " +
+                     named("apply_msys") + " takes them as absolute and moves them into it)");
     return;
   }
   tp_.frames.push_back(f);
   frame_ = static_cast<int>(tp_.frames.size()) - 1;
   ++tp_.reading.msys_applied;
-  notice(line, os.str() +
-                   ": --msys apply, the coordinates that follow are moved into it and "
-                   "posted there");
+  notice(line, os.str() + ": " + named("apply_msys") +
+                   ", the coordinates that follow are moved into it and posted there");
 }
 
 void Reader::multax(const ClRecordArgs& r) {

@@ -1,5 +1,7 @@
 #include "taxopt/core/error.hpp"
 
+#include "taxopt/core/option_names.hpp"
+
 namespace taxopt {
 
 std::string format_location(const std::string& file, int line, const std::string& what) {
@@ -17,5 +19,10 @@ InputError::InputError(std::string file, int line, const std::string& what)
       file_(std::move(file)),
       line_(line),
       message_(what) {}
+
+std::string option_name(const OptionNames& names, const std::string& field) {
+  const auto it = names.find(field);
+  return it == names.end() ? field : it->second;
+}
 
 }  // namespace taxopt

@@ -214,7 +214,7 @@ void check_m(const Word& w, bool tool_change, GcodeDialect dialect) {
   if (state) {
     refuse("holds " + word +
            ": the spindle, coolant, tool and program end are written by taxopt (the CL "
-           "file, --spindle-rpm, [defaults], gcode.coolant)");
+           "file, the job's options, [defaults], gcode.coolant)");
   }
   // LinuxCNC's M70-M73 (docs: "Save Modal State" ... "Save Autorestore Modal State"): M72
   // restores what an M70 saved, and rs274 aborts there when none did (a footer's M72, in an

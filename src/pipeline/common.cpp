@@ -54,13 +54,18 @@ double ball_radius_mm(const Operationd& op, const JobOptions& options) {
 
 /// Why an operation with no ball radius is left alone: no tool at all in the file, or another
 /// kind of tool.
-std::string not_a_ball(const Operationd& op) {
+std::string not_a_ball(const Operationd& op, const JobOptions& options) {
   if (!op.tool.from_file) {
     return "operation " + op.name +
            ": the CL file defines no tool (no TLDATA or CUTTER record); give the ball radius "
-           "with --tool-radius";
+           "with " +
+           option_name(options.option_names, "JobOptions::tool.ball_radius_mm");
   }
   return "operation " + op.name + ": not a ball-end mill";
+}
+
+std::string named(const Run& run, const std::string& field) {
+  return option_name(run.options.option_names, field);
 }
 
 std::string shown(double v) {

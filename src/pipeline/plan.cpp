@@ -175,7 +175,7 @@ void plan_operations(const Run& run, std::vector<OperationContext>& ops, JobResu
     if (!(o.ball_radius_mm > 0.0)) {
       add_finding(res, FindingCode::NotABallMill, o.index,
                   op.points.empty() ? 0 : op.points.front().line,
-                  not_a_ball(op) + ", the input tool axes are kept");
+                  not_a_ball(op, run.options) + ", the input tool axes are kept");
       continue;
     }
     if (options.part && !o.contact.recovered) continue;

@@ -45,6 +45,11 @@ std::vector<T> slice(const std::vector<T>& v, std::size_t begin, std::size_t end
 /// models, built once per run beside contact recovery: the occlusion map's tree (cspace.hpp),
 /// which the optimisers and the guard ask, and FCL's, the independent reference every output
 /// is verified with. Both empty without a part.
+struct Run;
+/// An option as the caller names it in messages (JobOptions::option_names), `field` its
+/// library name ("JobOptions::part").
+std::string named(const Run& run, const std::string& field);
+
 struct Run {
   const Toolpath& tp;
   const Machine& machine;
@@ -264,7 +269,7 @@ void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> op
 /// Ball radius of an operation's tool: the override, else the file's (0: not a ball-end mill).
 double ball_radius_mm(const Operationd& op, const JobOptions& options);
 /// Why an operation with no ball radius is left alone.
-std::string not_a_ball(const Operationd& op);
+std::string not_a_ball(const Operationd& op, const JobOptions& options);
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
 ToolMargins margins_of(const JobOptions& options, const Operationd& op);
 

@@ -34,6 +34,67 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
   return options;
 }
 
+void check_options(const JobOptions& o) {
+  const auto refuse = [&o](const std::string& field, const std::string& expected, double v) {
+    throw InputError(option_name(o.option_names, "JobOptions::" + field) + " must be " + expected +
+                     ", got " + pipeline::shown(v));
+  };
+  // `range` is the interval as the docs write it: "[0.01, 1e6] mm/min" (open below with "(").
+  const auto within = [&](const std::string& field, const std::optional<double>& v, double lo,
+                          double hi, const std::string& range) {
+    if (!v) return;
+    const bool open_low = range[0] == '(';
+    if (open_low ? (*v > lo && *v <= hi) : (*v >= lo && *v <= hi)) return;
+    refuse(field, "within " + range, *v);
+  };
+  if (!(o.global.jerk_weight_s2 >= 0.0) || !std::isfinite(o.global.jerk_weight_s2)) {
+    refuse("global.jerk_weight_s2", "a number >= 0 (s^2)", o.global.jerk_weight_s2);
+  }
+  // One cone per run: plan_pass_global's own field serves callers of the optimiser alone;
+  // run_job sets it from the run's, so a value given there would silently not apply.
+  if (o.global.max_deviation_deg != GlobalOptions{}.max_deviation_deg) {
+    throw InputError(
+        "JobOptions::global.max_deviation_deg is not read by run_job: the run's deviation cone "
+        "is " +
+        option_name(o.option_names, "JobOptions::max_deviation_deg") +
+        " (empty: paper.max_deviation_deg); set that one");
+  }
+  within("max_deviation_deg", o.max_deviation_deg, 0.0, 90.0, "[0, 90] deg");
+  within("paper.max_deviation_deg", o.paper.max_deviation_deg, 0.0, 90.0, "[0, 90] deg");
+  // Below 0.1 deg the cap grids and C-space windows outgrow any memory budget (a 30 deg cone
+  // at 0.1 deg is 300 x 300 cells a point) and their counts overflow an int.
+  within("paper.grid_deg", o.paper.grid_deg, 0.1, 10.0, "[0.1, 10] deg");
+  // A feed the G-code can write and a machine can run (as the CL reader's FEDRAT).
+  within("feed_mm_per_min", o.feed_mm_per_min, 0.01, 1e6, "[0.01, 1e6] mm/min");
+  within("default_feed_mm_per_min", o.default_feed_mm_per_min, 0.01, 1e6, "[0.01, 1e6] mm/min");
+  // Beyond a millimetre a contact is no contact: the gouge and flute checks would be off.
+  if (o.contact.tolerance_mm != 0.0) {
+    within("contact.tolerance_mm", o.contact.tolerance_mm, 0.0, 1.0, "(0, 1] mm (0: the default)");
+  }
+  // A part tolerance that is still one (1 mm), clearances a machine keeps (50 mm is more than
+  // any holder's): larger values turn the checks off or make them hang.
+  within("part_tolerance_mm", o.part_tolerance_mm, 0.0, 1.0, "[0, 1] mm");
+  within("shank_clearance_mm", o.shank_clearance_mm, 0.0, 50.0, "[0, 50] mm");
+  within("holder_clearance_mm", o.holder_clearance_mm, 0.0, 50.0, "[0, 50] mm");
+  // A tool is no larger than a metre: larger dimensions make the checks hang.
+  const ToolOverrides& tool = o.tool;
+  for (const auto& [field, v] : {std::make_pair("tool.ball_radius_mm", tool.ball_radius_mm),
+                                 std::make_pair("tool.shank_radius_mm", tool.shank_radius_mm),
+                                 std::make_pair("tool.flute_length_mm", tool.flute_length_mm),
+                                 std::make_pair("tool.holder_radius_mm", tool.holder_radius_mm),
+                                 std::make_pair("tool.holder_length_mm", tool.holder_length_mm),
+                                 std::make_pair("tool.gauge_length_mm", tool.gauge_length_mm)}) {
+    within(field, v, 0.0, 1000.0, "(0, 1000] mm");
+  }
+  within("spindle_rpm", o.spindle_rpm, 1.0, 2e5, "[1, 200000] rpm");
+  if (o.tool_number && !(*o.tool_number >= 1 && *o.tool_number <= 99999)) {
+    refuse("tool_number", "within [1, 99999]", *o.tool_number);
+  }
+  if (o.threads > 1024) {
+    refuse("threads", "within [0, 1024] (0: all cores)", static_cast<double>(o.threads));
+  }
+}
+
 }  // namespace taxopt
 
 namespace taxopt::pipeline {
@@ -78,6 +139,7 @@ void check_points(const Toolpath& tp) {
 }  // namespace
 
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+  check_options(given);
   taxopt::validate(machine);
   check_points(tp);
   JobOptions options = resolved_options(given, machine);
@@ -85,22 +147,27 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
   res.tilt_letter = machine.rotary.tilt_letter();
   if (!given.part) {
     std::ostringstream os;
-    os << "no part (--part): the tool and holder are not checked against the part";
+    const auto name = [&given](const char* field) {
+      return option_name(given.option_names, std::string("JobOptions::") + field);
+    };
+    os << "no part (" << name("part") << "): the tool and holder are not checked against the part";
     if (given.method != Method::None) {
       os << "; each tool axis stays within " << options.paper.max_deviation_deg
          << " deg of its input";
       if (given.max_deviation_deg && *given.max_deviation_deg > kNoPartMaxDeviationDeg) {
-        os << " as --max-deviation asks, unchecked: give --part to check it";
+        os << " as " << name("max_deviation_deg") << " asks, unchecked: give " << name("part")
+           << " to check it";
       } else {
-        os << " (--max-deviation widens it, unchecked)";
+        os << " (" << name("max_deviation_deg") << " widens it, unchecked)";
       }
     }
     add_finding(res, FindingCode::NoPart, std::nullopt, 0, os.str());
   } else if (!options.tool.holder_radius_mm) {
-    add_finding(
-        res, FindingCode::NoHolderModel, std::nullopt, 0,
-        "no holder model (--holder-radius, --holder-length): the holder is not checked against "
-        "the part, only the tool");
+    add_finding(res, FindingCode::NoHolderModel, std::nullopt, 0,
+                "no holder model (" +
+                    option_name(given.option_names, "JobOptions::tool.holder_radius_mm") + ", " +
+                    option_name(given.option_names, "JobOptions::tool.holder_length_mm") +
+                    "): the holder is not checked against the part, only the tool");
   }
   if (given.part && given.part->mesh().dropped_degenerate_faces > 0) {
     const TriangleMesh& m = given.part->mesh();
@@ -142,61 +209,6 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
         "the machine file's gcode.linearise_tolerance_mm is 0: the tip leaves the straight line "
         "between points where the table turns (the moves are checked as the joints run)");
   }
-  if (!(options.global.jerk_weight_s2 >= 0.0) || !std::isfinite(options.global.jerk_weight_s2)) {
-    throw InputError("JobOptions::global.jerk_weight_s2 must be a number >= 0 (s^2), got " +
-                     shown(options.global.jerk_weight_s2));
-  }
-  // One cone per run: plan_pass_global's own field serves callers of the optimiser alone;
-  // run_job sets it from the run's, so a value given there would silently not apply.
-  if (options.global.max_deviation_deg != GlobalOptions{}.max_deviation_deg) {
-    throw InputError(
-        "JobOptions::global.max_deviation_deg is not read by run_job: the run's deviation cone "
-        "is JobOptions::max_deviation_deg (empty: paper.max_deviation_deg); set that one");
-  }
-  if (!(options.paper.max_deviation_deg >= 0.0 && options.paper.max_deviation_deg <= 90.0)) {
-    throw InputError("JobOptions::max_deviation_deg must be within [0, 90] deg, got " +
-                     shown(options.paper.max_deviation_deg));
-  }
-  // Below 0.1 deg the cap grids and C-space windows outgrow any memory budget (a 30 deg cone
-  // at 0.1 deg is 300 x 300 cells a point) and their counts overflow an int.
-  if (!(options.paper.grid_deg >= 0.1 && options.paper.grid_deg <= 10.0)) {
-    throw InputError("JobOptions::paper.grid_deg must be within [0.1, 10] deg, got " +
-                     shown(options.paper.grid_deg));
-  }
-  // A feed the G-code can write and a machine can run (as the CL reader's FEDRAT).
-  if (options.feed_mm_per_min &&
-      !(*options.feed_mm_per_min >= 0.01 && *options.feed_mm_per_min <= 1e6)) {
-    throw InputError("JobOptions::feed_mm_per_min must be within [0.01, 1e6] mm/min, got " +
-                     shown(*options.feed_mm_per_min));
-  }
-  if (options.contact.tolerance_mm != 0.0 &&
-      !(options.contact.tolerance_mm > 0.0 && options.contact.tolerance_mm <= 1.0)) {
-    throw InputError(
-        "JobOptions::contact.tolerance_mm must be within (0, 1] mm (0: the "
-        "default), got " +
-        shown(options.contact.tolerance_mm));
-  }
-  if (options.part_tolerance_mm &&
-      !(*options.part_tolerance_mm >= 0.0 && *options.part_tolerance_mm <= 1.0)) {
-    throw InputError("JobOptions::part_tolerance_mm must be within [0, 1] mm, got " +
-                     shown(*options.part_tolerance_mm));
-  }
-  for (const auto& [name, v] :
-       {std::make_pair("shank_clearance_mm", options.shank_clearance_mm),
-        std::make_pair("holder_clearance_mm", options.holder_clearance_mm)}) {
-    if (v && !(*v >= 0.0 && *v <= 50.0)) {
-      throw InputError(std::string("JobOptions::") + name + " must be within [0, 50] mm, got " +
-                       shown(*v));
-    }
-  }
-  if (options.spindle_rpm && !(*options.spindle_rpm >= 1.0 && *options.spindle_rpm <= 2e5)) {
-    throw InputError("JobOptions::spindle_rpm must be within [1, 200000] rpm, got " +
-                     shown(*options.spindle_rpm));
-  }
-  if (options.tool_number && !(*options.tool_number >= 1 && *options.tool_number <= 99999)) {
-    throw InputError("JobOptions::tool_number must be within [1, 99999], got " +
-                     std::to_string(*options.tool_number));
-  }
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
   }
@@ -220,8 +232,9 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
       if (!run.fallback_tool) {
         throw InputError(tp.source, line,
                          "operation " + op.name +
-                             ": the CL file calls no tool (no LOADTL or TOOL number): give "
-                             "--tool-number N, or tool_number in the machine file's [defaults]");
+                             ": the CL file calls no tool (no LOADTL or TOOL number): give " +
+                             named(run, "JobOptions::tool_number") +
+                             ", or tool_number in the machine file's [defaults]");
       }
       add_finding(res, FindingCode::ClFileNote, k, line,
                   "operation " + op.name + ": no tool number in the CL file: T" +
@@ -233,8 +246,9 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
     if (!run.fallback_spindle_rpm) {
       throw InputError(tp.source, op.points[*first_feed].line,
                        "operation " + op.name +
-                           ": feed moves without a spindle speed (no SPINDL before them): give "
-                           "--spindle-rpm N, or spindle_rpm in the machine file's [defaults]");
+                           ": feed moves without a spindle speed (no SPINDL before them): give " +
+                           named(run, "JobOptions::spindle_rpm") +
+                           ", or spindle_rpm in the machine file's [defaults]");
     }
     add_finding(res, FindingCode::ClFileNote, k, op.points[*first_feed].line,
                 "operation " + op.name + ": no spindle speed in the CL file: S" +
@@ -285,10 +299,11 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
       add_finding(res, FindingCode::NoToolModel, k, op.points.empty() ? 0 : op.points.front().line,
                   "operation " + op.name +
                       " has no tool geometry (no TLDATA or CUTTER, or not a mill): none of its "
-                      "moves is checked against the part (--tool-radius gives it a ball)");
+                      "moves is checked against the part (" +
+                      named(run, "JobOptions::tool.ball_radius_mm") + " gives it a ball)");
     }
     add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
-                not_a_ball(op) +
+                not_a_ball(op, run.options) +
                     (op.tool.from_file && op.tool.diameter_mm > 0.0
                          ? ", no contact recovery: its flutes are not checked against the part, "
                            "its shank and holder are"
@@ -310,7 +325,8 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
           "operation " + op.name + ": the ball cuts " + shown(-c.gap_mm) +
               " mm into the part here, more than the contact tolerance " + shown(cs.tolerance_mm) +
               " mm (" + contact_tolerance_source(part, run.options.contact, op.cam_tolerance_mm) +
-              "; --contact-tolerance); wrong part, wrong tool or wrong units?");
+              "; " + named(run, "JobOptions::contact.tolerance_mm") +
+              "); wrong part, wrong tool or wrong units?");
     }
     if (c.state == ContactState::Touching) {
       ++cs.touching;

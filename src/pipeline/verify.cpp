@@ -277,8 +277,8 @@ void kept_points(const Run& run, const OperationContext& o, OperationResult& r, 
   if (r.max_axis_change_deg > allowed) {
     add_finding(res, FindingCode::DeviationExceeded, k, 0,
                 "operation " + op.name + ": an output axis is " +
-                    std::to_string(r.max_axis_change_deg) +
-                    " deg from its input axis, more than --max-deviation");
+                    std::to_string(r.max_axis_change_deg) + " deg from its input axis, more than " +
+                    named(run, "JobOptions::max_deviation_deg"));
   }
 }
 
@@ -445,11 +445,12 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];
   }
   r.feed_words = written_feed_words(op, po, w.point_moves[k], res.gcode_units, machine);
-  check_dynamic_limits(r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves,
-                       res, run.tp.source,
-                       options.feed_schedule ? effective_limits(machine) : machine.limits,
-                       options.feed_schedule, machine.rotary.tilt_letter(), k,
-                       [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); });
+  check_dynamic_limits(
+      r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves, res,
+      run.tp.source, options.feed_schedule ? effective_limits(machine) : machine.limits,
+      options.feed_schedule, machine.rotary.tilt_letter(), k,
+      [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); },
+      options.option_names);
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
   return r;

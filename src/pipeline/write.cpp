@@ -397,7 +397,7 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   std::vector<std::string> comments = program_comments(run, res);
   comments.push_back("NOT VERIFIED: the verification failed (" +
                      std::to_string(res.problems.size()) +
-                     " problems); a program written anyway (--force) is not to be run as it is");
+                     " problems); a program written anyway is not to be run as it is");
   for (std::size_t i = 0; i < res.problems.size() && i < 10; ++i) {
     comments.push_back("FAILED: " + res.problems[i].substr(0, 200));
   }

@@ -144,7 +144,7 @@ TEST_CASE(
   CHECK_THAT(no_band, Catch::Contains("the ball cuts 0.153"));
   CHECK_THAT(no_band, Catch::Contains("more than the contact tolerance 0.123"));
   CHECK_THAT(no_band, Catch::Contains("the mesh's chordal error 0.123"));
-  CHECK_THAT(no_band, Catch::Contains("--contact-tolerance"));
+  CHECK_THAT(no_band, Catch::Contains("JobOptions::contact.tolerance_mm"));
   // The CAM's band: the part surface's (second) value, the larger of INTOL and OUTTOL.
   for (const std::string& records :
        {std::string("INTOL/0.1,0.04\n"), std::string("INTOL/0.01\nOUTTOL/0.04\n"),

@@ -117,7 +117,7 @@ TEST_CASE("cl arcs: when most arcs run against the CAM system's sense the reader
   CHECK(throws_with([] { parse_cl(quarter("TOOL PATH/OP,TOOL,T\n", -1), "nx.cls"); },
                     "nx.cls:4: CIRCLE: 1 of 1 decidable arcs (lines 4) run against the clockwise"));
   CHECK(throws_with([] { parse_cl(quarter("TOOL PATH/OP,TOOL,T\n", -1), "nx.cls"); },
-                    "--arc-direction cw|ccw"));
+                    "ClReadOptions::arc_direction cw|ccw"));
   // The option applies one sense to every arc, as given, with a note.
   ClReadOptions o;
   o.arc_direction = ArcDirection::CounterClockwise;
@@ -437,9 +437,10 @@ TEST_CASE(
   const std::string text =
       "FEDRAT/MMPM,500\nRAPID\nGOTO/0,0,5\nGOTO/50,0,5\nUNITS/INCHES\n"
       "GOTO/60,0,5\n";
-  CHECK(throws_with([&] { parse_cl(text, "u.cls"); },
-                    "u.cls:5: UNITS/INCHES comes after the first motion (line 3): whether the "
-                    "moves before it are in inches too is not known; give --units in|mm"));
+  CHECK(throws_with(
+      [&] { parse_cl(text, "u.cls"); },
+      "u.cls:5: UNITS/INCHES comes after the first motion (line 3): whether the "
+      "moves before it are in inches too is not known; give ClReadOptions::units in|mm"));
   ClReadOptions o;
   o.units = LengthUnit::Inch;
   CHECK(parse_cl(text, "u.cls", o).operations.at(0).points.at(1).tip_mm.x() == Approx(50 * 25.4));
@@ -459,7 +460,8 @@ TEST_CASE(
   CHECK(throws_with([&] { parse_cl(creo, "c.ncl"); },
                     "its feed, 30319 mm/min at 7958 rpm, is 3.81 mm a revolution, no milling "
                     "feed; read as millimetres it would be 0.15 mm"));
-  CHECK(throws_with([&] { parse_cl(creo, "c.ncl"); }, "--units mm reads the whole file so"));
+  CHECK(throws_with([&] { parse_cl(creo, "c.ncl"); },
+                    "ClReadOptions::units mm reads the whole file so"));
   ClReadOptions mm;
   mm.units = LengthUnit::Millimetre;
   const Toolpath read = parse_cl(creo, "c.ncl", mm);

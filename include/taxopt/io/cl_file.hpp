@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "taxopt/core/export.hpp"
+#include "taxopt/core/option_names.hpp"
 #include "taxopt/core/toolpath.hpp"
 
 namespace taxopt {
@@ -38,6 +39,9 @@ struct ClReadOptions {
   /// knows as information, a program event or a refused word that leaves the motion as it is
   /// (cl_words.hpp, ClWord::skippable). Skipping a motion, state or frame word is refused.
   std::set<std::string> skip_records;
+  /// How the caller names these fields in its messages (option_names.hpp): the reader's
+  /// errors and notices that say which option to set name it so.
+  OptionNames option_names;
 };
 
 /// Parses CL text. `source` names the file in errors and warnings.

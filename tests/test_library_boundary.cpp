@@ -192,6 +192,10 @@ TEST_CASE(
          m.rotary.c.max_rad = kNaN;
        },
        "Machine::rotary.c.max_rad must be a number"},
+      {"a holder clearance of a metre", [](Machine& m) { m.holder_clearance_mm = 1000.0; },
+       "Machine::holder_clearance_mm must be within [0, 50]"},
+      {"a NaN holder radius", [](Machine& m) { m.holder_radius_mm = kNaN; },
+       "Machine::holder_radius_mm must be within (0, 1000]"},
       {"a NaN velocity limit", [](Machine& m) { m.limits[3].max_velocity_per_s = kNaN; },
        "Machine::limits[A].max_velocity_per_s"},
       {"a negative acceleration", [](Machine& m) { m.limits[0].max_accel_per_s2 = -1.0; },

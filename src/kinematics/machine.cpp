@@ -129,6 +129,18 @@ void validate(const Machine& m) {
         "ISO mode has no G93)");
   }
   check_range("gcode.max_feed_ratio", g.max_feed_ratio, 1.0, 100.0, "within [1, 100]");
+  // The machine's [checks] and [holder], which a job uses where its options name none: the
+  // bounds check_options puts on the options themselves.
+  for (const auto& [field, v] : {std::make_pair("shank_clearance_mm", m.shank_clearance_mm),
+                                 std::make_pair("holder_clearance_mm", m.holder_clearance_mm)}) {
+    if (v) check_range(field, *v, 0.0, 50.0, "within [0, 50]");
+  }
+  for (const auto& [field, v] :
+       {std::make_pair("holder_radius_mm", m.holder_radius_mm),
+        std::make_pair("holder_length_mm", m.holder_length_mm),
+        std::make_pair("holder_gauge_length_mm", m.holder_gauge_length_mm)}) {
+    if (v && !(*v > 0.0 && *v <= 1000.0)) refuse(field, "within (0, 1000]", *v);
+  }
   const ProgramTemplate& t = g.program;
   check_range("gcode.program.number", t.number, 1, 9999, "within [1, 9999]");
   check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");

@@ -165,9 +165,9 @@ int run_bench(int argc, char** argv) {
             "%.2f |\n",
             k.name.c_str(), var.name, r.result.ok() ? "" : " (exit 1)", op.points,
             op.after.max_omega_deg_s, op.after.rms_omega_deg_s, op.after.rms_accel_deg_s2,
-            op.after.max_accel_deg_s2, op.after.c_jumps, op.colliding_after, op.max_axis_change_deg,
-            op.feed_after.cycle_time_s, 100.0 * op.feed_after.feed_limited_fraction,
-            op.feed_after.feed_path_mm, r.seconds);
+            op.after.max_accel_deg_s2, op.after.c_jumps, op.colliding_after.value_or(-1),
+            op.max_axis_change_deg, op.feed_after.cycle_time_s,
+            100.0 * op.feed_after.feed_limited_fraction, op.feed_after.feed_path_mm, r.seconds);
       }
     }
   }

@@ -565,9 +565,9 @@ void check_blocks(const GcodeProgram& prog, GcodeDialect dialect, char tilt_lett
       const int line = prog.emitted[k][i];
       if (line == 0) continue;
       const ProgramBlock b = block_at(std::abs(line));
-      CHECK(b.operation == static_cast<int>(k));
-      if (line > 0) CHECK(b.point == static_cast<int>(i));
-      if (line < 0) CHECK(b.point > static_cast<int>(i));  // an arc's chord point: its end is on
+      CHECK(b.operation == k);
+      if (line > 0) CHECK(b.point == i);
+      if (line < 0) CHECK(b.point > i);  // an arc's chord point: its end is on
       CHECK((b.kind == BlockKind::Point || b.kind == BlockKind::JointSafeRapid ||
              b.kind == BlockKind::Arc));
     }

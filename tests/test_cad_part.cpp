@@ -160,7 +160,7 @@ TEST_CASE(
       long swept = 0;
       for (const OperationResult& o : r.operations) {
         CHECK(o.verification.colliding_blocks == 0);
-        swept += o.verification.blocks_swept;
+        swept += o.verification.blocks_swept.value();
       }
       CHECK(swept > 0);
       check_blocks(r.gcode, c.dialect, machine.rotary.tilt_letter());

@@ -450,7 +450,7 @@ TEST_CASE(
   long swept = 0;
   for (const OperationResult& r : clean.operations) {
     CHECK(r.verification.colliding_blocks == 0);
-    swept += r.verification.blocks_swept;
+    swept += r.verification.blocks_swept.value();
   }
   CHECK(swept >= 2);  // each operation's approach to its first point, the second's XY move
 

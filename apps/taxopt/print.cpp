@@ -28,8 +28,9 @@ void print_summary(const JobResult& result) {
               "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "feed time s",
               "cycle time s", "time s");
   for (const auto& r : result.operations) {
-    const auto count = [](long before, long after) {
-      return before < 0 ? std::string("-") : std::to_string(before) + "->" + std::to_string(after);
+    const auto count = [](const std::optional<long>& before, const std::optional<long>& after) {
+      return !before || !after ? std::string("-")
+                               : std::to_string(*before) + "->" + std::to_string(*after);
     };
     const std::string collide = result.collision_checked
                                     ? count(r.colliding_before, r.colliding_after)

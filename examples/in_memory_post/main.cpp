@@ -158,9 +158,11 @@ int main(int argc, char** argv) {
       if (!result.ok()) return 1;
       out.stage(argv[1 + k], result.gcode.text);
       const auto& op = result.operations.front();
-      std::printf("%s (%s): %zu points, peak a %.1f deg/s^2, %ld blocks swept, program %.1f s\n",
+      // With a part every block the writer added was swept against it (empty: not checked).
+      std::printf("%s (%s): %zu points, peak %c %.1f deg/s^2, %ld blocks swept, program %.1f s\n",
                   machines[k].name.c_str(), machines[k].kinematics.c_str(), op.points,
-                  op.after.max_accel_deg_s2, op.verification.blocks_swept, result.gcode.time_s);
+                  machines[k].rotary.tilt_letter(), op.after.max_accel_deg_s2,
+                  op.verification.blocks_swept.value_or(0), result.gcode.time_s);
     }
     out.commit();
     return 0;

@@ -127,27 +127,28 @@ struct Verification {
   /// Collision-free by the part check; empty when no part was given (nothing checked).
   std::optional<bool> collision_free;
   /// Moves between consecutive CL points (sampled as the machine moves them, linear in its
-  /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; -1: not checked.
-  long colliding_moves = -1;
+  /// joints, at most 0.5 deg and 0.1 mm apart) where the tool hits the part; empty: not checked.
+  std::optional<long> colliding_moves;
   /// The blocks of the program the operation's point and move checks do not cover (the
   /// approach, the descent and the XY move to it, index moves, retracts, the end moves: the
   /// blocks taxopt adds), swept against the part with the whole tool in the air as the
-  /// controller runs them, and those where it hits (check_every_block); -1: not checked.
-  long blocks_swept = -1, colliding_blocks = -1;
+  /// controller runs them, and those where it hits (check_every_block); empty: not checked.
+  std::optional<long> blocks_swept, colliding_blocks;
   /// Of those blocks, the ones whose end is not known relative to the part: a retract in
   /// machine coordinates (G53 and the like) and the blocks after it until one gives the tool's
   /// X Y Z in the workpiece again (the table's turn at the retract height, a descent): where
   /// they put the tool depends on the work offset and the tool length, which the program does
-  /// not hold. Not checked; -1 without a part.
-  long blocks_not_checked = -1;
+  /// not hold. Not checked; empty without a part.
+  std::optional<long> blocks_not_checked;
   /// A guaranteed lower bound (true value within a factor sqrt 2 above it) of the least
   /// distance between the part and the tool's bodies that do not cut (shank and holder, past
   /// the flutes) at the written CL points, mm, capped at 10 mm; and the point where it
   /// occurs. Empty without a part or when the flutes reach the holder.
   std::optional<double> min_clearance_mm;
   /// Written CL points where the flutes reach deeper into the part than the part tolerance (a
-  /// gouge of the cutter, told apart from collisions of the shank and holder); -1: not checked.
-  long flute_gouge_points = -1;
+  /// gouge of the cutter, told apart from collisions of the shank and holder); empty: not
+  /// checked.
+  std::optional<long> flute_gouge_points;
   std::size_t min_clearance_index = 0;
   bool within_axis_limits = true;
   /// Every written point's move runs with the tool length offset on, and in tcp mode with the
@@ -305,8 +306,8 @@ struct OperationResult {
   /// Feed schedules of the input axes and of the written G-code.
   FeedSummary feed_before, feed_after;
   /// CL points whose tool intersects the part (shank and holder above the ball; the ball too
-  /// where it is in the air), with the input and with the output axes; -1: not checked.
-  long colliding_before = -1, colliding_after = -1;
+  /// where it is in the air), with the input and with the output axes; empty: not checked.
+  std::optional<long> colliding_before, colliding_after;
   double max_axis_change_deg = 0.0;
   int segments = 0;
   ContactSummary contact;

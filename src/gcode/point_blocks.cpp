@@ -142,7 +142,7 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
     from = to_r;
   }
   std::vector<int> piece_line(static_cast<std::size_t>(pieces));
-  point_ = static_cast<int>(run.end);
+  point_ = run.end;
   for (int k = 1; k <= pieces; ++k) {
     const Piece& pc = planned[static_cast<std::size_t>(k - 1)];
     std::string block = std::string(plane) + " " + sense + " " + xyz_words(pc.to);

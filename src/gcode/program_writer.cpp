@@ -101,8 +101,8 @@ void ProgramWriter::program_start(const std::vector<std::string>& comments) {
 }
 
 void ProgramWriter::program_end() {
-  op_index_ = -1;
-  point_ = -1;
+  op_index_.reset();
+  point_.reset();
   lines(dialect_.retract(retract_z_), BlockKind::Retract);
   // The rotary axes home (a continuous C within one turn of it), with the tool up.
   if (g_.program.end_pose == EndPose::Home && retracts_ && !ops_.empty()) {
@@ -125,15 +125,15 @@ void ProgramWriter::operation(std::size_t k) {
     throw std::invalid_argument("write_gcode: operation '" + op.name + "' has no pose per point");
   }
   op_ = &op;
-  op_index_ = static_cast<int>(k);
-  point_ = -1;
+  op_index_ = k;
+  point_.reset();
   operation_start();
   emitted_.assign(op.points.size(), 0);
   passed_over_.clear();
   index_target_ = 0;
   own_times_ = programmed_block_times_s(op.points, op.poses);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
-    point_ = static_cast<int>(i);
+    point_ = i;
     events_before(i);
     if (arc_at(i)) {
       i = op.arcs[arc_cursor_].end;
@@ -141,7 +141,7 @@ void ProgramWriter::operation(std::size_t k) {
     }
     point(i);
   }
-  point_ = -1;
+  point_.reset();
   events_before(op.points.size());
   prog_.emitted.push_back(std::move(emitted_));
   prog_.passed_over.push_back(std::move(passed_over_));

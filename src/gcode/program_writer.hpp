@@ -180,7 +180,7 @@ class ProgramWriter {
   std::string running_spindle_, running_coolant_;
   // --- the operation being written ---------------------------------------------------------
   const PostedOperation* op_ = nullptr;
-  int op_index_ = -1, point_ = -1;
+  std::optional<std::size_t> op_index_, point_;
   std::string spindle_, coolant_;  ///< the words in force (empty: stopped, off)
   std::size_t next_event_ = 0, arc_cursor_ = 0;
   /// Fanuc's length and TCP words for the operation's (or index move's) first motion block.

@@ -28,8 +28,8 @@ class BlockOwner {
       : blocks_(program.blocks), last_(operations > 0 ? operations - 1 : 0) {}
   std::size_t operator()(int line) const {
     const ProgramBlock* b = at(line);
-    if (!b || b->operation < 0) return line <= first_line() ? 0 : last_;
-    return std::min(static_cast<std::size_t>(b->operation), last_);
+    if (!b || !b->operation) return line <= first_line() ? 0 : last_;
+    return std::min(*b->operation, last_);
   }
   /// What the block is, in words.
   std::string what(int line) const {
@@ -55,7 +55,7 @@ class BlockOwner {
   }
   int first_line() const {
     for (const ProgramBlock& b : blocks_) {
-      if (b.operation >= 0) return b.line;
+      if (b.operation) return b.line;
     }
     return 0;
   }
@@ -327,7 +327,10 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
     res.operations[k].verification.blocks_swept = 0;
     res.operations[k].verification.blocks_not_checked = unknown[k];
   }
-  for (std::size_t j : candidates) ++res.operations[op_of(moves[j].line)].verification.blocks_swept;
+  for (std::size_t j : candidates) {
+    std::optional<long>& count = res.operations[op_of(moves[j].line)].verification.blocks_swept;
+    count = *count + 1;
+  }
   for (std::size_t k = 0; k < posted.size(); ++k) {
     OperationResult& r = res.operations[k];
     r.verification.colliding_blocks = static_cast<long>(hits[k].count);

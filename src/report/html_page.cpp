@@ -155,12 +155,12 @@ std::string summary_table(const JobResult& result) {
       << pair(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, 1) << "</td><td>"
       << pair(r.before.rms_accel_deg_s2, r.after.rms_accel_deg_s2, 1) << "</td><td>"
       << r.before.c_jumps << " &rarr; " << r.after.c_jumps << "</td><td>";
-    if (r.colliding_after < 0) {
+    if (!r.colliding_after) {
       t << "<span class=\"unchecked\">NOT CHECKED</span></td><td>"
            "<span class=\"unchecked\">NOT CHECKED</span>";
     } else {
-      t << r.colliding_before << " &rarr; " << r.colliding_after << "</td><td>"
-        << r.verification.colliding_moves;
+      t << r.colliding_before.value_or(-1) << " &rarr; " << *r.colliding_after << "</td><td>"
+        << r.verification.colliding_moves.value_or(-1);
     }
     t << "</td><td>" << (r.kept_input_points ? std::to_string(r.kept_input_points->total()) : "-")
       << "</td><td>" << pair(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, 2)
@@ -291,9 +291,10 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
     json o;
     o["name"] = r.name;
     o["points"] = r.rows.size();
-    o["checked"] = r.colliding_after >= 0;
-    o["colliding_after"] = r.colliding_after;
-    o["colliding_moves"] = r.verification.colliding_moves;
+    // The page's script reads -1 as "not checked" (with `checked` false).
+    o["checked"] = r.colliding_after.has_value();
+    o["colliding_after"] = r.colliding_after.value_or(-1);
+    o["colliding_moves"] = r.verification.colliding_moves.value_or(-1);
     o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
                   {"omega_after", r.after.max_omega_deg_s},
                   {"accel_before", r.before.max_accel_deg_s2},

@@ -13,7 +13,8 @@
 namespace taxopt {
 namespace {
 
-nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSummary& f) {
+nlohmann::json summary_json(const RotarySummary& s, const std::optional<long>& colliding,
+                            const FeedSummary& f) {
   nlohmann::json j;
   j["max_omega_deg_s"] = s.max_omega_deg_s;
   j["max_accel_deg_s2"] = s.max_accel_deg_s2;
@@ -21,7 +22,7 @@ nlohmann::json summary_json(const RotarySummary& s, long colliding, const FeedSu
   j["rms_omega_deg_s"] = s.rms_omega_deg_s;
   j["c_jumps"] = s.c_jumps;
   // Counted only when a part is given; null says "not checked", not "none".
-  j["colliding_points"] = colliding >= 0 ? nlohmann::json(colliding) : nlohmann::json(nullptr);
+  j["colliding_points"] = colliding ? nlohmann::json(*colliding) : nlohmann::json(nullptr);
   // The feed schedule at the machine's limits (feed_schedule.hpp).
   j["cycle_time_s"] = f.cycle_time_s;
   j["feed_time_s"] = f.feed_time_s;
@@ -296,8 +297,10 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     if (r.verification.min_clearance_mm) {
       v["min_clearance_point"] = r.verification.min_clearance_index;
     }
-    // A count, or null where it was not checked (-1).
-    const auto count = [](long n) { return n >= 0 ? nlohmann::json(n) : nlohmann::json(nullptr); };
+    // A count, or null where it was not checked.
+    const auto count = [](const std::optional<long>& n) {
+      return n ? nlohmann::json(*n) : nlohmann::json(nullptr);
+    };
     v["flute_gouge_points"] = count(r.verification.flute_gouge_points);
     v["within_axis_limits"] = r.verification.within_axis_limits;
     v["tool_length_active"] = r.verification.tool_length_active;
@@ -314,11 +317,11 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     const std::string no_ball = "the tool is no ball-end mill: no contact recovery, not checked";
     const std::string unchecked = result.collision_checked ? no_ball : no_part;
     if (!r.verification.collision_free) why["collision_free"] = unchecked;
-    if (r.verification.colliding_moves < 0) why["colliding_moves"] = unchecked;
-    if (r.verification.blocks_swept < 0) why["blocks_swept"] = unchecked;
-    if (r.verification.colliding_blocks < 0) why["colliding_blocks"] = unchecked;
-    if (r.verification.blocks_not_checked < 0) why["blocks_not_checked"] = unchecked;
-    if (r.verification.flute_gouge_points < 0) why["flute_gouge_points"] = unchecked;
+    if (!r.verification.colliding_moves) why["colliding_moves"] = unchecked;
+    if (!r.verification.blocks_swept) why["blocks_swept"] = unchecked;
+    if (!r.verification.colliding_blocks) why["colliding_blocks"] = unchecked;
+    if (!r.verification.blocks_not_checked) why["blocks_not_checked"] = unchecked;
+    if (!r.verification.flute_gouge_points) why["flute_gouge_points"] = unchecked;
     if (!r.verification.min_clearance_mm) {
       why["min_clearance_mm"] =
           r.verification.collision_free

@@ -105,8 +105,10 @@ enum class BlockKind {
 struct ProgramBlock {
   int line = 0;  ///< 1-based line of GcodeProgram::text
   BlockKind kind = BlockKind::Start;
-  int operation = -1;  ///< index of its operation; -1: the program's start or end
-  int point = -1;      ///< CL point it leads to (an arc's: its last); -1: none
+  /// Index of its operation; empty: the program's start or end.
+  std::optional<std::size_t> operation;
+  /// CL point it leads to (an arc's: its last); empty: none.
+  std::optional<std::size_t> point;
 };
 
 /// Written G-code and where each point went.

@@ -494,10 +494,11 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   CHECK(l.joint_max_accel_per_s2[0] == 0.0);
   CHECK(joint_accel_limit(l, effective_limits(l), 1) == 300.0);
   // Another kinematics is refused by name and line.
-  write_file(dir.path("other.ini"), "[KINS]\nKINEMATICS = maxkins\n");
+  write_file(dir.path("other.ini"), "[KINS]\nKINEMATICS = genhexkins\n");
   const RunResult other = run_taxopt("machine --from-linuxcnc-ini " + dir.path("other.ini"));
   CHECK(other.code == 2);
-  CHECK_THAT(other.err, Catch::Contains("other.ini:2") && Catch::Contains("xyzbc-trt-kins"));
+  CHECK_THAT(other.err, Catch::Contains("other.ini:2") && Catch::Contains("xyzbc-trt-kins") &&
+                            Catch::Contains("5axiskins"));
 }
 
 TEST_CASE(

@@ -236,3 +236,71 @@ TEST_CASE(
     CHECK(worst_axis_deg <= report["options"]["max_deviation_deg"].get<double>() + 1e-3);
   }
 }
+
+namespace {
+
+/// The imported machine's axes, limits and pivot equal the shipped machine file's.
+void check_same_machine(const Machine& imported, const Machine& shipped) {
+  CHECK(imported.kinematics == shipped.kinematics);
+  CHECK(imported.rotary.layout == shipped.rotary.layout);
+  CHECK(imported.rotary.tilt_about == shipped.rotary.tilt_about);
+  CHECK(imported.rotary.tilt.sense == shipped.rotary.tilt.sense);
+  CHECK(imported.rotary.c.sense == shipped.rotary.c.sense);
+  CHECK(imported.rotary.tilt.min_rad == Approx(shipped.rotary.tilt.min_rad));
+  CHECK(imported.rotary.tilt.max_rad == Approx(shipped.rotary.tilt.max_rad));
+  CHECK(imported.rotary.c.min_rad == Approx(shipped.rotary.c.min_rad));
+  CHECK(imported.rotary.c.max_rad == Approx(shipped.rotary.c.max_rad));
+  CHECK(imported.head_pivot_length_mm == shipped.head_pivot_length_mm);
+  for (std::size_t j = 0; j < kJointCount; ++j) {
+    INFO("joint " << j);
+    CHECK(imported.limits[j].max_velocity_per_s == shipped.limits[j].max_velocity_per_s);
+    CHECK(imported.limits[j].max_accel_per_s2 == shipped.limits[j].max_accel_per_s2);
+  }
+  for (std::size_t q = 0; q < 3; ++q) {
+    CHECK(imported.linear_range[q].min_mm == shipped.linear_range[q].min_mm);
+    CHECK(imported.linear_range[q].max_mm == shipped.linear_range[q].max_mm);
+  }
+}
+
+}  // namespace
+
+TEST_CASE(
+    "machine: LinuxCNC's max5 (maxkins) sample imports as the shipped head-table machine and "
+    "its bridge mill (5axiskins) as the head-head one once its pivot length is a number",
+    "[cli][machine][head]") {
+  const std::string samples =
+      "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis/";
+  const std::string machines = std::string(TAXOPT_SOURCE_DIR) + "/data/machines/";
+  TempDir t;
+  // max5kins.ini #INCLUDEs max5_base.inc (its axes, LINEAR_UNITS = 1.0: units per mm) and its
+  // HAL sets maxkins.pivot-length to [MAX]B_PIVOT_LENGTH (0).
+  const RunResult max5 = run_taxopt("machine --from-linuxcnc-ini " + samples +
+                                    "max5/max5kins.ini --out " + t.path("max5.toml"));
+  INFO(max5.err);
+  REQUIRE(max5.code == 0);
+  check_same_machine(read_machine_file(t.path("max5.toml")),
+                     read_machine_file(machines + "linuxcnc-max5.toml"));
+  // B is joint 4 in maxkins (X Y Z A B C), not the 4th letter of COORDINATES = X Y Z B C.
+  CHECK_THAT(read_file(t.path("max5.toml")), Catch::Contains("maxkins"));
+
+  // The bridge mill's pivot length comes from its GUI (5axisgui.pivot_len, summed with the
+  // tool offset in HAL): not a number its files hold, so refused naming the pin and the line.
+  const std::string bridge = samples + "bridgemill/";
+  const RunResult refused = run_taxopt("machine --from-linuxcnc-ini " + bridge + "5axis.ini");
+  CHECK(refused.code == 2);
+  CHECK_THAT(refused.err, Catch::Contains("5axis.ini:98") &&
+                              Catch::Contains("5axiskins.pivot-length is not set"));
+  // The same configuration with a shop's HAL in place of the GUI's, setting the pin: the
+  // shipped machine.
+  write_file(t.path("5axis_postgui.hal"), read_file(bridge + "5axis_postgui.hal"));
+  write_file(t.path("shop.hal"), "setp 5axiskins.pivot-length 250\n");
+  const std::string ini = replaced_once(read_file(bridge + "5axis.ini"), "HALFILE = 5axisgui.hal\n",
+                                        "HALFILE = shop.hal\n");
+  write_file(t.path("bridge.ini"), ini);
+  const RunResult set = run_taxopt("machine --from-linuxcnc-ini " + t.path("bridge.ini") +
+                                   " --out " + t.path("bridge.toml"));
+  INFO(set.err);
+  REQUIRE(set.code == 0);
+  check_same_machine(read_machine_file(t.path("bridge.toml")),
+                     read_machine_file(machines + "linuxcnc-5axis-bridgemill.toml"));
+}

@@ -19,13 +19,15 @@ struct ImportedMachine {
   std::vector<std::string> files_read;
 };
 
-/// Reads a LinuxCNC INI of an xyzac-trt-kins machine: [KINS] KINEMATICS, [TRAJ] LINEAR_UNITS,
-/// [AXIS_X|Y|Z|A|C] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION, and the kinematics'
-/// pins (x-rot-point, y-rot-point, z-rot-point, y-offset, z-offset) set by `setp` or by
-/// `sets` on the signal a `net` joins them to, in the [HAL] HALCMD lines and in the HALFILEs
-/// beside the INI. A is the kinematics' A (sense -1, as C); the retract goes to Z's
-/// MAX_LIMIT. @throws InputError naming the file and line (another kinematics, a missing
-/// axis, a value that is no number).
+/// Reads a LinuxCNC INI (and the files it #INCLUDEs) of a machine whose [KINS] KINEMATICS is
+/// xyzac-trt-kins or xyzbc-trt-kins (table-table: A or B, and C, sense -1), maxkins
+/// (head-table B/C) or 5axiskins (head-head B/C; both B sense -1, C +1): [TRAJ] LINEAR_UNITS,
+/// [AXIS_*] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION within the axis's joint's,
+/// and the kinematics' pins (the table's x-/y-/z-rot-point and offsets; a head's
+/// pivot-length, which must be set) by `setp`, or `sets` on the signal a `net` joins them to,
+/// in the [HAL] HALCMD lines and the HALFILEs beside the INI ([SECTION]KEY substituted). The
+/// retract goes to Z's MAX_LIMIT. @throws InputError naming the file and line (another
+/// kinematics, a missing axis, a value that is no number, a head's pivot length not set).
 TAXOPT_API ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path);
 
 }  // namespace taxopt

@@ -37,6 +37,28 @@ class MachineParser {
     check_keys(root, "",
                {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder", "defaults"});
     if (auto* n = root.get("name")) m.name = string_of(*n, "name");
+    parse_kinematics_and_axes(root, m);
+    parse_checks_holder_defaults(root, m);
+    parse_pivot(root, m);
+    if (const toml::table* g = table_of(root, "gcode", false)) {
+      parse_gcode_modes(root, *g, m);
+      parse_program_identity(*g, m);
+      parse_program_tolerances(*g, m);
+      parse_program_end(*g, m);
+      parse_template_blocks(*g, m);
+    } else if (m.gcode.program.end_pose == EndPose::Home &&
+               (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
+      // The default end pose as the key would be checked: no program ends outside the ranges.
+      fail(0, std::string("gcode.end_pose \"home\" (the default) turns ") + m.rotary.tilt_letter() +
+                  " and C to 0, outside this machine's axis ranges; give [gcode] end_pose = "
+                  "\"none\" (and home them in the footer)");
+    }
+    return m;
+  }
+
+ private:
+  /// The kinematics, the rotary axes (range, sense, limits) and the linear ones.
+  void parse_kinematics_and_axes(const toml::table& root, Machine& m) {
     const toml::node* kin = root.get("kinematics");
     if (!kin) fail(0, "missing key 'kinematics' (\"ac-table-table\" or \"bc-table-table\")");
     m.kinematics = string_of(*kin, "kinematics");
@@ -44,8 +66,7 @@ class MachineParser {
       fail(line_of(*kin),
            "kinematics '" + m.kinematics + "' is not supported (" + kKinematicsNames + ")");
     }
-    const bool head = m.rotary.layout != RotaryLayout::TableTable;
-    // The tilt axis: A about X, B about Y (ac_machine.hpp).
+    // The tilt axis: A about X, B about Y (machine_kinematics.hpp).
     const std::string tilt(1, m.rotary.tilt_letter());
     const toml::table* axes = table_of(root, "axes", true);
     check_keys(*axes, "axes", {"X", "Y", "Z", tilt, "C"});
@@ -76,16 +97,22 @@ class MachineParser {
         }
       }
     }
-    const auto positive = [&](const toml::table& t, const std::string& where,
-                              const std::string& key, bool zero_ok) -> std::optional<double> {
-      const toml::node* n = t.get(key);
-      if (!n) return std::nullopt;
-      const double v = number_of(*n, where + "." + key);
-      if (!(zero_ok ? v >= 0.0 : v > 0.0)) {
-        fail(line_of(*n), where + "." + key + (zero_ok ? " must be >= 0" : " must be positive"));
-      }
-      return v;
-    };
+  }
+
+  /// A number >= 0 (or > 0) under `key`, where given.
+  std::optional<double> positive(const toml::table& t, const std::string& where,
+                                 const std::string& key, bool zero_ok) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    const double v = number_of(*n, where + "." + key);
+    if (!(zero_ok ? v >= 0.0 : v > 0.0)) {
+      fail(line_of(*n), where + "." + key + (zero_ok ? " must be >= 0" : " must be positive"));
+    }
+    return v;
+  }
+
+  /// [checks], [holder] and [defaults].
+  void parse_checks_holder_defaults(const toml::table& root, Machine& m) {
     if (const toml::table* c = table_of(root, "checks", false)) {
       check_keys(*c, "checks", {"shank_clearance_mm", "holder_clearance_mm"});
       m.shank_clearance_mm = positive(*c, "checks", "shank_clearance_mm", true);
@@ -113,6 +140,11 @@ class MachineParser {
         m.default_tool_number = whole(*n, "defaults.tool_number", 1, 99999, "");
       }
     }
+  }
+
+  /// [pivot]: a head's pivot length, or where a table's rotary axes lie.
+  void parse_pivot(const toml::table& root, Machine& m) {
+    const bool head = m.rotary.layout != RotaryLayout::TableTable;
     if (const toml::table* pivot = table_of(root, "pivot", false); pivot && head) {
       // A head: its pivot length (tilt axis to the spindle's gauge line), and for a head-table
       // machine where C turns the table.
@@ -138,215 +170,213 @@ class MachineParser {
       m.rotary.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
                                        length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     }
-    if (const toml::table* g = table_of(root, "gcode", false)) {
-      check_keys(*g, "gcode",
-                 {"dialect",
-                  "mode",
-                  "feed_mode",
-                  "feed_reference",
-                  "max_feed_ratio",
-                  "decimals",
-                  "feed_decimals",
-                  "program_name",
-                  "program_number",
-                  "work_offset",
-                  "coolant",
-                  "header",
-                  "footer",
-                  "tool_change",
-                  "tcp_on",
-                  "tcp_off",
-                  "safe_retract",
-                  "retract_z_mm",
-                  "linearise_tolerance_mm",
-                  "blend_tolerance_mm",
-                  "approach_clearance_mm",
-                  "index_threshold_deg",
-                  "end_pose",
-                  "end_park_xy_mm"});
-      choose(*g, "gcode", "dialect",
-             {{"linuxcnc", GcodeDialect::LinuxCNC},
-              {"fanuc", GcodeDialect::Fanuc},
-              {"siemens", GcodeDialect::Siemens},
-              {"heidenhain", GcodeDialect::Heidenhain},
-              {"haas", GcodeDialect::Haas}},
-             m.gcode.dialect);
-      choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
-             m.gcode.mode);
-      if (m.gcode.mode == GcodeMode::Machine && head) {
-        // In machine mode every block would carry the tip swung about the pivot by the pivot
-        // length plus this tool's length (maxkins, 5axiskins): taxopt writes head machines
-        // with the controller's TCP, which takes the tool length from its own table.
-        fail(line_of(*g->get("mode")),
-             "gcode.mode \"machine\" on a " + m.kinematics +
-                 " machine is not written (each block would depend on the tool's length about "
-                 "the head's pivot): use mode \"tcp\" (the controller's G43.4, TRAORI, M128 or "
-                 "LinuxCNC's head kinematics)");
-      }
-      if (m.gcode.mode == GcodeMode::Machine && !table_of(root, "pivot", false)) {
-        // Machine mode writes joint positions about the rotary axes' pivots: a file without
-        // them would post every point about a pivot at 0, silently (a machinist's review,
-        // tests/test_program.cpp).
-        fail(
-            line_of(*g->get("mode")),
-            std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
-                (m.rotary.tilt_about == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
-                ", c_axis_x, c_axis_y: where the rotary axes lie in machine coordinates, from "
-                "the machine's kinematics); give it, even as zeros, or use mode \"tcp\"");
-      }
-      choose(
-          *g, "gcode", "feed_mode",
-          {{"units-per-minute", FeedMode::UnitsPerMinute}, {"inverse-time", FeedMode::InverseTime}},
-          m.gcode.feed_mode);
-      choose(*g, "gcode", "feed_reference",
-             {{"cutter-path", FeedReference::CutterPath}, {"tip", FeedReference::Tip}},
-             m.gcode.feed_reference);
-      if (m.gcode.dialect == GcodeDialect::Heidenhain &&
-          m.gcode.feed_mode == FeedMode::InverseTime) {
-        fail(line_of(*g->get("feed_mode")),
-             "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
-             "mode has no G93); use \"units-per-minute\"");
-      }
-      if (auto* n = g->get("max_feed_ratio")) {
-        m.gcode.max_feed_ratio = number_of(*n, "gcode.max_feed_ratio");
-        if (!(m.gcode.max_feed_ratio >= 1.0 && m.gcode.max_feed_ratio <= 100.0)) {
-          fail(line_of(*n),
-               "gcode.max_feed_ratio must be within [1, 100] (times the programmed "
-               "feed)");
-        }
-      }
-      const std::string dialect = to_string(m.gcode.dialect);
-      if (auto* n = g->get("decimals")) {
-        const int most = max_decimals(m.gcode.dialect);
-        m.gcode.decimals =
-            whole(*n, "gcode.decimals", 0, most, " (the most " + dialect + " takes)");
-      }
-      if (auto* n = g->get("feed_decimals")) {
-        const int most = max_feed_decimals(m.gcode.dialect);
-        m.gcode.feed_decimals =
-            whole(*n, "gcode.feed_decimals", 0, most, " (the most " + dialect + " takes)");
-      }
-      ProgramTemplate& t = m.gcode.program;
-      if (auto* n = g->get("program_name")) {
-        t.name = string_of(*n, "gcode.program_name");
-        // A TNC program name is a file name; the others go into a comment.
-        for (char ch : t.name) {
-          if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-')) {
-            fail(line_of(*n), "gcode.program_name may hold letters, digits, '_' and '-' only");
-          }
-        }
-        if (t.name.empty() || t.name.size() > 24) {
-          fail(line_of(*n), "gcode.program_name must have 1 to 24 characters");
-        }
-      }
-      if (auto* n = g->get("program_number")) {
-        t.number = whole(*n, "gcode.program_number", 1, 9999, " (Fanuc's O1 to O9999)");
-      }
-      if (auto* n = g->get("work_offset")) {
-        t.work_offset = string_of(*n, "gcode.work_offset");
-        if (t.work_offset.empty()) fail(line_of(*n), "gcode.work_offset is empty (\"none\"?)");
-        if (t.work_offset != "none") {
-          check_block(*n, t.work_offset, "gcode.work_offset", m.gcode.dialect);
-        }
-      }
-      choose(*g, "gcode", "coolant",
-             {{"none", Coolant::None}, {"flood", Coolant::Flood}, {"mist", Coolant::Mist}},
-             t.coolant);
-      choose(*g, "gcode", "safe_retract",
-             {{"machine-z", SafeRetract::MachineZ}, {"none", SafeRetract::None}}, t.retract);
-      t.retract_z_mm = length_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
-      if (auto* n = g->get("linearise_tolerance_mm")) {
-        t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
-        if (t.linearise_tolerance_mm < 0.0) {
-          fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
-        }
-      }
-      if (auto* n = g->get("blend_tolerance_mm")) {
-        t.blend_tolerance_mm = number_of(*n, "gcode.blend_tolerance_mm");
-        if (!(t.blend_tolerance_mm >= 0.0 && t.blend_tolerance_mm <= 1.0)) {
-          fail(line_of(*n), "gcode.blend_tolerance_mm must be within [0, 1] mm (0: exact path)");
-        }
-      }
-      if (auto* n = g->get("approach_clearance_mm")) {
-        t.approach_clearance_mm = number_of(*n, "gcode.approach_clearance_mm");
-        if (!(t.approach_clearance_mm >= 0.0 && t.approach_clearance_mm <= 1000.0)) {
-          fail(line_of(*n), "gcode.approach_clearance_mm must be within [0, 1000] mm");
-        }
-      }
-      if (auto* n = g->get("index_threshold_deg")) {
-        t.index_threshold_deg = number_of(*n, "gcode.index_threshold_deg");
-        if (!(t.index_threshold_deg >= 0.0 && t.index_threshold_deg <= 360.0)) {
-          fail(line_of(*n), "gcode.index_threshold_deg must be within [0, 360] deg");
-        }
-      }
-      choose(*g, "gcode", "end_pose", {{"home", EndPose::Home}, {"none", EndPose::None}},
-             t.end_pose);
-      if (t.end_pose == EndPose::Home &&
-          (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
-        fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.rotary.tilt_letter() +
-                              " and C to 0, outside this machine's axis ranges; use \"none\" "
-                              "(and home them in the footer)");
-      }
-      if (auto* n = g->get("end_park_xy_mm")) {
-        const auto* list = n->as_array();
-        if (!list || list->size() != 2) {
-          fail(line_of(*n), "gcode.end_park_xy_mm must be [x, y] in machine coordinates, mm");
-        }
-        std::array<double, 2> xy{};
-        for (std::size_t q = 0; q < 2; ++q) {
-          const std::string what = std::string("gcode.end_park_xy_mm's ") + "XY"[q];
-          xy[q] = number_of(*list->get(q), what);
-          if (!m.linear_range[q].contains(xy[q])) {
-            fail(line_of(*n), what + " lies outside the machine's travel ([axes." + "XY"[q] +
-                                  "] min_mm, max_mm)");
-          }
-        }
-        if (t.retract == SafeRetract::None) {
-          fail(line_of(*n),
-               "gcode.end_park_xy_mm needs the safe retract (safe_retract "
-               "\"machine-z\"): the table moves under the tool only with it up");
-        }
-        t.end_park_xy_mm = xy;
-      }
-      const std::pair<const char*, std::vector<std::string>*> blocks[] = {
-          {"header", &t.header},
-          {"footer", &t.footer},
-          {"tool_change", &t.tool_change},
-          {"tcp_on", &t.tcp_on},
-          {"tcp_off", &t.tcp_off}};
-      for (const auto& [key, out] : blocks) {
-        const toml::node* n = g->get(key);
-        if (!n) continue;
-        const std::string what = std::string("gcode.") + key;
-        if (!n->is_array()) fail(line_of(*n), what + " must be a list of blocks (strings)");
-        if (std::string(key) == "tool_change") {
-          // The program is checked for the tool it calls: the template must call ours.
-          bool calls = false;
-          for (const toml::node& e : *n->as_array()) {
-            calls = calls || (e.is_string() &&
-                              e.value<std::string>().value().find("{tool}") != std::string::npos);
-          }
-          if (!calls) {
-            fail(line_of(*n), what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
-          }
-        }
-        for (const toml::node& e : *n->as_array()) {
-          const std::string b = string_of(e, what + " entries");
-          check_block(e, b, what, m.gcode.dialect, std::string(key) == "footer");
-          out->push_back(b);
-        }
-      }
-    } else if (m.gcode.program.end_pose == EndPose::Home &&
-               (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
-      // The default end pose as the key would be checked: no program ends outside the ranges.
-      fail(0, std::string("gcode.end_pose \"home\" (the default) turns ") + m.rotary.tilt_letter() +
-                  " and C to 0, outside this machine's axis ranges; give [gcode] end_pose = "
-                  "\"none\" (and home them in the footer)");
-    }
-    return m;
   }
 
- private:
+  /// [gcode]'s dialect, mode, feed words and decimals.
+  void parse_gcode_modes(const toml::table& root, const toml::table& gt, Machine& m) {
+    const toml::table* g = &gt;
+    const bool head = m.rotary.layout != RotaryLayout::TableTable;
+    // clang-format off
+    check_keys(*g, "gcode",
+               {"dialect", "mode", "feed_mode", "feed_reference", "max_feed_ratio", "decimals",
+                "feed_decimals", "program_name", "program_number", "work_offset", "coolant",
+                "header", "footer", "tool_change", "tcp_on", "tcp_off", "safe_retract",
+                "retract_z_mm", "linearise_tolerance_mm", "blend_tolerance_mm",
+                "approach_clearance_mm", "index_threshold_deg", "end_pose", "end_park_xy_mm"});
+    // clang-format on
+    choose(*g, "gcode", "dialect",
+           {{"linuxcnc", GcodeDialect::LinuxCNC},
+            {"fanuc", GcodeDialect::Fanuc},
+            {"siemens", GcodeDialect::Siemens},
+            {"heidenhain", GcodeDialect::Heidenhain},
+            {"haas", GcodeDialect::Haas}},
+           m.gcode.dialect);
+    choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
+           m.gcode.mode);
+    if (m.gcode.mode == GcodeMode::Machine && head) {
+      // In machine mode every block would carry the tip swung about the pivot by the pivot
+      // length plus this tool's length (maxkins, 5axiskins): taxopt writes head machines
+      // with the controller's TCP, which takes the tool length from its own table.
+      fail(line_of(*g->get("mode")),
+           "gcode.mode \"machine\" on a " + m.kinematics +
+               " machine is not written (each block would depend on the tool's length about "
+               "the head's pivot): use mode \"tcp\" (the controller's G43.4, TRAORI, M128 or "
+               "LinuxCNC's head kinematics)");
+    }
+    if (m.gcode.mode == GcodeMode::Machine && !table_of(root, "pivot", false)) {
+      // Machine mode writes joint positions about the rotary axes' pivots: a file without
+      // them would post every point about a pivot at 0, silently (a machinist's review,
+      // tests/test_program.cpp).
+      fail(line_of(*g->get("mode")),
+           std::string("gcode.mode \"machine\" needs the machine's [pivot] (") +
+               (m.rotary.tilt_about == TiltAxis::Y ? "b_axis_x, b_axis_z" : "a_axis_y, a_axis_z") +
+               ", c_axis_x, c_axis_y: where the rotary axes lie in machine coordinates, from "
+               "the machine's kinematics); give it, even as zeros, or use mode \"tcp\"");
+    }
+    choose(
+        *g, "gcode", "feed_mode",
+        {{"units-per-minute", FeedMode::UnitsPerMinute}, {"inverse-time", FeedMode::InverseTime}},
+        m.gcode.feed_mode);
+    choose(*g, "gcode", "feed_reference",
+           {{"cutter-path", FeedReference::CutterPath}, {"tip", FeedReference::Tip}},
+           m.gcode.feed_reference);
+    if (m.gcode.dialect == GcodeDialect::Heidenhain && m.gcode.feed_mode == FeedMode::InverseTime) {
+      fail(line_of(*g->get("feed_mode")),
+           "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
+           "mode has no G93); use \"units-per-minute\"");
+    }
+    if (auto* n = g->get("max_feed_ratio")) {
+      m.gcode.max_feed_ratio = number_of(*n, "gcode.max_feed_ratio");
+      if (!(m.gcode.max_feed_ratio >= 1.0 && m.gcode.max_feed_ratio <= 100.0)) {
+        fail(line_of(*n),
+             "gcode.max_feed_ratio must be within [1, 100] (times the programmed "
+             "feed)");
+      }
+    }
+    const std::string dialect = to_string(m.gcode.dialect);
+    if (auto* n = g->get("decimals")) {
+      const int most = max_decimals(m.gcode.dialect);
+      m.gcode.decimals = whole(*n, "gcode.decimals", 0, most, " (the most " + dialect + " takes)");
+    }
+    if (auto* n = g->get("feed_decimals")) {
+      const int most = max_feed_decimals(m.gcode.dialect);
+      m.gcode.feed_decimals =
+          whole(*n, "gcode.feed_decimals", 0, most, " (the most " + dialect + " takes)");
+    }
+  }
+
+  /// The program's name, number, work offset, coolant and retract.
+  void parse_program_identity(const toml::table& gt, Machine& m) {
+    const toml::table* g = &gt;
+    ProgramTemplate& t = m.gcode.program;
+    if (auto* n = g->get("program_name")) {
+      t.name = string_of(*n, "gcode.program_name");
+      // A TNC program name is a file name; the others go into a comment.
+      for (char ch : t.name) {
+        if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-')) {
+          fail(line_of(*n), "gcode.program_name may hold letters, digits, '_' and '-' only");
+        }
+      }
+      if (t.name.empty() || t.name.size() > 24) {
+        fail(line_of(*n), "gcode.program_name must have 1 to 24 characters");
+      }
+    }
+    if (auto* n = g->get("program_number")) {
+      t.number = whole(*n, "gcode.program_number", 1, 9999, " (Fanuc's O1 to O9999)");
+    }
+    if (auto* n = g->get("work_offset")) {
+      t.work_offset = string_of(*n, "gcode.work_offset");
+      if (t.work_offset.empty()) fail(line_of(*n), "gcode.work_offset is empty (\"none\"?)");
+      if (t.work_offset != "none") {
+        check_block(*n, t.work_offset, "gcode.work_offset", m.gcode.dialect);
+      }
+    }
+    choose(*g, "gcode", "coolant",
+           {{"none", Coolant::None}, {"flood", Coolant::Flood}, {"mist", Coolant::Mist}},
+           t.coolant);
+    choose(*g, "gcode", "safe_retract",
+           {{"machine-z", SafeRetract::MachineZ}, {"none", SafeRetract::None}}, t.retract);
+  }
+
+  /// The program's retract height and tolerances.
+  void parse_program_tolerances(const toml::table& gt, Machine& m) {
+    const toml::table* g = &gt;
+    ProgramTemplate& t = m.gcode.program;
+    t.retract_z_mm = length_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
+    if (auto* n = g->get("linearise_tolerance_mm")) {
+      t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
+      if (t.linearise_tolerance_mm < 0.0) {
+        fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
+      }
+    }
+    if (auto* n = g->get("blend_tolerance_mm")) {
+      t.blend_tolerance_mm = number_of(*n, "gcode.blend_tolerance_mm");
+      if (!(t.blend_tolerance_mm >= 0.0 && t.blend_tolerance_mm <= 1.0)) {
+        fail(line_of(*n), "gcode.blend_tolerance_mm must be within [0, 1] mm (0: exact path)");
+      }
+    }
+    if (auto* n = g->get("approach_clearance_mm")) {
+      t.approach_clearance_mm = number_of(*n, "gcode.approach_clearance_mm");
+      if (!(t.approach_clearance_mm >= 0.0 && t.approach_clearance_mm <= 1000.0)) {
+        fail(line_of(*n), "gcode.approach_clearance_mm must be within [0, 1000] mm");
+      }
+    }
+    if (auto* n = g->get("index_threshold_deg")) {
+      t.index_threshold_deg = number_of(*n, "gcode.index_threshold_deg");
+      if (!(t.index_threshold_deg >= 0.0 && t.index_threshold_deg <= 360.0)) {
+        fail(line_of(*n), "gcode.index_threshold_deg must be within [0, 360] deg");
+      }
+    }
+  }
+
+  /// How the program ends: the rotaries' home turn and the park.
+  void parse_program_end(const toml::table& gt, Machine& m) {
+    const toml::table* g = &gt;
+    ProgramTemplate& t = m.gcode.program;
+    choose(*g, "gcode", "end_pose", {{"home", EndPose::Home}, {"none", EndPose::None}}, t.end_pose);
+    if (t.end_pose == EndPose::Home &&
+        (!m.rotary.tilt.contains(0.0) || !m.rotary.c.contains(0.0))) {
+      fail(line_of(*g), std::string("gcode.end_pose \"home\" turns ") + m.rotary.tilt_letter() +
+                            " and C to 0, outside this machine's axis ranges; use \"none\" "
+                            "(and home them in the footer)");
+    }
+    if (auto* n = g->get("end_park_xy_mm")) {
+      const auto* list = n->as_array();
+      if (!list || list->size() != 2) {
+        fail(line_of(*n), "gcode.end_park_xy_mm must be [x, y] in machine coordinates, mm");
+      }
+      std::array<double, 2> xy{};
+      for (std::size_t q = 0; q < 2; ++q) {
+        const std::string what = std::string("gcode.end_park_xy_mm's ") + "XY"[q];
+        xy[q] = number_of(*list->get(q), what);
+        if (!m.linear_range[q].contains(xy[q])) {
+          fail(line_of(*n),
+               what + " lies outside the machine's travel ([axes." + "XY"[q] + "] min_mm, max_mm)");
+        }
+      }
+      if (t.retract == SafeRetract::None) {
+        fail(line_of(*n),
+             "gcode.end_park_xy_mm needs the safe retract (safe_retract "
+             "\"machine-z\"): the table moves under the tool only with it up");
+      }
+      t.end_park_xy_mm = xy;
+    }
+  }
+
+  /// The program template's blocks: header, footer, tool change, TCP on and off.
+  void parse_template_blocks(const toml::table& gt, Machine& m) {
+    const toml::table* g = &gt;
+    ProgramTemplate& t = m.gcode.program;
+    const std::pair<const char*, std::vector<std::string>*> blocks[] = {
+        {"header", &t.header},
+        {"footer", &t.footer},
+        {"tool_change", &t.tool_change},
+        {"tcp_on", &t.tcp_on},
+        {"tcp_off", &t.tcp_off}};
+    for (const auto& [key, out] : blocks) {
+      const toml::node* n = g->get(key);
+      if (!n) continue;
+      const std::string what = std::string("gcode.") + key;
+      if (!n->is_array()) fail(line_of(*n), what + " must be a list of blocks (strings)");
+      if (std::string(key) == "tool_change") {
+        // The program is checked for the tool it calls: the template must call ours.
+        bool calls = false;
+        for (const toml::node& e : *n->as_array()) {
+          calls = calls || (e.is_string() &&
+                            e.value<std::string>().value().find("{tool}") != std::string::npos);
+        }
+        if (!calls) {
+          fail(line_of(*n), what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
+        }
+      }
+      for (const toml::node& e : *n->as_array()) {
+        const std::string b = string_of(e, what + " entries");
+        check_block(e, b, what, m.gcode.dialect, std::string(key) == "footer");
+        out->push_back(b);
+      }
+    }
+  }
+
   [[noreturn]] void fail(int line, const std::string& what) const {
     throw InputError(source_, line, what);
   }

@@ -94,20 +94,9 @@ nlohmann::json tool_json(const Tool& tool, const JobOptions& options) {
   return t;
 }
 
-}  // namespace
-
-std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                        const JobOptions& given, const RunInfo& run) {
-  // What the run applied: every default made explicit (the cone without a part, the machine
-  // file's holder and clearances).
-  const JobOptions options = resolved_options(given, machine);
+/// The run, to reproduce it: command line, time, the machine file by digest, the part.
+nlohmann::json run_json(const RunInfo& run) {
   nlohmann::json j;
-  j["taxopt_version"] = kVersion;
-  j["method"] = to_string(options.method);
-  j["input"] = toolpath.source;
-  j["machine"] = machine.name;
-  j["kinematics"] = machine.kinematics;
-  // The run, to reproduce it: command line, time, the machine file by digest, the options.
   j["run"] = {
       {"command_line", run.command_line},
       {"started_utc", run.started_utc},
@@ -118,6 +107,12 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       {"part_file",
        run.part_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.part_file)}};
   if (run.machine_file.empty()) j["run"]["null_reasons"] = {{"machine_file", "built-in machine"}};
+  return j["run"];
+}
+
+/// The options the run applied and the machine's G-code settings.
+nlohmann::json options_json(const JobOptions& options, const Machine& machine) {
+  nlohmann::json j;
   j["options"] = {
       {"method", to_string(options.method)},
       {"max_deviation_deg", options.paper.max_deviation_deg},
@@ -151,8 +146,11 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
         {"retract_z_mm", machine.gcode.program.retract_z_mm},
         {"linearise_tolerance_mm", machine.gcode.program.linearise_tolerance_mm},
         {"blend_tolerance_mm", machine.gcode.program.blend_tolerance_mm}}}};
-  j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
-  j["ok"] = result.ok();
+  return j["options"];
+}
+
+/// Every finding with its operation, CL line and G-code line.
+nlohmann::json findings_json(const JobResult& result, const Toolpath& toolpath) {
   nlohmann::json findings = nlohmann::json::array();
   for (const Finding& f : result.findings) {
     nlohmann::json one = {
@@ -164,17 +162,12 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     one["gcode_line"] = f.gcode_line ? nlohmann::json(*f.gcode_line) : nlohmann::json();
     findings.push_back(one);
   }
-  j["findings"] = findings;
-  j["problems"] = result.problems;
-  j["warnings"] = result.warnings;
-  j["safety_warnings"] = result.safety_warnings;
-  j["collision_checked"] = result.collision_checked;
-  // How the bodies are judged (docs/cli.md "What is checked").
-  j["clearances_mm"] = {{"shank", *options.shank_clearance_mm},
-                        {"holder", *options.holder_clearance_mm},
-                        {"holder_modelled", options.tool.holder_radius_mm.has_value()}};
-  // How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
-  // and the motion that splines, drilling cycles and MSYS frames contributed.
+  return findings;
+}
+
+/// How the CL file was read (docs/cl-files.md): its CAM system, the sense of its arcs and why,
+/// and the motion that splines, drilling cycles and MSYS frames contributed.
+nlohmann::json cl_input_json(const Toolpath& toolpath) {
   const ClReadSummary& rd = toolpath.reading;
   nlohmann::json cl;
   cl["dialect"] = to_string(rd.dialect);
@@ -194,7 +187,12 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   cl["skipped_records"] = toolpath.skipped_records;
   cl["skipped_by_option"] = toolpath.skipped_by_option;
   cl["notices"] = toolpath.notices;
-  j["cl_input"] = cl;
+  return cl;
+}
+
+/// The program: what was written, its time, LinuxCNC's joint peaks on its rapids.
+nlohmann::json gcode_json(const JobResult& result) {
+  nlohmann::json j;
   j["gcode"] = {
       {"arcs_kept", result.gcode.arcs_kept},
       {"arcs_chorded", result.gcode.arcs_chorded},
@@ -233,132 +231,143 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
     j["gcode"]["null_reasons"]["tcp_axis_accel_scale"] =
         "no joint passes its acceleration limit in tcp_joint_peaks";
   }
-  nlohmann::json ops = nlohmann::json::array();
-  for (const auto& r : result.operations) {
-    nlohmann::json o;
-    o["name"] = r.name;
-    o["points"] = r.points;
-    o["feed_mm_min"] = r.feed_mm_min;
-    o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
-    o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
-    const auto paper_json = [](const RotarySummary& p) {
-      return nlohmann::json{{"max_omega_deg_s", p.max_omega_deg_s},
-                            {"max_accel_deg_s2", p.max_accel_deg_s2},
-                            {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
-    };
-    o["paper_metric"] = {{"before", paper_json(r.paper_before)},
-                         {"after", paper_json(r.paper_after)},
-                         {"facets",
-                          {{"before", paper_json(r.paper_before_facets)},
-                           {"after", paper_json(r.paper_after_facets)}}},
-                         {"claimed", r.paper_gain_claimed},
-                         {"what",
-                          "eq. 16-18 over the designed surface's contact-point arc lengths "
-                          "at the metric feed (the paper's comparison; before/after are "
-                          "the program's own timing); `facets` over the mesh's own contact "
-                          "points; `claimed`: its peak a falls under both"}};
-    o["feed_schedule_written"] = options.feed_schedule;
-    if (r.feed_words) {
-      o["feed_words"] = {{"blocks", r.feed_words->blocks},
-                         {"min_written_over_programmed", r.feed_words->min_ratio},
-                         {"max_written_over_programmed", r.feed_words->max_ratio},
-                         {"max_feed_ratio", r.feed_words->max_feed_ratio},
-                         {"lengthened_blocks", r.feed_words->lengthened_blocks}};
-    } else {
-      o["feed_words"] = nullptr;
-    }
-    const std::size_t k = static_cast<std::size_t>(&r - result.operations.data());
-    if (k < toolpath.operations.size()) o["tool"] = tool_json(toolpath.operations[k].tool, options);
-    o["max_axis_change_deg"] = r.max_axis_change_deg;
-    o["segments"] = r.segments;
-    if (r.contact.recovered) {
-      o["contact"] = {{"touching_points", r.contact.touching},
-                      {"points_in_air", r.contact.in_air},
-                      {"local_gouge_points", r.contact.local_gouges},
-                      {"max_gap_mm", r.contact.max_abs_gap_mm},
-                      {"tolerance_mm", r.contact.tolerance_mm},
-                      {"edge_points", r.contact.edge_points},
-                      {"corner_points", r.contact.corner_points},
-                      {"max_normal_uncertainty_deg", r.contact.max_normal_uncertainty_deg}};
-      if (k < toolpath.operations.size()) {
-        const auto& band = toolpath.operations[k].cam_tolerance_mm;
-        o["contact"]["cam_tolerance_mm"] = band ? nlohmann::json(*band) : nlohmann::json(nullptr);
-      }
-    }
-    nlohmann::json v;
-    v["roundtrip_max_mm"] = r.verification.roundtrip_max_mm;
-    v["roundtrip_max_deg"] = r.verification.roundtrip_max_deg;
-    v["collision_free"] = r.verification.collision_free
-                              ? nlohmann::json(*r.verification.collision_free)
+  return j["gcode"];
+}
+
+/// What the run proved about an operation's program, and why a value is null.
+nlohmann::json verification_json(const OperationResult& r, const JobResult& result,
+                                 const JobOptions& options) {
+  nlohmann::json v;
+  v["roundtrip_max_mm"] = r.verification.roundtrip_max_mm;
+  v["roundtrip_max_deg"] = r.verification.roundtrip_max_deg;
+  v["collision_free"] = r.verification.collision_free
+                            ? nlohmann::json(*r.verification.collision_free)
+                            : nlohmann::json(nullptr);
+  v["min_clearance_mm"] = r.verification.min_clearance_mm
+                              ? nlohmann::json(*r.verification.min_clearance_mm)
                               : nlohmann::json(nullptr);
-    v["min_clearance_mm"] = r.verification.min_clearance_mm
-                                ? nlohmann::json(*r.verification.min_clearance_mm)
-                                : nlohmann::json(nullptr);
-    if (r.verification.min_clearance_mm) {
-      v["min_clearance_point"] = r.verification.min_clearance_index;
-    }
-    // A count, or null where it was not checked.
-    const auto count = [](const std::optional<long>& n) {
-      return n ? nlohmann::json(*n) : nlohmann::json(nullptr);
-    };
-    v["flute_gouge_points"] = count(r.verification.flute_gouge_points);
-    v["within_axis_limits"] = r.verification.within_axis_limits;
-    v["tool_length_active"] = r.verification.tool_length_active;
-    v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
-    v["blocks_swept"] = count(r.verification.blocks_swept);
-    v["blocks_not_checked"] = count(r.verification.blocks_not_checked);
-    v["colliding_blocks"] = count(r.verification.colliding_blocks);
-    v["colliding_moves"] = count(r.verification.colliding_moves);
-    // Why a value is null.
-    nlohmann::json why = nlohmann::json::object();
-    const std::string no_part = "no part given (" +
-                                option_name(options.option_names, "JobOptions::part") +
-                                "): not checked";
-    const std::string no_ball = "the tool is no ball-end mill: no contact recovery, not checked";
-    const std::string unchecked = result.collision_checked ? no_ball : no_part;
-    if (!r.verification.collision_free) why["collision_free"] = unchecked;
-    if (!r.verification.colliding_moves) why["colliding_moves"] = unchecked;
-    if (!r.verification.blocks_swept) why["blocks_swept"] = unchecked;
-    if (!r.verification.colliding_blocks) why["colliding_blocks"] = unchecked;
-    if (!r.verification.blocks_not_checked) why["blocks_not_checked"] = unchecked;
-    if (!r.verification.flute_gouge_points) why["flute_gouge_points"] = unchecked;
-    if (!r.verification.min_clearance_mm) {
-      why["min_clearance_mm"] =
-          r.verification.collision_free
-              ? "no shank or holder past the flutes to measure (the flutes reach the holder)"
-              : unchecked;
-    }
-    if (!why.empty()) v["null_reasons"] = why;
-    o["verification"] = v;
-    o["timings_s"] = {{"contacts", r.time_contacts_s},
-                      {"cspace", r.time_cspace_s},
-                      {"optimise", r.time_optimise_s},
-                      {"post", r.time_post_s},
-                      {"verify", r.time_verify_s}};
-    if (r.kept_input_points) {
-      const auto& kept = *r.kept_input_points;
-      o["kept_input_points"] = {{"total", kept.total()},
-                                {"by_reason",
-                                 {{"collision", kept.collision},
-                                  {"peak_rate", kept.peak_rate},
-                                  {"no_free_axis", kept.no_free_axis}}},
-                                {"join_points", kept.join_points},
-                                {"whole_passes", kept.passes},
-                                {"stretches", kept.stretches}};
-    }
-    if (r.time_choice) {
-      const auto& t = *r.time_choice;
-      o["time_objective"] = {{"plan", t.plan},
-                             {"cycle_s", t.cycle_s},
-                             {"peak_accel_deg_s2", t.peak_accel_deg_s2},
-                             {"shortest_plan", t.shortest_plan},
-                             {"shortest_cycle_s", t.shortest_cycle_s},
-                             {"shortest_peak_accel_deg_s2", t.shortest_peak_accel_deg_s2},
-                             {"tie_band", t.tie_band}};
-    }
-    ops.push_back(o);
+  if (r.verification.min_clearance_mm) {
+    v["min_clearance_point"] = r.verification.min_clearance_index;
   }
-  j["operations"] = ops;
+  // A count, or null where it was not checked.
+  const auto count = [](const std::optional<long>& n) {
+    return n ? nlohmann::json(*n) : nlohmann::json(nullptr);
+  };
+  v["flute_gouge_points"] = count(r.verification.flute_gouge_points);
+  v["within_axis_limits"] = r.verification.within_axis_limits;
+  v["tool_length_active"] = r.verification.tool_length_active;
+  v["within_dynamic_limits"] = r.verification.within_dynamic_limits;
+  v["blocks_swept"] = count(r.verification.blocks_swept);
+  v["blocks_not_checked"] = count(r.verification.blocks_not_checked);
+  v["colliding_blocks"] = count(r.verification.colliding_blocks);
+  v["colliding_moves"] = count(r.verification.colliding_moves);
+  // Why a value is null.
+  nlohmann::json why = nlohmann::json::object();
+  const std::string no_part =
+      "no part given (" + option_name(options.option_names, "JobOptions::part") + "): not checked";
+  const std::string no_ball = "the tool is no ball-end mill: no contact recovery, not checked";
+  const std::string unchecked = result.collision_checked ? no_ball : no_part;
+  if (!r.verification.collision_free) why["collision_free"] = unchecked;
+  if (!r.verification.colliding_moves) why["colliding_moves"] = unchecked;
+  if (!r.verification.blocks_swept) why["blocks_swept"] = unchecked;
+  if (!r.verification.colliding_blocks) why["colliding_blocks"] = unchecked;
+  if (!r.verification.blocks_not_checked) why["blocks_not_checked"] = unchecked;
+  if (!r.verification.flute_gouge_points) why["flute_gouge_points"] = unchecked;
+  if (!r.verification.min_clearance_mm) {
+    why["min_clearance_mm"] =
+        r.verification.collision_free
+            ? "no shank or holder past the flutes to measure (the flutes reach the holder)"
+            : unchecked;
+  }
+  if (!why.empty()) v["null_reasons"] = why;
+  return v;
+}
+
+/// One operation: its rates before and after, its tool, contacts, verification and timings.
+nlohmann::json operation_json(const OperationResult& r, const JobResult& result,
+                              const Toolpath& toolpath, const JobOptions& options) {
+  nlohmann::json o;
+  o["name"] = r.name;
+  o["points"] = r.points;
+  o["feed_mm_min"] = r.feed_mm_min;
+  o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
+  o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
+  const auto paper_json = [](const RotarySummary& p) {
+    return nlohmann::json{{"max_omega_deg_s", p.max_omega_deg_s},
+                          {"max_accel_deg_s2", p.max_accel_deg_s2},
+                          {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
+  };
+  o["paper_metric"] = {{"before", paper_json(r.paper_before)},
+                       {"after", paper_json(r.paper_after)},
+                       {"facets",
+                        {{"before", paper_json(r.paper_before_facets)},
+                         {"after", paper_json(r.paper_after_facets)}}},
+                       {"claimed", r.paper_gain_claimed},
+                       {"what",
+                        "eq. 16-18 over the designed surface's contact-point arc lengths "
+                        "at the metric feed (the paper's comparison; before/after are "
+                        "the program's own timing); `facets` over the mesh's own contact "
+                        "points; `claimed`: its peak a falls under both"}};
+  o["feed_schedule_written"] = options.feed_schedule;
+  if (r.feed_words) {
+    o["feed_words"] = {{"blocks", r.feed_words->blocks},
+                       {"min_written_over_programmed", r.feed_words->min_ratio},
+                       {"max_written_over_programmed", r.feed_words->max_ratio},
+                       {"max_feed_ratio", r.feed_words->max_feed_ratio},
+                       {"lengthened_blocks", r.feed_words->lengthened_blocks}};
+  } else {
+    o["feed_words"] = nullptr;
+  }
+  const std::size_t k = static_cast<std::size_t>(&r - result.operations.data());
+  if (k < toolpath.operations.size()) o["tool"] = tool_json(toolpath.operations[k].tool, options);
+  o["max_axis_change_deg"] = r.max_axis_change_deg;
+  o["segments"] = r.segments;
+  if (r.contact.recovered) {
+    o["contact"] = {{"touching_points", r.contact.touching},
+                    {"points_in_air", r.contact.in_air},
+                    {"local_gouge_points", r.contact.local_gouges},
+                    {"max_gap_mm", r.contact.max_abs_gap_mm},
+                    {"tolerance_mm", r.contact.tolerance_mm},
+                    {"edge_points", r.contact.edge_points},
+                    {"corner_points", r.contact.corner_points},
+                    {"max_normal_uncertainty_deg", r.contact.max_normal_uncertainty_deg}};
+    if (k < toolpath.operations.size()) {
+      const auto& band = toolpath.operations[k].cam_tolerance_mm;
+      o["contact"]["cam_tolerance_mm"] = band ? nlohmann::json(*band) : nlohmann::json(nullptr);
+    }
+  }
+  o["verification"] = verification_json(r, result, options);
+  o["timings_s"] = {{"contacts", r.time_contacts_s},
+                    {"cspace", r.time_cspace_s},
+                    {"optimise", r.time_optimise_s},
+                    {"post", r.time_post_s},
+                    {"verify", r.time_verify_s}};
+  if (r.kept_input_points) {
+    const auto& kept = *r.kept_input_points;
+    o["kept_input_points"] = {{"total", kept.total()},
+                              {"by_reason",
+                               {{"collision", kept.collision},
+                                {"peak_rate", kept.peak_rate},
+                                {"no_free_axis", kept.no_free_axis}}},
+                              {"join_points", kept.join_points},
+                              {"whole_passes", kept.passes},
+                              {"stretches", kept.stretches}};
+  }
+  if (r.time_choice) {
+    const auto& t = *r.time_choice;
+    o["time_objective"] = {{"plan", t.plan},
+                           {"cycle_s", t.cycle_s},
+                           {"peak_accel_deg_s2", t.peak_accel_deg_s2},
+                           {"shortest_plan", t.shortest_plan},
+                           {"shortest_cycle_s", t.shortest_cycle_s},
+                           {"shortest_peak_accel_deg_s2", t.shortest_peak_accel_deg_s2},
+                           {"tie_band", t.tie_band}};
+  }
+  return o;
+}
+
+/// The limits used, per joint by its name.
+nlohmann::json axis_limits_json(const Machine& machine) {
   nlohmann::json limits = nlohmann::json::object();
   const JointLimits effective = effective_limits(machine);
   for (std::size_t q = 0; q < kJointCount; ++q) {
@@ -371,7 +380,43 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
       l["joint_max_accel_" + unit + "_s2"] = machine.joint_max_accel_per_s2[q];
     limits[joint_name(static_cast<Joint>(q), machine.rotary.tilt_letter())] = l;
   }
-  j["axis_limits"] = limits;
+  return limits;
+}
+
+}  // namespace
+
+std::string report_json(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                        const JobOptions& given, const RunInfo& run) {
+  // What the run applied: every default made explicit (the cone without a part, the machine
+  // file's holder and clearances).
+  const JobOptions options = resolved_options(given, machine);
+  nlohmann::json j;
+  j["taxopt_version"] = kVersion;
+  j["method"] = to_string(options.method);
+  j["input"] = toolpath.source;
+  j["machine"] = machine.name;
+  j["kinematics"] = machine.kinematics;
+  j["run"] = run_json(run);
+  j["options"] = options_json(options, machine);
+  j["units"] = {{"cl", to_string(toolpath.units)}, {"gcode", to_string(result.gcode_units)}};
+  j["ok"] = result.ok();
+  j["findings"] = findings_json(result, toolpath);
+  j["problems"] = result.problems;
+  j["warnings"] = result.warnings;
+  j["safety_warnings"] = result.safety_warnings;
+  j["collision_checked"] = result.collision_checked;
+  // How the bodies are judged (docs/cli.md "What is checked").
+  j["clearances_mm"] = {{"shank", *options.shank_clearance_mm},
+                        {"holder", *options.holder_clearance_mm},
+                        {"holder_modelled", options.tool.holder_radius_mm.has_value()}};
+  j["cl_input"] = cl_input_json(toolpath);
+  j["gcode"] = gcode_json(result);
+  nlohmann::json ops = nlohmann::json::array();
+  for (const OperationResult& r : result.operations) {
+    ops.push_back(operation_json(r, result, toolpath, options));
+  }
+  j["operations"] = ops;
+  j["axis_limits"] = axis_limits_json(machine);
   tidy_numbers(j);
   return j.dump(2) + "\n";
 }

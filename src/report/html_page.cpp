@@ -234,26 +234,13 @@ TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles, 
   return TriangleMesh{};  // never: at 200 steps the cell is far larger than the part
 }
 
-std::string html_page(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
-                      const JobOptions& options, const RunInfo& run, const TriangleMesh* part_mm,
-                      const HtmlAssets& assets, const HtmlBudget& budget) {
-  using nlohmann::json;
-  json data;
-  data["source"] = toolpath.source;
-  data["method"] = to_string(options.method);
-  data["tilt"] = std::string(1, result.tilt_letter);
-  data["collision_checked"] = result.collision_checked;
-  const JointLimits limits = effective_limits(machine);
-  data["machine"] = {{"name", machine.name},
-                     {"tilt_range_deg", range_json(machine.rotary.tilt)},
-                     {"c_range_deg", range_json(machine.rotary.c)},
-                     {"tilt_limits", limit_json(limits[3])},
-                     {"c_limits", limit_json(limits[4])}};
-  std::size_t total_points = 0;
-  for (const OperationResult& r : result.operations) total_points += r.rows.size();
-  data["points"] = total_points;
+namespace {
 
-  // The part, decimated to the budget.
+using nlohmann::json;
+
+/// The part, decimated to the budget; null without one.
+json mesh_json(const TriangleMesh* part_mm, const HtmlBudget& budget) {
+  json data;
   if (part_mm && !part_mm->faces.empty()) {
     double cell = 0.0;
     const TriangleMesh shown = decimate_mesh(*part_mm, budget.max_triangles, &cell);
@@ -277,125 +264,124 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
     data["mesh"] = nullptr;
   }
 
-  const std::size_t plot_stride =
-      std::max<std::size_t>(1, (total_points + budget.max_plot_points / 5 - 1) /
-                                   std::max<std::size_t>(1, budget.max_plot_points / 5));
-  const std::size_t axes_every = std::max<std::size_t>(
-      1, (total_points + budget.max_axes - 1) / std::max<std::size_t>(1, budget.max_axes));
-  data["decimation"] = {{"plot_stride", plot_stride}, {"axes_every", axes_every}};
+  return data["mesh"];
+}
 
-  json ops = json::array(), markers = json::array();
-  std::size_t marker_total = 0, plotted_total = 0;
-  for (std::size_t k = 0; k < result.operations.size(); ++k) {
-    const OperationResult& r = result.operations[k];
-    json o;
-    o["name"] = r.name;
-    o["points"] = r.rows.size();
-    // The page's script reads -1 as "not checked" (with `checked` false).
-    o["checked"] = r.colliding_after.has_value();
-    o["colliding_after"] = r.colliding_after.value_or(-1);
-    o["colliding_moves"] = r.verification.colliding_moves.value_or(-1);
-    o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
-                  {"omega_after", r.after.max_omega_deg_s},
-                  {"accel_before", r.before.max_accel_deg_s2},
-                  {"accel_after", r.after.max_accel_deg_s2}};
-    o["programmed_feed_mm_min"] = r.feed_mm_min;
-    const std::vector<std::size_t> shown = plotted_rows(r.rows, plot_stride);
-    plotted_total += shown.size();
-    json idx = json::array(), line = json::array(), arc = json::array(), ab = json::array(),
-         aa = json::array(), cb = json::array(), ca = json::array(), wb = json::array(),
-         wa = json::array(), gb = json::array(), ga = json::array(), fb = json::array(),
-         fa = json::array(), path = json::array(), pass = json::array();
-    std::size_t pass_number = 0;
-    std::size_t at = 0;
-    // The plots' x: the rows' arc length over the passes (the paper's L), carried over the
-    // points outside them (rapids), so that it never runs back.
-    double arc_mm = 0.0;
-    for (std::size_t i = 0; i < r.rows.size(); ++i) {
-      const PointRow& p = r.rows[i];
-      arc_mm = std::max(arc_mm, p.arc_mm);
-      if (i > 0 && !p.feed_mm_min) ++pass_number;  // a rapid (or a move the schedule skips)
-      if (at >= shown.size() || shown[at] != i) continue;
-      ++at;
-      idx.push_back(i);
-      line.push_back(p.line);
-      arc.push_back(rounded(arc_mm));
-      ab.push_back(rounded(p.tilt_axis_before_deg));
-      aa.push_back(rounded(p.tilt_axis_deg));
-      cb.push_back(rounded(p.c_before_deg));
-      ca.push_back(rounded(p.c_deg));
-      wb.push_back(rounded(p.omega_before_deg_s));
-      wa.push_back(rounded(p.omega_deg_s));
-      gb.push_back(rounded(p.accel_before_deg_s2));
-      ga.push_back(rounded(p.accel_deg_s2));
-      fb.push_back(p.feed_before_mm_min ? json(rounded(*p.feed_before_mm_min, 1)) : json(nullptr));
-      fa.push_back(p.feed_mm_min ? json(rounded(*p.feed_mm_min, 1)) : json(nullptr));
-      pass.push_back(pass_number);
-      path.push_back(rounded(p.tip_mm.x()));
-      path.push_back(rounded(p.tip_mm.y()));
-      path.push_back(rounded(p.tip_mm.z()));
-    }
-    o["idx"] = std::move(idx);
-    o["line"] = std::move(line);
-    o["arc_mm"] = std::move(arc);
-    o["tilt_before"] = std::move(ab);
-    o["tilt_after"] = std::move(aa);
-    o["c_before"] = std::move(cb);
-    o["c_after"] = std::move(ca);
-    o["omega_before"] = std::move(wb);
-    o["omega_after"] = std::move(wa);
-    o["accel_before"] = std::move(gb);
-    o["accel_after"] = std::move(ga);
-    o["feed_before"] = std::move(fb);
-    o["feed_after"] = std::move(fa);
-    o["pass"] = std::move(pass);
-    o["path"] = std::move(path);
-    json keys = json::array();
-    for (const PointRow& p : r.rows) {
-      if (p.key) keys.push_back(rounded(p.arc_mm));
-    }
-    o["key_arc_mm"] = std::move(keys);
-    // The tool axes, before and after, at every N-th point: tip, axis before, axis after, the
-    // synthetic a before and after.
-    json axes = json::array();
-    for (std::size_t i = 0; i < r.rows.size(); i += axes_every) {
-      const PointRow& p = r.rows[i];
-      const Vec3d before = machine.rotary.forward(
-          Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
-      axes.push_back({i, vec_json(p.tip_mm, 3), vec_json(before, 4), vec_json(p.axis, 4),
-                      rounded(p.accel_before_deg_s2), rounded(p.accel_deg_s2)});
-    }
-    o["axes"] = std::move(axes);
-    ops.push_back(std::move(o));
-    // Markers: every point where a check fired (not_checked is the operation's, shown on the
-    // path and in the header, not a marker at every point).
-    const std::uint32_t not_checked = static_cast<std::uint32_t>(PointMark::NotChecked);
-    for (std::size_t i = 0; i < r.rows.size(); ++i) {
-      const PointRow& p = r.rows[i];
-      const std::uint32_t m = p.marks & ~not_checked;
-      if (m == 0) continue;
-      ++marker_total;
-      if (markers.size() >= budget.max_markers) continue;
-      const Vec3d before = machine.rotary.forward(
-          Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
-      markers.push_back({{"op", k},
-                         {"i", i},
-                         {"line", p.line},
-                         {"marks", point_marks_text(m)},
-                         {"tip", vec_json(p.tip_mm, 3)},
-                         {"arc_mm", rounded(p.arc_mm)},
-                         {"tilt_before", rounded(p.tilt_axis_before_deg)},
-                         {"c_before", rounded(p.c_before_deg)},
-                         {"tilt_after", rounded(p.tilt_axis_deg)},
-                         {"c_after", rounded(p.c_deg)},
-                         {"axis_before", vec_json(before, 4)},
-                         {"axis_after", vec_json(p.axis, 4)}});
-    }
+/// An operation's series for the plots (every `plot_stride`-th row kept by plotted_rows) and
+/// its tool axes before and after at every `axes_every`-th point.
+json operation_series_json(const OperationResult& r, const Machine& machine,
+                           std::size_t plot_stride, std::size_t axes_every,
+                           std::size_t& plotted_total) {
+  json o;
+  o["name"] = r.name;
+  o["points"] = r.rows.size();
+  // The page's script reads -1 as "not checked" (with `checked` false).
+  o["checked"] = r.colliding_after.has_value();
+  o["colliding_after"] = r.colliding_after.value_or(-1);
+  o["colliding_moves"] = r.verification.colliding_moves.value_or(-1);
+  o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
+                {"omega_after", r.after.max_omega_deg_s},
+                {"accel_before", r.before.max_accel_deg_s2},
+                {"accel_after", r.after.max_accel_deg_s2}};
+  o["programmed_feed_mm_min"] = r.feed_mm_min;
+  const std::vector<std::size_t> shown = plotted_rows(r.rows, plot_stride);
+  plotted_total += shown.size();
+  json idx = json::array(), line = json::array(), arc = json::array(), ab = json::array(),
+       aa = json::array(), cb = json::array(), ca = json::array(), wb = json::array(),
+       wa = json::array(), gb = json::array(), ga = json::array(), fb = json::array(),
+       fa = json::array(), path = json::array(), pass = json::array();
+  std::size_t pass_number = 0;
+  std::size_t at = 0;
+  // The plots' x: the rows' arc length over the passes (the paper's L), carried over the
+  // points outside them (rapids), so that it never runs back.
+  double arc_mm = 0.0;
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    const PointRow& p = r.rows[i];
+    arc_mm = std::max(arc_mm, p.arc_mm);
+    if (i > 0 && !p.feed_mm_min) ++pass_number;  // a rapid (or a move the schedule skips)
+    if (at >= shown.size() || shown[at] != i) continue;
+    ++at;
+    idx.push_back(i);
+    line.push_back(p.line);
+    arc.push_back(rounded(arc_mm));
+    ab.push_back(rounded(p.tilt_axis_before_deg));
+    aa.push_back(rounded(p.tilt_axis_deg));
+    cb.push_back(rounded(p.c_before_deg));
+    ca.push_back(rounded(p.c_deg));
+    wb.push_back(rounded(p.omega_before_deg_s));
+    wa.push_back(rounded(p.omega_deg_s));
+    gb.push_back(rounded(p.accel_before_deg_s2));
+    ga.push_back(rounded(p.accel_deg_s2));
+    fb.push_back(p.feed_before_mm_min ? json(rounded(*p.feed_before_mm_min, 1)) : json(nullptr));
+    fa.push_back(p.feed_mm_min ? json(rounded(*p.feed_mm_min, 1)) : json(nullptr));
+    pass.push_back(pass_number);
+    path.push_back(rounded(p.tip_mm.x()));
+    path.push_back(rounded(p.tip_mm.y()));
+    path.push_back(rounded(p.tip_mm.z()));
   }
-  data["operations"] = std::move(ops);
-  data["markers"] = std::move(markers);
-  data["marker_total"] = marker_total;
-  data["plotted_points"] = plotted_total;
+  o["idx"] = std::move(idx);
+  o["line"] = std::move(line);
+  o["arc_mm"] = std::move(arc);
+  o["tilt_before"] = std::move(ab);
+  o["tilt_after"] = std::move(aa);
+  o["c_before"] = std::move(cb);
+  o["c_after"] = std::move(ca);
+  o["omega_before"] = std::move(wb);
+  o["omega_after"] = std::move(wa);
+  o["accel_before"] = std::move(gb);
+  o["accel_after"] = std::move(ga);
+  o["feed_before"] = std::move(fb);
+  o["feed_after"] = std::move(fa);
+  o["pass"] = std::move(pass);
+  o["path"] = std::move(path);
+  json keys = json::array();
+  for (const PointRow& p : r.rows) {
+    if (p.key) keys.push_back(rounded(p.arc_mm));
+  }
+  o["key_arc_mm"] = std::move(keys);
+  // The tool axes, before and after, at every N-th point: tip, axis before, axis after, the
+  // synthetic a before and after.
+  json axes = json::array();
+  for (std::size_t i = 0; i < r.rows.size(); i += axes_every) {
+    const PointRow& p = r.rows[i];
+    const Vec3d before = machine.rotary.forward(
+        Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
+    axes.push_back({i, vec_json(p.tip_mm, 3), vec_json(before, 4), vec_json(p.axis, 4),
+                    rounded(p.accel_before_deg_s2), rounded(p.accel_deg_s2)});
+  }
+  o["axes"] = std::move(axes);
+  return o;
+}
+
+/// The points where a check fired (not_checked is the operation's, shown on the path and in
+/// the header, not a marker at every point), up to the budget; counted all.
+void add_markers(const OperationResult& r, std::size_t k, const Machine& machine,
+                 const HtmlBudget& budget, json& markers, std::size_t& marker_total) {
+  const std::uint32_t not_checked = static_cast<std::uint32_t>(PointMark::NotChecked);
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    const PointRow& p = r.rows[i];
+    const std::uint32_t m = p.marks & ~not_checked;
+    if (m == 0) continue;
+    ++marker_total;
+    if (markers.size() >= budget.max_markers) continue;
+    const Vec3d before = machine.rotary.forward(
+        Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
+    markers.push_back({{"op", k},
+                       {"i", i},
+                       {"line", p.line},
+                       {"marks", point_marks_text(m)},
+                       {"tip", vec_json(p.tip_mm, 3)},
+                       {"arc_mm", rounded(p.arc_mm)},
+                       {"tilt_before", rounded(p.tilt_axis_before_deg)},
+                       {"c_before", rounded(p.c_before_deg)},
+                       {"tilt_after", rounded(p.tilt_axis_deg)},
+                       {"c_after", rounded(p.c_deg)},
+                       {"axis_before", vec_json(before, 4)},
+                       {"axis_after", vec_json(p.axis, 4)}});
+  }
+}
+
+json findings_json(const JobResult& result) {
   json findings = json::array();
   for (const Finding& f : result.findings) {
     findings.push_back({{"code", to_string(f.code)},
@@ -404,10 +390,13 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
                         {"line", f.line},
                         {"message", f.message}});
   }
-  data["findings"] = std::move(findings);
+  return findings;
+}
 
-  // The page: static header and summary (readable without scripts), then the views.
-  std::ostringstream page;
+/// The page's header: the run, the verdict and what was found, readable without scripts.
+void write_header(std::ostringstream& page, const JobResult& result, const Toolpath& toolpath,
+                  const Machine& machine, const JobOptions& options, const RunInfo& run,
+                  const HtmlAssets& assets) {
   page << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
        << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
        << "<title>taxopt: " << escape_html(toolpath.source) << "</title>\n"
@@ -439,6 +428,49 @@ std::string html_page(const JobResult& result, const Toolpath& toolpath, const M
       page << "<li class=\"warning\">" << escape_html(s) << "</li>";
     page << "</ul>\n";
   }
+}
+
+}  // namespace
+
+std::string html_page(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                      const JobOptions& options, const RunInfo& run, const TriangleMesh* part_mm,
+                      const HtmlAssets& assets, const HtmlBudget& budget) {
+  json data;
+  data["source"] = toolpath.source;
+  data["method"] = to_string(options.method);
+  data["tilt"] = std::string(1, result.tilt_letter);
+  data["collision_checked"] = result.collision_checked;
+  const JointLimits limits = effective_limits(machine);
+  data["machine"] = {{"name", machine.name},
+                     {"tilt_range_deg", range_json(machine.rotary.tilt)},
+                     {"c_range_deg", range_json(machine.rotary.c)},
+                     {"tilt_limits", limit_json(limits[3])},
+                     {"c_limits", limit_json(limits[4])}};
+  std::size_t total_points = 0;
+  for (const OperationResult& r : result.operations) total_points += r.rows.size();
+  data["points"] = total_points;
+  data["mesh"] = mesh_json(part_mm, budget);
+  const std::size_t plot_stride =
+      std::max<std::size_t>(1, (total_points + budget.max_plot_points / 5 - 1) /
+                                   std::max<std::size_t>(1, budget.max_plot_points / 5));
+  const std::size_t axes_every = std::max<std::size_t>(
+      1, (total_points + budget.max_axes - 1) / std::max<std::size_t>(1, budget.max_axes));
+  data["decimation"] = {{"plot_stride", plot_stride}, {"axes_every", axes_every}};
+  json ops = json::array(), markers = json::array();
+  std::size_t marker_total = 0, plotted_total = 0;
+  for (std::size_t k = 0; k < result.operations.size(); ++k) {
+    const OperationResult& r = result.operations[k];
+    ops.push_back(operation_series_json(r, machine, plot_stride, axes_every, plotted_total));
+    add_markers(r, k, machine, budget, markers, marker_total);
+  }
+  data["operations"] = std::move(ops);
+  data["markers"] = std::move(markers);
+  data["marker_total"] = marker_total;
+  data["plotted_points"] = plotted_total;
+  data["findings"] = findings_json(result);
+  // The page: static header and summary (readable without scripts), then the views.
+  std::ostringstream page;
+  write_header(page, result, toolpath, machine, options, run, assets);
   page << "</header>\n<section><h2>Summary</h2>" << summary_table(result)
        << "<p class=\"note\">&omega; and a: the synthetic angular velocity and acceleration of the "
           "rotary axes (the paper's eqs. 16&ndash;18) at the programmed feed; the cycle at the "

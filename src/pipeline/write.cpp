@@ -132,178 +132,219 @@ void count_table_turns(const Run& run, const std::vector<OperationContext>& ops,
 /// controller plans it in. The machine's state is followed from the end of the first retract
 /// as joints referred to the tip (kinematics/machine.hpp); the spindle's reference point is the
 /// tool length above it.
-void program_time(const Run& run, Written& w, const JointLimits& limits, LengthUnit units,
-                  GcodeProgram& g, std::vector<TcpBlock>& tcp_blocks) {
-  const Machine& machine = run.machine;
-  const ProgramTemplate& t = machine.gcode.program;
-  const double length_mm = run.options.tool.gauge_length_mm.value_or(0.0);
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
-  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
-  double feed_s = 0.0, rapid_s = 0.0;
-  for (const OperationSchedule& s : w.schedule_after) feed_s += s.summary.feed_time_s;
-  // LinuxCNC with TCP on: its blocks, for the joints on them (GcodeProgram::tcp_joint_peaks).
-  // A feed block waits for the next block to know whether it ends at rest.
-  tcp_blocks.clear();
-  const bool lcnc = machine.gcode.dialect == GcodeDialect::LinuxCNC;
-  std::optional<TcpBlock> pending;
-  bool after_feed = false;  // the previous block was a tcp feed block (its chain goes on)
-  // A block that turns A or C (LinuxCNC's tcRotaryMotionCheck).
-  const auto turns = [](const TcpBlock& b) {
-    return std::abs(b.to[kA] - b.from[kA]) > 1e-9 || std::abs(b.to[kC] - b.from[kC]) > 1e-9;
-  };
-  // The pending feed block ends at rest, or goes on into `next`. LinuxCNC (tp.c) blends two
-  // feed blocks of which one turns A or C parabolically (no tangency or blend arc is tried
-  // where rotary axes move), and a block it blends parabolically with the next runs at half
-  // its acceleration (tcGetOverallMaxAccel): a chain's first block so blended starts from rest
-  // at half (measured: the peening file's line 33, joint Y 223.6 mm/s^2 and A 150 deg/s^2
-  // against 447.2 and 300 at the full acceleration). Its last block stops at the full one
-  // (measured: the demo's line 87, 327.53 as predicted at full).
-  const auto flush_feed = [&](bool ends_at_rest, const TcpBlock* next) {
-    if (pending) {
-      pending->end_rest = ends_at_rest;
-      if (!ends_at_rest && pending->start_rest && next && (turns(*pending) || turns(*next))) {
-        pending->accel_share = 0.5;
-      }
-      tcp_blocks.push_back(*pending);
-    }
-    pending.reset();
-    after_feed = !ends_at_rest;
-  };
-  JointPosition q{};
-  bool known = false;
-  int from_line = 0;
-  w.spindle_mm.assign(w.moves.size(), std::nullopt);
-  w.joints_after.assign(w.moves.size(), std::nullopt);
-  w.tip_linear.assign(w.moves.size(), 0);
-  // Which joints some block has set since the start (where the machine stands before is not
-  // known): a block's end is known where all five are.
-  std::array<bool, kJointCount> set{};
-  // With TCP on, which of the tip's X Y Z some block has given since a block without it.
-  std::array<bool, 3> tip_set{};
-  const auto record = [&](std::size_t index) {
-    if (std::all_of(set.begin(), set.end(), [](bool b) { return b; })) w.joints_after[index] = q;
-  };
-  std::size_t at = 0;
-  const auto spindle = [&](const JointPosition& j) {
-    return std::optional<Vec3d>(Vec3d(j[0], j[1], j[2] + length_mm));
-  };
-  for (const GcodeMove& m : w.moves) {
-    const std::size_t index = at++;
-    JointPosition to = q;
-    const bool gives[5] = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
-                           (m.given & 8u) != 0, (m.given & 16u) != 0};
+class ProgramClock {
+ public:
+  ProgramClock(const Run& run, Written& w, const JointLimits& limits, LengthUnit units,
+               const GcodeProgram& g, std::vector<TcpBlock>& tcp_blocks)
+      : machine_(run.machine),
+        t_(run.machine.gcode.program),
+        w_(w),
+        limits_(limits),
+        units_(units),
+        g_(g),
+        tcp_blocks_(tcp_blocks),
+        length_mm_(run.options.tool.gauge_length_mm.value_or(0.0)),
+        lcnc_(run.machine.gcode.dialect == GcodeDialect::LinuxCNC) {
+    tcp_blocks_.clear();
+    w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
+    w_.joints_after.assign(w_.moves.size(), std::nullopt);
+    w_.tip_linear.assign(w_.moves.size(), 0);
+  }
+
+  /// Walks every block read back; then the program's time into `g`.
+  void run(GcodeProgram& g) {
+    for (std::size_t index = 0; index < w_.moves.size(); ++index) block(index);
+    flush_feed(true, nullptr);
+    double feed_s = 0.0;
+    for (const OperationSchedule& s : w_.schedule_after) feed_s += s.summary.feed_time_s;
+    g.tcp_joint_peaks = controller::tcp_joint_peaks(machine_, tcp_blocks_, 1.0);
+    g.time_s = feed_s + rapid_s_;
+    g.time_from_line = from_line_;
+    g.time_tool_length_mm = length_mm_;
+  }
+
+ private:
+  static constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
+  static constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  using Gives = std::array<bool, 5>;
+
+  void block(std::size_t index) {
+    const GcodeMove& m = w_.moves[index];
+    JointPosition to = q_;
+    const Gives gives = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
+                         (m.given & 8u) != 0, (m.given & 16u) != 0};
     if (gives[3]) to[kA] = m.tilt_deg;
     if (gives[4]) to[kC] = m.c_deg;
-    const Posed from_pose{deg_to_rad(q[kA]), deg_to_rad(q[kC])};
-    const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
-    if (m.retract || !known) flush_feed(true, nullptr);
-    if (gives[3]) set[kA] = true;
-    if (gives[4]) set[kC] = true;
+    if (m.retract || !known_) flush_feed(true, nullptr);
+    if (gives[3]) set_[kA] = true;
+    if (gives[4]) set_[kC] = true;
     if (m.retract) {
-      // Machine coordinates: the spindle's reference point to the retract height; X and Y (the
-      // end's park) where the block gives them, the work offset taken as zero.
-      if (gives[2]) to[2] = t.retract_z_mm - length_mm;
-      for (int k = 0; k < 2; ++k) {
-        if (gives[k]) to[k] = m.machine_mm[k];
-      }
-      // In machine coordinates: where it leaves the tool relative to the part depends on the
-      // work offset and the tool length, which the program does not hold.
-      set[0] = set[1] = set[2] = false;
-      tip_set.fill(false);
-      if (known && m.rapid) rapid_s += rapid_time_s(q, to, limits);
-      if (!known) from_line = m.line;
-      known = true;
-      q = to;
-      w.spindle_mm[index] = spindle(q);
-      record(index);
-      continue;
-    }
-    if (!known && !from_line) {
-      // No retract before the first move: timed from its end.
-      const Vec3d xyz = joints_of_written_mm(machine, m.xyz_mm, to_pose);
-      q = {xyz.x(), xyz.y(), xyz.z(), to[kA], to[kC]};
-      known = true;
-      from_line = m.line;
-      w.spindle_mm[index] = spindle(q);
-      set.fill(true);
-      record(index);
-      continue;
-    }
-    // The reader takes LinuxCNC's kinematics as always on; a configuration that switches them
-    // (tcp_on, M428) has them on where the writer put them: with the tool length offset.
-    const bool switched = machine.gcode.dialect == GcodeDialect::LinuxCNC && !t.tcp_on.empty();
-    if (machine.gcode.mode == GcodeMode::Tcp && m.tcp && (!switched || m.length_offset)) {
-      // The program's axes: the tip where the joints stand, the words given replacing it.
-      Vec3d tip = machine.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
-      const Vec3d written_tip = tip_of_written_mm(machine, m.xyz_mm, to_pose);
-      for (int k = 0; k < 3; ++k) {
-        if (gives[k]) tip[k] = written_tip[k];
-      }
-      const Vec3d xyz = machine.rotary.to_machine_mm(tip, to_pose);
-      to[0] = xyz.x();
-      to[1] = xyz.y();
-      to[2] = xyz.z();
-      // The tip on a straight line in the workpiece, the joints through the kinematics.
-      w.tip_linear[index] = 1;
-      for (std::size_t k = 0; k < 3; ++k) tip_set[k] = tip_set[k] || gives[k];
-      if (tip_set[0] && tip_set[1] && tip_set[2]) set[0] = set[1] = set[2] = true;
-      const bool safe_rapid =
-          std::binary_search(g.joint_safe_rapids.begin(), g.joint_safe_rapids.end(), m.line);
-      const Vec3d was = machine.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from_pose);
-      const JointPosition a{was.x(), was.y(), was.z(), q[kA], q[kC]};
-      const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
-      // The written F as a rate of the block a second: the tip's distance (the rotary one when
-      // only A and C turn) per minute, or under G93 the block's inverse time.
-      const double tip_mm = (tip - was).norm();
-      const double rot_deg = std::hypot(to[kA] - q[kA], to[kC] - q[kC]);
-      const double rate = !(m.feed > 0.0) || m.rapid ? 0.0
-                          : m.inverse_time           ? m.feed / 60.0
-                          : tip_mm > 1e-9            ? m.feed * mm_per_unit(units) / 60.0 / tip_mm
-                                          : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
-      if (m.rapid || safe_rapid) {
-        JointLimits capped = limits;
-        // A rapid written at a joint-safe feed: every axis at that rate along the move.
-        for (std::size_t k = 0; k < kJointCount && safe_rapid && rate > 0.0; ++k) {
-          const double v = rate * std::abs(b[k] - a[k]);
-          if (v > 0.0 &&
-              (capped[k].max_velocity_per_s <= 0.0 || v < capped[k].max_velocity_per_s)) {
-            capped[k].max_velocity_per_s = v;
-          }
-        }
-        rapid_s += rapid_time_s(a, b, capped);
-        flush_feed(true, nullptr);
-        if (lcnc) tcp_blocks.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line});
-      } else if (lcnc) {
-        // A feed block: from rest after a rapid (or as the program's first), to rest before one
-        // (known at the next block).
-        const TcpBlock block{a, b, limits, rate, !after_feed, true, m.line};
-        flush_feed(false, &block);
-        pending = block;
-      }
+      retract(m, gives, to);
+    } else if (!known_ && !from_line_) {
+      first(m, to);
     } else {
-      flush_feed(true, nullptr);
-      // The joints, the written X Y Z the controlled point: the tip with the tool length
-      // offset on, else the spindle's reference point.
-      const double above = m.length_offset ? 0.0 : length_mm;
-      const Vec3d xyz = machine.gcode.mode == GcodeMode::Machine
-                            ? m.xyz_mm
-                            : Vec3d(m.xyz_mm.x(), m.xyz_mm.y(), m.xyz_mm.z() - above);
-      for (int k = 0; k < 3; ++k) {
-        if (gives[k]) to[static_cast<std::size_t>(k)] = xyz[k];
-        if (gives[k]) set[static_cast<std::size_t>(k)] = true;
+      // The reader takes LinuxCNC's kinematics as always on; a configuration that switches
+      // them (tcp_on, M428) has them on where the writer put them: with the tool length offset.
+      const bool switched = lcnc_ && !t_.tcp_on.empty();
+      if (machine_.gcode.mode == GcodeMode::Tcp && m.tcp && (!switched || m.length_offset)) {
+        tcp(m, gives, to, index);
+      } else {
+        joints(m, gives, to);
       }
-      tip_set.fill(false);
-      if (m.rapid) rapid_s += rapid_time_s(q, to, limits);
     }
-    q = to;
-    if (known) w.spindle_mm[index] = spindle(q);
-    if (known) record(index);
+    q_ = to;
+    if (known_) {
+      w_.spindle_mm[index] = Vec3d(q_[0], q_[1], q_[2] + length_mm_);
+      if (std::all_of(set_.begin(), set_.end(), [](bool b) { return b; })) {
+        w_.joints_after[index] = q_;
+      }
+    }
   }
-  flush_feed(true, nullptr);
-  g.tcp_joint_peaks = controller::tcp_joint_peaks(machine, tcp_blocks, 1.0);
-  g.time_s = feed_s + rapid_s;
-  g.time_from_line = from_line;
-  g.time_tool_length_mm = length_mm;
+
+  /// Machine coordinates: the spindle's reference point to the retract height; X and Y (the
+  /// end's park) where the block gives them, the work offset taken as zero.
+  void retract(const GcodeMove& m, const Gives& gives, JointPosition& to) {
+    if (gives[2]) to[2] = t_.retract_z_mm - length_mm_;
+    for (int k = 0; k < 2; ++k) {
+      if (gives[k]) to[k] = m.machine_mm[k];
+    }
+    // In machine coordinates: where it leaves the tool relative to the part depends on the
+    // work offset and the tool length, which the program does not hold.
+    set_[0] = set_[1] = set_[2] = false;
+    tip_set_.fill(false);
+    if (known_ && m.rapid) rapid_s_ += rapid_time_s(q_, to, limits_);
+    if (!known_) from_line_ = m.line;
+    known_ = true;
+  }
+
+  /// No retract before the first move: timed from its end.
+  void first(const GcodeMove& m, JointPosition& to) {
+    const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
+    const Vec3d xyz = joints_of_written_mm(machine_, m.xyz_mm, to_pose);
+    to = {xyz.x(), xyz.y(), xyz.z(), to[kA], to[kC]};
+    known_ = true;
+    from_line_ = m.line;
+    set_.fill(true);
+  }
+
+  /// A block in the program's axes: the tip where the joints stand, the words given replacing
+  /// it; the tip on a straight line in the workpiece, the joints through the kinematics.
+  void tcp(const GcodeMove& m, const Gives& gives, JointPosition& to, std::size_t index) {
+    const Posed from_pose{deg_to_rad(q_[kA]), deg_to_rad(q_[kC])};
+    const Posed to_pose{deg_to_rad(to[kA]), deg_to_rad(to[kC])};
+    Vec3d tip = machine_.rotary.from_machine_mm(Vec3d(q_[0], q_[1], q_[2]), from_pose);
+    const Vec3d written_tip = tip_of_written_mm(machine_, m.xyz_mm, to_pose);
+    for (int k = 0; k < 3; ++k) {
+      if (gives[k]) tip[k] = written_tip[k];
+    }
+    const Vec3d xyz = machine_.rotary.to_machine_mm(tip, to_pose);
+    to[0] = xyz.x();
+    to[1] = xyz.y();
+    to[2] = xyz.z();
+    w_.tip_linear[index] = 1;
+    for (std::size_t k = 0; k < 3; ++k) tip_set_[k] = tip_set_[k] || gives[k];
+    if (tip_set_[0] && tip_set_[1] && tip_set_[2]) set_[0] = set_[1] = set_[2] = true;
+    const bool safe_rapid =
+        std::binary_search(g_.joint_safe_rapids.begin(), g_.joint_safe_rapids.end(), m.line);
+    const Vec3d was = machine_.rotary.from_machine_mm(Vec3d(q_[0], q_[1], q_[2]), from_pose);
+    const JointPosition a{was.x(), was.y(), was.z(), q_[kA], q_[kC]};
+    const JointPosition b{tip.x(), tip.y(), tip.z(), to[kA], to[kC]};
+    // The written F as a rate of the block a second: the tip's distance (the rotary one when
+    // only A and C turn) per minute, or under G93 the block's inverse time.
+    const double tip_mm = (tip - was).norm();
+    const double rot_deg = std::hypot(to[kA] - q_[kA], to[kC] - q_[kC]);
+    const double rate = !(m.feed > 0.0) || m.rapid ? 0.0
+                        : m.inverse_time           ? m.feed / 60.0
+                        : tip_mm > 1e-9            ? m.feed * mm_per_unit(units_) / 60.0 / tip_mm
+                                        : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
+    if (m.rapid || safe_rapid) {
+      JointLimits capped = limits_;
+      // A rapid written at a joint-safe feed: every axis at that rate along the move.
+      for (std::size_t k = 0; k < kJointCount && safe_rapid && rate > 0.0; ++k) {
+        const double v = rate * std::abs(b[k] - a[k]);
+        if (v > 0.0 && (capped[k].max_velocity_per_s <= 0.0 || v < capped[k].max_velocity_per_s)) {
+          capped[k].max_velocity_per_s = v;
+        }
+      }
+      rapid_s_ += rapid_time_s(a, b, capped);
+      flush_feed(true, nullptr);
+      if (lcnc_) tcp_blocks_.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line});
+    } else if (lcnc_) {
+      // A feed block: from rest after a rapid (or as the program's first), to rest before one
+      // (known at the next block).
+      const TcpBlock feed_block{a, b, limits_, rate, !after_feed_, true, m.line};
+      flush_feed(false, &feed_block);
+      pending_ = feed_block;
+    }
+  }
+
+  /// A block in the joints: the written X Y Z the controlled point, the tip with the tool
+  /// length offset on, else the spindle's reference point.
+  void joints(const GcodeMove& m, const Gives& gives, JointPosition& to) {
+    flush_feed(true, nullptr);
+    const double above = m.length_offset ? 0.0 : length_mm_;
+    const Vec3d xyz = machine_.gcode.mode == GcodeMode::Machine
+                          ? m.xyz_mm
+                          : Vec3d(m.xyz_mm.x(), m.xyz_mm.y(), m.xyz_mm.z() - above);
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (gives[k]) to[k] = xyz[static_cast<int>(k)];
+      if (gives[k]) set_[k] = true;
+    }
+    tip_set_.fill(false);
+    if (m.rapid) rapid_s_ += rapid_time_s(q_, to, limits_);
+  }
+
+  /// A block that turns A or C (LinuxCNC's tcRotaryMotionCheck).
+  static bool turns(const TcpBlock& b) {
+    return std::abs(b.to[kA] - b.from[kA]) > 1e-9 || std::abs(b.to[kC] - b.from[kC]) > 1e-9;
+  }
+
+  /// The pending feed block ends at rest, or goes on into `next`. LinuxCNC (tp.c) blends two
+  /// feed blocks of which one turns A or C parabolically (no tangency or blend arc is tried
+  /// where rotary axes move), and a block it blends parabolically with the next runs at half
+  /// its acceleration (tcGetOverallMaxAccel): a chain's first block so blended starts from rest
+  /// at half (measured: the peening file's line 33, joint Y 223.6 mm/s^2 and A 150 deg/s^2
+  /// against 447.2 and 300 at the full acceleration). Its last block stops at the full one
+  /// (measured: the demo's line 87, 327.53 as predicted at full).
+  void flush_feed(bool ends_at_rest, const TcpBlock* next) {
+    if (pending_) {
+      pending_->end_rest = ends_at_rest;
+      if (!ends_at_rest && pending_->start_rest && next && (turns(*pending_) || turns(*next))) {
+        pending_->accel_share = 0.5;
+      }
+      tcp_blocks_.push_back(*pending_);
+    }
+    pending_.reset();
+    after_feed_ = !ends_at_rest;
+  }
+
+  const Machine& machine_;
+  const ProgramTemplate& t_;
+  Written& w_;
+  const JointLimits& limits_;
+  LengthUnit units_;
+  const GcodeProgram& g_;
+  std::vector<TcpBlock>& tcp_blocks_;
+  const double length_mm_;
+  const bool lcnc_;
+  // LinuxCNC with TCP on: a feed block waits for the next block to know whether it ends at
+  // rest; after_feed_: the previous block was a tcp feed block (its chain goes on).
+  std::optional<TcpBlock> pending_;
+  bool after_feed_ = false;
+  JointPosition q_{};
+  bool known_ = false;
+  int from_line_ = 0;
+  double rapid_s_ = 0.0;
+  // Which joints some block has set since the start (where the machine stands before is not
+  // known): a block's end is known where all five are. With TCP on, which of the tip's X Y Z
+  // some block has given since a block without it.
+  std::array<bool, kJointCount> set_{};
+  std::array<bool, 3> tip_set_{};
+};
+
+void program_time(const Run& run, Written& w, const JointLimits& limits, LengthUnit units,
+                  GcodeProgram& g, std::vector<TcpBlock>& tcp_blocks) {
+  ProgramClock(run, w, limits, units, g, tcp_blocks).run(g);
 }
 
 /// A warning where a block with TCP on drives a joint past its limit as LinuxCNC moves it

@@ -48,38 +48,55 @@ std::vector<Candidate> candidates(const MachineKinematicsd& m, const Vec3d& axis
   return out;
 }
 
-}  // namespace
+/// One plan: the candidates of every point, the dynamic programme over the key points (those
+/// off the pole, and pole points the caller gave a pose), the points on the pole between them.
+class PosePlanner {
+ public:
+  PosePlanner(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
+              const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
+              const PosePlanOptions& options, const std::vector<std::optional<Posed>>& preferred)
+      : m_(m),
+        axes_(axes),
+        rapid_into_(rapid_into),
+        start_(start),
+        options_(options),
+        preferred_(preferred),
+        cand_(axes.size()) {}
 
-PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
-                    const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
-                    const PosePlanOptions& options,
-                    const std::vector<std::optional<Posed>>& preferred) {
-  if (rapid_into.size() != axes.size()) {
-    throw std::invalid_argument("plan_poses: rapid_into and axes differ in size");
+  PosePlan run() {
+    const std::size_t n = axes_.size();
+    plan_.poses.assign(n, Posed{});
+    if (n == 0) return plan_;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!candidates_at(i)) return plan_;
+    }
+    if (!keys_.empty()) choose_keys();
+    fill_pole_runs();
+    return plan_;
   }
-  if (!preferred.empty() && preferred.size() != axes.size()) {
-    throw std::invalid_argument("plan_poses: preferred and axes differ in size");
-  }
-  const auto preferred_at = [&](std::size_t i) -> const std::optional<Posed>& {
+
+ private:
+  const std::optional<Posed>& preferred_at(std::size_t i) const {
     static const std::optional<Posed> none;
-    return preferred.empty() ? none : preferred[i];
-  };
-  const std::size_t n = axes.size();
-  PosePlan plan;
-  plan.poses.assign(n, Posed{});
-  if (n == 0) return plan;
-
-  std::vector<std::size_t> keys;  // points off the pole, in order
-  std::vector<std::vector<Candidate>> cand(n);
+    return preferred_.empty() ? none : preferred_[i];
+  }
   // Points on the pole that the caller gave a pose keep its C, as key points.
-  const auto free_pole = [&](std::size_t i) { return m.at_pole(axes[i]) && !preferred_at(i); };
-  for (std::size_t i = 0; i < n; ++i) {
+  bool free_pole(std::size_t i) const { return m_.at_pole(axes_[i]) && !preferred_at(i); }
+
+  /// Point i's candidate poses (a key point), or none (on the pole); false with the plan's
+  /// failure where it has no pose within the ranges.
+  bool candidates_at(std::size_t i) {
+    const MachineKinematicsd& m = m_;
+    const std::vector<Vec3d>& axes = axes_;
+    std::vector<std::vector<Candidate>>& cand = cand_;
+    std::vector<std::size_t>& keys = keys_;
+    PosePlan& plan = plan_;
     if (m.at_pole(axes[i]) && preferred_at(i) && m.tilt.contains(0.0)) {
       const double c = preferred_at(i)->c_rad;
       cand[i] = {Candidate{Posed{0.0, c}, 1},
                  Candidate{Posed{0.0, c + Constants<double>::pi()}, 2}};
       keys.push_back(i);
-      continue;
+      return true;
     }
     if (m.at_pole(axes[i])) {
       if (!m.tilt.contains(0.0)) {
@@ -87,9 +104,9 @@ PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
         plan.failed_index = i;
         const std::string t(1, m.tilt_letter());
         plan.message = "axis on the pole needs " + t + " = 0, outside the " + t + " range";
-        return plan;
+        return false;
       }
-      continue;
+      return true;
     }
     cand[i] = candidates(m, axes[i]);
     if (const std::optional<Posed>& want = preferred_at(i)) {
@@ -125,34 +142,44 @@ PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
            << " deg (plus turns)";
       }
       plan.message = os.str();
-      return plan;
+      return false;
     }
     keys.push_back(i);
+    return true;
   }
 
-  const auto dc = [&](double c0, double c1) {
-    return m.c.continuous ? std::abs(wrap_pi(c1 - c0)) : std::abs(c1 - c0);
-  };
-  const auto weight = [&](std::size_t from, std::size_t to) {
-    double w = 0.0;  // the heaviest move between two key points
+  double dc(double c0, double c1) const {
+    return m_.c.continuous ? std::abs(wrap_pi(c1 - c0)) : std::abs(c1 - c0);
+  }
+  /// The heaviest move between two key points.
+  double weight(std::size_t from, std::size_t to) const {
+    double w = 0.0;
     for (std::size_t k = from + 1; k <= to; ++k) {
-      w = std::max(w, rapid_into[k] ? options.rapid_weight : 1.0);
+      w = std::max(w, rapid_into_[k] ? options_.rapid_weight : 1.0);
     }
     return w;
-  };
-  // Travel between two key points `steps` moves apart (steps > 1: pole points between them,
-  // where A passes through 0 and C is spread evenly over the steps).
-  const auto travel = [&](const Posed& p, const Posed& q, std::size_t steps) {
+  }
+  /// Travel between two key points `steps` moves apart (steps > 1: pole points between them,
+  /// where A passes through 0 and C is spread evenly over the steps).
+  double travel(const Posed& p, const Posed& q, std::size_t steps) const {
     const double da =
         steps > 1 ? std::abs(p.tilt_rad) + std::abs(q.tilt_rad) : std::abs(q.tilt_rad - p.tilt_rad);
     const double c = dc(p.c_rad, q.c_rad);
-    const double jump = c / static_cast<double>(steps) > options.c_jump_threshold_rad
-                            ? options.c_jump_penalty_rad
+    const double jump = c / static_cast<double>(steps) > options_.c_jump_threshold_rad
+                            ? options_.c_jump_penalty_rad
                             : 0.0;
-    return da + options.c_weight * c + jump;
-  };
+    return da + options_.c_weight * c + jump;
+  }
 
-  if (!keys.empty()) {
+  /// The dynamic programme over the key points, then the continuous C's winding.
+  void choose_keys() {
+    const MachineKinematicsd& m = m_;
+    const std::vector<std::vector<Candidate>>& cand = cand_;
+    const std::vector<std::size_t>& keys = keys_;
+    const std::vector<bool>& rapid_into = rapid_into_;
+    const std::optional<Posed>& start = start_;
+    const PosePlanOptions& options = options_;
+    PosePlan& plan = plan_;
     // Forward pass of the dynamic programme over the key points.
     std::vector<std::vector<double>> cost(keys.size());
     std::vector<std::vector<int>> from(keys.size());
@@ -215,30 +242,59 @@ PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
     }
   }
 
-  // Points on the pole: A = 0, C interpolated between the neighbouring key points (held at
-  // the ends of the sequence), so that C never jumps where it does not move the axis.
-  std::size_t i = 0;
-  while (i < n) {
-    if (!free_pole(i)) {
-      ++i;
-      continue;
+  /// Points on the pole: A = 0, C interpolated between the neighbouring key points (held at
+  /// the ends of the sequence), so that C never jumps where it does not move the axis.
+  void fill_pole_runs() {
+    const std::size_t n = axes_.size();
+    const std::optional<Posed>& start = start_;
+    PosePlan& plan = plan_;
+    std::size_t i = 0;
+    while (i < n) {
+      if (!free_pole(i)) {
+        ++i;
+        continue;
+      }
+      std::size_t e = i;
+      while (e < n && free_pole(e)) ++e;
+      const bool has_before = i > 0, has_after = e < n;
+      const double c_before =
+          has_before ? plan.poses[i - 1].c_rad
+                     : (has_after ? plan.poses[e].c_rad : (start ? start->c_rad : 0.0));
+      const double c_after = has_after ? plan.poses[e].c_rad : c_before;
+      for (std::size_t k = i; k < e; ++k) {
+        const double t = (has_before && has_after)
+                             ? static_cast<double>(k - i + 1) / static_cast<double>(e - i + 1)
+                             : 0.0;
+        plan.poses[k] = Posed{0.0, c_before + t * (c_after - c_before)};
+      }
+      i = e;
     }
-    std::size_t e = i;
-    while (e < n && free_pole(e)) ++e;
-    const bool has_before = i > 0, has_after = e < n;
-    const double c_before = has_before
-                                ? plan.poses[i - 1].c_rad
-                                : (has_after ? plan.poses[e].c_rad : (start ? start->c_rad : 0.0));
-    const double c_after = has_after ? plan.poses[e].c_rad : c_before;
-    for (std::size_t k = i; k < e; ++k) {
-      const double t = (has_before && has_after)
-                           ? static_cast<double>(k - i + 1) / static_cast<double>(e - i + 1)
-                           : 0.0;
-      plan.poses[k] = Posed{0.0, c_before + t * (c_after - c_before)};
-    }
-    i = e;
   }
-  return plan;
+
+  const MachineKinematicsd& m_;
+  const std::vector<Vec3d>& axes_;
+  const std::vector<bool>& rapid_into_;
+  const std::optional<Posed>& start_;
+  const PosePlanOptions& options_;
+  const std::vector<std::optional<Posed>>& preferred_;
+  std::vector<std::vector<Candidate>> cand_;
+  std::vector<std::size_t> keys_;  // points off the pole (and preferred pole points), in order
+  PosePlan plan_;
+};
+
+}  // namespace
+
+PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
+                    const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
+                    const PosePlanOptions& options,
+                    const std::vector<std::optional<Posed>>& preferred) {
+  if (rapid_into.size() != axes.size()) {
+    throw std::invalid_argument("plan_poses: rapid_into and axes differ in size");
+  }
+  if (!preferred.empty() && preferred.size() != axes.size()) {
+    throw std::invalid_argument("plan_poses: preferred and axes differ in size");
+  }
+  return PosePlanner(m, axes, rapid_into, start, options, preferred).run();
 }
 
 }  // namespace taxopt

@@ -261,20 +261,53 @@ double pass_time_s(const std::vector<JointPosition>& joints,
   return pass_schedule(joints, programmed_time_s, limits).total_time_s();
 }
 
-GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine, const GlobalPassProblem& problem,
-                                const AxisTest& acceptable, const GlobalOptions& options) {
-  const std::size_t n = problem.warm_start.size();
-  if (problem.input_axes.size() != n || (n > 0 && problem.segment_time_s.size() + 1 != n)) {
-    throw std::invalid_argument("plan_pass_global: n axes, n poses and n - 1 times are needed");
-  }
-  for (double ti : problem.segment_time_s) {
-    if (!(ti > 0.0) || !std::isfinite(ti)) {
-      throw std::invalid_argument("plan_pass_global: segment times must be positive");
+namespace {
+
+/// One pass's plan (plan_pass_global): the programme over coarse candidates, the pyramid of
+/// finer caps, the continuous refinement, and for the time objective the fastest start and
+/// rounds at the scheduled times.
+class GlobalPassPlanner {
+ public:
+  GlobalPassPlanner(const MachineKinematicsd& machine, const GlobalPassProblem& problem,
+                    const AxisTest& acceptable, const GlobalOptions& options)
+      : machine_(machine),
+        problem_(problem),
+        acceptable_(acceptable),
+        options_(options),
+        n_(problem.warm_start.size()),
+        timed_(options.objective == GlobalObjective::Time) {}
+
+  GlobalPassPlan run() {
+    check_problem();
+    plan_.poses = problem_.warm_start;
+    plan_.objective_warm = plan_.objective_dp = objective_of(plan_.poses);
+    if (n_ < 3) return finish();
+    const std::vector<Posed> dp = programme();
+    if (!timed_) {
+      const Value current = value_of(plan_.poses, problem_.segment_time_s, options_.jerk_weight_s2);
+      const Value dp_full = value_of(dp, problem_.segment_time_s, options_.jerk_weight_s2);
+      if (less(dp_full, current, options_.objective)) plan_.poses = dp;
+      plan_.iterations =
+          refine(problem_.segment_time_s, options_.objective, options_.max_iterations, {});
+      return finish();
     }
+    fastest(dp);
+    return finish();
   }
-  const GlobalObjective objective = options.objective;
-  const bool timed = objective == GlobalObjective::Time;
-  if (timed) {
+
+ private:
+  void check_problem() const {
+    const GlobalPassProblem& problem = problem_;
+    const std::size_t n = n_;
+    if (problem.input_axes.size() != n || (n > 0 && problem.segment_time_s.size() + 1 != n)) {
+      throw std::invalid_argument("plan_pass_global: n axes, n poses and n - 1 times are needed");
+    }
+    for (double ti : problem.segment_time_s) {
+      if (!(ti > 0.0) || !std::isfinite(ti)) {
+        throw std::invalid_argument("plan_pass_global: segment times must be positive");
+      }
+    }
+    if (!timed_) return;
     if (!problem.joints_at || (n > 0 && problem.programmed_time_s.size() + 1 != n)) {
       throw std::invalid_argument(
           "plan_pass_global: the time objective needs the joints and n - 1 programmed times");
@@ -285,110 +318,119 @@ GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine, const GlobalP
       }
     }
   }
-  const auto& t = problem.segment_time_s;
-  const double wj = options.jerk_weight_s2;
-  // The time objective: the pass's schedule at the machine's limits.
-  const auto joints_of = [&](const std::vector<Posed>& poses) {
-    std::vector<JointPosition> q(n);
-    for (std::size_t i = 0; i < n; ++i) q[i] = problem.joints_at(i, poses[i]);
-    return q;
-  };
-  const auto time_of = [&](const std::vector<Posed>& poses) {
-    return pass_time_s(joints_of(poses), problem.programmed_time_s, problem.limits);
-  };
-  const auto objective_of = [&](const std::vector<Posed>& poses) {
-    return timed ? time_of(poses) : rotary_objective(poses, t, objective, wj);
-  };
-  GlobalPassPlan plan;
-  plan.poses = problem.warm_start;
-  const auto finish = [&] {
-    plan.axes.clear();
-    for (const Posed& p : plan.poses) plan.axes.push_back(machine.forward(p));
-    plan.objective = objective_of(plan.poses);
-    return plan;
-  };
-  plan.objective_warm = plan.objective_dp = objective_of(plan.poses);
-  if (n < 3) return finish();
 
-  // (1) The programme over coarse candidates.
-  const double radius = deg_to_rad(options.max_deviation_deg);
-  const double step = deg_to_rad(std::max(options.candidate_step_deg, 1.0));
-  // Both branches only where the pass comes within reach of the pole.
-  bool near_pole = false;
-  for (const Posed& p : problem.warm_start) {
-    near_pole = near_pole || std::abs(p.tilt_rad) <= 2.0 * radius + step;
+  /// The time objective: the pass's schedule at the machine's limits.
+  std::vector<JointPosition> joints_of(const std::vector<Posed>& poses) const {
+    std::vector<JointPosition> q(n_);
+    for (std::size_t i = 0; i < n_; ++i) q[i] = problem_.joints_at(i, poses[i]);
+    return q;
   }
-  std::vector<std::vector<Posed>> cand(n);
-  std::vector<Posed> extra;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3d turn =
-        problem.input_axes[std::min(i + 1, n - 1)] - problem.input_axes[i > 0 ? i - 1 : 0];
-    std::vector<Vec3d> grid = cap_grid(problem.input_axes[i], radius, step, turn);
-    extra.clear();
-    if (timed) {
-      for (const auto& alt : problem.alternatives) extra.push_back(alt[i]);
+  double time_of(const std::vector<Posed>& poses) const {
+    return pass_time_s(joints_of(poses), problem_.programmed_time_s, problem_.limits);
+  }
+  double objective_of(const std::vector<Posed>& poses) const {
+    return timed_ ? time_of(poses)
+                  : rotary_objective(poses, problem_.segment_time_s, options_.objective,
+                                     options_.jerk_weight_s2);
+  }
+  GlobalPassPlan finish() {
+    plan_.axes.clear();
+    for (const Posed& p : plan_.poses) plan_.axes.push_back(machine_.forward(p));
+    plan_.objective = objective_of(plan_.poses);
+    return plan_;
+  }
+
+  /// (1) The programme over coarse candidates, then (1b) the pyramid: caps around the answer
+  /// at half the spacing, on its branch; a level is kept only when it lowers the objective.
+  std::vector<Posed> programme() {
+    const std::size_t n = n_;
+    const double radius = deg_to_rad(options_.max_deviation_deg);
+    const double step = deg_to_rad(std::max(options_.candidate_step_deg, 1.0));
+    // Both branches only where the pass comes within reach of the pole.
+    bool near_pole = false;
+    for (const Posed& p : problem_.warm_start) {
+      near_pole = near_pole || std::abs(p.tilt_rad) <= 2.0 * radius + step;
     }
-    cand[i] = candidates_at(machine, i, problem.warm_start[i], extra, grid, near_pole, acceptable);
-    plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
-  }
-  std::vector<std::size_t> seq;
-  if (timed) {
-    std::vector<std::vector<JointPosition>> joints(n);
+    cand_.assign(n, {});
+    std::vector<Posed> extra;
     for (std::size_t i = 0; i < n; ++i) {
-      for (const Posed& p : cand[i]) joints[i].push_back(problem.joints_at(i, p));
+      const Vec3d turn =
+          problem_.input_axes[std::min(i + 1, n - 1)] - problem_.input_axes[i > 0 ? i - 1 : 0];
+      std::vector<Vec3d> grid = cap_grid(problem_.input_axes[i], radius, step, turn);
+      extra.clear();
+      if (timed_) {
+        for (const auto& alt : problem_.alternatives) extra.push_back(alt[i]);
+      }
+      cand_[i] =
+          candidates_at(machine_, i, problem_.warm_start[i], extra, grid, near_pole, acceptable_);
+      plan_.max_candidates = std::max(plan_.max_candidates, cand_[i].size());
     }
-    seq = fastest_candidate_sequence(cand, joints, problem.programmed_time_s, t, problem.limits,
-                                     nullptr, machine.c.continuous);
-  } else {
-    seq = best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous);
+    std::vector<std::size_t> seq;
+    if (timed_) {
+      std::vector<std::vector<JointPosition>> joints(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        for (const Posed& p : cand_[i]) joints[i].push_back(problem_.joints_at(i, p));
+      }
+      seq = fastest_candidate_sequence(cand_, joints, problem_.programmed_time_s,
+                                       problem_.segment_time_s, problem_.limits, nullptr,
+                                       machine_.c.continuous);
+    } else {
+      seq = best_candidate_sequence(cand_, problem_.segment_time_s, options_.objective, nullptr,
+                                    machine_.c.continuous);
+    }
+    std::vector<Posed> dp = poses_of(seq);
+    plan_.objective_pyramid = objective_of(dp);
+    if (!timed_) plan_.objective_dp = plan_.objective_pyramid;
+    if (!timed_ && options_.fine_step_deg > 0.0) {
+      const double fine = deg_to_rad(std::max(options_.fine_step_deg, 0.25));
+      for (double s = step / 2.0; s >= fine * (1.0 - 1e-9); s /= 2.0) {
+        for (std::size_t i = 0; i < n; ++i) {
+          const std::vector<Vec3d> grid = cap_grid(machine_.forward(dp[i]), 2.0 * s, s);
+          cand_[i] = candidates_at(machine_, i, dp[i], {}, grid, false, acceptable_);
+          plan_.max_candidates = std::max(plan_.max_candidates, cand_[i].size());
+        }
+        std::vector<Posed> finer = poses_of(best_candidate_sequence(
+            cand_, problem_.segment_time_s, options_.objective, nullptr, machine_.c.continuous));
+        const double value = objective_of(finer);
+        ++plan_.pyramid_levels;
+        if (value < plan_.objective_pyramid) dp = std::move(finer), plan_.objective_pyramid = value;
+      }
+    }
+    return dp;
   }
-  // The programme's sequence as poses with a continuous C, on the warm start's turn of C at
-  // the first point (the programme works modulo a turn).
-  const auto poses_of = [&](const std::vector<std::size_t>& chosen) {
-    std::vector<Posed> out(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      out[i] = cand[i][chosen[i]];
-      if (i > 0 && machine.c.continuous) {
+
+  /// The programme's sequence as poses with a continuous C, on the warm start's turn of C at
+  /// the first point (the programme works modulo a turn).
+  std::vector<Posed> poses_of(const std::vector<std::size_t>& chosen) const {
+    std::vector<Posed> out(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      out[i] = cand_[i][chosen[i]];
+      if (i > 0 && machine_.c.continuous) {
         out[i].c_rad = out[i - 1].c_rad + wrap_pi(out[i].c_rad - out[i - 1].c_rad);
       }
     }
-    if (machine.c.continuous) {
-      const double shift = problem.warm_start[0].c_rad - out[0].c_rad;
+    if (machine_.c.continuous) {
+      const double shift = problem_.warm_start[0].c_rad - out[0].c_rad;
       const double turns = std::round(shift / Constants<double>::two_pi());
       for (Posed& p : out) p.c_rad += turns * Constants<double>::two_pi();
     }
     return out;
-  };
-  std::vector<Posed> dp = poses_of(seq);
-  plan.objective_pyramid = objective_of(dp);
-  if (!timed) plan.objective_dp = plan.objective_pyramid;
-  // (1b) The pyramid: caps around the answer at half the spacing, on its branch; a level is
-  // kept only when it lowers the objective.
-  if (!timed && options.fine_step_deg > 0.0) {
-    const double fine = deg_to_rad(std::max(options.fine_step_deg, 0.25));
-    for (double s = step / 2.0; s >= fine * (1.0 - 1e-9); s /= 2.0) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::vector<Vec3d> grid = cap_grid(machine.forward(dp[i]), 2.0 * s, s);
-        cand[i] = candidates_at(machine, i, dp[i], {}, grid, false, acceptable);
-        plan.max_candidates = std::max(plan.max_candidates, cand[i].size());
-      }
-      std::vector<Posed> finer =
-          poses_of(best_candidate_sequence(cand, t, objective, nullptr, machine.c.continuous));
-      const double value = objective_of(finer);
-      ++plan.pyramid_levels;
-      if (value < plan.objective_pyramid) dp = std::move(finer), plan.objective_pyramid = value;
-    }
   }
 
-  // (2) Continuous refinement from `plan.poses`, minimising `obj` at segment times `tt`; a step
-  // is taken only where `admissible` (if given) accepts it. Returns the steps taken.
-  const auto feasible = [&](std::size_t i, const Posed& p) {
-    if (!machine.tilt.contains(p.tilt_rad)) return false;
-    if (!machine.c.continuous && !machine.c.contains(p.c_rad)) return false;
-    return acceptable(i, machine.forward(p));
-  };
-  const auto refine = [&](const std::vector<double>& tt, GlobalObjective obj, int budget,
-                          const std::function<bool(const std::vector<Posed>&)>& admissible) {
+  bool feasible(std::size_t i, const Posed& p) const {
+    if (!machine_.tilt.contains(p.tilt_rad)) return false;
+    if (!machine_.c.continuous && !machine_.c.contains(p.c_rad)) return false;
+    return acceptable_(i, machine_.forward(p));
+  }
+
+  /// (2) Continuous refinement from `plan_.poses`, minimising `obj` at segment times `tt`; a
+  /// step is taken only where `admissible` (if given) accepts it. Returns the steps taken.
+  int refine(const std::vector<double>& tt, GlobalObjective obj, int budget,
+             const std::function<bool(const std::vector<Posed>&)>& admissible) {
+    const std::size_t n = n_;
+    const double wj = options_.jerk_weight_s2;
+    const GlobalOptions& options = options_;
+    GlobalPassPlan& plan = plan_;
     Value current = value_of(plan.poses, tt, wj);
     std::vector<double> row_weight(n, 1.0);
     double lambda = 1e-3;
@@ -449,42 +491,51 @@ GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine, const GlobalP
       }
     }
     return taken;
-  };
-
-  if (!timed) {
-    Value current = value_of(plan.poses, t, wj);
-    const Value dp_full = value_of(dp, t, wj);
-    if (less(dp_full, current, objective)) plan.poses = dp;
-    plan.iterations = refine(t, objective, options.max_iterations, {});
-    return finish();
   }
 
-  // The time objective: the fastest of the starts by the schedule itself (the warm start
-  // first, so ties keep it), then the sum of squares lowered at the scheduled times, a step
-  // taken only where the schedule does not get slower; the times follow the poses (rounds).
-  double best_s = plan.objective_warm;
-  for (const auto& alt : problem.alternatives) {
-    const double alt_s = time_of(alt);
-    if (alt_s < best_s * (1.0 - 1e-9)) plan.poses = alt, best_s = alt_s;
+  /// The time objective: the fastest of the starts by the schedule itself (the warm start
+  /// first, so ties keep it), then the sum of squares lowered at the scheduled times, a step
+  /// taken only where the schedule does not get slower; the times follow the poses (rounds).
+  void fastest(const std::vector<Posed>& dp) {
+    double best_s = plan_.objective_warm;
+    for (const auto& alt : problem_.alternatives) {
+      const double alt_s = time_of(alt);
+      if (alt_s < best_s * (1.0 - 1e-9)) plan_.poses = alt, best_s = alt_s;
+    }
+    plan_.objective_dp = time_of(dp);
+    if (plan_.objective_dp < best_s * (1.0 - 1e-9)) plan_.poses = dp, best_s = plan_.objective_dp;
+    for (int round = 0; round < 3 && plan_.iterations < options_.max_iterations; ++round) {
+      FeedSchedule schedule =
+          pass_schedule(joints_of(plan_.poses), problem_.programmed_time_s, problem_.limits);
+      for (double& ti : schedule.time_s) ti = std::max(ti, 1e-6);
+      const int taken =
+          refine(schedule.time_s, GlobalObjective::SumSquares,
+                 options_.max_iterations - plan_.iterations, [&](const std::vector<Posed>& trial) {
+                   const double trial_s = time_of(trial);
+                   if (trial_s > best_s * (1.0 + 1e-12)) return false;
+                   best_s = trial_s;
+                   return true;
+                 });
+      plan_.iterations += taken;
+      if (taken == 0) break;
+    }
   }
-  plan.objective_dp = time_of(dp);
-  if (plan.objective_dp < best_s * (1.0 - 1e-9)) plan.poses = dp, best_s = plan.objective_dp;
-  for (int round = 0; round < 3 && plan.iterations < options.max_iterations; ++round) {
-    FeedSchedule schedule =
-        pass_schedule(joints_of(plan.poses), problem.programmed_time_s, problem.limits);
-    for (double& ti : schedule.time_s) ti = std::max(ti, 1e-6);
-    const int taken =
-        refine(schedule.time_s, GlobalObjective::SumSquares,
-               options.max_iterations - plan.iterations, [&](const std::vector<Posed>& trial) {
-                 const double trial_s = time_of(trial);
-                 if (trial_s > best_s * (1.0 + 1e-12)) return false;
-                 best_s = trial_s;
-                 return true;
-               });
-    plan.iterations += taken;
-    if (taken == 0) break;
-  }
-  return finish();
+
+  const MachineKinematicsd& machine_;
+  const GlobalPassProblem& problem_;
+  const AxisTest& acceptable_;
+  const GlobalOptions& options_;
+  const std::size_t n_;
+  const bool timed_;
+  std::vector<std::vector<Posed>> cand_;
+  GlobalPassPlan plan_;
+};
+
+}  // namespace
+
+GlobalPassPlan plan_pass_global(const MachineKinematicsd& machine, const GlobalPassProblem& problem,
+                                const AxisTest& acceptable, const GlobalOptions& options) {
+  return GlobalPassPlanner(machine, problem, acceptable, options).run();
 }
 
 }  // namespace taxopt

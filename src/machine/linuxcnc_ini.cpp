@@ -1,5 +1,6 @@
 #include "taxopt/io/linuxcnc_ini.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -157,58 +158,37 @@ struct KinsModule {
   std::string formula;  ///< the machine file's comment: the module's formula
 };
 
+/// The modules, each by the names a [KINS] KINEMATICS line gives it.
 std::optional<KinsModule> kins_module(const std::string& module) {
-  if (module == "xyzac-trt-kins" || module == "xyzac-trt") {
-    return KinsModule{"xyzac-trt",
-                      "ac-table-table",
-                      false,
-                      RotaryLayout::TableTable,
-                      -1,
-                      -1,
-                      "",
-                      "# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 "
-                      "on A and C.\n# Pivot: C through (x-rot-point, y-rot-point), A at y = "
-                      "y-rot-point + y-offset,\n# z = z-rot-point + z-offset.\n"};
-  }
-  if (module == "xyzbc-trt-kins" || module == "xyzbc-trt") {
-    return KinsModule{"xyzbc-trt",
-                      "bc-table-table",
-                      true,
-                      RotaryLayout::TableTable,
-                      -1,
-                      -1,
-                      "",
-                      "# xyzbc-trt-kins: joints = Rot(Y, B)(Rot(Z, C)(p - rot) - d) + d + rot, "
-                      "d = (x-offset,\n# 0, z-offset): sense -1 on B and C. Pivot: C through "
-                      "(x-rot-point, y-rot-point), B at\n# x = x-rot-point + x-offset, z = "
-                      "z-rot-point + z-offset.\n"};
-  }
-  // maxkins.c: joints = Rot(Z, -C) tip + L (-sin B, 0, cos B - 1), L its pivot-length pin;
-  // "the direction of the B axis is the opposite of the conventional": sense -1 on B, +1 on C.
-  // Its joints are X Y Z A B C whatever the INI's COORDINATES.
-  if (module == "maxkins") {
-    return KinsModule{"maxkins",
-                      "bc-head-table",
-                      true,
-                      RotaryLayout::HeadTable,
-                      -1,
-                      1,
-                      "XYZABC",
-                      "# maxkins: joints = Rot(Z, -C) tip + L (-sin B, 0, cos B - 1), L the\n"
-                      "# pivot-length pin: the head tilts about B (sense -1), the table turns "
-                      "about C (+1).\n"};
-  }
-  // 5axiskins.c: joints = tip - L (sin B cos C, sin B sin C, 1 - cos B): sense -1 on B, +1 on C.
-  if (module == "5axiskins") {
-    return KinsModule{"5axiskins",
-                      "bc-head-head",
-                      true,
-                      RotaryLayout::HeadHead,
-                      -1,
-                      1,
-                      "",
-                      "# 5axiskins: joints = tip - L (sin B cos C, sin B sin C, 1 - cos B), L the\n"
-                      "# pivot-length pin: the head turns about C (+1) and tilts about B (-1).\n"};
+  // clang-format off
+  static const std::vector<std::pair<std::vector<std::string>, KinsModule>> modules = {
+      {{"xyzac-trt-kins", "xyzac-trt"},
+       {"xyzac-trt", "ac-table-table", false, RotaryLayout::TableTable, -1, -1, "",
+        "# xyzac-trt-kins: tool axis (sin A sin C, sin A cos C, cos A): sense -1 on A and C.\n"
+        "# Pivot: C through (x-rot-point, y-rot-point), A at y = y-rot-point + y-offset,\n"
+        "# z = z-rot-point + z-offset.\n"}},
+      {{"xyzbc-trt-kins", "xyzbc-trt"},
+       {"xyzbc-trt", "bc-table-table", true, RotaryLayout::TableTable, -1, -1, "",
+        "# xyzbc-trt-kins: joints = Rot(Y, B)(Rot(Z, C)(p - rot) - d) + d + rot, d = (x-offset,\n"
+        "# 0, z-offset): sense -1 on B and C. Pivot: C through (x-rot-point, y-rot-point), B at\n"
+        "# x = x-rot-point + x-offset, z = z-rot-point + z-offset.\n"}},
+      // maxkins.c: joints = Rot(Z, -C) tip + L (-sin B, 0, cos B - 1), L its pivot-length pin;
+      // "the direction of the B axis is the opposite of the conventional": sense -1 on B, +1 on
+      // C. Its joints are X Y Z A B C whatever the INI's COORDINATES.
+      {{"maxkins"},
+       {"maxkins", "bc-head-table", true, RotaryLayout::HeadTable, -1, 1, "XYZABC",
+        "# maxkins: joints = Rot(Z, -C) tip + L (-sin B, 0, cos B - 1), L the\n"
+        "# pivot-length pin: the head tilts about B (sense -1), the table turns about C (+1).\n"}},
+      // 5axiskins.c: joints = tip - L (sin B cos C, sin B sin C, 1 - cos B): sense -1 on B,
+      // +1 on C.
+      {{"5axiskins"},
+       {"5axiskins", "bc-head-head", true, RotaryLayout::HeadHead, -1, 1, "",
+        "# 5axiskins: joints = tip - L (sin B cos C, sin B sin C, 1 - cos B), L the\n"
+        "# pivot-length pin: the head turns about C (+1) and tilts about B (-1).\n"}},
+  };
+  // clang-format on
+  for (const auto& [names, m] : modules) {
+    if (std::find(names.begin(), names.end(), module) != names.end()) return m;
   }
   return std::nullopt;
 }

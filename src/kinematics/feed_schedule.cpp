@@ -61,158 +61,204 @@ double FeedSchedule::total_time_s() const {
   return t;
 }
 
-FeedSchedule schedule_feed(const FeedChain& chain, const JointLimits& limits,
-                           const ScheduleOptions& options) {
-  const std::size_t n = chain.joints.size();
-  if (n == 0 || chain.min_time_s.size() + 1 != n) {
-    throw std::invalid_argument("schedule_feed: need n joint positions and n - 1 segment times");
-  }
-  const double keep = 1.0 - options.margin;
-  FeedSchedule out;
-  out.time_s.assign(n - 1, 0.0);
-  out.bound.assign(n - 1, FeedBound::Programmed);
-  out.bound_joint.assign(n - 1, Joint::X);
+namespace {
 
-  // The segments that move a joint; the others take no time and are skipped.
-  std::vector<std::size_t> seg;
-  std::vector<JointPosition> dq;
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    JointPosition d;
-    bool moves = false;
-    for (std::size_t j = 0; j < kJointCount; ++j) {
-      d[j] = chain.joints[i + 1][j] - chain.joints[i][j];
-      if (!std::isfinite(d[j])) {
-        throw std::invalid_argument("schedule_feed: joint position not finite at point " +
-                                    std::to_string(i + 1));
-      }
-      moves = moves || d[j] != 0.0;
-    }
-    if (!moves) continue;
-    if (!(chain.min_time_s[i] > 0.0) || !std::isfinite(chain.min_time_s[i])) {
-      throw std::invalid_argument("schedule_feed: segment " + std::to_string(i) +
-                                  " moves but has no positive time at the programmed feed");
-    }
-    seg.push_back(i);
-    dq.push_back(d);
-  }
-  const std::size_t m = seg.size();
-  if (m == 0) return out;
+/// One chain's schedule (schedule_feed): the segments that move, their single caps and the
+/// same-direction turns between them, the sweeps that make neighbouring rates agree, and the
+/// uniform fallback where the sweeps do not converge.
+class FeedScheduler {
+ public:
+  FeedScheduler(const FeedChain& chain, const JointLimits& limits, const ScheduleOptions& options)
+      : chain_(chain), limits_(limits), options_(options), keep_(1.0 - options.margin) {}
 
-  // Caps of single segments: programmed feed, velocity limits, and the acceleration bounds
-  // of rests, reversals, starts and stops (p q <= 0). Same-direction turns are kept per point.
-  std::vector<Cap> cap(m);
-  std::vector<std::size_t> turn_begin(m + 1, 0);
-  std::vector<Turn> turns;
-  const auto own_half_time = [&](std::size_t k, std::size_t j) {
-    // |dq| u <= A / (2u): the joint reaches (or sheds) its velocity within half the segment.
-    return std::sqrt(limits[j].max_accel_per_s2 * keep / (2.0 * std::abs(dq[k][j])));
-  };
-  for (std::size_t k = 0; k < m; ++k) {
-    cap[k].lower(1.0 / chain.min_time_s[seg[k]], FeedBound::Programmed, Joint::X);
-    turn_begin[k] = turns.size();
-    for (std::size_t j = 0; j < kJointCount; ++j) {
-      const Joint joint = static_cast<Joint>(j);
-      const double d = std::abs(dq[k][j]);
-      if (d == 0.0) continue;
-      if (limits[j].max_velocity_per_s > 0.0) {
-        cap[k].lower(limits[j].max_velocity_per_s * keep / d, FeedBound::Velocity, joint);
-      }
-      if (!(limits[j].max_accel_per_s2 > 0.0)) continue;
-      const bool first = k == 0, last = k + 1 == m;
-      if ((first && chain.start_at_rest) || (last && chain.end_at_rest)) {
-        cap[k].lower(own_half_time(k, j), FeedBound::Acceleration, joint);
-      }
+  FeedSchedule run() {
+    const std::size_t n = chain_.joints.size();
+    if (n == 0 || chain_.min_time_s.size() + 1 != n) {
+      throw std::invalid_argument("schedule_feed: need n joint positions and n - 1 segment times");
     }
-    if (k == 0) continue;
-    // The point between segments k - 1 and k.
+    out_.time_s.assign(n - 1, 0.0);
+    out_.bound.assign(n - 1, FeedBound::Programmed);
+    out_.bound_joint.assign(n - 1, Joint::X);
+    moving_segments();
+    if (seg_.empty()) return out_;
+    single_caps();
+    sweep();
+    for (std::size_t k = 0; k < seg_.size(); ++k) {
+      // A segment at its programmed feed takes exactly its time (1 / (1 / t) may not be t).
+      out_.time_s[seg_[k]] = std::max(1.0 / u_[k], chain_.min_time_s[seg_[k]]);
+      out_.bound[seg_[k]] = cap_[k].bound;
+      out_.bound_joint[seg_[k]] = cap_[k].joint;
+    }
+    if (!out_.converged) uniform_fallback();
+    return out_;
+  }
+
+ private:
+  /// The segments that move a joint; the others take no time and are skipped.
+  void moving_segments() {
+    for (std::size_t i = 0; i + 1 < chain_.joints.size(); ++i) {
+      JointPosition d;
+      bool moves = false;
+      for (std::size_t j = 0; j < kJointCount; ++j) {
+        d[j] = chain_.joints[i + 1][j] - chain_.joints[i][j];
+        if (!std::isfinite(d[j])) {
+          throw std::invalid_argument("schedule_feed: joint position not finite at point " +
+                                      std::to_string(i + 1));
+        }
+        moves = moves || d[j] != 0.0;
+      }
+      if (!moves) continue;
+      if (!(chain_.min_time_s[i] > 0.0) || !std::isfinite(chain_.min_time_s[i])) {
+        throw std::invalid_argument("schedule_feed: segment " + std::to_string(i) +
+                                    " moves but has no positive time at the programmed feed");
+      }
+      seg_.push_back(i);
+      dq_.push_back(d);
+    }
+  }
+
+  /// |dq| u <= A / (2u): the joint reaches (or sheds) its velocity within half the segment.
+  double own_half_time(std::size_t k, std::size_t j) const {
+    return std::sqrt(limits_[j].max_accel_per_s2 * keep_ / (2.0 * std::abs(dq_[k][j])));
+  }
+
+  /// Caps of single segments: programmed feed, velocity limits, and the acceleration bounds
+  /// of rests, reversals, starts and stops (p q <= 0). Same-direction turns are kept per point:
+  /// those of the point before segment k are [turn_begin_[k], turn_begin_[k + 1]) for k >= 1.
+  void single_caps() {
+    const std::size_t m = seg_.size();
+    cap_.assign(m, Cap{});
+    turn_begin_.assign(m + 1, 0);
+    for (std::size_t k = 0; k < m; ++k) {
+      cap_[k].lower(1.0 / chain_.min_time_s[seg_[k]], FeedBound::Programmed, Joint::X);
+      turn_begin_[k] = turns_.size();
+      for (std::size_t j = 0; j < kJointCount; ++j) {
+        const Joint joint = static_cast<Joint>(j);
+        const double d = std::abs(dq_[k][j]);
+        if (d == 0.0) continue;
+        if (limits_[j].max_velocity_per_s > 0.0) {
+          cap_[k].lower(limits_[j].max_velocity_per_s * keep_ / d, FeedBound::Velocity, joint);
+        }
+        if (!(limits_[j].max_accel_per_s2 > 0.0)) continue;
+        const bool first = k == 0, last = k + 1 == m;
+        if ((first && chain_.start_at_rest) || (last && chain_.end_at_rest)) {
+          cap_[k].lower(own_half_time(k, j), FeedBound::Acceleration, joint);
+        }
+      }
+      if (k > 0) point_caps(k);
+    }
+    turn_begin_[m] = turns_.size();
+  }
+
+  /// The point between segments k - 1 and k.
+  void point_caps(std::size_t k) {
     for (std::size_t j = 0; j < kJointCount; ++j) {
-      if (!(limits[j].max_accel_per_s2 > 0.0)) continue;
+      if (!(limits_[j].max_accel_per_s2 > 0.0)) continue;
       const Joint joint = static_cast<Joint>(j);
-      const double p = dq[k - 1][j], q = dq[k][j];
+      const double p = dq_[k - 1][j], q = dq_[k][j];
       if (p * q > 0.0) {
-        turns.push_back(Turn{std::abs(p), std::abs(q), limits[j].max_accel_per_s2 * keep,
-                             static_cast<std::uint8_t>(j)});
+        turns_.push_back(Turn{std::abs(p), std::abs(q), limits_[j].max_accel_per_s2 * keep_,
+                              static_cast<std::uint8_t>(j)});
         continue;
       }
-      if (p != 0.0) cap[k - 1].lower(own_half_time(k - 1, j), FeedBound::Acceleration, joint);
-      if (q != 0.0) cap[k].lower(own_half_time(k, j), FeedBound::Acceleration, joint);
+      if (p != 0.0) cap_[k - 1].lower(own_half_time(k - 1, j), FeedBound::Acceleration, joint);
+      if (q != 0.0) cap_[k].lower(own_half_time(k, j), FeedBound::Acceleration, joint);
     }
   }
-  turn_begin[m] = turns.size();
-  // turns of the point before segment k: [turn_begin[k], turn_begin[k + 1]) for k >= 1.
 
-  std::vector<double> u(m);
-  for (std::size_t k = 0; k < m; ++k) u[k] = cap[k].rate;
-  const auto lower = [&](std::size_t k, double r, Joint joint) {
-    if (r < u[k]) {
-      u[k] = r;
-      cap[k].bound = FeedBound::Acceleration;
-      cap[k].joint = joint;
+  bool lower(std::size_t k, double r, Joint joint) {
+    if (r < u_[k]) {
+      u_[k] = r;
+      cap_[k].bound = FeedBound::Acceleration;
+      cap_[k].joint = joint;
       return true;
     }
     return false;
-  };
-  const auto psi = [&](std::size_t k, Joint& joint) {  // bound on u[k-1] from u[k]
+  }
+  /// The bound on u[k-1] from u[k].
+  double psi(std::size_t k, Joint& joint) const {
     double r = kInf;
-    for (std::size_t t = turn_begin[k]; t < turn_begin[k + 1]; ++t) {
-      const double x = rate_before(turns[t], u[k]);
-      if (x < r) r = x, joint = static_cast<Joint>(turns[t].joint);
+    for (std::size_t t = turn_begin_[k]; t < turn_begin_[k + 1]; ++t) {
+      const double x = rate_before(turns_[t], u_[k]);
+      if (x < r) r = x, joint = static_cast<Joint>(turns_[t].joint);
     }
     return r;
-  };
-  const auto phi = [&](std::size_t k, Joint& joint) {  // bound on u[k] from u[k-1]
+  }
+  /// The bound on u[k] from u[k-1].
+  double phi(std::size_t k, Joint& joint) const {
     double r = kInf;
-    for (std::size_t t = turn_begin[k]; t < turn_begin[k + 1]; ++t) {
-      const double x = rate_after(turns[t], u[k - 1]);
-      if (x < r) r = x, joint = static_cast<Joint>(turns[t].joint);
+    for (std::size_t t = turn_begin_[k]; t < turn_begin_[k + 1]; ++t) {
+      const double x = rate_after(turns_[t], u_[k - 1]);
+      if (x < r) r = x, joint = static_cast<Joint>(turns_[t].joint);
     }
     return r;
-  };
-  out.converged = false;
-  while (out.sweeps < options.max_sweeps) {
-    ++out.sweeps;
-    Joint joint = Joint::X;
-    for (std::size_t k = m - 1; k >= 1; --k) {
-      const double r = psi(k, joint);
-      lower(k - 1, r, joint);
-    }
-    for (std::size_t k = 1; k < m; ++k) {
-      const double r = phi(k, joint);
-      lower(k, r, joint);
-    }
-    // Every phi holds after the forward sweep; done when every psi holds too.
-    bool ok = true;
-    for (std::size_t k = 1; k < m && ok; ++k) {
-      ok = u[k - 1] <= psi(k, joint) * (1.0 + 1e-12);
-    }
-    if (ok) {
-      out.converged = true;
-      break;
+  }
+
+  /// Backward and forward sweeps until every turn's bound holds both ways.
+  void sweep() {
+    const std::size_t m = seg_.size();
+    u_.resize(m);
+    for (std::size_t k = 0; k < m; ++k) u_[k] = cap_[k].rate;
+    out_.converged = false;
+    while (out_.sweeps < options_.max_sweeps) {
+      ++out_.sweeps;
+      Joint joint = Joint::X;
+      for (std::size_t k = m - 1; k >= 1; --k) {
+        const double r = psi(k, joint);
+        lower(k - 1, r, joint);
+      }
+      for (std::size_t k = 1; k < m; ++k) {
+        const double r = phi(k, joint);
+        lower(k, r, joint);
+      }
+      // Every phi holds after the forward sweep; done when every psi holds too.
+      bool ok = true;
+      for (std::size_t k = 1; k < m && ok; ++k) {
+        ok = u_[k - 1] <= psi(k, joint) * (1.0 + 1e-12);
+      }
+      if (ok) {
+        out_.converged = true;
+        break;
+      }
     }
   }
-  for (std::size_t k = 0; k < m; ++k) {
-    // A segment at its programmed feed takes exactly its time (1 / (1 / t) may not be t).
-    out.time_s[seg[k]] = std::max(1.0 / u[k], chain.min_time_s[seg[k]]);
-    out.bound[seg[k]] = cap[k].bound;
-    out.bound_joint[seg[k]] = cap[k].joint;
-  }
-  if (!out.converged) {
-    // Feasible fallback: slow the whole chain uniformly until the exact model holds
-    // (velocities scale with the factor, accelerations with its square).
+
+  /// Feasible fallback: slow the whole chain uniformly until the exact model holds
+  /// (velocities scale with the factor, accelerations with its square).
+  void uniform_fallback() {
     const JointRates r =
-        joint_rates(chain.joints, out.time_s, chain.start_at_rest, chain.end_at_rest);
+        joint_rates(chain_.joints, out_.time_s, chain_.start_at_rest, chain_.end_at_rest);
     double slow = 1.0;
     for (std::size_t j = 0; j < kJointCount; ++j) {
-      if (limits[j].max_velocity_per_s > 0.0 && r.max_velocity_per_s[j] > 0.0) {
-        slow = std::min(slow, limits[j].max_velocity_per_s * keep / r.max_velocity_per_s[j]);
+      if (limits_[j].max_velocity_per_s > 0.0 && r.max_velocity_per_s[j] > 0.0) {
+        slow = std::min(slow, limits_[j].max_velocity_per_s * keep_ / r.max_velocity_per_s[j]);
       }
-      if (limits[j].max_accel_per_s2 > 0.0 && r.max_accel_per_s2[j] > 0.0) {
-        slow = std::min(slow, std::sqrt(limits[j].max_accel_per_s2 * keep / r.max_accel_per_s2[j]));
+      if (limits_[j].max_accel_per_s2 > 0.0 && r.max_accel_per_s2[j] > 0.0) {
+        slow =
+            std::min(slow, std::sqrt(limits_[j].max_accel_per_s2 * keep_ / r.max_accel_per_s2[j]));
       }
     }
-    for (double& t : out.time_s) t /= slow;
+    for (double& t : out_.time_s) t /= slow;
   }
-  return out;
+
+  const FeedChain& chain_;
+  const JointLimits& limits_;
+  const ScheduleOptions& options_;
+  const double keep_;
+  FeedSchedule out_;
+  std::vector<std::size_t> seg_;
+  std::vector<JointPosition> dq_;
+  std::vector<Cap> cap_;
+  std::vector<std::size_t> turn_begin_;
+  std::vector<Turn> turns_;
+  std::vector<double> u_;
+};
+
+}  // namespace
+
+FeedSchedule schedule_feed(const FeedChain& chain, const JointLimits& limits,
+                           const ScheduleOptions& options) {
+  return FeedScheduler(chain, limits, options).run();
 }
 
 JointRates joint_rates(const std::vector<JointPosition>& joints, const std::vector<double>& time_s,

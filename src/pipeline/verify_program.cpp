@@ -63,57 +63,82 @@ class BlockOwner {
   std::size_t last_;
 };
 
-}  // namespace
+/// The program's own checks (check_program): each kind of breach counted, its first named.
+class ProgramChecks {
+ public:
+  ProgramChecks(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
+                JobResult& res)
+      : machine_(run.machine),
+        t_(run.machine.gcode.program),
+        posted_(posted),
+        w_(w),
+        res_(res),
+        op_of_(res.gcode, posted.size()),
+        threshold_deg_(run.machine.gcode.program.index_threshold_deg + 1e-9) {}
 
-void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
-                   JobResult& res) {
-  const Machine& machine = run.machine;
-  const ProgramTemplate& t = machine.gcode.program;
-  const std::vector<GcodeMove>& moves = w.moves;
-  if (moves.empty() || posted.empty()) return;
-  const BlockOwner op_of(res.gcode, posted.size());
+  void run() {
+    travel();
+    const GcodeMove* prev = nullptr;
+    for (const GcodeMove& m : w_.moves) {
+      block_words(m, prev);
+      approach(m, prev);
+      prev = &m;
+    }
+    coolant();
+    end_pose();
+    for (const auto& [code, b] : breaches_) {
+      add_finding(res_, code, b.operation, 0,
+                  b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""),
+                  b.line);
+    }
+  }
+
+ private:
   struct Breach {
     std::size_t count = 0;
     std::size_t operation = 0;
     int line = 0;
     std::string what;
   };
-  std::map<FindingCode, Breach> breaches;
-  const auto breach = [&](FindingCode code, const GcodeMove& m, const std::string& what) {
-    Breach& b = breaches[code];
+
+  void breach(FindingCode code, const GcodeMove& m, const std::string& what) {
+    Breach& b = breaches_[code];
     if (b.count++ == 0) {
-      b.operation = op_of(m.line);
+      b.operation = op_of_(m.line);
       b.line = m.line;
-      b.what = "operation " + posted[op_of(m.line)].name + ": G-code line " +
+      b.what = "operation " + posted_[op_of_(m.line)].name + ": G-code line " +
                std::to_string(m.line) + " " + what;
     }
-  };
-  const double threshold_deg = t.index_threshold_deg + 1e-9;
-  bool after_retract = false, xy_set = false;
-  double xy[2] = {0.0, 0.0};
-  const GcodeMove* prev = nullptr;
-  // Every block's end within the machine's travel, the spindle's position (the approach, the
-  // index moves, the retracts too: a LinuxCNC program whose approach left Z's travel by the
-  // tool's length stopped there with a soft-limit error, measured on LinuxCNC's motion controller).
-  // The CL points' own blocks are checked with their points (verify_operation, with the same
-  // tool length): here the blocks between them.
-  std::set<const GcodeMove*> at_points;
-  for (const auto& op_moves : w.point_moves) at_points.insert(op_moves.begin(), op_moves.end());
-  for (std::size_t k = 0; k < moves.size() && k < w.spindle_mm.size(); ++k) {
-    if (!w.spindle_mm[k] || at_points.count(&moves[k])) continue;
-    for (int q = 0; q < 3; ++q) {
-      const double v = (*w.spindle_mm[k])[q];
-      const std::optional<std::string> outside = outside_travel(machine, q, v);
-      if (!outside) continue;
-      std::ostringstream os;
-      os << "takes the spindle to "
-         << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
-         << res.gcode.time_tool_length_mm << " mm)" << *outside;
-      breach(FindingCode::TravelExceeded, moves[k], os.str());
+  }
+
+  /// Every block's end within the machine's travel, the spindle's position (the approach, the
+  /// index moves, the retracts too: a LinuxCNC program whose approach left Z's travel by the
+  /// tool's length stopped there with a soft-limit error, measured on LinuxCNC's motion
+  /// controller). The CL points' own blocks are checked with their points (verify_operation,
+  /// with the same tool length): here the blocks between them.
+  void travel() {
+    const std::vector<GcodeMove>& moves = w_.moves;
+    std::set<const GcodeMove*> at_points;
+    for (const auto& op_moves : w_.point_moves) at_points.insert(op_moves.begin(), op_moves.end());
+    for (std::size_t k = 0; k < moves.size() && k < w_.spindle_mm.size(); ++k) {
+      if (!w_.spindle_mm[k] || at_points.count(&moves[k])) continue;
+      for (int q = 0; q < 3; ++q) {
+        const double v = (*w_.spindle_mm[k])[q];
+        const std::optional<std::string> outside = outside_travel(machine_, q, v);
+        if (!outside) continue;
+        std::ostringstream os;
+        os << "takes the spindle to "
+           << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
+           << res_.gcode.time_tool_length_mm << " mm)" << *outside;
+        breach(FindingCode::TravelExceeded, moves[k], os.str());
+      }
     }
   }
-  for (const GcodeMove& m : moves) {
-    const PostedOperation& po = posted[op_of(m.line)];
+
+  /// The tool, the spindle and the feed a block runs with, and a table turned in a rapid
+  /// below the retract.
+  void block_words(const GcodeMove& m, const GcodeMove* prev) {
+    const PostedOperation& po = posted_[op_of_(m.line)];
     if (!m.retract) {
       if (m.tool <= 0) {
         breach(FindingCode::NoToolCalled, m, "moves with no tool called (T with M6)");
@@ -124,8 +149,8 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
       }
     }
     // A rapid written at a joint-safe feed (LinuxCNC, tcp) cuts nothing: a rapid still.
-    const bool joint_safe_rapid = std::binary_search(res.gcode.joint_safe_rapids.begin(),
-                                                     res.gcode.joint_safe_rapids.end(), m.line);
+    const bool joint_safe_rapid = std::binary_search(res_.gcode.joint_safe_rapids.begin(),
+                                                     res_.gcode.joint_safe_rapids.end(), m.line);
     if (!m.rapid && !m.spindle_on && !joint_safe_rapid) {
       breach(FindingCode::SpindleOff, m, "moves at feed with the spindle stopped");
     }
@@ -136,86 +161,110 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
              "moves at feed F0 (the feed rounds to zero at gcode.feed_decimals)");
     }
     if (prev && m.rapid && !m.positioning && !prev->positioning && !po.swept_moves_checked &&
-        t.retract != SafeRetract::None &&
+        t_.retract != SafeRetract::None &&
         std::max(std::abs(m.tilt_deg - prev->tilt_deg), std::abs(m.c_deg - prev->c_deg)) >
-            threshold_deg) {
+            threshold_deg_) {
       breach(FindingCode::IndexWithoutRetract, m,
-             "turns the table by more than " + shown(t.index_threshold_deg) +
+             "turns the table by more than " + shown(t_.index_threshold_deg) +
                  " deg in a rapid below the retract, with no part model to check the move");
     }
+  }
+
+  /// Down from the retract height: XY first, then straight down, or under TCP along the tool
+  /// axis (as CAM links an approach: the writer comes down so where the axis is not vertical).
+  void approach(const GcodeMove& m, const GcodeMove* prev) {
     if (m.retract) {
-      after_retract = true;
-      xy_set = false;
-    } else if (after_retract) {
-      const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
-      const bool turns = prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg);
-      if (gives_z && !gives_xy && !xy_set && !turns) {
-        // Straight down (or up) to the clearance height, where it is: not the way in yet.
-      } else if (gives_xy && !gives_z) {
-        xy_set = true;
-        xy[0] = m.xyz_mm.x();
-        xy[1] = m.xyz_mm.y();
-      } else if (gives_z) {
-        // Down from there: straight down, or under TCP along the tool axis (as CAM links an
-        // approach: the writer comes down so where the axis is not vertical).
-        const auto along_axis = [&] {
-          if (!prev || !m.tcp || !prev->tcp) return false;
-          const Vec3d d = m.xyz_mm - prev->xyz_mm;
-          if (d.norm() < 1e-9) return false;
-          const Vec3d axis =
-              machine.rotary.forward(Posed{deg_to_rad(m.tilt_deg), deg_to_rad(m.c_deg)});
-          return std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
-        };
-        if (!xy_set || ((m.xyz_mm.x() != xy[0] || m.xyz_mm.y() != xy[1]) && !along_axis()) ||
-            (prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg))) {
-          breach(FindingCode::DiagonalApproach, m,
-                 "leaves the retract height otherwise than XY first, then down");
-        }
-        after_retract = false;
+      after_retract_ = true;
+      xy_set_ = false;
+      return;
+    }
+    if (!after_retract_) return;
+    const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
+    const bool turns = prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg);
+    if (gives_z && !gives_xy && !xy_set_ && !turns) {
+      // Straight down (or up) to the clearance height, where it is: not the way in yet.
+    } else if (gives_xy && !gives_z) {
+      xy_set_ = true;
+      xy_[0] = m.xyz_mm.x();
+      xy_[1] = m.xyz_mm.y();
+    } else if (gives_z) {
+      const auto along_axis = [&] {
+        if (!prev || !m.tcp || !prev->tcp) return false;
+        const Vec3d d = m.xyz_mm - prev->xyz_mm;
+        if (d.norm() < 1e-9) return false;
+        const Vec3d axis =
+            machine_.rotary.forward(Posed{deg_to_rad(m.tilt_deg), deg_to_rad(m.c_deg)});
+        return std::abs(d.normalized().dot(axis)) > std::cos(1e-3);
+      };
+      if (!xy_set_ || ((m.xyz_mm.x() != xy_[0] || m.xyz_mm.y() != xy_[1]) && !along_axis()) ||
+          turns) {
+        breach(FindingCode::DiagonalApproach, m,
+               "leaves the retract height otherwise than XY first, then down");
+      }
+      after_retract_ = false;
+    }
+  }
+
+  /// The coolant at each operation's first point: the CL file's (its last change before that
+  /// point), else the machine file's.
+  void coolant() {
+    const auto code_of = [](ClCoolant c) {
+      return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0;
+    };
+    for (std::size_t k = 0; k < posted_.size(); ++k) {
+      const PostedOperation& po = posted_[k];
+      if (w_.point_moves[k].empty()) continue;
+      int want = po.coolant                     ? code_of(*po.coolant)
+                 : t_.coolant == Coolant::Flood ? 8
+                 : t_.coolant == Coolant::Mist  ? 7
+                                                : 0;
+      for (const ProgramEvent& e : po.events) {
+        if (e.kind == ProgramEvent::Kind::Coolant && e.before_point == 0) want = code_of(e.coolant);
+      }
+      const GcodeMove& first = *w_.point_moves[k].front();
+      if (first.coolant != want) {
+        breach(FindingCode::CoolantMismatch, first,
+               "starts with coolant " +
+                   std::string(first.coolant == 0   ? "off"
+                               : first.coolant == 7 ? "M7"
+                                                    : "M8") +
+                   " where " +
+                   std::string(want == 0   ? "off"
+                               : want == 7 ? "M7 (mist)"
+                                           : "M8 (flood)") +
+                   " is asked (CL file COOLNT, else the machine file's gcode.coolant)");
       }
     }
-    prev = &m;
   }
-  // The coolant at each operation's first point: the CL file's (its last change before that
-  // point), else the machine file's.
-  const auto code_of = [](ClCoolant c) {
-    return c == ClCoolant::Flood ? 8 : c == ClCoolant::Mist ? 7 : 0;
-  };
-  for (std::size_t k = 0; k < posted.size(); ++k) {
-    const PostedOperation& po = posted[k];
-    if (w.point_moves[k].empty()) continue;
-    int want = po.coolant                    ? code_of(*po.coolant)
-               : t.coolant == Coolant::Flood ? 8
-               : t.coolant == Coolant::Mist  ? 7
-                                             : 0;
-    for (const ProgramEvent& e : po.events) {
-      if (e.kind == ProgramEvent::Kind::Coolant && e.before_point == 0) want = code_of(e.coolant);
-    }
-    const GcodeMove& first = *w.point_moves[k].front();
-    if (first.coolant != want) {
-      breach(FindingCode::CoolantMismatch, first,
-             "starts with coolant " +
-                 std::string(first.coolant == 0   ? "off"
-                             : first.coolant == 7 ? "M7"
-                                                  : "M8") +
-                 " where " +
-                 std::string(want == 0   ? "off"
-                             : want == 7 ? "M7 (mist)"
-                                         : "M8 (flood)") +
-                 " is asked (CL file COOLNT, else the machine file's gcode.coolant)");
+
+  void end_pose() {
+    const GcodeMove& last = w_.moves.back();
+    if (t_.end_pose == EndPose::Home && t_.retract != SafeRetract::None &&
+        (last.tilt_deg != 0.0 || last.c_deg != 0.0)) {
+      breach(FindingCode::EndPoseNotHome, last,
+             "ends with the rotary axes at " + shown(last.tilt_deg) + " / " + shown(last.c_deg) +
+                 " deg, not at their home (gcode.end_pose)");
     }
   }
-  if (t.end_pose == EndPose::Home && t.retract != SafeRetract::None &&
-      (moves.back().tilt_deg != 0.0 || moves.back().c_deg != 0.0)) {
-    breach(FindingCode::EndPoseNotHome, moves.back(),
-           "ends with the rotary axes at " + shown(moves.back().tilt_deg) + " / " +
-               shown(moves.back().c_deg) + " deg, not at their home (gcode.end_pose)");
-  }
-  for (const auto& [code, b] : breaches) {
-    add_finding(res, code, b.operation, 0,
-                b.what + (b.count > 1 ? " (and " + std::to_string(b.count - 1) + " more)" : ""),
-                b.line);
-  }
+
+  const Machine& machine_;
+  const ProgramTemplate& t_;
+  const std::vector<PostedOperation>& posted_;
+  const Written& w_;
+  JobResult& res_;
+  const BlockOwner op_of_;
+  const double threshold_deg_;
+  std::map<FindingCode, Breach> breaches_;
+  bool after_retract_ = false, xy_set_ = false;
+  double xy_[2] = {0.0, 0.0};
+};
+
+}  // namespace
+
+void check_program(const Run& run, const std::vector<PostedOperation>& posted, const Written& w,
+                   JobResult& res) {
+  if (w.moves.empty() || posted.empty()) return;
+  ProgramChecks(run, posted, w, res).run();
 }
 
 void check_every_block(const Run& run, const std::vector<OperationContext>& ops,

@@ -267,19 +267,19 @@ void check_program(const Run& run, const std::vector<PostedOperation>& posted, c
   ProgramChecks(run, posted, w, res).run();
 }
 
-void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
-                       const std::vector<PostedOperation>& posted, const Written& w,
-                       JobResult& res) {
+namespace {
+
+/// The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
+/// point with its linearisation blocks, a rapid written as one block; and the blocks that end
+/// at a contact point.
+struct PointBlocks {
+  std::vector<char> swept, touching_end;
+};
+
+PointBlocks point_blocks(const std::vector<OperationContext>& ops,
+                         const std::vector<PostedOperation>& posted, const Written& w) {
   const std::vector<GcodeMove>& moves = w.moves;
-  if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
-    return;
-  const BlockOwner op_of(res.gcode, posted.size());
-  // The blocks the operations' own checks sweep already (colliding_moves): a feed move into a
-  // point with its linearisation blocks, a rapid written as one block. Every other block (the
-  // approach, the descent and the XY move to it, an index move's retract, turn and way back,
-  // the retract at the end and the unwinding) is swept here, with the whole tool in the air.
-  std::vector<char> swept(moves.size(), 0);
-  std::vector<char> touching_end(moves.size(), 0);
+  PointBlocks out{std::vector<char>(moves.size(), 0), std::vector<char>(moves.size(), 0)};
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const OperationContext& o = ops[k];
     const std::vector<const GcodeMove*>& at = w.point_moves[k];
@@ -287,16 +287,80 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       const std::ptrdiff_t to = move_index(moves, at[i]);
       if (to < 0) continue;
       if (!o.contacts.empty() && o.contacts[i].state == ContactState::Touching) {
-        touching_end[static_cast<std::size_t>(to)] = 1;
+        out.touching_end[static_cast<std::size_t>(to)] = 1;
       }
       if (i == 0 || !o.judged_tool()) continue;
       const std::ptrdiff_t from = move_index(moves, at[i - 1]);
       if (from < 0 || to <= from) continue;
       if (posted[k].points[i].motion == Motion::Feed || to == from + 1) {
-        for (std::ptrdiff_t j = from + 1; j <= to; ++j) swept[static_cast<std::size_t>(j)] = 1;
+        for (std::ptrdiff_t j = from + 1; j <= to; ++j) out.swept[static_cast<std::size_t>(j)] = 1;
       }
     }
   }
+  return out;
+}
+
+/// Whether block j (its end known) hits the part as the machine moves it, sampled at most
+/// 0.5 deg of either rotary axis and half the thinnest body apart.
+bool block_collides(const Run& run, const OperationContext& o, const Written& w, std::size_t j,
+                    bool touching_end, double flute_tolerance_mm) {
+  const Machine& machine = run.machine;
+  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
+  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+  const ToolModel& tool = *o.tool;
+  const double R = tool.ball_radius_mm;
+  // In the air the ball counts as a body too, within the flutes' tolerance of the part
+  // (a block that ends at a contact point touches it there by design).
+  ToolModel air = tool;
+  air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm);
+  // A block whose start is not known (the first after a retract in machine
+  // coordinates): its end, where the tool stands.
+  const JointPosition& q1 = *w.joints_after[j];
+  const JointPosition& q0 = w.joints_after[j - 1] ? *w.joints_after[j - 1] : q1;
+  const Posed p0{deg_to_rad(q0[kA]), deg_to_rad(q0[kC])};
+  const Posed p1{deg_to_rad(q1[kA]), deg_to_rad(q1[kC])};
+  const Vec3d m0(q0[0], q0[1], q0[2]), m1(q1[0], q1[1], q1[2]);
+  const Vec3d t0 = machine.rotary.from_machine_mm(m0, p0),
+              t1 = machine.rotary.from_machine_mm(m1, p1);
+  const bool tip_linear = w.tip_linear[j] != 0;
+  // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
+  // thinnest body's radius (a wall the body could pass between two samples is thinner
+  // than the body is wide).
+  double thinnest = R > 0.0 ? R : 1.0;
+  for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
+  const double step_mm = std::max(0.05, 0.5 * thinnest);
+  const double travel = std::max((t1 - t0).norm(), (m1 - m0).norm());
+  const int steps = static_cast<int>(std::ceil(std::max(
+      {std::abs(q1[kA] - q0[kA]) / 0.5, std::abs(q1[kC] - q0[kC]) / 0.5, travel / step_mm, 1.0})));
+  for (int s = 1; s <= steps; ++s) {
+    const double u = static_cast<double>(s) / steps;
+    const Posed pose{p0.tilt_rad + u * (p1.tilt_rad - p0.tilt_rad),
+                     p0.c_rad + u * (p1.c_rad - p0.c_rad)};
+    const Vec3d tip = tip_linear ? Vec3d(t0 + u * (t1 - t0))
+                                 : machine.rotary.from_machine_mm(m0 + u * (m1 - m0), pose);
+    const Vec3d axis = machine.rotary.forward(pose);
+    // The block's end at a contact point: the flutes judged as at every CL point.
+    const bool at_contact = s == steps && touching_end;
+    if (run.collision->collides(at_contact ? tool : air, tip + R * axis, axis, !at_contact)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
+                       const std::vector<PostedOperation>& posted, const Written& w,
+                       JobResult& res) {
+  const std::vector<GcodeMove>& moves = w.moves;
+  if (!run.collision || moves.empty() || posted.empty() || res.operations.size() != posted.size())
+    return;
+  const BlockOwner op_of(res.gcode, posted.size());
+  // Every block the operations' own checks do not sweep (the approach, the descent and the XY
+  // move to it, an index move's retract, turn and way back, the retract at the end and the
+  // unwinding) is swept here, with the whole tool in the air.
+  const PointBlocks points = point_blocks(ops, posted, w);
   struct Hit {
     std::size_t count = 0;
     std::size_t move = 0;  // the first block that hits
@@ -305,7 +369,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   std::vector<std::size_t> candidates;
   std::vector<long> unknown(posted.size(), 0);
   for (std::size_t j = 1; j < moves.size(); ++j) {
-    if (swept[j]) continue;
+    if (points.swept[j]) continue;
     const OperationContext& o = ops[op_of(moves[j].line)];
     if (!o.judged_tool()) continue;
     if (w.joints_after[j]) {
@@ -314,9 +378,6 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       ++unknown[op_of(moves[j].line)];
     }
   }
-  const Machine& machine = run.machine;
-  constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
-  constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   std::vector<double> flute_tolerance_mm(ops.size(), 0.0);
   for (std::size_t k = 0; k < ops.size(); ++k) {
     flute_tolerance_mm[k] = margins_of(run.options, *ops[k].op).flute_tolerance_mm;
@@ -325,47 +386,8 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
         const std::size_t k = op_of(moves[j].line);
-        const OperationContext& o = ops[k];
-        const ToolModel& tool = *o.tool;
-        const double R = tool.ball_radius_mm;
-        // In the air the ball counts as a body too, within the flutes' tolerance of the part
-        // (a block that ends at a contact point touches it there by design).
-        ToolModel air = tool;
-        air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm[k]);
-        // A block whose start is not known (the first after a retract in machine
-        // coordinates): its end, where the tool stands.
-        const JointPosition& q1 = *w.joints_after[j];
-        const JointPosition& q0 = w.joints_after[j - 1] ? *w.joints_after[j - 1] : q1;
-        const Posed p0{deg_to_rad(q0[kA]), deg_to_rad(q0[kC])};
-        const Posed p1{deg_to_rad(q1[kA]), deg_to_rad(q1[kC])};
-        const Vec3d m0(q0[0], q0[1], q0[2]), m1(q1[0], q1[1], q1[2]);
-        const Vec3d t0 = machine.rotary.from_machine_mm(m0, p0),
-                    t1 = machine.rotary.from_machine_mm(m1, p1);
-        const bool tip_linear = w.tip_linear[j] != 0;
-        // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
-        // thinnest body's radius (a wall the body could pass between two samples is thinner
-        // than the body is wide).
-        double thinnest = R > 0.0 ? R : 1.0;
-        for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
-        const double step_mm = std::max(0.05, 0.5 * thinnest);
-        const double travel = std::max((t1 - t0).norm(), (m1 - m0).norm());
-        const int steps = static_cast<int>(
-            std::ceil(std::max({std::abs(q1[kA] - q0[kA]) / 0.5, std::abs(q1[kC] - q0[kC]) / 0.5,
-                                travel / step_mm, 1.0})));
-        for (int s = 1; s <= steps; ++s) {
-          const double u = static_cast<double>(s) / steps;
-          const Posed pose{p0.tilt_rad + u * (p1.tilt_rad - p0.tilt_rad),
-                           p0.c_rad + u * (p1.c_rad - p0.c_rad)};
-          const Vec3d tip = tip_linear ? Vec3d(t0 + u * (t1 - t0))
-                                       : machine.rotary.from_machine_mm(m0 + u * (m1 - m0), pose);
-          const Vec3d axis = machine.rotary.forward(pose);
-          // The block's end at a contact point: the flutes judged as at every CL point.
-          const bool at_contact = s == steps && touching_end[j];
-          if (run.collision->collides(at_contact ? tool : air, tip + R * axis, axis, !at_contact)) {
-            return true;
-          }
-        }
-        return false;
+        return block_collides(run, ops[k], w, j, points.touching_end[j] != 0,
+                              flute_tolerance_mm[k]);
       });
   for (std::size_t c : hit) {
     const std::size_t j = candidates[c];

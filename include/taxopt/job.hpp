@@ -109,6 +109,10 @@ struct JobOptions {
   /// How the caller names these fields in its messages (option_names.hpp): run_job's errors
   /// and findings that say which option to set name it so ("JobOptions::part" unless mapped).
   OptionNames option_names;
+  /// `field` ("tool.ball_radius_mm") as the caller names JobOptions::field (option_names).
+  std::string name_of(const std::string& field) const {
+    return option_name(option_names, "JobOptions::" + field);
+  }
 };
 
 /// Checks the options' values as run_job does first (each number within its documented

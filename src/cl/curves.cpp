@@ -179,7 +179,8 @@ void Reader::expand_arcs() {
              "CIRCLE: the file shows two CAM systems whose arcs run in opposite senses (line " +
                  std::to_string(first.line) + ": " + first.what + "; line " +
                  std::to_string(s.line) + ": " + s.what +
-                 "): which sense its arcs have is not known; give " + named("arc_direction"));
+                 "): which sense its arcs have is not known; give " +
+                 options_.name_of("arc_direction"));
       }
     }
     convention = documented_arc_direction(rd.dialect);
@@ -192,7 +193,7 @@ void Reader::expand_arcs() {
                "CIRCLE: the CAM system is not recognised and no arc's neighbouring moves "
                "decide its sense; APT's counter-clockwise about (i,j,k) is assumed "
                "(" +
-                   named("arc_direction") + " cw|ccw sets it)");
+                   options_.name_of("arc_direction") + " cw|ccw sets it)");
       } else if (std::max(ccw_votes, cw_votes) >= 0.8 * decided) {
         convention =
             ccw_votes > cw_votes ? ArcDirection::CounterClockwise : ArcDirection::Clockwise;
@@ -204,13 +205,13 @@ void Reader::expand_arcs() {
                    (convention == ArcDirection::Clockwise ? "clockwise" : "counter-clockwise") +
                    " about their axis by the tangents of the moves beside them, so every arc "
                    "is read so (" +
-                   named("arc_direction") + " cw|ccw sets it)");
+                   options_.name_of("arc_direction") + " cw|ccw sets it)");
       } else {
         fail(arcs_.front().line,
              "CIRCLE: the CAM system is not recognised and its arcs disagree: " +
                  std::to_string(ccw_votes) + " run counter-clockwise (lines " + lines_of(1) +
                  ") and " + std::to_string(cw_votes) + " clockwise (lines " + lines_of(-1) +
-                 ") by the moves beside them; give " + named("arc_direction"));
+                 ") by the moves beside them; give " + options_.name_of("arc_direction"));
       }
     }
   }
@@ -228,14 +229,14 @@ void Reader::expand_arcs() {
              " sense " + dialect +
              " files use about (i,j,k), by the moves before and after them; if the file is "
              "right, give " +
-             named("arc_direction") + " cw|ccw");
+             options_.name_of("arc_direction") + " cw|ccw");
   }
   if (contra > agree && rd.arc_convention_source == "option") {
     notice(arcs_.front().line,
-           "CIRCLE: " + named("arc_direction") + " " + std::string(to_string(convention)) +
-               " is against the tangents of " + std::to_string(contra) + " of " +
-               std::to_string(contra + agree) + " decidable arcs (lines " +
-               lines_of(-convention_sign) + "); applied as asked");
+           "CIRCLE: " + options_.name_of("arc_direction") + " " +
+               std::string(to_string(convention)) + " is against the tangents of " +
+               std::to_string(contra) + " of " + std::to_string(contra + agree) +
+               " decidable arcs (lines " + lines_of(-convention_sign) + "); applied as asked");
   }
   for (auto& a : arcs_) {
     if (a.movarc) continue;
@@ -254,7 +255,7 @@ void Reader::expand_arcs() {
            "CIRCLE: " + std::to_string(rd.arcs - rd.arcs_decidable) + " of " +
                std::to_string(rd.arcs) + " arcs have no neighbouring moves that decide their " +
                "sense; they run " + sense + ", the convention of " + dialect + " (" +
-               rd.dialect_evidence + "; " + named("arc_direction") + " cw|ccw sets it)");
+               rd.dialect_evidence + "; " + options_.name_of("arc_direction") + " cw|ccw sets it)");
   }
   if (rd.arcs_reversed > 0) {
     std::string lines;
@@ -264,7 +265,7 @@ void Reader::expand_arcs() {
                ") are run against the " + sense + " sense " + dialect +
                " files use: the moves before and after each of them run the other way "
                "(" +
-               named("arc_direction") + " cw|ccw applies one sense to every arc)");
+               options_.name_of("arc_direction") + " cw|ccw applies one sense to every arc)");
   }
   check_movarcs();
   insert_chords();

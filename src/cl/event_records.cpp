@@ -77,7 +77,7 @@ void Reader::insert(const ClRecordArgs& r) {
     fail(line, shown +
                    ": code for the controller, which taxopt does not pass uninterpreted into "
                    "a program; " +
-                   named("skip_records") + " INSERT drops it");
+                   options_.name_of("skip_records") + " INSERT drops it");
   } else if (text.size() > 200) {
     fail(line, "INSERT text of " + std::to_string(text.size()) +
                    " characters: longer than the 200 a comment block is written with");

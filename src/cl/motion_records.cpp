@@ -335,15 +335,15 @@ void Reader::msys(const ClRecordArgs& r) {
      << f.rotation(0, 2) << ", " << f.rotation(1, 2) << ", " << f.rotation(2, 2) << ")";
   if (!options_.apply_msys) {
     tp_.declared_frames.push_back(f);
-    notice(line, os.str() +
-                     ": the coordinates are posted as written (NX writes them in this MCS; " +
-                     named("apply_msys") + " takes them as absolute and moves them into it)");
+    notice(line,
+           os.str() + ": the coordinates are posted as written (NX writes them in this MCS; " +
+               options_.name_of("apply_msys") + " takes them as absolute and moves them into it)");
     return;
   }
   tp_.frames.push_back(f);
   frame_ = static_cast<int>(tp_.frames.size()) - 1;
   ++tp_.reading.msys_applied;
-  notice(line, os.str() + ": " + named("apply_msys") +
+  notice(line, os.str() + ": " + options_.name_of("apply_msys") +
                    ", the coordinates that follow are moved into it and posted there");
 }
 

@@ -17,11 +17,13 @@ Toolpath Reader::run(const std::string& input) {
   for (const std::string& w : options_.skip_records) {
     const ClWord* word = find_cl_word(w);
     if (w.empty() || w != upper(w)) {
-      throw InputError(named("skip_records") + " '" + w + "': a record word in upper case");
+      throw InputError(options_.name_of("skip_records") + " '" + w +
+                       "': a record word in upper case");
     }
     if (word && !word->skippable) {
-      throw InputError(named("skip_records") + " " + w + ": a " + to_string(word->meaning) +
-                       " word (" + word->what + "); skipping it would change the motion");
+      throw InputError(options_.name_of("skip_records") + " " + w + ": a " +
+                       to_string(word->meaning) + " word (" + word->what +
+                       "); skipping it would change the motion");
     }
   }
   std::string text = input;
@@ -101,7 +103,7 @@ void Reader::check_feed_per_revolution(const Operationd& op) const {
     os << per_rev << " mm a revolution, no milling feed; read as "
        << (k < 1.0 ? "millimetres" : "inches") << " it would be " << per_rev * k
        << " mm: the file's numbers look like " << (k < 1.0 ? "millimetres" : "inches")
-       << " though it reads as " << to_string(tp_.units) << "; " << named("units") << " "
+       << " though it reads as " << to_string(tp_.units) << "; " << options_.name_of("units") << " "
        << (k < 1.0 ? "mm" : "in") << " reads the whole file so, feed words too";
     fail(line, os.str());
   }
@@ -170,7 +172,8 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
     const char* unit = *declared == LengthUnit::Inch ? "inches" : "millimetres";
     fail(declared_line, declared_record + " comes after the first motion (line " +
                             std::to_string(motion_line) + "): whether the moves before it are in " +
-                            unit + " too is not known; give " + named("units") + " in|mm");
+                            unit + " too is not known; give " + options_.name_of("units") +
+                            " in|mm");
   }
   const LengthUnit from_file =
       declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
@@ -180,12 +183,12 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
   // INCHES over millimetre numbers, read with --units mm, kept its 1193.66 IPM as 30319 mm/min).
   const int other_feed_line = tp_.units == LengthUnit::Inch ? mm_feed_line : inch_feed_line;
   if (options_.units && declared && *declared != *options_.units) {
-    notice(declared_line, named("units") + " " + name + " read the file in " + name +
+    notice(declared_line, options_.name_of("units") + " " + name + " read the file in " + name +
                               " though it says " + to_string(*declared) + " here" +
                               (other_feed_line ? ", its feed words too" : ""));
   } else if (options_.units && other_feed_line) {
     notice(other_feed_line,
-           named("units") + " " + name + " read the file in " + name +
+           options_.name_of("units") + " " + name + " read the file in " + name +
                ", its feed words too, though they say " +
                (tp_.units == LengthUnit::Inch ? "millimetres (MMPM/MMPR)" : "inches (IPM/IPR)") +
                " from here");
@@ -193,12 +196,12 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
     notice(inch_feed_line,
            "a feed in inches (IPM/IPR) in a file read in millimetres: the "
            "feed is taken as its word says, the coordinates in mm (" +
-               named("units") + " mm reads the feeds in mm too)");
+               options_.name_of("units") + " mm reads the feeds in mm too)");
   } else if (tp_.units == LengthUnit::Inch && mm_feed_line) {
     notice(mm_feed_line,
            "a feed in millimetres (MMPM/MMPR) in a file read in inches: the feed "
            "is taken as its word says, the coordinates in inches (" +
-               named("units") + " in reads the feeds in inches too)");
+               options_.name_of("units") + " in reads the feeds in inches too)");
   }
 }
 
@@ -299,7 +302,7 @@ void Reader::interpret(const std::string& major, const std::string& args_text, i
     fail(line, major +
                    ": not a record word taxopt knows (docs/cl-files.md lists them); if it "
                    "neither moves the tool nor changes what the moves mean, " +
-                   named("skip_records") + " " + major + " skips it");
+                   options_.name_of("skip_records") + " " + major + " skips it");
   }
   if (finished_line_ > 0 && word->meaning == ClWordMeaning::Motion) {
     fail(line, major + " after the end of the program (line " + std::to_string(finished_line_) +

@@ -90,11 +90,6 @@ class Reader {
 
  private:
   [[noreturn]] void fail(int line, const std::string& what) const;
-  /// A reader option as the caller names it (ClReadOptions::option_names): `field` is its
-  /// member, "skip_records".
-  std::string named(const char* field) const {
-    return option_name(options_.option_names, std::string("ClReadOptions::") + field);
-  }
   void notice(int line, const std::string& what);
   /// The file's length unit (docs/cl-files.md, "Units"): --units, else the first UNITS/UNIT
   /// record, else inches when a feed is IPM/IPR, else mm. A change of unit is refused; feed

@@ -168,8 +168,8 @@ void Reader::load_tool(const ClRecordArgs& r) {
     fail(line, major + "/" + args_text + " loads tool " + args[at] + " where TOOLNO at line " +
                    std::to_string(announced_tool_->line) + " announced tool " +
                    std::to_string(announced_tool_->number) +
-                   ": which tool the machine holds is not known (" + named("skip_records") +
-                   " TOOLNO trusts the LOADTL)");
+                   ": which tool the machine holds is not known (" +
+                   options_.name_of("skip_records") + " TOOLNO trusts the LOADTL)");
   }
   announced_tool_.reset();
   tool_.number = static_cast<int>(v[0]);
@@ -229,7 +229,7 @@ void Reader::coolnt(const ClRecordArgs& r) {
     fail(line, "COOLNT/" + args[0] +
                    ": a coolant taxopt does not write (ON, FLOOD, MIST and OFF are: M8, M7, "
                    "M9); " +
-                   named("skip_records") + " COOLNT drops every COOLNT record");
+                   options_.name_of("skip_records") + " COOLNT drops every COOLNT record");
   }
   coolant_ = c;
   ProgramEvent e;
@@ -244,7 +244,7 @@ void Reader::cutcom(const ClRecordArgs& r) {
     fail(line, "CUTCOM/" + args_text +
                    ": cutter compensation in the control is not posted (taxopt writes the "
                    "tool centre path the file gives, without G41/G42); " +
-                   named("skip_records") +
+                   options_.name_of("skip_records") +
                    " CUTCOM posts that path as it is, without the control's wear compensation");
   }
   skipped(major);
@@ -274,7 +274,7 @@ void Reader::tolerance(const ClRecordArgs& r) {
       std::ostringstream os;
       os << major << "/" << args_text << ": a tolerance within [0, " << kMaxCamToleranceMm / scale_
          << "] " << to_string(tp_.units) << " expected (a finishing tolerance; "
-         << named("skip_records") << " " << major << " ignores it)";
+         << options_.name_of("skip_records") << " " << major << " ignores it)";
       fail(line, os.str());
     }
   }

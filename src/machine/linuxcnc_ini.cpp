@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/types.hpp"
@@ -217,6 +218,7 @@ class Importer {
       if (w.rfind("coordinates=", 0) == 0) coordinates_ = upper(w.substr(12));
     }
     tilt_ = module_.bc ? 'B' : 'A';
+    joint_letters_ = joint_letters();
     read_units();
     read_hal();
   }
@@ -295,11 +297,15 @@ class Importer {
     return d;
   }
 
-  /// A pin of the kinematics in mm; empty where no HAL command sets it to a value.
+  /// A pin of the kinematics in mm; empty where no HAL command sets it to a value. The
+  /// table-table modules' pins are named "<module>-kins.<pin>" in LinuxCNC's samples, some
+  /// shops' HAL "<module>.<pin>"; the head modules' only "<module>.<pin>".
   std::optional<double> pin(const std::string& name) const {
-    const bool trt = module_.layout == RotaryLayout::TableTable;
-    for (const std::string& prefix :
-         {module_.pin_prefix + (trt ? "-kins." : "."), module_.pin_prefix + "."}) {
+    std::vector<std::string> prefixes;
+    if (module_.layout == RotaryLayout::TableTable)
+      prefixes.push_back(module_.pin_prefix + "-kins.");
+    prefixes.push_back(module_.pin_prefix + ".");
+    for (const std::string& prefix : prefixes) {
       if (const auto v = hal_.value(prefix + name)) {
         // A value that is set but no number (or no machine's) is an error, never a 0.
         char* end = nullptr;
@@ -322,10 +328,9 @@ class Importer {
     return 0.0;
   }
 
-  /// The [JOINT_n] section of an axis: by the module's own joint order (maxkins), else by the
-  /// coordinates (the module's parameter, else [TRAJ] COORDINATES), where one joint drives it;
-  /// none where two do (a gantry) or none does.
-  std::optional<std::string> joint_of(const std::string& axis) const {
+  /// The axis letters in joint order: the module's own (maxkins), else its coordinates=
+  /// parameter, else [TRAJ] COORDINATES, else X Y Z, the tilt axis, C.
+  std::string joint_letters() const {
     std::string order = module_.joints.empty() ? coordinates_ : module_.joints;
     if (order.empty()) {
       order = "XYZ" + std::string(1, tilt_) + "C";
@@ -335,8 +340,14 @@ class Importer {
     for (char ch : order) {
       if (std::isalpha(static_cast<unsigned char>(ch))) letters += ch;
     }
-    const std::size_t j = letters.find(axis);
-    if (j == std::string::npos || letters.find(axis, j + 1) != std::string::npos) {
+    return letters;
+  }
+
+  /// The [JOINT_n] section of an axis where one joint drives it; none where two do (a gantry)
+  /// or none does.
+  std::optional<std::string> joint_of(const std::string& axis) const {
+    const std::size_t j = joint_letters_.find(axis);
+    if (j == std::string::npos || joint_letters_.find(axis, j + 1) != std::string::npos) {
       return std::nullopt;
     }
     return "JOINT_" + std::to_string(j);
@@ -486,6 +497,7 @@ class Importer {
   KinsModule module_;
   std::string coordinates_;
   char tilt_ = 'A';
+  std::string joint_letters_;  ///< joint_letters(), once the module is known
   double unit_mm_ = 1.0;
   HalPins hal_;
   std::string name_;

@@ -59,13 +59,9 @@ std::string not_a_ball(const Operationd& op, const JobOptions& options) {
     return "operation " + op.name +
            ": the CL file defines no tool (no TLDATA or CUTTER record); give the ball radius "
            "with " +
-           option_name(options.option_names, "JobOptions::tool.ball_radius_mm");
+           options.name_of("tool.ball_radius_mm");
   }
   return "operation " + op.name + ": not a ball-end mill";
-}
-
-std::string named(const Run& run, const std::string& field) {
-  return option_name(run.options.option_names, field);
 }
 
 std::string shown(double v) {

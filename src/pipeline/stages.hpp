@@ -46,9 +46,6 @@ std::vector<T> slice(const std::vector<T>& v, std::size_t begin, std::size_t end
 /// which the optimisers and the guard ask, and FCL's, the independent reference every output
 /// is verified with. Both empty without a part.
 struct Run;
-/// An option as the caller names it in messages (JobOptions::option_names), `field` its
-/// library name ("JobOptions::part").
-std::string named(const Run& run, const std::string& field);
 
 struct Run {
   const Toolpath& tp;

@@ -36,8 +36,7 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
 
 void check_options(const JobOptions& o) {
   const auto refuse = [&o](const std::string& field, const std::string& expected, double v) {
-    throw InputError(option_name(o.option_names, "JobOptions::" + field) + " must be " + expected +
-                     ", got " + pipeline::shown(v));
+    throw InputError(o.name_of(field) + " must be " + expected + ", got " + pipeline::shown(v));
   };
   // `range` is the interval as the docs write it: "[0.01, 1e6] mm/min" (open below with "(").
   const auto within = [&](const std::string& field, const std::optional<double>& v, double lo,
@@ -56,8 +55,7 @@ void check_options(const JobOptions& o) {
     throw InputError(
         "JobOptions::global.max_deviation_deg is not read by run_job: the run's deviation cone "
         "is " +
-        option_name(o.option_names, "JobOptions::max_deviation_deg") +
-        " (empty: paper.max_deviation_deg); set that one");
+        o.name_of("max_deviation_deg") + " (empty: paper.max_deviation_deg); set that one");
   }
   within("max_deviation_deg", o.max_deviation_deg, 0.0, 90.0, "[0, 90] deg");
   within("paper.max_deviation_deg", o.paper.max_deviation_deg, 0.0, 90.0, "[0, 90] deg");
@@ -139,7 +137,7 @@ void check_points(const Toolpath& tp) {
 }  // namespace
 
 Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
-  check_options(given);
+  // The options were checked where the job entered the library (in_job_arena).
   taxopt::validate(machine);
   check_points(tp);
   JobOptions options = resolved_options(given, machine);
@@ -147,9 +145,7 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
   res.tilt_letter = machine.rotary.tilt_letter();
   if (!given.part) {
     std::ostringstream os;
-    const auto name = [&given](const char* field) {
-      return option_name(given.option_names, std::string("JobOptions::") + field);
-    };
+    const auto name = [&given](const char* field) { return given.name_of(field); };
     os << "no part (" << name("part") << "): the tool and holder are not checked against the part";
     if (given.method != Method::None) {
       os << "; each tool axis stays within " << options.paper.max_deviation_deg
@@ -164,9 +160,8 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
     add_finding(res, FindingCode::NoPart, std::nullopt, 0, os.str());
   } else if (!options.tool.holder_radius_mm) {
     add_finding(res, FindingCode::NoHolderModel, std::nullopt, 0,
-                "no holder model (" +
-                    option_name(given.option_names, "JobOptions::tool.holder_radius_mm") + ", " +
-                    option_name(given.option_names, "JobOptions::tool.holder_length_mm") +
+                "no holder model (" + given.name_of("tool.holder_radius_mm") + ", " +
+                    given.name_of("tool.holder_length_mm") +
                     "): the holder is not checked against the part, only the tool");
   }
   if (given.part && given.part->mesh().dropped_degenerate_faces > 0) {
@@ -233,7 +228,7 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
         throw InputError(tp.source, line,
                          "operation " + op.name +
                              ": the CL file calls no tool (no LOADTL or TOOL number): give " +
-                             named(run, "JobOptions::tool_number") +
+                             run.options.name_of("tool_number") +
                              ", or tool_number in the machine file's [defaults]");
       }
       add_finding(res, FindingCode::ClFileNote, k, line,
@@ -247,7 +242,7 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
       throw InputError(tp.source, op.points[*first_feed].line,
                        "operation " + op.name +
                            ": feed moves without a spindle speed (no SPINDL before them): give " +
-                           named(run, "JobOptions::spindle_rpm") +
+                           run.options.name_of("spindle_rpm") +
                            ", or spindle_rpm in the machine file's [defaults]");
     }
     add_finding(res, FindingCode::ClFileNote, k, op.points[*first_feed].line,
@@ -300,7 +295,7 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
                   "operation " + op.name +
                       " has no tool geometry (no TLDATA or CUTTER, or not a mill): none of its "
                       "moves is checked against the part (" +
-                      named(run, "JobOptions::tool.ball_radius_mm") + " gives it a ball)");
+                      run.options.name_of("tool.ball_radius_mm") + " gives it a ball)");
     }
     add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
                 not_a_ball(op, run.options) +
@@ -325,7 +320,7 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
           "operation " + op.name + ": the ball cuts " + shown(-c.gap_mm) +
               " mm into the part here, more than the contact tolerance " + shown(cs.tolerance_mm) +
               " mm (" + contact_tolerance_source(part, run.options.contact, op.cam_tolerance_mm) +
-              "; " + named(run, "JobOptions::contact.tolerance_mm") +
+              "; " + run.options.name_of("contact.tolerance_mm") +
               "); wrong part, wrong tool or wrong units?");
     }
     if (c.state == ContactState::Touching) {

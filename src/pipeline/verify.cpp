@@ -278,7 +278,7 @@ void kept_points(const Run& run, const OperationContext& o, OperationResult& r, 
     add_finding(res, FindingCode::DeviationExceeded, k, 0,
                 "operation " + op.name + ": an output axis is " +
                     std::to_string(r.max_axis_change_deg) + " deg from its input axis, more than " +
-                    named(run, "JobOptions::max_deviation_deg"));
+                    run.options.name_of("max_deviation_deg"));
   }
 }
 
@@ -449,8 +449,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
       r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves, res,
       run.tp.source, options.feed_schedule ? effective_limits(machine) : machine.limits,
       options.feed_schedule, machine.rotary.tilt_letter(), k,
-      [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); },
-      options.option_names);
+      [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); }, options);
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
   return r;

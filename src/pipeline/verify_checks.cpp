@@ -96,7 +96,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::string& source, const JointLimits& check, bool scheduled,
                           char tilt_letter, std::size_t op_index,
                           const std::function<JointPosition(const GcodeMove&)>& joint_of,
-                          const OptionNames& names) {
+                          const JobOptions& options) {
   const std::size_t n = po.points.size();
   std::vector<double> written_s(n, 0.0);
   const auto index_of = [&](const GcodeMove* m) { return move_index(moves, m); };
@@ -183,7 +183,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
   }
   if (!r.verification.within_dynamic_limits && !scheduled) {
     add_finding(res, FindingCode::DynamicLimitExceeded, op_index, 0,
-                "operation " + po.name + ": " + option_name(names, "JobOptions::feed_schedule") +
+                "operation " + po.name + ": " + options.name_of("feed_schedule") +
                     " writes feeds within the machine's limits");
   }
 }
@@ -194,7 +194,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
 /// refusal gives (tests/test_paper_method.cpp).
 std::string what_hits(const CollisionModel& model, const ToolModel& tool,
                       const ToolModel& real_tool, const Operationd& op, std::size_t i,
-                      const Vec3d& axis, bool in_air, const OptionNames& names) {
+                      const Vec3d& axis, bool in_air, const JobOptions& options) {
   const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * axis;
   const std::size_t first = static_cast<std::size_t>(tool.flute_bodies);
   for (std::size_t b = first; b < tool.bodies.size(); ++b) {
@@ -246,7 +246,7 @@ std::string what_hits(const CollisionModel& model, const ToolModel& tool,
           (clear_with(mid) ? hi : lo) = mid;
         }
         os << "; flutes of " << hi + s0 + tool.ball_radius_mm << " mm from the tip ("
-           << option_name(names, "JobOptions::tool.flute_length_mm") << ") would clear it here";
+           << options.name_of("tool.flute_length_mm") << ") would clear it here";
       } else {
         os << "; no flute length up to the gauge length clears it here";
       }
@@ -332,7 +332,7 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
             : what_hits(
                   *run.collision, tool, real_tool, op, hits.front(), out_axes[hits.front()],
                   o.contacts.empty() || o.contacts[hits.front()].state != ContactState::Touching,
-                  run.options.option_names);
+                  run.options);
     report(hits,
            "where the tool hits the part (the shank or holder within its clearance, or a "
            "ball in the air)",
@@ -344,7 +344,7 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
                             ? std::string("as given")
                             : contact_tolerance_source(*run.options.part, run.options.contact,
                                                        op.cam_tolerance_mm)) +
-                       "; a gouge; " + named(run, "JobOptions::part_tolerance_mm") + ")");
+                       "; a gouge; " + run.options.name_of("part_tolerance_mm") + ")");
     if (hits.empty() && gouges.empty()) {
       report(after, "where the tool hits the part");  // never: the bodies are the same
     }

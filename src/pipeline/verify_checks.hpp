@@ -39,7 +39,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           const std::string& source, const JointLimits& check, bool scheduled,
                           char tilt_letter, std::size_t op_index,
                           const std::function<JointPosition(const GcodeMove&)>& joint_of,
-                          const OptionNames& names);
+                          const JobOptions& options);
 
 /// What hits at point i (axis `axis`): the first body of the judged `tool` past the flutes
 /// that meets the part, how far its real body (`real_tool`) stays from it (or that it enters
@@ -47,7 +47,7 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
 /// refusal gives (tests/test_paper_method.cpp).
 std::string what_hits(const CollisionModel& model, const ToolModel& tool,
                       const ToolModel& real_tool, const Operationd& op, std::size_t i,
-                      const Vec3d& axis, bool in_air, const OptionNames& names);
+                      const Vec3d& axis, bool in_air, const JobOptions& options);
 
 /// The collisions of an operation's points and moves as written (FCL, the reference), told
 /// apart by body, and the clearance of the bodies that do not cut.

@@ -263,8 +263,7 @@ nlohmann::json verification_json(const OperationResult& r, const JobResult& resu
   v["colliding_moves"] = count(r.verification.colliding_moves);
   // Why a value is null.
   nlohmann::json why = nlohmann::json::object();
-  const std::string no_part =
-      "no part given (" + option_name(options.option_names, "JobOptions::part") + "): not checked";
+  const std::string no_part = "no part given (" + options.name_of("part") + "): not checked";
   const std::string no_ball = "the tool is no ball-end mill: no contact recovery, not checked";
   const std::string unchecked = result.collision_checked ? no_ball : no_part;
   if (!r.verification.collision_free) why["collision_free"] = unchecked;

@@ -42,6 +42,10 @@ struct ClReadOptions {
   /// How the caller names these fields in its messages (option_names.hpp): the reader's
   /// errors and notices that say which option to set name it so.
   OptionNames option_names;
+  /// `field` ("skip_records") as the caller names ClReadOptions::field (option_names).
+  std::string name_of(const std::string& field) const {
+    return option_name(option_names, "ClReadOptions::" + field);
+  }
 };
 
 /// Parses CL text. `source` names the file in errors and warnings.

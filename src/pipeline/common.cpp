@@ -262,120 +262,177 @@ std::vector<IndexRange> feed_chains(const std::vector<CLPointd>& points) {
   return chains;
 }
 
+namespace {
+
+/// One operation's schedule: its feed chains each scheduled on the joints (FeedScheduler),
+/// a point's time the sum of its blocks', then the operation's summary (feed and rapid times,
+/// the path the limits slow and the axis that slows most of it).
+class OperationScheduler {
+ public:
+  OperationScheduler(const std::vector<CLPointd>& points, const std::vector<JointPosition>& joints,
+                     const std::vector<double>& programmed_s, const JointLimits& limits,
+                     const MachineKinematicsd& ac, const std::vector<Linearised>* via,
+                     const std::vector<Posed>* tcp_poses)
+      : points_(points),
+        joints_(joints),
+        programmed_s_(programmed_s),
+        limits_(limits),
+        ac_(ac),
+        via_(via),
+        tcp_poses_(tcp_poses),
+        n_(points.size()),
+        bound_(n_, FeedBound::Programmed),
+        bound_joint_(n_, Joint::X),
+        joint_bound_(n_) {
+    out_.time_s.assign(n_, 0.0);
+    out_.feed_mm_min.assign(n_, std::nullopt);
+    out_.block_time_s.assign(n_, {});
+  }
+
+  OperationSchedule run() {
+    for (const IndexRange& c : feed_chains(points_)) schedule_chain(c);
+    summarise();
+    return std::move(out_);
+  }
+
+ private:
+  const Linearised* blocks_of(std::size_t i) const {
+    return via_ && i < via_->size() && !(*via_)[i].share.empty() ? &(*via_)[i] : nullptr;
+  }
+
+  /// The chain's blocks: one a point, or a linearised move's blocks, each with its share of
+  /// the programmed time; `owner` maps a block to its point.
+  FeedChain chain_of(const IndexRange& c, std::vector<std::size_t>& owner) {
+    FeedChain chain;
+    chain.joints = {joints_[c.begin - 1]};
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      if (const Linearised* l = blocks_of(i)) {
+        for (std::size_t j = 0; j < l->share.size(); ++j) {
+          chain.joints.push_back(j < l->joints.size() ? l->joints[j] : joints_[i]);
+          chain.min_time_s.push_back(programmed_s_[i] * l->share[j]);
+          owner.push_back(i);
+        }
+        continue;
+      }
+      chain.joints.push_back(joints_[i]);
+      double least_s = programmed_s_[i];
+      if (tcp_poses_ && i < tcp_poses_->size()) {
+        const auto [rate, joint] =
+            joint_velocity_rate_per_s(ac_, limits_, points_[i - 1].tip_mm, (*tcp_poses_)[i - 1],
+                                      points_[i].tip_mm, (*tcp_poses_)[i]);
+        if (1.0 / rate > least_s) {
+          least_s = 1.0 / rate;
+          joint_bound_[i] = joint;
+        }
+      }
+      chain.min_time_s.push_back(least_s);
+      owner.push_back(i);
+    }
+    return chain;
+  }
+
+  void schedule_chain(const IndexRange& c) {
+    std::vector<std::size_t> owner;
+    const FeedChain chain = chain_of(c, owner);
+    const FeedSchedule s = schedule_feed(chain, limits_);
+    out_.summary.sweeps = std::max(out_.summary.sweeps, s.sweeps);
+    // A point's time adds up its blocks'; its bound is that of its most slowed block.
+    std::vector<double> slowed(n_, 0.0);
+    for (std::size_t b = 0; b < owner.size(); ++b) {
+      const std::size_t i = owner[b];
+      out_.time_s[i] += s.time_s[b];
+      if (blocks_of(i)) out_.block_time_s[i].push_back(s.time_s[b]);
+      const double ratio = chain.min_time_s[b] > 0.0 ? s.time_s[b] / chain.min_time_s[b] : 1.0;
+      if (ratio > slowed[i]) {
+        slowed[i] = ratio;
+        bound_[i] = s.bound[b];
+        bound_joint_[i] = s.bound_joint[b];
+        if (s.bound[b] == FeedBound::Programmed && joint_bound_[i]) {
+          // At its joints' velocity limit inside the block (tcp_poses).
+          bound_[i] = FeedBound::Velocity;
+          bound_joint_[i] = *joint_bound_[i];
+        }
+      }
+    }
+  }
+
+  /// A rapid's time, and what its turn adds: the same move without the turn holds the rotary
+  /// joints where the move starts, the linear ones taking the tip to its point under that pose.
+  void rapid(std::size_t i) {
+    FeedSummary& sum = out_.summary;
+    const double t = rapid_time_s(joints_[i - 1], joints_[i], limits_);
+    constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
+    constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
+    const Posed start{deg_to_rad(joints_[i - 1][kA]), deg_to_rad(joints_[i - 1][kC])};
+    const Vec3d xyz = ac_.to_machine_mm(points_[i].tip_mm, start);
+    const JointPosition held = {xyz.x(), xyz.y(), xyz.z(), joints_[i - 1][kA], joints_[i - 1][kC]};
+    sum.rapid_time_s += t;
+    sum.transition_excess_s += std::max(0.0, t - rapid_time_s(joints_[i - 1], held, limits_));
+  }
+
+  void summarise() {
+    FeedSummary& sum = out_.summary;
+    double path_mm = 0.0, limited_mm = 0.0;
+    std::array<double, kJointCount> by_velocity{}, by_accel{};
+    bool any_feed = false;
+    for (std::size_t i = 1; i < n_; ++i) {
+      if (points_[i].motion == Motion::Rapid) {
+        rapid(i);
+        continue;
+      }
+      if (!(out_.time_s[i] > 0.0)) continue;
+      sum.feed_time_s += out_.time_s[i];
+      const double feed = points_[i].feed_mm_per_min * programmed_s_[i] / out_.time_s[i];
+      out_.feed_mm_min[i] = feed;
+      sum.min_feed_mm_min = any_feed ? std::min(sum.min_feed_mm_min, feed) : feed;
+      any_feed = true;
+      const double len = (points_[i].tip_mm - points_[i - 1].tip_mm).norm();
+      path_mm += len;
+      if (out_.time_s[i] > programmed_s_[i] * (1.0 + 1e-9)) {
+        limited_mm += len;
+        const std::size_t j = static_cast<std::size_t>(bound_joint_[i]);
+        (bound_[i] == FeedBound::Velocity ? by_velocity : by_accel)[j] += len;
+      }
+    }
+    sum.cycle_time_s = sum.feed_time_s + sum.rapid_time_s;
+    sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
+    sum.feed_path_mm = path_mm;
+    double most = 0.0;
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      for (const auto& [share, kind] : {std::pair<double, const char*>{by_velocity[j], "velocity"},
+                                        {by_accel[j], "acceleration"}}) {
+        if (share > most) {
+          most = share;
+          sum.limiting_axis = joint_name(static_cast<Joint>(j), ac_.tilt_letter());
+          sum.limiting_kind = kind;
+        }
+      }
+    }
+  }
+
+  const std::vector<CLPointd>& points_;
+  const std::vector<JointPosition>& joints_;
+  const std::vector<double>& programmed_s_;
+  const JointLimits& limits_;
+  const MachineKinematicsd& ac_;
+  const std::vector<Linearised>* via_;
+  const std::vector<Posed>* tcp_poses_;
+  const std::size_t n_;
+  OperationSchedule out_;
+  std::vector<FeedBound> bound_;
+  std::vector<Joint> bound_joint_;
+  std::vector<std::optional<Joint>> joint_bound_;
+};
+
+}  // namespace
+
 OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<JointPosition>& joints,
                                      const std::vector<double>& programmed_s,
                                      const JointLimits& limits, const MachineKinematicsd& ac,
                                      const std::vector<Linearised>* via,
                                      const std::vector<Posed>* tcp_poses) {
-  OperationSchedule out;
-  const std::size_t n = points.size();
-  out.time_s.assign(n, 0.0);
-  out.feed_mm_min.assign(n, std::nullopt);
-  out.block_time_s.assign(n, {});
-  std::vector<FeedBound> bound(n, FeedBound::Programmed);
-  std::vector<Joint> bound_joint(n, Joint::X);
-  std::vector<std::optional<Joint>> joint_bound(n);
-  const auto blocks_of = [&](std::size_t i) -> const Linearised* {
-    return via && i < via->size() && !(*via)[i].share.empty() ? &(*via)[i] : nullptr;
-  };
-  for (const IndexRange& c : feed_chains(points)) {
-    // The chain's blocks: one a point, or a linearised move's blocks, each with its share of
-    // the programmed time; `owner` maps a block to its point.
-    FeedChain chain;
-    chain.joints = {joints[c.begin - 1]};
-    std::vector<std::size_t> owner;
-    for (std::size_t i = c.begin; i < c.end; ++i) {
-      if (const Linearised* l = blocks_of(i)) {
-        for (std::size_t j = 0; j < l->share.size(); ++j) {
-          chain.joints.push_back(j < l->joints.size() ? l->joints[j] : joints[i]);
-          chain.min_time_s.push_back(programmed_s[i] * l->share[j]);
-          owner.push_back(i);
-        }
-      } else {
-        chain.joints.push_back(joints[i]);
-        double least_s = programmed_s[i];
-        if (tcp_poses && i < tcp_poses->size()) {
-          const auto [rate, joint] =
-              joint_velocity_rate_per_s(ac, limits, points[i - 1].tip_mm, (*tcp_poses)[i - 1],
-                                        points[i].tip_mm, (*tcp_poses)[i]);
-          if (1.0 / rate > least_s) {
-            least_s = 1.0 / rate;
-            joint_bound[i] = joint;
-          }
-        }
-        chain.min_time_s.push_back(least_s);
-        owner.push_back(i);
-      }
-    }
-    const FeedSchedule s = schedule_feed(chain, limits);
-    out.summary.sweeps = std::max(out.summary.sweeps, s.sweeps);
-    // A point's time adds up its blocks'; its bound is that of its most slowed block.
-    std::vector<double> slowed(n, 0.0);
-    for (std::size_t b = 0; b < owner.size(); ++b) {
-      const std::size_t i = owner[b];
-      out.time_s[i] += s.time_s[b];
-      if (blocks_of(i)) out.block_time_s[i].push_back(s.time_s[b]);
-      const double ratio = chain.min_time_s[b] > 0.0 ? s.time_s[b] / chain.min_time_s[b] : 1.0;
-      if (ratio > slowed[i]) {
-        slowed[i] = ratio;
-        bound[i] = s.bound[b];
-        bound_joint[i] = s.bound_joint[b];
-        if (s.bound[b] == FeedBound::Programmed && joint_bound[i]) {
-          // At its joints' velocity limit inside the block (tcp_poses).
-          bound[i] = FeedBound::Velocity;
-          bound_joint[i] = *joint_bound[i];
-        }
-      }
-    }
-  }
-  FeedSummary& sum = out.summary;
-  double path_mm = 0.0, limited_mm = 0.0;
-  std::array<double, kJointCount> by_velocity{}, by_accel{};
-  bool any_feed = false;
-  for (std::size_t i = 1; i < n; ++i) {
-    if (points[i].motion == Motion::Rapid) {
-      const double t = rapid_time_s(joints[i - 1], joints[i], limits);
-      // The same move without the turn: the rotary joints held where the move starts, the
-      // linear ones taking the tip to its point under that pose.
-      constexpr std::size_t kA = static_cast<std::size_t>(Joint::Tilt);
-      constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
-      const Posed start{deg_to_rad(joints[i - 1][kA]), deg_to_rad(joints[i - 1][kC])};
-      const Vec3d xyz = ac.to_machine_mm(points[i].tip_mm, start);
-      const JointPosition held = {xyz.x(), xyz.y(), xyz.z(), joints[i - 1][kA], joints[i - 1][kC]};
-      sum.rapid_time_s += t;
-      sum.transition_excess_s += std::max(0.0, t - rapid_time_s(joints[i - 1], held, limits));
-      continue;
-    }
-    if (!(out.time_s[i] > 0.0)) continue;
-    sum.feed_time_s += out.time_s[i];
-    const double feed = points[i].feed_mm_per_min * programmed_s[i] / out.time_s[i];
-    out.feed_mm_min[i] = feed;
-    sum.min_feed_mm_min = any_feed ? std::min(sum.min_feed_mm_min, feed) : feed;
-    any_feed = true;
-    const double len = (points[i].tip_mm - points[i - 1].tip_mm).norm();
-    path_mm += len;
-    if (out.time_s[i] > programmed_s[i] * (1.0 + 1e-9)) {
-      limited_mm += len;
-      const std::size_t j = static_cast<std::size_t>(bound_joint[i]);
-      (bound[i] == FeedBound::Velocity ? by_velocity : by_accel)[j] += len;
-    }
-  }
-  sum.cycle_time_s = sum.feed_time_s + sum.rapid_time_s;
-  sum.feed_limited_fraction = path_mm > 0.0 ? limited_mm / path_mm : 0.0;
-  sum.feed_path_mm = path_mm;
-  double most = 0.0;
-  for (std::size_t j = 0; j < kJointCount; ++j) {
-    for (const auto& [share, kind] : {std::pair<double, const char*>{by_velocity[j], "velocity"},
-                                      {by_accel[j], "acceleration"}}) {
-      if (share > most) {
-        most = share;
-        sum.limiting_axis = joint_name(static_cast<Joint>(j), ac.tilt_letter());
-        sum.limiting_kind = kind;
-      }
-    }
-  }
-  return out;
+  return OperationScheduler(points, joints, programmed_s, limits, ac, via, tcp_poses).run();
 }
 
 /// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed

@@ -40,122 +40,167 @@ std::string out_of_reach(const MachineKinematicsd& ac, const Vec3d& axis) {
   return os.str();
 }
 
-/// The method's axes for one ball-end operation, and the findings of its guards.
-void plan_operation(const Run& run, OperationContext& o, detail::StageProgress& progress,
-                    JobResult& res) {
-  const JobOptions& options = run.options;
-  const Operationd& op = *o.op;
-  const std::size_t k = o.index;
-  const double R = o.ball_radius_mm;
-  const PartCheck* check = run.planner_check();
-  const ToolModel* tool = o.judged_tool();
-  const auto t0 = Clock::now();
-  // The written program's timing (the guard's, the global objective's, the report's).
-  const BlockTiming timing =
-      block_timing(op, run.machine, options.pose_options, o.metric_feed_mm_per_min);
-  o.optimised =
-      optimise_paper(op, o.contacts, R, check, tool, run.machine, o.metric_feed_mm_per_min,
-                     options.pose_options, options.paper, progress);
-  OptimisedOperation& out = *o.optimised;
-  out.guard =
-      guard_passes(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options, out);
-  std::string time_line;
-  GlobalOptions global = options.global;
-  global.max_deviation_deg = options.paper.max_deviation_deg;
-  global.candidate_step_deg =
-      std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
-  // The pyramid down to the C-space cell size (refine_time uses it for one of its plans).
-  global.fine_step_deg = options.paper.grid_deg;
-  if (options.method == Method::Global) {
-    if (global.objective == GlobalObjective::Time) {
-      time_line =
-          refine_time(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
-                      global, run.fallback_feed_mm_per_min, out, progress);
-    } else {
-      refine_global(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
-                    global, out, progress);
+/// The method's axes for one ball-end operation, and the findings of its guards. The stages:
+/// the paper's optimiser and its guard, the global method (cone, pyramid, objective), the
+/// plan again after the verification refused the paper's, the findings, the log line.
+class OperationPlanner {
+ public:
+  OperationPlanner(const Run& run, OperationContext& o, detail::StageProgress& progress,
+                   JobResult& res)
+      : run_(run),
+        options_(run.options),
+        o_(o),
+        op_(*o.op),
+        k_(o.index),
+        radius_mm_(o.ball_radius_mm),
+        check_(run.planner_check()),
+        tool_(o.judged_tool()),
+        progress_(progress),
+        res_(res),
+        // The written program's timing (the guard's, the global objective's, the report's).
+        timing_(block_timing(op_, run.machine, options_.pose_options, o.metric_feed_mm_per_min)),
+        global_(global_options(options_)) {}
+
+  void run() {
+    const auto t0 = Clock::now();
+    o_.optimised =
+        optimise_paper(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine,
+                       o_.metric_feed_mm_per_min, options_.pose_options, options_.paper, progress_);
+    OptimisedOperation& out = *o_.optimised;
+    out.guard = guard_passes(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
+                             options_.pose_options, out);
+    std::string time_line;
+    if (options_.method == Method::Global) {
+      if (global_.objective == GlobalObjective::Time) {
+        time_line = refine_time(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
+                                options_.pose_options, global_, run_.fallback_feed_mm_per_min, out,
+                                progress_);
+      } else {
+        refine_global(out);
+      }
     }
+    if (options_.method == Method::Paper && run_.collision && tool_ &&
+        run_.paper_fallback.count(k_)) {
+      replan_refused(out);
+    }
+    findings(out);
+    o_.optimise_s = seconds_since(t0);
+    if (options_.log) options_.log(log_line(out, time_line));
   }
-  if (options.method == Method::Paper && run.collision && tool && run.paper_fallback.count(k)) {
-    // The verification refused the paper's plan of this operation in a first run (run_job):
-    // the global method's plan of the operation where that is free as the verification judges
-    // it (FCL, the same grown bodies, every point and every move as the machine runs it), else
-    // the input's axes over the stretches that hit (where those are free). The verification
-    // stays the judge of what is written.
-    const std::size_t n = op.points.size();
-    Machine path_machine = run.machine;
+
+ private:
+  /// The run's cone for the global method, its candidates no finer than half the cone, its
+  /// pyramid down to the C-space cell size (refine_time uses it for one of its plans).
+  static GlobalOptions global_options(const JobOptions& options) {
+    GlobalOptions global = options.global;
+    global.max_deviation_deg = options.paper.max_deviation_deg;
+    global.candidate_step_deg =
+        std::max(global.candidate_step_deg, options.paper.max_deviation_deg / 2.0);
+    global.fine_step_deg = options.paper.grid_deg;
+    return global;
+  }
+
+  void refine_global(OptimisedOperation& plan) {
+    pipeline::refine_global(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
+                            options_.pose_options, global_, plan, progress_);
+  }
+
+  /// Points and moves of `plan` that hit as the verification judges them (FCL, the same grown
+  /// bodies, every point and every move as the machine runs it).
+  std::size_t hits(const OptimisedOperation& plan) const {
+    Machine path_machine = run_.machine;
     if (path_machine.gcode.program.linearise_tolerance_mm > 0.0) {
       path_machine.gcode.mode = GcodeMode::Tcp;
     }
-    const auto hits = [&](const OptimisedOperation& plan) -> std::size_t {
-      const PosePlan pp = plan_poses(run.machine.rotary, plan.axes, rapid_into_of(op), {},
-                                     options.pose_options, plan.preferred);
-      if (!pp.ok()) return 0;  // unposable axes are the verification's to report
-      const std::vector<char> hit =
-          points_and_moves_hit(op, o.contacts, R, &*run.collision, tool, path_machine, plan.axes,
-                               pp.poses, std::vector<char>(n, 1));
-      return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
-    };
-    {
-      const std::size_t paper_hits = hits(out);
-      OptimisedOperation alt = out;
-      refine_global(op, o.contacts, R, check, tool, run.machine, timing, options.pose_options,
-                    global, alt, progress);
-      std::string how;
-      if (hits(alt) == 0) {
-        out = std::move(alt);
-        how = "the global method's plan is used for this operation";
-      } else {
-        const StretchGuardResult g = guard_passes(op, o.contacts, R, &*run.collision, tool,
-                                                  run.machine, timing, options.pose_options, out);
-        out.guard.points_hit += g.points_hit;
-        out.guard.stretches += g.stretches;
-        out.guard.whole_passes += g.whole_passes;
-        how =
-            "neither the global method's plan is free: the input's axes are kept where they "
-            "hit, where those are free";
-      }
-      add_finding(res, FindingCode::InputAxesKept, k, 0,
-                  "operation " + op.name +
-                      ": the verification refused the paper method's plan (the tool hit the "
-                      "part at " +
-                      std::to_string(paper_hits) + " points or moves as it judges them); " + how);
+    const PosePlan pp = plan_poses(run_.machine.rotary, plan.axes, rapid_into_of(op_), {},
+                                   options_.pose_options, plan.preferred);
+    if (!pp.ok()) return 0;  // unposable axes are the verification's to report
+    const std::vector<char> hit =
+        points_and_moves_hit(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, path_machine,
+                             plan.axes, pp.poses, std::vector<char>(op_.points.size(), 1));
+    return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
+  }
+
+  /// The verification refused the paper's plan of this operation in a first run (run_job):
+  /// the global method's plan of the operation where that is free as the verification judges
+  /// it, else the input's axes over the stretches that hit (where those are free). The
+  /// verification stays the judge of what is written.
+  void replan_refused(OptimisedOperation& out) {
+    const std::size_t paper_hits = hits(out);
+    OptimisedOperation alt = out;
+    refine_global(alt);
+    std::string how;
+    if (hits(alt) == 0) {
+      out = std::move(alt);
+      how = "the global method's plan is used for this operation";
+    } else {
+      const StretchGuardResult g =
+          guard_passes(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, run_.machine, timing_,
+                       options_.pose_options, out);
+      out.guard.points_hit += g.points_hit;
+      out.guard.stretches += g.stretches;
+      out.guard.whole_passes += g.whole_passes;
+      how =
+          "neither the global method's plan is free: the input's axes are kept where they "
+          "hit, where those are free";
+    }
+    add_finding(res_, FindingCode::InputAxesKept, k_, 0,
+                "operation " + op_.name +
+                    ": the verification refused the paper method's plan (the tool hit the "
+                    "part at " +
+                    std::to_string(paper_hits) + " points or moves as it judges them); " + how);
+  }
+
+  /// The guard's kept stretches, and the points no free axis reaches.
+  void findings(const OptimisedOperation& out) {
+    if (const StretchGuardResult& g = out.guard; g.whole_passes + g.stretches > 0) {
+      add_finding(res_, FindingCode::InputAxesKept, k_, 0,
+                  "operation " + op_.name + ": " + std::to_string(g.points_hit + g.points_rate) +
+                      " points keep their input axes (" + std::to_string(g.whole_passes) +
+                      " whole passes, " + std::to_string(g.stretches) +
+                      " stretches within passes, joined over " + std::to_string(g.points_blended) +
+                      " points): there the optimised axes " +
+                      (g.points_hit ? "swept the tool through the part between points" : "") +
+                      (g.points_hit && g.points_rate ? " or " : "") +
+                      (g.points_rate ? "raised the pass's peak omega or a" : ""));
+    }
+    for (std::size_t i : out.no_free_axis) {
+      add_finding(
+          res_, FindingCode::NoFreeAxis, k_, op_.points[i].line,
+          format_location(run_.tp.source, op_.points[i].line,
+                          "operation " + op_.name + ": no tool axis within " +
+                              std::to_string(options_.paper.max_deviation_deg) +
+                              " deg of the input axis is reachable and collision-free here" +
+                              out_of_reach(run_.machine.rotary, op_.points[i].axis)));
     }
   }
-  if (const StretchGuardResult& g = out.guard; g.whole_passes + g.stretches > 0) {
-    add_finding(res, FindingCode::InputAxesKept, k, 0,
-                "operation " + op.name + ": " + std::to_string(g.points_hit + g.points_rate) +
-                    " points keep their input axes (" + std::to_string(g.whole_passes) +
-                    " whole passes, " + std::to_string(g.stretches) +
-                    " stretches within passes, joined over " + std::to_string(g.points_blended) +
-                    " points): there the optimised axes " +
-                    (g.points_hit ? "swept the tool through the part between points" : "") +
-                    (g.points_hit && g.points_rate ? " or " : "") +
-                    (g.points_rate ? "raised the pass's peak omega or a" : ""));
+
+  std::string log_line(const OptimisedOperation& out, const std::string& time_line) const {
+    return "operation " + op_.name + ": " + std::to_string(out.intervals) + " intervals, " +
+           std::to_string(out.repairs) + " repair keys, " + std::to_string(out.smoothed_joints) +
+           " joints smoothed, " + std::to_string(out.sharp_joints) + " left sharp, " +
+           std::to_string(out.pole_stretches) + " pole passages re-planned" +
+           (options_.method == Method::Global
+                ? "; global: " + std::to_string(out.global_passes) + " passes refined, " +
+                      std::to_string(out.global_guard.whole_passes) + " kept the paper's axes, " +
+                      std::to_string(out.global_guard.stretches) + " stretches kept them"
+                : std::string()) +
+           (time_line.empty() ? std::string() : "; time: " + time_line);
   }
-  for (std::size_t i : out.no_free_axis) {
-    add_finding(res, FindingCode::NoFreeAxis, k, op.points[i].line,
-                format_location(run.tp.source, op.points[i].line,
-                                "operation " + op.name + ": no tool axis within " +
-                                    std::to_string(options.paper.max_deviation_deg) +
-                                    " deg of the input axis is reachable and collision-free here" +
-                                    out_of_reach(run.machine.rotary, op.points[i].axis)));
-  }
-  o.optimise_s = seconds_since(t0);
-  if (options.log) {
-    options.log(
-        "operation " + op.name + ": " + std::to_string(out.intervals) + " intervals, " +
-        std::to_string(out.repairs) + " repair keys, " + std::to_string(out.smoothed_joints) +
-        " joints smoothed, " + std::to_string(out.sharp_joints) + " left sharp, " +
-        std::to_string(out.pole_stretches) + " pole passages re-planned" +
-        (options.method == Method::Global
-             ? "; global: " + std::to_string(out.global_passes) + " passes refined, " +
-                   std::to_string(out.global_guard.whole_passes) + " kept the paper's axes, " +
-                   std::to_string(out.global_guard.stretches) + " stretches kept them"
-             : std::string()) +
-        (time_line.empty() ? std::string() : "; time: " + time_line));
-  }
-}
+
+  const Run& run_;
+  const JobOptions& options_;
+  OperationContext& o_;
+  const Operationd& op_;
+  const std::size_t k_;
+  const double radius_mm_;
+  const PartCheck* check_;
+  const ToolModel* tool_;
+  detail::StageProgress& progress_;
+  JobResult& res_;
+  const BlockTiming timing_;
+  const GlobalOptions global_;
+};
 
 }  // namespace
 
@@ -179,7 +224,7 @@ void plan_operations(const Run& run, std::vector<OperationContext>& ops, JobResu
       continue;
     }
     if (options.part && !o.contact.recovered) continue;
-    plan_operation(run, o, progress, res);
+    OperationPlanner(run, o, progress, res).run();
   }
 }
 

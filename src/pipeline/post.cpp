@@ -6,6 +6,73 @@
 
 namespace taxopt::pipeline {
 
+namespace {
+
+/// The operation as the program will carry it: its points (on the planned axes), feeds, tool
+/// and spindle (the fallbacks where the CL file gives none: validate checked they exist),
+/// arcs, coolant and events, before its poses.
+PostedOperation operation_to_post(const Run& run, const OperationContext& o) {
+  const Operationd& op = *o.op;
+  PostedOperation po{op.name,
+                     op.tool,
+                     op.spindle_rpm,
+                     op.spindle_clockwise,
+                     posted_feeds(op, run.fallback_feed_mm_per_min),
+                     {},
+                     {},
+                     {},
+                     op.arcs,
+                     op.coolant,
+                     op.events};
+  if (po.tool.number <= 0 && run.fallback_tool) po.tool.number = *run.fallback_tool;
+  if (needs_spindle_speed(op) && run.fallback_spindle_rpm) {
+    po.spindle_rpm = *run.fallback_spindle_rpm;
+    po.spindle_clockwise = true;
+  }
+  po.swept_moves_checked = run.collision.has_value() && o.contact.recovered;
+  if (run.options.part) {
+    double top = -std::numeric_limits<double>::infinity();
+    for (const Vec3d& v : run.options.part->mesh().vertices) top = std::max(top, v.z());
+    if (std::isfinite(top)) po.part_top_z_mm = top;
+  }
+  if (o.optimised) {
+    for (std::size_t i = 0; i < po.points.size(); ++i) {
+      po.points[i].axis = o.optimised->axes[i];
+      po.points[i].tip_mm = tip_for_axis(op.points[i], o.ball_radius_mm, po.points[i].axis);
+    }
+  }
+  return po;
+}
+
+void missing_feed_finding(const Run& run, const OperationContext& o, JobResult& res) {
+  const Operationd& op = *o.op;
+  bool missing_feed = false;
+  for (const CLPointd& p : op.points) {
+    missing_feed = missing_feed || (p.motion == Motion::Feed && !(p.feed_mm_per_min > 0.0));
+  }
+  if (missing_feed) {
+    add_finding(res, FindingCode::MissingFeed, o.index, 0,
+                "operation " + op.name + ": feed moves without FEDRAT use " +
+                    std::to_string(run.fallback_feed_mm_per_min) + " mm/min");
+  }
+}
+
+/// Cutter-path feed reference: every feed block keeps the time of the input block at its
+/// feed, so the ball centre and the contact point run as the CAM system programmed them,
+/// whatever the tip does; within the feed ratio: where the new tip path would need an F above
+/// max_feed_ratio times the programmed one, the block takes longer (the contact runs slower).
+void keep_input_block_times(const Machine& machine, const OperationContext& o,
+                            PostedOperation& po) {
+  std::vector<CLPointd> in_points = po.points;
+  for (std::size_t i = 0; i < in_points.size(); ++i) in_points[i].tip_mm = o.op->points[i].tip_mm;
+  po.programmed_time_s = kept_block_times_s(
+      programmed_block_times_s(in_points, o.input_poses.empty() ? po.poses : o.input_poses),
+      programmed_block_times_s(po.points, po.poses), machine.gcode.max_feed_ratio,
+      &po.feed_ratio_blocks);
+}
+
+}  // namespace
+
 std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
                                                             std::vector<OperationContext>& ops,
                                                             JobResult& res) {
@@ -18,44 +85,8 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
     const Operationd& op = *o.op;
     const std::size_t k = o.index;
     const auto t0 = Clock::now();
-    PostedOperation po{op.name,
-                       op.tool,
-                       op.spindle_rpm,
-                       op.spindle_clockwise,
-                       posted_feeds(op, run.fallback_feed_mm_per_min),
-                       {},
-                       {},
-                       {},
-                       op.arcs,
-                       op.coolant,
-                       op.events};
-    // The tool and spindle speed where the CL file gives none (validate checked they exist).
-    if (po.tool.number <= 0 && run.fallback_tool) po.tool.number = *run.fallback_tool;
-    if (needs_spindle_speed(op) && run.fallback_spindle_rpm) {
-      po.spindle_rpm = *run.fallback_spindle_rpm;
-      po.spindle_clockwise = true;
-    }
-    po.swept_moves_checked = run.collision.has_value() && o.contact.recovered;
-    if (run.options.part) {
-      double top = -std::numeric_limits<double>::infinity();
-      for (const Vec3d& v : run.options.part->mesh().vertices) top = std::max(top, v.z());
-      if (std::isfinite(top)) po.part_top_z_mm = top;
-    }
-    if (o.optimised) {
-      for (std::size_t i = 0; i < po.points.size(); ++i) {
-        po.points[i].axis = o.optimised->axes[i];
-        po.points[i].tip_mm = tip_for_axis(op.points[i], o.ball_radius_mm, po.points[i].axis);
-      }
-    }
-    bool missing_feed = false;
-    for (const CLPointd& p : op.points) {
-      missing_feed = missing_feed || (p.motion == Motion::Feed && !(p.feed_mm_per_min > 0.0));
-    }
-    if (missing_feed) {
-      add_finding(res, FindingCode::MissingFeed, k, 0,
-                  "operation " + op.name + ": feed moves without FEDRAT use " +
-                      std::to_string(run.fallback_feed_mm_per_min) + " mm/min");
-    }
+    PostedOperation po = operation_to_post(run, o);
+    missing_feed_finding(run, o, res);
     std::vector<Vec3d> axes, in_axes;
     const std::vector<bool> rapid_into = rapid_into_of(op);
     for (std::size_t i = 0; i < op.points.size(); ++i) {
@@ -89,16 +120,7 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
                           deg_to_rad(options.paper.max_deviation_deg), po);
     }
     if (o.optimised && machine.gcode.feed_reference == FeedReference::CutterPath) {
-      // Every feed block keeps the time of the input block at its feed: the ball centre and
-      // the contact point run as the CAM system programmed them, whatever the tip does.
-      std::vector<CLPointd> in_points = po.points;
-      for (std::size_t i = 0; i < in_points.size(); ++i) in_points[i].tip_mm = op.points[i].tip_mm;
-      // Within the feed ratio: where the new tip path would need an F above max_feed_ratio
-      // times the programmed one, the block takes longer (the contact runs slower there).
-      po.programmed_time_s = kept_block_times_s(
-          programmed_block_times_s(in_points, o.input_poses.empty() ? po.poses : o.input_poses),
-          programmed_block_times_s(po.points, po.poses), machine.gcode.max_feed_ratio,
-          &po.feed_ratio_blocks);
+      keep_input_block_times(machine, o, po);
     }
     start = po.poses.back();
     posted.push_back(std::move(po));

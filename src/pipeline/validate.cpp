@@ -136,13 +136,13 @@ void check_points(const Toolpath& tp) {
 
 }  // namespace
 
-Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
-  // The options were checked where the job entered the library (in_job_arena).
-  taxopt::validate(machine);
-  check_points(tp);
-  JobOptions options = resolved_options(given, machine);
-  res.collision_checked = given.part != nullptr;
-  res.tilt_letter = machine.rotary.tilt_letter();
+namespace {
+
+/// What the run leaves unchecked or unwritten by the machine's and the part's set-up: no part,
+/// no holder model, slivers dropped from the mesh, no safe retract, no coolant, no
+/// linearisation; and the CL file's own notes.
+void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions& given,
+                    const JobOptions& options, JobResult& res) {
   if (!given.part) {
     std::ostringstream os;
     const auto name = [&given](const char* field) { return given.name_of(field); };
@@ -207,16 +207,13 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
   }
-  res.gcode_units = options.units_out.value_or(tp.units);
-  const double fallback = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
-  Run run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
-  // The tool and the spindle speed: the CL file's, else the command line's, else the machine
-  // file's [defaults]; never guessed (tests/test_program.cpp: a program that feeds with the spindle
-  // off).
-  run.fallback_tool =
-      run.options.tool_number ? run.options.tool_number : machine.default_tool_number;
-  run.fallback_spindle_rpm =
-      run.options.spindle_rpm ? run.options.spindle_rpm : machine.default_spindle_rpm;
+}
+
+/// The tool and the spindle speed: the CL file's, else the options', else the machine file's
+/// [defaults]; never guessed (tests/test_program.cpp: a program that feeds with the spindle
+/// off). An operation that needs one and has none is refused, naming the option.
+void tool_and_spindle_fallbacks(const Run& run, JobResult& res) {
+  const Toolpath& tp = run.tp;
   const auto source_of = [&](bool option) {
     return std::string(option ? "the command line" : "the machine file's [defaults]");
   };
@@ -250,6 +247,26 @@ Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given
                     shown(*run.fallback_spindle_rpm) + " from " +
                     source_of(run.options.spindle_rpm.has_value()));
   }
+}
+
+}  // namespace
+
+Run validate(const Toolpath& tp, const Machine& machine, const JobOptions& given, JobResult& res) {
+  // The options were checked where the job entered the library (in_job_arena).
+  taxopt::validate(machine);
+  check_points(tp);
+  JobOptions options = resolved_options(given, machine);
+  res.collision_checked = given.part != nullptr;
+  res.tilt_letter = machine.rotary.tilt_letter();
+  setup_findings(tp, machine, given, options, res);
+  res.gcode_units = options.units_out.value_or(tp.units);
+  const double fallback = options.feed_mm_per_min.value_or(options.default_feed_mm_per_min);
+  Run run{tp, machine, std::move(options), fallback, std::nullopt, std::nullopt};
+  run.fallback_tool =
+      run.options.tool_number ? run.options.tool_number : machine.default_tool_number;
+  run.fallback_spindle_rpm =
+      run.options.spindle_rpm ? run.options.spindle_rpm : machine.default_spindle_rpm;
+  tool_and_spindle_fallbacks(run, res);
   return run;
 }
 

@@ -353,70 +353,47 @@ void longer_cycle_finding(const Machine& machine, const OperationContext& o,
   }
 }
 
-/// One operation verified as written.
-OperationResult verify_operation(const Run& run, const OperationContext& o,
-                                 const PostedOperation& po, const Written& w, std::size_t n_posted,
-                                 detail::StageProgress& checking, JobResult& res) {
+/// Read back: the A/C values actually written, and what they mean in the workpiece; each
+/// point's row. Rapids an index move passed over (GcodeProgram::passed_over): no block reaches
+/// them, so nothing of theirs is read back to check; their rows and axes are the plan's (the
+/// rates run over feed passes, which start at the point the move came down to).
+WrittenAxes read_back_points(const Run& run, const OperationContext& o, const PostedOperation& po,
+                             const Written& w, OperationResult& r, JobResult& res) {
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
-  const Machine& machine = run.machine;
-  const JobOptions& options = run.options;
-  const auto t_verify = Clock::now();
-  OperationResult r;
-  r.name = op.name;
-  r.points = op.points.size();
-  r.time_post_s = o.post_s + w.write_s / static_cast<double>(n_posted);
-  for (std::size_t i = 0; i < op.points.size(); ++i) {
-    if (op.points[i].motion == Motion::Feed) {
-      r.feed_mm_min = o.metric_feed_mm_per_min[i];
-      break;
-    }
-  }
-  // Read back: the A/C values actually written, and what they mean in the workpiece.
+  const std::size_t n = op.points.size();
   WrittenAxes ax;
-  ax.a_w.resize(op.points.size());
-  ax.c_w.resize(op.points.size());
-  ax.xyz_w.resize(op.points.size());
-  ax.a_in.resize(op.points.size());
-  ax.c_in.resize(op.points.size());
-  r.rows.resize(op.points.size());
-  // Rapids an index move passed over (GcodeProgram::passed_over): no block reaches them, so
-  // nothing of theirs is read back to check; their rows and axes are the plan's (the rates
-  // run over feed passes, which start at the point the move came down to).
-  std::vector<char> passed(op.points.size(), 0);
+  ax.a_w.resize(n);
+  ax.c_w.resize(n);
+  ax.xyz_w.resize(n);
+  ax.a_in.resize(n);
+  ax.c_in.resize(n);
+  r.rows.resize(n);
+  std::vector<char> passed(n, 0);
   if (k < res.gcode.passed_over.size()) {
     for (const std::size_t i : res.gcode.passed_over[k]) passed[i] = 1;
   }
-  for (std::size_t i = 0; i < op.points.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     if (!passed[i]) {
       check_point_written(run, o, po, w.point_moves[k][i], i, ax, r, res);
       continue;
     }
-    const int decimals = machine.gcode.decimals;
+    const int decimals = run.machine.gcode.decimals;
     ax.a_w[i] = round_to(rad_to_deg(po.poses[i].tilt_rad), decimals);
     ax.c_w[i] = round_to(rad_to_deg(po.poses[i].c_rad), decimals);
-    ax.xyz_w[i] = written_xyz_mm(machine, po.points[i].tip_mm, po.poses[i]);
+    ax.xyz_w[i] = written_xyz_mm(run.machine, po.points[i].tip_mm, po.poses[i]);
     set_point_row(po.points[i], i, ax, r.rows[i]);
   }
-  check_round_trip(run, o, po, r, res);
-  check_turns_in_cut(run, o, ax, res);
-  r.contact = o.contact;
-  r.time_contacts_s = o.contacts_s;
-  r.time_optimise_s = o.optimise_s;
-  if (o.optimised) kept_points(run, o, r, res);
-  if (run.collision && r.contact.recovered) {
-    check_collisions(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, checking, r, res);
-  } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
-             op.tool.diameter_mm > 0.0) {
-    check_shank_and_holder(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, r, res);
-  }
-  if (!r.verification.collision_free) {
-    for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
-  }
-  contact_rows(run, o, checking, r);
-  // The rates as the machine runs the program: each move at the time the controller gives the
-  // words written (Written::time_into_after), the input's likewise; the paper's eq. 16-18 over
-  // the contacts beside them, for the paper's comparison.
+  return ax;
+}
+
+/// The rates as the machine runs the program: each move at the time the controller gives the
+/// words written (Written::time_into_after), the input's likewise; the paper's eq. 16-18 over
+/// the contacts beside them, for the paper's comparison, on the exact contacts and on the
+/// facets'.
+void rates(const OperationContext& o, const Written& w, const WrittenAxes& ax, OperationResult& r) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
   r.before = summarise_timed(op, ax.a_in, ax.c_in, w.time_into_before[k], &r.rows, true);
   r.paper_before =
       summarise_paper(op, o.contacts, o.ball_radius_mm, ax.a_in, ax.c_in, o.metric_feed_mm_per_min);
@@ -437,6 +414,45 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   r.paper_gain_claimed =
       r.paper_after.max_accel_deg_s2 < r.paper_before.max_accel_deg_s2 &&
       r.paper_after_facets.max_accel_deg_s2 < r.paper_before_facets.max_accel_deg_s2;
+}
+
+/// One operation verified as written.
+OperationResult verify_operation(const Run& run, const OperationContext& o,
+                                 const PostedOperation& po, const Written& w, std::size_t n_posted,
+                                 detail::StageProgress& checking, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const Machine& machine = run.machine;
+  const JobOptions& options = run.options;
+  const auto t_verify = Clock::now();
+  OperationResult r;
+  r.name = op.name;
+  r.points = op.points.size();
+  r.time_post_s = o.post_s + w.write_s / static_cast<double>(n_posted);
+  for (std::size_t i = 0; i < op.points.size(); ++i) {
+    if (op.points[i].motion == Motion::Feed) {
+      r.feed_mm_min = o.metric_feed_mm_per_min[i];
+      break;
+    }
+  }
+  WrittenAxes ax = read_back_points(run, o, po, w, r, res);
+  check_round_trip(run, o, po, r, res);
+  check_turns_in_cut(run, o, ax, res);
+  r.contact = o.contact;
+  r.time_contacts_s = o.contacts_s;
+  r.time_optimise_s = o.optimise_s;
+  if (o.optimised) kept_points(run, o, r, res);
+  if (run.collision && r.contact.recovered) {
+    check_collisions(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, checking, r, res);
+  } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
+             op.tool.diameter_mm > 0.0) {
+    check_shank_and_holder(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, r, res);
+  }
+  if (!r.verification.collision_free) {
+    for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
+  }
+  contact_rows(run, o, checking, r);
+  rates(o, w, ax, r);
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   longer_cycle_finding(machine, o, r, res);

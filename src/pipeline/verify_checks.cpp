@@ -256,6 +256,82 @@ std::string what_hits(const CollisionModel& model, const ToolModel& tool,
   return in_air ? "the ball, in the air, meets the part" : "";
 }
 
+/// The points `at` of an operation that collide, `what` they hit, the first's detail.
+void point_collision_finding(const Run& run, const OperationContext& o,
+                             const std::vector<std::size_t>& at, const std::string& what,
+                             const std::string& first_detail, JobResult& res) {
+  if (at.empty()) return;
+  const Operationd& op = *o.op;
+  std::string lines;
+  for (std::size_t j = 0; j < at.size() && j < 10; ++j) {
+    lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
+  }
+  if (at.size() > 10) lines += ", ...";
+  add_finding(res, FindingCode::PointCollision, o.index, op.points[at.front()].line,
+              format_location(run.tp.source, op.points[at.front()].line,
+                              "operation " + op.name + ": " + std::to_string(at.size()) +
+                                  " CL points " + what + ", at lines " + lines +
+                                  (first_detail.empty()
+                                       ? std::string()
+                                       : "; at line " + std::to_string(op.points[at.front()].line) +
+                                             " " + first_detail)));
+}
+
+/// The colliding points `after` told apart: the flutes reaching deeper than the part tolerance
+/// (a gouge of the cutter) and the bodies that never cut (shank, holder, a ball in the air)
+/// within their margins; each marked on its row and reported.
+void tell_point_collisions(const Run& run, const OperationContext& o,
+                           const std::vector<std::size_t>& after,
+                           const std::vector<Vec3d>& out_axes, OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const ToolModel& real_tool = *o.real_tool;
+  const ToolModel& tool = *o.tool;
+  ToolModel flutes = tool, rest = tool;
+  flutes.bodies.resize(static_cast<std::size_t>(tool.flute_bodies));
+  rest.bodies.erase(rest.bodies.begin(), rest.bodies.begin() + tool.flute_bodies);
+  std::vector<std::size_t> gouges, hits;
+  for (std::size_t i : after) {
+    const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * out_axes[i];
+    const bool in_air = o.contacts.empty() || o.contacts[i].state != ContactState::Touching;
+    if (!flutes.bodies.empty() && run.collision->collides(flutes, centre, out_axes[i], false)) {
+      gouges.push_back(i);
+    }
+    if (run.collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
+  }
+  r.verification.flute_gouge_points = static_cast<long>(gouges.size());
+  for (std::size_t i : gouges) r.rows[i].mark(PointMark::FluteGouge);
+  for (std::size_t i : hits) r.rows[i].mark(PointMark::PointCollision);
+  if (hits.empty() && gouges.empty()) {
+    for (std::size_t i : after) r.rows[i].mark(PointMark::PointCollision);
+  }
+  const auto report = [&](const std::vector<std::size_t>& at, const std::string& what,
+                          const std::string& first_detail = std::string()) {
+    point_collision_finding(run, o, at, what, first_detail, res);
+  };
+  const std::string hit_detail =
+      hits.empty()
+          ? std::string()
+          : what_hits(
+                *run.collision, tool, real_tool, op, hits.front(), out_axes[hits.front()],
+                o.contacts.empty() || o.contacts[hits.front()].state != ContactState::Touching,
+                run.options);
+  report(hits,
+         "where the tool hits the part (the shank or holder within its clearance, or a "
+         "ball in the air)",
+         hit_detail);
+  const double flute_tolerance_mm = margins_of(run.options, op).flute_tolerance_mm;
+  report(gouges, "where the flutes reach into the part deeper than the part tolerance " +
+                     shown(flute_tolerance_mm) + " mm (" +
+                     (run.options.part_tolerance_mm
+                          ? std::string("as given")
+                          : contact_tolerance_source(*run.options.part, run.options.contact,
+                                                     op.cam_tolerance_mm)) +
+                     "; a gouge; " + run.options.name_of("part_tolerance_mm") + ")");
+  if (hits.empty() && gouges.empty()) {
+    report(after, "where the tool hits the part");  // never: the bodies are the same
+  }
+}
+
 /// The collisions of an operation's points and moves as written (FCL, the reference), told
 /// apart by body, and the clearance of the bodies that do not cut.
 void check_collisions(const Run& run, const OperationContext& o, const PostedOperation& po,
@@ -288,66 +364,7 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
   r.colliding_after = static_cast<long>(after.size());
   r.verification.collision_free = after.empty();
   if (!after.empty()) {
-    // Told apart: the flutes reaching deeper than the part tolerance (a gouge of the cutter)
-    // and the bodies that never cut (shank, holder, a ball in the air) within their margins.
-    ToolModel flutes = tool, rest = tool;
-    flutes.bodies.resize(static_cast<std::size_t>(tool.flute_bodies));
-    rest.bodies.erase(rest.bodies.begin(), rest.bodies.begin() + tool.flute_bodies);
-    std::vector<std::size_t> gouges, hits;
-    for (std::size_t i : after) {
-      const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * out_axes[i];
-      const bool in_air = o.contacts.empty() || o.contacts[i].state != ContactState::Touching;
-      if (!flutes.bodies.empty() && run.collision->collides(flutes, centre, out_axes[i], false)) {
-        gouges.push_back(i);
-      }
-      if (run.collision->collides(rest, centre, out_axes[i], in_air)) hits.push_back(i);
-    }
-    r.verification.flute_gouge_points = static_cast<long>(gouges.size());
-    for (std::size_t i : gouges) r.rows[i].mark(PointMark::FluteGouge);
-    for (std::size_t i : hits) r.rows[i].mark(PointMark::PointCollision);
-    if (hits.empty() && gouges.empty()) {
-      for (std::size_t i : after) r.rows[i].mark(PointMark::PointCollision);
-    }
-    const auto report = [&](const std::vector<std::size_t>& at, const std::string& what,
-                            const std::string& first_detail = std::string()) {
-      if (at.empty()) return;
-      std::string lines;
-      for (std::size_t j = 0; j < at.size() && j < 10; ++j) {
-        lines += (j ? ", " : "") + std::to_string(op.points[at[j]].line);
-      }
-      if (at.size() > 10) lines += ", ...";
-      add_finding(
-          res, FindingCode::PointCollision, k, op.points[at.front()].line,
-          format_location(run.tp.source, op.points[at.front()].line,
-                          "operation " + op.name + ": " + std::to_string(at.size()) +
-                              " CL points " + what + ", at lines " + lines +
-                              (first_detail.empty()
-                                   ? std::string()
-                                   : "; at line " + std::to_string(op.points[at.front()].line) +
-                                         " " + first_detail)));
-    };
-    const std::string hit_detail =
-        hits.empty()
-            ? std::string()
-            : what_hits(
-                  *run.collision, tool, real_tool, op, hits.front(), out_axes[hits.front()],
-                  o.contacts.empty() || o.contacts[hits.front()].state != ContactState::Touching,
-                  run.options);
-    report(hits,
-           "where the tool hits the part (the shank or holder within its clearance, or a "
-           "ball in the air)",
-           hit_detail);
-    const double flute_tolerance_mm = margins_of(run.options, op).flute_tolerance_mm;
-    report(gouges, "where the flutes reach into the part deeper than the part tolerance " +
-                       shown(flute_tolerance_mm) + " mm (" +
-                       (run.options.part_tolerance_mm
-                            ? std::string("as given")
-                            : contact_tolerance_source(*run.options.part, run.options.contact,
-                                                       op.cam_tolerance_mm)) +
-                       "; a gouge; " + run.options.name_of("part_tolerance_mm") + ")");
-    if (hits.empty() && gouges.empty()) {
-      report(after, "where the tool hits the part");  // never: the bodies are the same
-    }
+    tell_point_collisions(run, o, after, out_axes, r, res);
   } else {
     r.verification.flute_gouge_points = 0;
   }

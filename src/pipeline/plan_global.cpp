@@ -100,82 +100,116 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
                                   pose_options, out, reference ? reference : &paper);
 }
 
+namespace {
+
 /// The turn of the rotary axes between two passes (made in one move by carry_between_passes)
 /// spread over the rapids of the chain in the air (air_turn.hpp), where that makes the chain
 /// faster and every new pose and move is acceptable: within the cone of its point's input
 /// axis, within the machine's ranges and, with a part, free (points and swept moves). The ball
 /// centres stay where the CAM system put them.
-void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                         double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
-                         const Machine& machine, double max_deviation_rad, PostedOperation& po) {
-  const std::size_t n = op.points.size();
-  if (n < 3 || po.poses.size() != n) return;
-  const JointLimits limits = effective_limits(machine);
-  // The point as the machine's joints reach it (what the schedule times: in TCP mode too the
-  // linear joints follow the turning table), and as the G-code writes it.
-  const auto tip_at = [&](std::size_t i, const Posed& pose) {
-    return tip_for_axis(op.points[i], ball_radius_mm, machine.rotary.forward(pose));
-  };
-  const auto joints_at = [&](std::size_t i, const Posed& pose) {
-    const Vec3d xyz = machine.rotary.to_machine_mm(tip_at(i, pose), pose);
+class AirTurnSpreader {
+ public:
+  AirTurnSpreader(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                  double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
+                  const Machine& machine, double max_deviation_rad, PostedOperation& po)
+      : op_(op),
+        contacts_(contacts),
+        ball_radius_mm_(ball_radius_mm),
+        model_(model),
+        tool_(tool),
+        machine_(machine),
+        max_deviation_rad_(max_deviation_rad),
+        po_(po),
+        n_(op.points.size()),
+        limits_(effective_limits(machine)) {}
+
+  void run() {
+    if (n_ < 3 || po_.poses.size() != n_) return;
+    std::vector<char> in_pass(n_, 0);
+    for (const IndexRange& pass : feed_passes(op_)) {
+      std::fill(in_pass.begin() + static_cast<long>(pass.begin),
+                in_pass.begin() + static_cast<long>(pass.end), 1);
+    }
+    std::vector<Posed> trial = po_.poses;
+    std::vector<std::pair<std::size_t, std::size_t>> changed;  // chains [a, b) taken
+    for (std::size_t a = 1; a < n_;) {
+      if (in_pass[a]) {
+        ++a;
+        continue;
+      }
+      std::size_t b = a;
+      while (b < n_ && !in_pass[b]) ++b;
+      const std::size_t first = a;
+      a = b;
+      if (b == n_) break;  // after the last pass: nothing to turn to
+      if (spread_chain(first, b, trial)) changed.emplace_back(first, b);
+    }
+    if (changed.empty()) return;
+    if (model_) keep_hits_where_they_were(changed, trial);
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (trial[i].tilt_rad == po_.poses[i].tilt_rad && trial[i].c_rad == po_.poses[i].c_rad) {
+        continue;
+      }
+      po_.points[i].axis = machine_.rotary.forward(trial[i]);
+      po_.points[i].tip_mm = tip_for_axis(op_.points[i], ball_radius_mm_, po_.points[i].axis);
+    }
+    po_.poses = std::move(trial);
+  }
+
+ private:
+  /// The point as the machine's joints reach it (what the schedule times: in TCP mode too the
+  /// linear joints follow the turning table), and as the G-code writes it.
+  Vec3d tip_at(std::size_t i, const Posed& pose) const {
+    return tip_for_axis(op_.points[i], ball_radius_mm_, machine_.rotary.forward(pose));
+  }
+  JointPosition joints_at(std::size_t i, const Posed& pose) const {
+    const Vec3d xyz = machine_.rotary.to_machine_mm(tip_at(i, pose), pose);
     return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.tilt_rad),
                          rad_to_deg(pose.c_rad)};
-  };
-  // A chain's time: its rapids on their trapezoids, its feed moves at their feed.
-  // `chain[k]` is the pose of point a - 1 + k (k = 0 .. b - a + 1).
-  const auto chain_time = [&](std::size_t a, std::size_t b, const std::vector<Posed>& chain) {
+  }
+
+  /// A chain's time: its rapids on their trapezoids, its feed moves at their feed.
+  /// `chain[k]` is the pose of point a - 1 + k (k = 0 .. b - a + 1).
+  double chain_time(std::size_t a, std::size_t b, const std::vector<Posed>& chain) const {
     double t = 0.0;
     for (std::size_t j = a; j <= b; ++j) {
       const JointPosition from = joints_at(j - 1, chain[j - a]),
                           to = joints_at(j, chain[j - a + 1]);
-      if (op.points[j].motion == Motion::Rapid) {
-        t += rapid_time_s(from, to, limits);
-      } else if (po.points[j].feed_mm_per_min > 0.0) {
+      if (op_.points[j].motion == Motion::Rapid) {
+        t += rapid_time_s(from, to, limits_);
+      } else if (po_.points[j].feed_mm_per_min > 0.0) {
         t += 60.0 * Vec3d(to[0] - from[0], to[1] - from[1], to[2] - from[2]).norm() /
-             po.points[j].feed_mm_per_min;
+             po_.points[j].feed_mm_per_min;
       }
     }
     return t;
-  };
-  std::vector<char> in_pass(n, 0);
-  for (const IndexRange& pass : feed_passes(op)) {
-    std::fill(in_pass.begin() + static_cast<long>(pass.begin),
-              in_pass.begin() + static_cast<long>(pass.end), 1);
   }
-  std::vector<Posed> trial = po.poses;
-  std::vector<std::pair<std::size_t, std::size_t>> changed;  // chains [a, b) taken
-  for (std::size_t a = 1; a < n;) {
-    if (in_pass[a]) {
-      ++a;
-      continue;
-    }
-    std::size_t b = a;
-    while (b < n && !in_pass[b]) ++b;
-    const std::size_t first = a;
-    a = b;
-    if (b == n) break;  // after the last pass: nothing to turn to
-    // Moves first .. b; the turn from the pose before the chain to the pose after it. Only
-    // chains whose turn is made by rapids now (a feed move in the air keeps its axis).
-    const Posed from = po.poses[first - 1], to = po.poses[b];
+
+  /// The chain in the air between passes, moves first .. b: the turn from the pose before it
+  /// to the pose after it spread where that is faster and every pose acceptable, written into
+  /// `trial`. Only chains whose turn is made by rapids now (a feed move in the air keeps its
+  /// axis). True when the chain was taken.
+  bool spread_chain(std::size_t first, std::size_t b, std::vector<Posed>& trial) const {
+    const Posed from = po_.poses[first - 1], to = po_.poses[b];
     bool rapid_turn = true;
     std::vector<double> linear_s, now;  // per move: its time without the turn, its share now
     std::vector<bool> rapid;
     const double turn_rad = std::abs(to.tilt_rad - from.tilt_rad) + std::abs(to.c_rad - from.c_rad);
     for (std::size_t j = first; j <= b; ++j) {
-      const double turned = std::abs(po.poses[j].tilt_rad - po.poses[j - 1].tilt_rad) +
-                            std::abs(po.poses[j].c_rad - po.poses[j - 1].c_rad);
-      rapid.push_back(op.points[j].motion == Motion::Rapid);
+      const double turned = std::abs(po_.poses[j].tilt_rad - po_.poses[j - 1].tilt_rad) +
+                            std::abs(po_.poses[j].c_rad - po_.poses[j - 1].c_rad);
+      rapid.push_back(op_.points[j].motion == Motion::Rapid);
       if (turned > 1e-12 && !rapid.back()) rapid_turn = false;
       now.push_back(turn_rad > 0.0 ? turned / turn_rad : 0.0);
-      JointPosition p = joints_at(j - 1, po.poses[j - 1]), q = joints_at(j, po.poses[j]);
+      JointPosition p = joints_at(j - 1, po_.poses[j - 1]), q = joints_at(j, po_.poses[j]);
       q[3] = p[3];
       q[4] = p[4];
-      linear_s.push_back(rapid.back() ? rapid_time_s(p, q, limits) : 0.0);
+      linear_s.push_back(rapid.back() ? rapid_time_s(p, q, limits_) : 0.0);
     }
-    if (!rapid_turn || turn_rad < 1e-9) continue;
+    if (!rapid_turn || turn_rad < 1e-9) return false;
     // The chain's poses for per-move shares of the turn, and their time.
-    const std::vector<Posed> current(po.poses.begin() + static_cast<long>(first - 1),
-                                     po.poses.begin() + static_cast<long>(b + 1));
+    const std::vector<Posed> current(po_.poses.begin() + static_cast<long>(first - 1),
+                                     po_.poses.begin() + static_cast<long>(b + 1));
     const auto poses_for = [&](const std::vector<double>& share) {
       std::vector<Posed> cand = current;
       double f = 0.0;
@@ -189,29 +223,31 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     std::vector<std::vector<double>> starts = {now};
     const std::vector<double> by_capacity =
         spread_turn(linear_s, rapid, rad_to_deg(to.tilt_rad - from.tilt_rad),
-                    rad_to_deg(to.c_rad - from.c_rad), limits);
+                    rad_to_deg(to.c_rad - from.c_rad), limits_);
     if (!by_capacity.empty()) starts.push_back(by_capacity);
     const std::vector<double> share = best_turn_shares(
         starts, rapid,
         [&](const std::vector<double>& sh) { return chain_time(first, b, poses_for(sh)); });
     const std::vector<Posed> cand = poses_for(share);
-    bool ok = true;
-    for (std::size_t j = first; j < b && ok; ++j) {
+    const MachineKinematicsd& rotary = machine_.rotary;
+    for (std::size_t j = first; j < b; ++j) {
       const Posed& pose = cand[j - first + 1];
-      ok = angle_between(machine.rotary.forward(pose), op.points[j].axis) <=
-               max_deviation_rad + 1e-12 &&
-           machine.rotary.tilt.contains(pose.tilt_rad) &&
-           (machine.rotary.c.continuous || machine.rotary.c.contains(pose.c_rad));
+      if (!(angle_between(rotary.forward(pose), op_.points[j].axis) <= max_deviation_rad_ + 1e-12 &&
+            rotary.tilt.contains(pose.tilt_rad) &&
+            (rotary.c.continuous || rotary.c.contains(pose.c_rad)))) {
+        return false;
+      }
     }
-    if (!ok || chain_time(first, b, cand) >= chain_time(first, b, current) - 1e-6) continue;
+    if (chain_time(first, b, cand) >= chain_time(first, b, current) - 1e-6) return false;
     std::copy(cand.begin() + 1, cand.end() - 1, trial.begin() + static_cast<long>(first));
-    changed.emplace_back(first, b);
+    return true;
   }
-  if (changed.empty()) return;
-  // The new poses and the moves into and out of them must be free; a chain with any hit keeps
-  // its turn where it was.
-  if (model) {
-    std::vector<char> check_point(n, 0), check_move(n, 0);
+
+  /// The new poses and the moves into and out of them must be free; a chain with any hit
+  /// keeps its turn where it was.
+  void keep_hits_where_they_were(const std::vector<std::pair<std::size_t, std::size_t>>& changed,
+                                 std::vector<Posed>& trial) const {
+    std::vector<char> check_point(n_, 0), check_move(n_, 0);
     for (const auto& [first, b] : changed) {
       std::fill(check_point.begin() + static_cast<long>(first),
                 check_point.begin() + static_cast<long>(b), 1);
@@ -220,38 +256,51 @@ void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& 
     }
     std::vector<Vec3d> axes, xyz;
     std::vector<double> tilt_deg, c_deg;
-    for (std::size_t i = 0; i < n; ++i) {
-      axes.push_back(machine.rotary.forward(trial[i]));
-      const Vec3d tip = tip_at(i, trial[i]);
-      xyz.push_back(written_xyz_mm(machine, tip, trial[i]));
+    for (std::size_t i = 0; i < n_; ++i) {
+      axes.push_back(machine_.rotary.forward(trial[i]));
+      xyz.push_back(written_xyz_mm(machine_, tip_at(i, trial[i]), trial[i]));
       tilt_deg.push_back(rad_to_deg(trial[i].tilt_rad));
       c_deg.push_back(rad_to_deg(trial[i].c_rad));
     }
-    std::vector<ContactPoint> air(n);  // no contacts known: every point in the air
-    const std::vector<ContactPoint>& state = contacts.empty() ? air : contacts;
-    std::vector<char> hit(n, 0);
-    for (std::size_t i : colliding_points(*model, tool, op, axes, state, nullptr, &check_point)) {
+    std::vector<ContactPoint> air(n_);  // no contacts known: every point in the air
+    const std::vector<ContactPoint>& state = contacts_.empty() ? air : contacts_;
+    std::vector<char> hit(n_, 0);
+    for (std::size_t i :
+         colliding_points(*model_, tool_, op_, axes, state, nullptr, &check_point)) {
       hit[i] = 1;
     }
-    for (std::size_t i : colliding_moves(*model, tool, machine, xyz, tilt_deg, c_deg, state,
+    for (std::size_t i : colliding_moves(*model_, tool_, machine_, xyz, tilt_deg, c_deg, state,
                                          nullptr, nullptr, &check_move)) {
       hit[i] = 1;
     }
     for (const auto& [first, b] : changed) {
       if (std::any_of(hit.begin() + static_cast<long>(first),
                       hit.begin() + static_cast<long>(b) + 1, [](char h) { return h != 0; })) {
-        std::copy(po.poses.begin() + static_cast<long>(first),
-                  po.poses.begin() + static_cast<long>(b),
+        std::copy(po_.poses.begin() + static_cast<long>(first),
+                  po_.poses.begin() + static_cast<long>(b),
                   trial.begin() + static_cast<long>(first));
       }
     }
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    if (trial[i].tilt_rad == po.poses[i].tilt_rad && trial[i].c_rad == po.poses[i].c_rad) continue;
-    po.points[i].axis = machine.rotary.forward(trial[i]);
-    po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, po.points[i].axis);
-  }
-  po.poses = std::move(trial);
+
+  const Operationd& op_;
+  const std::vector<ContactPoint>& contacts_;
+  const double ball_radius_mm_;
+  const PartCheck* model_;
+  const ToolModel& tool_;
+  const Machine& machine_;
+  const double max_deviation_rad_;
+  PostedOperation& po_;
+  const std::size_t n_;
+  const JointLimits limits_;
+};
+
+}  // namespace
+
+void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                         double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
+                         const Machine& machine, double max_deviation_rad, PostedOperation& po) {
+  AirTurnSpreader(op, contacts, ball_radius_mm, model, tool, machine, max_deviation_rad, po).run();
 }
 
 }  // namespace taxopt::pipeline

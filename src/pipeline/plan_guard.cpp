@@ -51,128 +51,194 @@ std::vector<char> points_and_moves_hit(const Operationd& op,
   return hit;
 }
 
-StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                double ball_radius_mm, const PartCheck* model,
-                                const ToolModel* tool, const Machine& machine,
-                                const BlockTiming& timing, const PosePlanOptions& pose_options,
-                                OptimisedOperation& out, const GuardReference* reference) {
-  const std::size_t n = op.points.size();
-  const std::vector<bool> rapid_into = rapid_into_of(op);
-  std::vector<Vec3d> in_axes;
-  for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
-  if (reference) in_axes = reference->axes;
-  const std::vector<std::optional<Posed>> in_preferred =
-      reference ? reference->preferred : std::vector<std::optional<Posed>>{};
-  const PosePlan in_plan =
-      plan_poses(machine.rotary, in_axes, rapid_into, {}, pose_options, in_preferred);
-  if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n, KeptWhy::None)};
-  // In machine mode with linearisation the tip runs the straight line as in TCP mode.
-  Machine path_machine = machine;
-  if (machine.gcode.program.linearise_tolerance_mm > 0.0) path_machine.gcode.mode = GcodeMode::Tcp;
-  const auto moves_hit = [&](const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
-                             const std::vector<char>& check) {
-    return points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, axes,
-                                poses, check);
-  };
-  const std::vector<IndexRange> passes = feed_passes(op);
-  const std::vector<char> in_hit = moves_hit(in_axes, in_plan.poses, std::vector<char>(n, 1));
-  // The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks and the
-  // sum of squares of a over the interior points (metrics' accumulate).
-  struct PassRates {
-    RotaryKinematics k;
-    RotarySummary summary;
-    double mean_sq_accel() const {
-      return summary.accel_samples
-                 ? summary.sum_sq_accel / static_cast<double>(summary.accel_samples)
-                 : 0.0;
+namespace {
+
+/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks and the
+/// sum of squares of a over the interior points (metrics' accumulate).
+struct PassRates {
+  RotaryKinematics k;
+  RotarySummary summary;
+  double mean_sq_accel() const {
+    return summary.accel_samples ? summary.sum_sq_accel / static_cast<double>(summary.accel_samples)
+                                 : 0.0;
+  }
+};
+
+/// The guard of an operation's passes (guard_passes): the reference's poses (the input's
+/// unless given), which passes it guards (those whose reference is free), and the verdict on a
+/// candidate's points that guard_stretches asks for.
+class PassGuard {
+ public:
+  PassGuard(const Operationd& op, const std::vector<ContactPoint>& contacts, double ball_radius_mm,
+            const PartCheck* model, const ToolModel* tool, const Machine& machine,
+            const BlockTiming& timing, const PosePlanOptions& pose_options,
+            const GuardReference* reference)
+      : op_(op),
+        contacts_(contacts),
+        ball_radius_mm_(ball_radius_mm),
+        model_(model),
+        tool_(tool),
+        machine_(machine),
+        timing_(timing),
+        pose_options_(pose_options),
+        reference_(reference),
+        n_(op.points.size()),
+        rapid_into_(rapid_into_of(op)),
+        passes_(feed_passes(op)),
+        path_machine_(machine) {
+    for (const CLPointd& p : op.points) in_axes_.push_back(p.axis);
+    if (reference) {
+      in_axes_ = reference->axes;
+      in_preferred_ = reference->preferred;
     }
-  };
-  const auto rates = [&](const IndexRange& pass, const std::vector<Posed>& poses) {
+    // In machine mode with linearisation the tip runs the straight line as in TCP mode.
+    if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
+      path_machine_.gcode.mode = GcodeMode::Tcp;
+    }
+  }
+
+  StretchGuardResult run(OptimisedOperation& out) {
+    const PosePlan in_plan =
+        plan_poses(machine_.rotary, in_axes_, rapid_into_, {}, pose_options_, in_preferred_);
+    if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n_, KeptWhy::None)};
+    const std::vector<char> in_hit = moves_hit(in_axes_, in_plan.poses, std::vector<char>(n_, 1));
+    std::vector<char> guarded(passes_.size(), 0);
+    before_.assign(passes_.size(), {});
+    for (std::size_t q = 0; q < passes_.size(); ++q) {
+      const IndexRange& pass = passes_[q];
+      bool input_safe = true;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !in_hit[i];
+      if (!input_safe || pass.size() == 0) continue;
+      guarded[q] = 1;
+      before_[q] = rates(pass, in_plan.poses);
+    }
+    opt_preferred_ = out.preferred;
+    const StretchEvaluation evaluate =
+        [this](const std::vector<Vec3d>& axes, const std::vector<KeptWhy>& why,
+               const std::vector<char>& check) { return verdicts(axes, why, check); };
+    StretchGuardResult guard = guard_stretches(passes_, guarded, out.axes, in_axes_, evaluate);
+    out.axes = guard.axes;
+    if (!out.preferred.empty()) out.preferred = preferred_of(guard.why);
+    return guard;
+  }
+
+ private:
+  std::vector<char> moves_hit(const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
+                              const std::vector<char>& check) const {
+    return points_and_moves_hit(op_, contacts_, ball_radius_mm_, model_, tool_, path_machine_, axes,
+                                poses, check);
+  }
+
+  PassRates rates(const IndexRange& pass, const std::vector<Posed>& poses) const {
     std::vector<double> a, c;
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       a.push_back(rad_to_deg(poses[i].tilt_rad));
       c.push_back(rad_to_deg(poses[i].c_rad));
     }
-    PassRates r{rotary_kinematics_from_times(
-                    a, c, move_times_s(op, ball_radius_mm, machine.rotary, poses, timing, pass)),
-                {}};
+    PassRates r{
+        rotary_kinematics_from_times(
+            a, c, move_times_s(op_, ball_radius_mm_, machine_.rotary, poses, timing_, pass)),
+        {}};
     accumulate(r.summary, r.k, c);
     return r;
-  };
-  std::vector<char> guarded(passes.size(), 0);
-  std::vector<PassRates> before(passes.size());
-  for (std::size_t q = 0; q < passes.size(); ++q) {
-    const IndexRange& pass = passes[q];
-    bool input_safe = true;
-    for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !in_hit[i];
-    if (!input_safe || pass.size() == 0) continue;
-    guarded[q] = 1;
-    before[q] = rates(pass, in_plan.poses);
   }
-  const std::vector<std::optional<Posed>> opt_preferred = out.preferred;
-  // The preferred poses of a candidate: the optimiser's where optimised, the reference's where
-  // kept, none on a join.
-  const auto preferred_of = [&](const std::vector<KeptWhy>& why) {
-    std::vector<std::optional<Posed>> preferred = opt_preferred;
+
+  /// The preferred poses of a candidate: the optimiser's where optimised, the reference's
+  /// where kept, none on a join.
+  std::vector<std::optional<Posed>> preferred_of(const std::vector<KeptWhy>& why) const {
+    std::vector<std::optional<Posed>> preferred = opt_preferred_;
     for (std::size_t i = 0; i < preferred.size() && i < why.size(); ++i) {
       if (why[i] == KeptWhy::Join) preferred[i] = std::nullopt;
       if (why[i] == KeptWhy::Collision || why[i] == KeptWhy::PeakRate) {
-        preferred[i] = in_preferred.empty() ? std::nullopt : in_preferred[i];
+        preferred[i] = in_preferred_.empty() ? std::nullopt : in_preferred_[i];
       }
     }
     return preferred;
-  };
-  const StretchEvaluation evaluate = [&](const std::vector<Vec3d>& axes,
-                                         const std::vector<KeptWhy>& why,
-                                         const std::vector<char>& check) {
-    StretchVerdicts out_verdicts{std::vector<PointVerdict>(n, PointVerdict::Good),
-                                 std::vector<char>(passes.size(), 0)};
-    std::vector<PointVerdict>& verdict = out_verdicts.points;
+  }
+
+  /// A candidate's points: those whose points or moves hit, those that raise their guarded
+  /// pass's peak omega or a above the reference's; and the passes whose rates it improves.
+  StretchVerdicts verdicts(const std::vector<Vec3d>& axes, const std::vector<KeptWhy>& why,
+                           const std::vector<char>& check) const {
+    StretchVerdicts out{std::vector<PointVerdict>(n_, PointVerdict::Good),
+                        std::vector<char>(passes_.size(), 0)};
     const PosePlan plan =
-        plan_poses(machine.rotary, axes, rapid_into, {}, pose_options, preferred_of(why));
+        plan_poses(machine_.rotary, axes, rapid_into_, {}, pose_options_, preferred_of(why));
     if (!plan.ok()) {
-      for (std::size_t i = 0; i < n; ++i) {
-        if (check[i]) verdict[i] = PointVerdict::Hits;
+      for (std::size_t i = 0; i < n_; ++i) {
+        if (check[i]) out.points[i] = PointVerdict::Hits;
       }
-      return out_verdicts;
+      return out;
     }
     const std::vector<char> hit = moves_hit(axes, plan.poses, check);
-    for (std::size_t q = 0; q < passes.size(); ++q) {
-      const IndexRange& pass = passes[q];
+    for (std::size_t q = 0; q < passes_.size(); ++q) {
+      const IndexRange& pass = passes_[q];
       if (pass.size() == 0 || !check[pass.begin]) continue;
-      const PassRates after = rates(pass, plan.poses);
-      const RotaryKinematics& k = after.k;
-      // omega_j belongs to the segment j -> j + 1, a_j to the points j - 1, j, j + 1.
-      const auto raises = [&](std::size_t lo, std::size_t hi) {
-        for (std::size_t j = lo; j <= hi && j < pass.size(); ++j) {
-          if (verdict[pass.begin + j] == PointVerdict::Good)
-            verdict[pass.begin + j] = PointVerdict::RaisesRate;
-        }
-      };
-      constexpr double kRel = 1.0 + 1e-9;
-      const bool rates_count = !reference || reference->rates;
-      for (std::size_t j = 0; rates_count && j < pass.size(); ++j) {
-        if (!reference && k.omega_deg_s[j] > before[q].summary.max_omega_deg_s * kRel) {
-          raises(j, j + 1);
-        }
-        if (k.accel_deg_s2[j] > before[q].summary.max_accel_deg_s2 * kRel) {
-          raises(j ? j - 1 : 0, j + 1);
-        }
-      }
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        if (hit[i]) verdict[i] = PointVerdict::Hits;
-      }
-      out_verdicts.gains[q] =
-          !rates_count ||
-          after.summary.max_accel_deg_s2 * kRel < before[q].summary.max_accel_deg_s2 ||
-          after.mean_sq_accel() * kRel < before[q].mean_sq_accel();
+      out.gains[q] = pass_verdicts(q, plan.poses, hit, out.points);
     }
-    return out_verdicts;
-  };
-  StretchGuardResult guard = guard_stretches(passes, guarded, out.axes, in_axes, evaluate);
-  out.axes = guard.axes;
-  if (!out.preferred.empty()) out.preferred = preferred_of(guard.why);
-  return guard;
+    return out;
+  }
+
+  /// Pass q's points judged (see verdicts); true when the pass gains.
+  bool pass_verdicts(std::size_t q, const std::vector<Posed>& poses, const std::vector<char>& hit,
+                     std::vector<PointVerdict>& verdict) const {
+    const IndexRange& pass = passes_[q];
+    const PassRates after = rates(pass, poses);
+    const RotaryKinematics& k = after.k;
+    // omega_j belongs to the segment j -> j + 1, a_j to the points j - 1, j, j + 1.
+    const auto raises = [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t j = lo; j <= hi && j < pass.size(); ++j) {
+        if (verdict[pass.begin + j] == PointVerdict::Good)
+          verdict[pass.begin + j] = PointVerdict::RaisesRate;
+      }
+    };
+    constexpr double kRel = 1.0 + 1e-9;
+    const bool rates_count = !reference_ || reference_->rates;
+    for (std::size_t j = 0; rates_count && j < pass.size(); ++j) {
+      if (!reference_ && k.omega_deg_s[j] > before_[q].summary.max_omega_deg_s * kRel) {
+        raises(j, j + 1);
+      }
+      if (k.accel_deg_s2[j] > before_[q].summary.max_accel_deg_s2 * kRel) {
+        raises(j ? j - 1 : 0, j + 1);
+      }
+    }
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      if (hit[i]) verdict[i] = PointVerdict::Hits;
+    }
+    return !rates_count ||
+           after.summary.max_accel_deg_s2 * kRel < before_[q].summary.max_accel_deg_s2 ||
+           after.mean_sq_accel() * kRel < before_[q].mean_sq_accel();
+  }
+
+  const Operationd& op_;
+  const std::vector<ContactPoint>& contacts_;
+  const double ball_radius_mm_;
+  const PartCheck* model_;
+  const ToolModel* tool_;
+  const Machine& machine_;
+  const BlockTiming& timing_;
+  const PosePlanOptions& pose_options_;
+  const GuardReference* reference_;
+  const std::size_t n_;
+  const std::vector<bool> rapid_into_;
+  const std::vector<IndexRange> passes_;
+  Machine path_machine_;
+  std::vector<Vec3d> in_axes_;
+  std::vector<std::optional<Posed>> in_preferred_;
+  std::vector<std::optional<Posed>> opt_preferred_;
+  std::vector<PassRates> before_;
+};
+
+}  // namespace
+
+StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
+                                double ball_radius_mm, const PartCheck* model,
+                                const ToolModel* tool, const Machine& machine,
+                                const BlockTiming& timing, const PosePlanOptions& pose_options,
+                                OptimisedOperation& out, const GuardReference* reference) {
+  return PassGuard(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+                   reference)
+      .run(out);
 }
 
 }  // namespace taxopt::pipeline

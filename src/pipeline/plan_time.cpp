@@ -52,6 +52,198 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
       .summary.cycle_time_s;
 }
 
+namespace {
+
+/// --objective time on one operation (refine_time): its candidate plans, each timed as the
+/// schedule runs it, and the choice among them.
+class TimePlanner {
+ public:
+  TimePlanner(const Operationd& op, const std::vector<ContactPoint>& contacts,
+              double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
+              const Machine& machine, const BlockTiming& timing,
+              const PosePlanOptions& pose_options, const GlobalOptions& options,
+              double fallback_feed, detail::StageProgress& progress)
+      : op_(op),
+        contacts_(contacts),
+        ball_radius_mm_(ball_radius_mm),
+        model_(model),
+        tool_(tool),
+        machine_(machine),
+        timing_(timing),
+        pose_options_(pose_options),
+        options_(options),
+        fallback_feed_(fallback_feed),
+        progress_(progress),
+        rapid_into_(rapid_into_of(op)) {
+    for (const CLPointd& p : op.points) in_axes_.push_back(p.axis);
+  }
+
+  std::string run(OptimisedOperation& out) {
+    const OptimisedOperation paper = out;
+    // Two sum-squares plans: the coarse programme's (the time plan's start and guard
+    // reference: off the pyramid's, the time plan's schedule came out longer on three of the
+    // eighteen cases of docs/results.md, up to +14 %) and the pyramid's (--method global's own
+    // plan, so the time objective is never slower than it).
+    OptimisedOperation smooth = out, fine = out;
+    GlobalOptions sum_squares = options_;
+    sum_squares.objective = GlobalObjective::SumSquares;
+    sum_squares.fine_step_deg = 0.0;
+    refine(sum_squares, smooth);
+    const bool pyramid = options_.fine_step_deg > 0.0;
+    if (pyramid) {
+      sum_squares.fine_step_deg = options_.fine_step_deg;
+      refine(sum_squares, fine);
+    }
+    const PosePlan in_plan = poses_of(in_axes_, {});
+    const TimeContext time = time_context(in_plan, poses_of(smooth.axes, smooth.preferred));
+    programmed_s_ = time.programmed_s;
+    OptimisedOperation fast = out;
+    const GuardReference reference{smooth.axes, smooth.preferred, false};
+    refine(options_, fast, &time, &reference);
+    OptimisedOperation input = paper;
+    input.axes = in_axes_;
+    input.preferred.clear();
+    std::vector<Plan> plans = {
+        {"sum-squares", &smooth, cycle(smooth), 0.0},
+        {"sum-squares-fine", &fine, pyramid ? cycle(fine) : std::numeric_limits<double>::infinity(),
+         0.0},
+        {"paper", &paper, cycle(paper), 0.0},
+        {"time", &fast, cycle(fast), 0.0},
+        {"input", &input, input_cycle(in_plan), 0.0}};
+    return choose(plans, out);
+  }
+
+ private:
+  struct Plan {
+    const char* name;
+    const OptimisedOperation* plan;
+    double cycle_s, peak_a;
+  };
+
+  void refine(const GlobalOptions& options, OptimisedOperation& plan,
+              const TimeContext* time = nullptr, const GuardReference* reference = nullptr) {
+    refine_global(op_, contacts_, ball_radius_mm_, model_, tool_, machine_, timing_, pose_options_,
+                  options, plan, progress_, time, reference);
+  }
+
+  PosePlan poses_of(const std::vector<Vec3d>& axes,
+                    const std::vector<std::optional<Posed>>& preferred) const {
+    return plan_poses(machine_.rotary, axes, rapid_into_, {}, pose_options_, preferred);
+  }
+
+  /// The time plan's context: the machine's effective limits; every feed block keeps the
+  /// time the input block takes at its feed (cutter-path), as posted; with the tip-path
+  /// reference that time moves with the tip (the input's here); the sum-squares and the
+  /// input's poses as alternatives every pass weighs.
+  TimeContext time_context(const PosePlan& in_plan, const PosePlan& smooth_plan) const {
+    TimeContext time;
+    time.limits = effective_limits(machine_);
+    time.programmed_s = programmed_block_times_s(posted_feeds(op_, fallback_feed_),
+                                                 in_plan.ok() ? in_plan.poses : smooth_plan.poses);
+    if (smooth_plan.ok()) time.alternatives.push_back(smooth_plan.poses);
+    if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
+    return time;
+  }
+
+  double cycle_of(const std::vector<Vec3d>& axes,
+                  const std::vector<std::optional<Posed>>& preferred) const {
+    return operation_cycle_s(op_, contacts_, ball_radius_mm_, model_, tool_, machine_,
+                             deg_to_rad(options_.max_deviation_deg), axes, preferred, pose_options_,
+                             fallback_feed_, programmed_s_);
+  }
+  double cycle(const OptimisedOperation& o) const { return cycle_of(o.axes, o.preferred); }
+
+  /// The input's axes count where every point and move of theirs is free.
+  double input_cycle(const PosePlan& in_plan) const {
+    if (!in_plan.ok()) return std::numeric_limits<double>::infinity();
+    const double input_s = cycle_of(in_axes_, {});
+    if (!std::isfinite(input_s)) return input_s;
+    Machine path_machine = machine_;
+    if (machine_.gcode.program.linearise_tolerance_mm > 0.0) {
+      path_machine.gcode.mode = GcodeMode::Tcp;
+    }
+    const std::vector<char> hit =
+        points_and_moves_hit(op_, contacts_, ball_radius_mm_, model_, tool_, path_machine, in_axes_,
+                             in_plan.poses, std::vector<char>(op_.points.size(), 1));
+    return std::find(hit.begin(), hit.end(), 1) != hit.end()
+               ? std::numeric_limits<double>::infinity()
+               : input_s;
+  }
+
+  /// The peak a of a plan's passes, each move timed as the controller takes it from the words
+  /// (move_times_s), as the report measures it.
+  double peak_a(const OptimisedOperation& o) const {
+    const PosePlan pp = poses_of(o.axes, o.preferred);
+    if (!pp.ok()) return std::numeric_limits<double>::infinity();
+    std::vector<double> a, c;
+    for (const Posed& q : pp.poses) {
+      a.push_back(rad_to_deg(q.tilt_rad));
+      c.push_back(rad_to_deg(q.c_rad));
+    }
+    std::vector<double> into = {0.0};
+    for (double t : move_times_s(op_, ball_radius_mm_, machine_.rotary, pp.poses, timing_,
+                                 IndexRange{0, op_.points.size()})) {
+      into.push_back(t);
+    }
+    return summarise_timed(op_, a, c, into).max_accel_deg_s2;
+  }
+
+  /// Within the tie band of the shortest cycle, the smoothest plan wins (then the shorter,
+  /// then the earlier in the list: deterministic). Its axes go to `out`; the log's line.
+  std::string choose(std::vector<Plan>& plans, OptimisedOperation& out) const {
+    double shortest = std::numeric_limits<double>::infinity();
+    for (const Plan& p : plans) shortest = std::min(shortest, p.cycle_s);
+    const Plan* best = nullptr;
+    const Plan* fastest = nullptr;
+    for (Plan& p : plans) {
+      if (!std::isfinite(p.cycle_s)) continue;
+      if (!fastest || p.cycle_s < fastest->cycle_s * (1.0 - 1e-9)) fastest = &p;
+      if (p.cycle_s > shortest * (1.0 + options_.time_tie_band)) continue;
+      p.peak_a = peak_a(*p.plan);
+      if (!best || p.peak_a < best->peak_a * (1.0 - 1e-9) ||
+          (p.peak_a <= best->peak_a * (1.0 + 1e-9) && p.cycle_s < best->cycle_s * (1.0 - 1e-9))) {
+        best = &p;
+      }
+    }
+    if (!best) return "no plan could be timed: the paper's axes kept";
+    const std::string chosen = best->name;
+    const double best_s = best->cycle_s, best_peak = best->peak_a;
+    const double fastest_peak = fastest == best ? best_peak : peak_a(*fastest->plan);
+    const std::string fastest_name = fastest->name;
+    const double fastest_s = fastest->cycle_s;
+    out = *best->plan;
+    out.time_choice = OperationResult::TimeChoice{
+        chosen, fastest_name, best_s, best_peak, fastest_s, fastest_peak, options_.time_tie_band};
+    char line[640];
+    std::snprintf(line, sizeof line,
+                  "scheduled cycle %.3f s (paper), %.3f s (sum-squares), %.3f s (sum-squares, "
+                  "fine), %.3f s (time plan), %.3f s (input): %s axes kept (%.3f s, peak a %.1f "
+                  "deg/s^2; the shortest, %s, %.3f s with peak a %.1f: within the %.1f %% tie "
+                  "band the smoother wins)",
+                  plans[2].cycle_s, plans[0].cycle_s, plans[1].cycle_s, plans[3].cycle_s,
+                  plans[4].cycle_s, chosen.c_str(), best_s, best_peak, fastest_name.c_str(),
+                  fastest_s, fastest_peak, 100.0 * options_.time_tie_band);
+    return line;
+  }
+
+  const Operationd& op_;
+  const std::vector<ContactPoint>& contacts_;
+  const double ball_radius_mm_;
+  const PartCheck* model_;
+  const ToolModel* tool_;
+  const Machine& machine_;
+  const BlockTiming& timing_;
+  const PosePlanOptions& pose_options_;
+  const GlobalOptions& options_;
+  const double fallback_feed_;
+  detail::StageProgress& progress_;
+  const std::vector<bool> rapid_into_;
+  std::vector<Vec3d> in_axes_;
+  std::vector<double> programmed_s_;  ///< every move's least time (TimeContext::programmed_s)
+};
+
+}  // namespace
+
 /// --method global --objective time (docs/global-method.md): the sum-squares plan first (a
 /// start and an alternative every pass weighs, and the reference of the guard, which gives it
 /// back over stretches whose moves hit), then every pass planned for its scheduled time; of
@@ -65,131 +257,9 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
                         const PosePlanOptions& pose_options, const GlobalOptions& options,
                         double fallback_feed, OptimisedOperation& out,
                         detail::StageProgress& progress) {
-  const OptimisedOperation paper = out;
-  // Two sum-squares plans: the coarse programme's (the time plan's start and guard reference:
-  // off the pyramid's, the time plan's schedule came out longer on three of the eighteen cases
-  // of docs/results.md, up to +14 %) and the pyramid's (--method global's own plan, so the time
-  // objective is never slower than it).
-  OptimisedOperation smooth = out, fine = out;
-  GlobalOptions sum_squares = options;
-  sum_squares.objective = GlobalObjective::SumSquares;
-  sum_squares.fine_step_deg = 0.0;
-  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
-                sum_squares, smooth, progress);
-  const bool pyramid = options.fine_step_deg > 0.0;
-  if (pyramid) {
-    sum_squares.fine_step_deg = options.fine_step_deg;
-    refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
-                  sum_squares, fine, progress);
-  }
-  const std::vector<bool> rapid_into = rapid_into_of(op);
-  std::vector<Vec3d> in_axes;
-  for (const CLPointd& p : op.points) in_axes.push_back(p.axis);
-  const PosePlan in_plan = plan_poses(machine.rotary, in_axes, rapid_into, {}, pose_options);
-  const PosePlan smooth_plan =
-      plan_poses(machine.rotary, smooth.axes, rapid_into, {}, pose_options, smooth.preferred);
-  TimeContext time;
-  time.limits = effective_limits(machine);
-  // Every feed block keeps the time the input block takes at its feed (cutter-path), as
-  // posted; with the tip-path reference that time moves with the tip (the input's here).
-  time.programmed_s = programmed_block_times_s(posted_feeds(op, fallback_feed),
-                                               in_plan.ok() ? in_plan.poses : smooth_plan.poses);
-  if (smooth_plan.ok()) time.alternatives.push_back(smooth_plan.poses);
-  if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
-  OptimisedOperation fast = out;
-  const GuardReference reference{smooth.axes, smooth.preferred, false};
-  refine_global(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options, options,
-                fast, progress, &time, &reference);
-  const auto cycle = [&](const OptimisedOperation& o) {
-    return operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
-                             deg_to_rad(options.max_deviation_deg), o.axes, o.preferred,
-                             pose_options, fallback_feed, time.programmed_s);
-  };
-  const double paper_s = cycle(paper), smooth_s = cycle(smooth), fast_s = cycle(fast);
-  const double fine_s = pyramid ? cycle(fine) : std::numeric_limits<double>::infinity();
-  // The input's axes count where every point and move of theirs is free.
-  double input_s = in_plan.ok()
-                       ? operation_cycle_s(op, contacts, ball_radius_mm, model, tool, machine,
-                                           deg_to_rad(options.max_deviation_deg), in_axes, {},
-                                           pose_options, fallback_feed, time.programmed_s)
-                       : std::numeric_limits<double>::infinity();
-  OptimisedOperation input = paper;
-  input.axes = in_axes;
-  input.preferred.clear();
-  if (std::isfinite(input_s)) {
-    Machine path_machine = machine;
-    if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
-      path_machine.gcode.mode = GcodeMode::Tcp;
-    }
-    const std::vector<char> hit =
-        points_and_moves_hit(op, contacts, ball_radius_mm, model, tool, path_machine, in_axes,
-                             in_plan.poses, std::vector<char>(op.points.size(), 1));
-    if (std::find(hit.begin(), hit.end(), 1) != hit.end()) {
-      input_s = std::numeric_limits<double>::infinity();
-    }
-  }
-  // The peak a of a plan's passes, each move timed as the controller takes it from the words
-  // (move_times_s), as the report measures it.
-  const auto peak_a = [&](const OptimisedOperation& o) {
-    const PosePlan pp =
-        plan_poses(machine.rotary, o.axes, rapid_into, {}, pose_options, o.preferred);
-    if (!pp.ok()) return std::numeric_limits<double>::infinity();
-    std::vector<double> a, c;
-    for (const Posed& q : pp.poses) {
-      a.push_back(rad_to_deg(q.tilt_rad));
-      c.push_back(rad_to_deg(q.c_rad));
-    }
-    std::vector<double> into = {0.0};
-    for (double t : move_times_s(op, ball_radius_mm, machine.rotary, pp.poses, timing,
-                                 IndexRange{0, op.points.size()})) {
-      into.push_back(t);
-    }
-    return summarise_timed(op, a, c, into).max_accel_deg_s2;
-  };
-  struct Plan {
-    const char* name;
-    const OptimisedOperation* plan;
-    double cycle_s, peak_a;
-  };
-  std::vector<Plan> plans = {{"sum-squares", &smooth, smooth_s, 0.0},
-                             {"sum-squares-fine", &fine, fine_s, 0.0},
-                             {"paper", &paper, paper_s, 0.0},
-                             {"time", &fast, fast_s, 0.0},
-                             {"input", &input, input_s, 0.0}};
-  double shortest = std::numeric_limits<double>::infinity();
-  for (const Plan& p : plans) shortest = std::min(shortest, p.cycle_s);
-  // Within the tie band of the shortest cycle, the smoothest plan wins (then the shorter, then
-  // the earlier in the list: deterministic).
-  const Plan* best = nullptr;
-  const Plan* fastest = nullptr;
-  for (Plan& p : plans) {
-    if (!std::isfinite(p.cycle_s)) continue;
-    if (!fastest || p.cycle_s < fastest->cycle_s * (1.0 - 1e-9)) fastest = &p;
-    if (p.cycle_s > shortest * (1.0 + options.time_tie_band)) continue;
-    p.peak_a = peak_a(*p.plan);
-    if (!best || p.peak_a < best->peak_a * (1.0 - 1e-9) ||
-        (p.peak_a <= best->peak_a * (1.0 + 1e-9) && p.cycle_s < best->cycle_s * (1.0 - 1e-9))) {
-      best = &p;
-    }
-  }
-  if (!best) return "no plan could be timed: the paper's axes kept";
-  const std::string chosen = best->name;
-  const double best_s = best->cycle_s, best_peak = best->peak_a;
-  const double fastest_peak = fastest == best ? best_peak : peak_a(*fastest->plan);
-  const std::string fastest_name = fastest->name;
-  const double fastest_s = fastest->cycle_s;
-  out = *best->plan;
-  out.time_choice = OperationResult::TimeChoice{
-      chosen, fastest_name, best_s, best_peak, fastest_s, fastest_peak, options.time_tie_band};
-  char line[640];
-  std::snprintf(line, sizeof line,
-                "scheduled cycle %.3f s (paper), %.3f s (sum-squares), %.3f s (sum-squares, "
-                "fine), %.3f s (time plan), %.3f s (input): %s axes kept (%.3f s, peak a %.1f "
-                "deg/s^2; the shortest, %s, %.3f s with peak a %.1f: within the %.1f %% tie band "
-                "the smoother wins)",
-                paper_s, smooth_s, fine_s, fast_s, input_s, chosen.c_str(), best_s, best_peak,
-                fastest_name.c_str(), fastest_s, fastest_peak, 100.0 * options.time_tie_band);
-  return line;
+  return TimePlanner(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+                     options, fallback_feed, progress)
+      .run(out);
 }
 
 }  // namespace taxopt::pipeline

@@ -112,14 +112,12 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
       timed->second ? op.points[run.end].feed_mm_per_min : length_mm / (timed->first / 60.0);
   const std::string f = fmt(feed * scale_, fd_);
   const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
-  const char* plane = axis == 2 ? "G17" : axis == 1 ? "G18" : "G19";
-  const char* sense = n[axis] > 0.0 ? "G3" : "G2";
   // Each piece as its words will read: start and end rounded, the centre offset rounded. A
   // controller refuses an arc whose radii to its rounded ends differ (our reader as LinuxCNC:
   // 0.002 mm + 0.1 %): a 0.05 in arc at 4 decimals in inches came out 1.2723 against 1.2677
   // mm and refused taxopt's own program. Such an arc is written as chords.
   struct Piece {
-    Vec3d to, offset;
+    Vec3d to, offset_mm, offset;
   };
   std::vector<Piece> planned(static_cast<std::size_t>(pieces));
   Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, pose) * scale_) / scale_;
@@ -130,7 +128,8 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
     pc.to = k == pieces
                 ? e_out
                 : c + (hs + (he - hs) * frac) * n + r0 * (std::cos(th) * dir + std::sin(th) * side);
-    pc.offset = (c - from) * scale_;
+    pc.offset_mm = c - from;
+    pc.offset = pc.offset_mm * scale_;
     const Vec3d to_r = rounded(pc.to * scale_) / scale_;
     const Vec3d centre_r = from + rounded(pc.offset) / scale_;
     const auto radius = [&](const Vec3d& p) {
@@ -145,13 +144,15 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
   point_ = run.end;
   for (int k = 1; k <= pieces; ++k) {
     const Piece& pc = planned[static_cast<std::size_t>(k - 1)];
-    std::string block = std::string(plane) + " " + sense + " " + xyz_words(pc.to);
-    for (int q = 0; q < 3; ++q) {
-      if (q != axis) {
-        block += std::string(" ") + static_cast<char>('I' + q) + dialect_.number(pc.offset[q], d_);
-      }
-    }
-    piece_line[static_cast<std::size_t>(k - 1)] = line(block + feed_word(f), BlockKind::Arc);
+    PlannedMove block;
+    block.type =
+        n[axis] > 0.0 ? PlannedMove::Type::ArcCounterClockwise : PlannedMove::Type::ArcClockwise;
+    block.given = 0x7;
+    block.xyz_mm = pc.to;
+    block.arc_axis = axis;
+    block.centre_offset_mm = pc.offset_mm;
+    set_feed(block, f);
+    piece_line[static_cast<std::size_t>(k - 1)] = motion(block, BlockKind::Arc, false);
     ++prog_.arc_blocks;
   }
   for (std::size_t j = run.start + 1; j < run.end; ++j) {
@@ -222,7 +223,7 @@ std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
     ++last;
   }
   length_and_tcp_off();
-  lines(dialect_.retract(retract_z_), BlockKind::Retract);
+  retract();
   turn_table(op.poses[last]);
   length_and_tcp_on();
   approach_ = true;
@@ -231,24 +232,16 @@ std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
 }
 
 void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz) {
-  if (descend_) {
-    motion(dialect_.rapid() + " Z" + dialect_.number(clearance_z_mm_ * scale_, d_),
-           BlockKind::Approach);
-  }
+  if (descend_) motion(rapid_linear(0x4, Vec3d(0.0, 0.0, clearance_z_mm_)), BlockKind::Approach);
   const Vec3d above_tip =
       approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm_, g_.program.approach_clearance_mm);
   const Vec3d above = descend_ ? out_xyz(above_tip, pose) : xyz;
-  const std::string xy = dialect_.rapid() + " X" + dialect_.number(above.x() * scale_, d_) + " Y" +
-                         dialect_.number(above.y() * scale_, d_);
-  if (dialect_.length_on_first_move()) {
-    line(xy, BlockKind::Approach);  // Fanuc: its length and TCP come on with the Z block below
-  } else {
-    motion(xy, BlockKind::Approach);
-  }
+  // Fanuc: its length and TCP come on with the block below.
+  motion(rapid_linear(0x3, above), BlockKind::Approach, !dialect_.length_on_first_move());
   if (descend_ && std::abs(above.z() - clearance_z_mm_) * scale_ > 0.5 * std::pow(10.0, -d_)) {
     // A tool within 30 deg of the horizontal: straight down to the safe distance on its
     // axis, then along it.
-    line(dialect_.rapid() + " Z" + dialect_.number(above.z() * scale_, d_), BlockKind::Approach);
+    motion(rapid_linear(0x4, above), BlockKind::Approach, false);
   }
   approach_ = false;
   // The tool comes from the retract: no move to schedule or split; under TCP a rapid to
@@ -279,7 +272,7 @@ bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& wo
     for (std::size_t j = 1; j + 1 < at.size(); ++j) {
       const Posed mid = pose_at(pose, at[j]);
       const Vec3d mid_xyz = out_xyz(prev_tip_ + at[j] * (p.tip_mm - prev_tip_), mid);
-      motion(dialect_.rapid() + " " + xyz_words(mid_xyz) + angle_words(mid), BlockKind::Linearised);
+      motion(move_to(PlannedMove::Type::Rapid, mid_xyz, mid), BlockKind::Linearised);
       ++prog_.linearised_blocks;
     }
   }
@@ -291,7 +284,7 @@ bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& wo
       return true;
     }
   }
-  finish_point(i, xyz, words, dialect_.rapid() + " " + words, false);
+  finish_point(i, xyz, words, move_to(PlannedMove::Type::Rapid, xyz, pose), false);
   return false;
 }
 
@@ -310,7 +303,8 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
       7 - static_cast<int>(std::floor(std::log10(std::max(feed, 1e-300)))), fd_, max_fd_);
   const double unit = std::pow(10.0, digits);
   const std::string f = fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
-  const std::string block = dialect_.linear() + " " + words + feed_word(f);
+  PlannedMove block = move_to(PlannedMove::Type::Linear, xyz, pose);
+  set_feed(block, f);
   // LinuxCNC blends two feed blocks, and the blend leaves the programmed A and C (0.12 deg
   // measured at the end of a pass), so a dwell G4 P0 (the controller runs its queue to a
   // stop) stands between such a rapid and a feed block.
@@ -331,10 +325,11 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
 }
 
 void ProgramWriter::finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
-                                 const std::string& block, bool restore_inverse_time) {
+                                 const PlannedMove& block, bool restore_inverse_time) {
   const CLPointd& p = op_->points[i];
   if (last_joint_safe_ && p.motion != Motion::Rapid) line("G4 P0", BlockKind::Dwell);
-  emitted_[i] = motion(block, BlockKind::Point);
+  emitted_[i] = motion(block, BlockKind::Point, true, restore_inverse_time ? "G94 " : "");
+  if (restore_inverse_time) last_feed_.clear();
   last_feed_block_ = p.motion != Motion::Rapid;
   last_joint_safe_ = false;
   if (tcp_angles_.empty()) tcp_angles_ = angle_words(op_->poses[i]);
@@ -374,10 +369,8 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
   } else {
     f = tcp_feed(i, programmed_min);
   }
-  std::string block =
-      std::string(restore_inverse_time ? "G94 " : "") + dialect_.linear() + " " + words;
-  block += feed_word(f);
-  if (restore_inverse_time) last_feed_.clear();
+  PlannedMove block = move_to(PlannedMove::Type::Linear, xyz, op.poses[i]);
+  set_feed(block, f);
   finish_point(i, xyz, words, block, restore_inverse_time);
 }
 
@@ -456,8 +449,9 @@ std::string ProgramWriter::linearised_feed(std::size_t i, const Vec3d& xyz, cons
     }
     if (j + 1 == at.size()) return joint_feed(from, from_pose, xyz, pose, minutes, fb.scheduled);
     const std::string piece = joint_feed(from, from_pose, mid_xyz, mid, minutes, fb.scheduled);
-    motion(dialect_.linear() + " " + xyz_words(mid_xyz) + angle_words(mid) + feed_word(piece),
-           BlockKind::Linearised);
+    PlannedMove block = move_to(PlannedMove::Type::Linear, mid_xyz, mid);
+    set_feed(block, piece);
+    motion(block, BlockKind::Linearised);
     ++prog_.linearised_blocks;
     from = mid_xyz;
     from_pose = mid;

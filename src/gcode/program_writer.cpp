@@ -27,7 +27,7 @@ namespace gcode {
 int ProgramWriter::raw(const std::string& s, BlockKind kind) {
   prog_.text += s;
   prog_.text += '\n';
-  prog_.blocks.push_back({++line_no_, kind, op_index_, point_});
+  prog_.blocks.push_back({++line_no_, kind, op_index_, point_, std::nullopt, std::nullopt});
   return line_no_;
 }
 
@@ -39,10 +39,123 @@ void ProgramWriter::verbatim(const std::vector<std::string>& v, BlockKind kind) 
   for (const auto& s : v) prog_.verbatim_lines.push_back(line(s, kind));
 }
 
-int ProgramWriter::motion(const std::string& s, BlockKind kind) {
-  const int at = line(prefix_ + s, kind);
-  prefix_.clear();
+PlannedMove ProgramWriter::move_to(PlannedMove::Type type, const Vec3d& xyz,
+                                   const Posed& pose) const {
+  PlannedMove m;
+  m.type = type;
+  m.given = 0x1F;
+  m.xyz_mm = xyz;
+  m.tilt_deg = rad_to_deg(pose.tilt_rad);
+  m.c_deg = rad_to_deg(pose.c_rad);
+  return m;
+}
+
+PlannedMove ProgramWriter::rapid_linear(unsigned given, const Vec3d& xyz) const {
+  PlannedMove m;
+  m.given = given;
+  m.xyz_mm = xyz;
+  return m;
+}
+
+PlannedMove ProgramWriter::rapid_rotary(double tilt_deg, double c_deg) const {
+  PlannedMove m;
+  m.given = 0x18;
+  m.tilt_deg = tilt_deg;
+  m.c_deg = c_deg;
+  return m;
+}
+
+void ProgramWriter::set_feed(PlannedMove& m, const std::string& f) const {
+  const std::size_t dot = f.find('.');
+  m.feed_decimals = dot == std::string::npos ? 0 : static_cast<int>(f.size() - dot - 1);
+  m.feed_per_min = std::strtod(f.c_str(), nullptr);
+  m.inverse_time = g_.feed_mode == FeedMode::InverseTime;
+  // The plan holds the F the feed planning decided, digits included: written again, it is
+  // the same word (a scheduled F rounded down must not come back up).
+  if (fmt(*m.feed_per_min, m.feed_decimals) != f) {
+    throw std::logic_error("write_gcode: F" + f + " does not survive as a number");
+  }
+}
+
+std::string ProgramWriter::motion_text(const PlannedMove& m) {
+  std::string s;
+  switch (m.type) {
+    case PlannedMove::Type::Rapid: s = dialect_.rapid(); break;
+    case PlannedMove::Type::Linear: s = dialect_.linear(); break;
+    case PlannedMove::Type::ArcClockwise:
+    case PlannedMove::Type::ArcCounterClockwise:
+      s = std::string(m.arc_axis == 2   ? "G17"
+                      : m.arc_axis == 1 ? "G18"
+                                        : "G19") +
+          (m.type == PlannedMove::Type::ArcCounterClockwise ? " G3" : " G2");
+      break;
+  }
+  static const char* const kLinear[3] = {" X", " Y", " Z"};
+  for (int q = 0; q < 3; ++q) {
+    if (m.given & (1u << q)) s += kLinear[q] + dialect_.number(m.xyz_mm[q] * scale_, d_);
+  }
+  if (m.given & 0x8u) s += tilt_word_ + dialect_.number(m.tilt_deg, d_);
+  if (m.given & 0x10u) s += " C" + dialect_.number(m.c_deg, d_);
+  if (m.type == PlannedMove::Type::ArcClockwise ||
+      m.type == PlannedMove::Type::ArcCounterClockwise) {
+    for (int q = 0; q < 3; ++q) {
+      if (q != m.arc_axis) {
+        s += std::string(" ") + static_cast<char>('I' + q) +
+             dialect_.number(m.centre_offset_mm[q] * scale_, d_);
+      }
+    }
+  }
+  if (m.feed_per_min) s += feed_word(fmt(*m.feed_per_min, m.feed_decimals));
+  return s;
+}
+
+int ProgramWriter::motion(const PlannedMove& m, BlockKind kind, bool takes_prefix,
+                          const std::string& modal) {
+  const std::string text = motion_text(m);
+  const int at = line((takes_prefix ? prefix_ : std::string()) + modal + text, kind);
+  if (takes_prefix) prefix_.clear();
+  ProgramBlock& b = prog_.blocks.back();
+  b.move = m;
+  if (m.machine_frame) {
+    at_[0] = at_[1] = at_[2] = std::nullopt;
+    return at;
+  }
+  for (int q = 0; q < 3; ++q) {
+    if (m.given & (1u << q)) at_[q] = round_to(m.xyz_mm[q] * scale_, d_) / scale_;
+  }
+  if (m.given & 0x8u) at_[3] = round_to(m.tilt_deg, d_);
+  if (m.given & 0x10u) at_[4] = round_to(m.c_deg, d_);
+  if (std::all_of(at_.begin(), at_.end(), [](const auto& v) { return v.has_value(); })) {
+    const Vec3d xyz = joints_of_written_mm(machine_, Vec3d(*at_[0], *at_[1], *at_[2]),
+                                           Posed{deg_to_rad(*at_[3]), deg_to_rad(*at_[4])});
+    b.joints = JointPosition{xyz.x(), xyz.y(), xyz.z(), *at_[3], *at_[4]};
+  }
   return at;
+}
+
+void ProgramWriter::retract() {
+  const std::vector<std::string> blocks = dialect_.retract(retract_z_);
+  if (blocks.empty()) return;
+  PlannedMove m = rapid_linear(0x4, Vec3d(0.0, 0.0, g_.program.retract_z_mm));
+  m.machine_frame = true;
+  // Fanuc's retract is a reference return (G91 G28 Z0.): to the machine's reference point.
+  if (g_.dialect == GcodeDialect::Fanuc) m.xyz_mm.z() = 0.0;
+  line(blocks.front(), BlockKind::Retract);
+  prog_.blocks.back().move = m;
+  at_[0] = at_[1] = at_[2] = std::nullopt;
+  for (std::size_t j = 1; j < blocks.size(); ++j) line(blocks[j], BlockKind::Retract);
+}
+
+void ProgramWriter::park(const std::array<double, 2>& xy_mm) {
+  const std::vector<std::string> blocks =
+      dialect_.park(dialect_.number(xy_mm[0] * scale_, d_), dialect_.number(xy_mm[1] * scale_, d_));
+  PlannedMove m = rapid_linear(0x3, Vec3d(xy_mm[0], xy_mm[1], 0.0));
+  m.machine_frame = true;
+  for (std::size_t j = 0; j < blocks.size(); ++j) {
+    line(blocks[j], BlockKind::End);
+    if (j == 0) prog_.blocks.back().move = m;
+  }
+  at_[0] = at_[1] = at_[2] = std::nullopt;
 }
 
 Vec3d ProgramWriter::rounded(const Vec3d& v) const {
@@ -103,17 +216,12 @@ void ProgramWriter::program_start(const std::vector<std::string>& comments) {
 void ProgramWriter::program_end() {
   op_index_.reset();
   point_.reset();
-  lines(dialect_.retract(retract_z_), BlockKind::Retract);
+  retract();
   // The rotary axes home (a continuous C within one turn of it), with the tool up.
   if (g_.program.end_pose == EndPose::Home && retracts_ && !ops_.empty()) {
-    line(dialect_.rapid() + tilt_word_ + dialect_.number(0.0, d_) + " C" + dialect_.number(0.0, d_),
-         BlockKind::End);
+    motion(rapid_rotary(0.0, 0.0), BlockKind::End, false);
   }
-  if (g_.program.end_park_xy_mm && retracts_ && !ops_.empty()) {
-    const auto& xy = *g_.program.end_park_xy_mm;
-    lines(dialect_.park(dialect_.number(xy[0] * scale_, d_), dialect_.number(xy[1] * scale_, d_)),
-          BlockKind::End);
-  }
+  if (g_.program.end_park_xy_mm && retracts_ && !ops_.empty()) park(*g_.program.end_park_xy_mm);
   verbatim(g_.program.footer, BlockKind::End);
   line(dialect_.end(), BlockKind::End);
   for (const auto& s : dialect_.finish()) raw(s, BlockKind::End);
@@ -154,7 +262,7 @@ void ProgramWriter::operation_start() {
   // Every operation's first feed block carries its F (a reader of one operation, or a
   // restart at it, must not inherit the last operation's feed).
   last_feed_.clear();
-  lines(dialect_.retract(retract_z_), BlockKind::Retract);
+  retract();
   tool_change(op.tool.number);
   if (op.spindle_rpm > 0.0 &&
       spindle_words(op.spindle_rpm, op.spindle_clockwise) != running_spindle_) {
@@ -269,9 +377,8 @@ void ProgramWriter::event(const ProgramEvent& e) {
 
 void ProgramWriter::turn_table(const Posed& pose) {
   if (!retracts_) return;
-  line(dialect_.rapid() + tilt_word_ + dialect_.number(rad_to_deg(pose.tilt_rad), d_) + " C" +
-           dialect_.number(rad_to_deg(pose.c_rad), d_),
-       BlockKind::TableTurn);
+  motion(rapid_rotary(rad_to_deg(pose.tilt_rad), rad_to_deg(pose.c_rad)), BlockKind::TableTurn,
+         false);
 }
 
 void ProgramWriter::length_and_tcp_on() {

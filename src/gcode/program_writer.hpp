@@ -2,6 +2,7 @@
 /// @file The program writer's state and stages (program_writer.cpp: the program and its
 /// operations; point_blocks.cpp: the blocks that reach the CL points), internal to the library.
 
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -52,8 +53,25 @@ class ProgramWriter {
   void lines(const std::vector<std::string>& v, BlockKind kind);
   /// Blocks of the template, written as they are: the reader steps over them.
   void verbatim(const std::vector<std::string>& v, BlockKind kind);
-  /// A motion block; an operation's first carries Fanuc's length and TCP words.
-  int motion(const std::string& s, BlockKind kind);
+  // --- motion blocks: planned, then written ---------------------------------------------
+  /// A move of `type` to (xyz, pose): all five axes named.
+  PlannedMove move_to(PlannedMove::Type type, const Vec3d& xyz, const Posed& pose) const;
+  /// A rapid naming the linear axes in `given` (bits 0 to 2) at `xyz`.
+  PlannedMove rapid_linear(unsigned given, const Vec3d& xyz) const;
+  /// A rapid of the rotary axes alone.
+  PlannedMove rapid_rotary(double tilt_deg, double c_deg) const;
+  /// `m` at the F the feed planning wrote, `f`.
+  void set_feed(PlannedMove& m, const std::string& f) const;
+  /// The block's words: its motion word, the axes named, I J K, F where it changes.
+  std::string motion_text(const PlannedMove& m);
+  /// Writes a motion block (`modal` words before it); an operation's first that
+  /// `takes_prefix` carries Fanuc's length and TCP words. The block keeps its plan and, where
+  /// the program has named all five axes in its frame, the joints there.
+  int motion(const PlannedMove& m, BlockKind kind, bool takes_prefix = true,
+             const std::string& modal = std::string());
+  /// The dialect's safe retract to machine Z, and the end's park of X and Y.
+  void retract();
+  void park(const std::array<double, 2>& xy_mm);
   // --- words -----------------------------------------------------------------------------
   Vec3d rounded(const Vec3d& v) const;
   Vec3d out_xyz(const Vec3d& tip, const Posed& pose) const;
@@ -141,7 +159,7 @@ class ProgramWriter {
                         double rate_per_s);
   /// The block reaching point i, and the state after it.
   void finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
-                    const std::string& block, bool restore_inverse_time);
+                    const PlannedMove& block, bool restore_inverse_time);
   /// The feed block (machine mode: blocks) reaching point i.
   void feed(std::size_t i, const Vec3d& xyz, const std::string& words);
   struct FeedBlock {
@@ -172,6 +190,9 @@ class ProgramWriter {
   const std::string retract_z_, tilt_word_;
   // --- the program so far ------------------------------------------------------------------
   GcodeProgram prog_;
+  /// Where the program stands in its own frame as written (X Y Z mm, the tilt axis and C deg,
+  /// rounded as the words read); empty: not named since the last move in machine coordinates.
+  std::array<std::optional<double>, 5> at_;
   int line_no_ = 0;
   int current_tool_ = -1;
   std::string last_feed_;

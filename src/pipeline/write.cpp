@@ -2,6 +2,7 @@
 // the machine's limits (stages.hpp).
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
@@ -431,10 +432,9 @@ std::vector<std::string> program_comments(const Run& run, const JobResult& res) 
   return comments;
 }
 
-void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted, JobResult& res) {
-  if (res.problems.empty() || res.gcode.text.empty()) return;
-  // The same program with the failed checks named in its first lines (comments only: every
-  // block and its line's place after them is as verified, shifted).
+namespace {
+
+std::vector<std::string> unverified_comments(const Run& run, const JobResult& res) {
   std::vector<std::string> comments = program_comments(run, res);
   comments.push_back("NOT VERIFIED: the verification failed (" +
                      std::to_string(res.problems.size()) +
@@ -442,11 +442,69 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   for (std::size_t i = 0; i < res.problems.size() && i < 10; ++i) {
     comments.push_back("FAILED: " + res.problems[i].substr(0, 200));
   }
-  const std::size_t before = res.gcode.text.size();
-  GcodeProgram marked = write_gcode(posted, run.machine, res.gcode_units, comments);
-  if (marked.text.size() > before) {
-    res.gcode.text = std::move(marked.text);
-    res.gcode.blocks = std::move(marked.blocks);
+  return comments;
+}
+
+int line_count(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
+
+/// "G-code line N" in a message, N moved by `shift`.
+std::string shifted_gcode_lines(const std::string& message, int shift) {
+  static const std::string kWords = "G-code line ";
+  std::string out;
+  std::size_t from = 0;
+  for (std::size_t at = message.find(kWords); at != std::string::npos;
+       at = message.find(kWords, from)) {
+    std::size_t end = at + kWords.size();
+    while (end < message.size() && std::isdigit(static_cast<unsigned char>(message[end]))) ++end;
+    out += message.substr(from, at + kWords.size() - from);
+    const std::string digits = message.substr(at + kWords.size(), end - at - kWords.size());
+    out += digits.empty() ? digits : std::to_string(std::stoi(digits) + shift);
+    from = end;
+  }
+  return out + message.substr(from);
+}
+
+}  // namespace
+
+void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted, JobResult& res) {
+  if (res.problems.empty() || res.gcode.text.empty()) return;
+  // The same program with the failed checks named in its first lines (comments only: every
+  // block and its line's place after them is as verified, shifted). Every line the program's
+  // record and the findings name moves down with it: the writer's own (blocks, points,
+  // template lines, joint-safe rapids) are the marked program's; the G-code lines the
+  // verification and the time model found are shifted, in the findings' messages too, before
+  // those are written into the program. (Before, only the text and the blocks were replaced:
+  // read back with its verbatim lines, the marked program's feed blocks were stepped over,
+  // and a finding's G-code line named another block.)
+  const GcodeProgram first =
+      write_gcode(posted, run.machine, res.gcode_units, unverified_comments(run, res));
+  if (first.text.size() <= res.gcode.text.size()) return;
+  const int shift = line_count(first.text) - line_count(res.gcode.text);
+  for (Finding& f : res.findings) {
+    if (f.gcode_line) *f.gcode_line += shift;
+    f.message = shifted_gcode_lines(f.message, shift);
+  }
+  for (std::vector<std::string>* list : {&res.problems, &res.safety_warnings, &res.warnings}) {
+    for (std::string& m : *list) m = shifted_gcode_lines(m, shift);
+  }
+  GcodeProgram marked =
+      write_gcode(posted, run.machine, res.gcode_units, unverified_comments(run, res));
+  if (line_count(marked.text) - line_count(res.gcode.text) != shift) {
+    throw std::logic_error("mark_unverified: the marked program's comments changed in number");
+  }
+  GcodeProgram& g = res.gcode;
+  g.text = std::move(marked.text);
+  g.blocks = std::move(marked.blocks);
+  g.emitted = std::move(marked.emitted);
+  g.joint_safe_rapids = std::move(marked.joint_safe_rapids);
+  g.verbatim_lines = std::move(marked.verbatim_lines);
+  g.tool_calls = std::move(marked.tool_calls);
+  if (g.time_from_line > 0) g.time_from_line += shift;
+  for (JointPeak& p : g.tcp_joint_peaks) {
+    if (p.velocity_line > 0) p.velocity_line += shift;
+    if (p.accel_line > 0) p.accel_line += shift;
   }
 }
 

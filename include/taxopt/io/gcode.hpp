@@ -101,6 +101,38 @@ enum class BlockKind {
   End,             ///< the home turn, the park, the footer, M2/M30
 };
 
+/// A motion block as the writer plans it, before its dialect writes it: what the block asks
+/// of the machine. The block's text is this, formatted (the dialect's motion word, the axes'
+/// words to the program's decimals and units, I J K, F where it changes); read back
+/// (read_gcode_moves), each block gives the axes `given` says and lands where the move says,
+/// to the written decimals (tests/io/test_program_blocks.cpp, every dialect and mode).
+struct PlannedMove {
+  enum class Type { Rapid, Linear, ArcClockwise, ArcCounterClockwise };
+  Type type = Type::Rapid;
+  /// The words name machine coordinates: the safe retract and the end's park (G53, G28,
+  /// SUPA, M91). Fanuc's retract is a reference return (G91 G28 Z0.): its target Z is the
+  /// machine's reference point, 0 here, as read_gcode_moves reads it.
+  bool machine_frame = false;
+  /// Which of X Y Z, the tilt axis, C (bits 0 to 4, as GcodeMove::given) the block names.
+  unsigned given = 0;
+  /// The targets of the axes named, unrounded: X Y Z in mm in the block's frame (the
+  /// program's: with tool centre point control the tip in the workpiece, in machine mode the
+  /// machine's X Y Z; else the machine's), the rotary axes in deg.
+  Vec3d xyz_mm = Vec3d::Zero();
+  double tilt_deg = 0.0, c_deg = 0.0;
+  /// An arc: the axis normal to its plane (0 X: G19, 1 Y: G18, 2 Z: G17) and its centre's
+  /// offset from its start (the previous block's end as written), mm.
+  int arc_axis = 2;
+  Vec3d centre_offset_mm = Vec3d::Zero();
+  /// The F in force for the block (written where it changes, always under G93), as the
+  /// program states it: the program's length unit (or deg where only the rotary axes turn)
+  /// per minute, or 1/min under inverse time (G93), with `feed_decimals` decimals. Empty on a
+  /// rapid.
+  std::optional<double> feed_per_min;
+  int feed_decimals = 0;
+  bool inverse_time = false;
+};
+
 /// One written line, its kind and where it comes from.
 struct ProgramBlock {
   int line = 0;  ///< 1-based line of GcodeProgram::text
@@ -109,6 +141,14 @@ struct ProgramBlock {
   std::optional<std::size_t> operation;
   /// CL point it leads to (an arc's: its last); empty: none.
   std::optional<std::size_t> point;
+  /// A motion block's plan (empty: a block that moves no axis: modes, tool, spindle,
+  /// coolant, comments, dwells, a template's verbatim lines).
+  std::optional<PlannedMove> move;
+  /// The machine's joints at the block's end (X Y Z mm, the tilt axis and C deg: JointPosition,
+  /// as joints_of_written_mm takes them from the words, the work offset zero) where the
+  /// program has named all five axes in its own frame since the last move in machine
+  /// coordinates; empty elsewhere (the way back in after a retract until X Y Z are given).
+  std::optional<JointPosition> joints;
 };
 
 /// Written G-code and where each point went.

@@ -25,12 +25,14 @@ struct Case {
   LengthUnit units;
   FeedMode feed_mode;
   bool schedule;
+  GcodeMode mode = GcodeMode::Tcp;
 };
 
 std::string describe(const Case& c) {
   return c.cl + " on " + c.machine + ", " + to_string(c.dialect) +
          (c.units == LengthUnit::Inch ? ", in" : ", mm") +
-         (c.feed_mode == FeedMode::InverseTime ? ", G93" : "") + (c.schedule ? ", scheduled" : "");
+         (c.feed_mode == FeedMode::InverseTime ? ", G93" : "") + (c.schedule ? ", scheduled" : "") +
+         (c.mode == GcodeMode::Machine ? ", machine mode" : "");
 }
 
 Toolpath toolpath_of(const std::string& cl) {
@@ -42,7 +44,9 @@ Toolpath toolpath_of(const std::string& cl) {
 
 /// One case posted (method none: the writer's blocks are the subject), its plan and its text
 /// compared block by block. Returns the number of motion blocks compared.
-std::size_t spindle_z_findings = 0;  ///< findings naming the block that takes the spindle to a Z
+std::size_t spindle_z_findings = 0;
+std::size_t last_linearised = 0;  ///< the last case's linearised blocks  ///< findings naming the
+                                  ///< block that takes the spindle to a Z
 
 std::size_t check_case(const Case& c) {
   INFO(describe(c));
@@ -50,6 +54,7 @@ std::size_t check_case(const Case& c) {
       read_machine_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/" + c.machine + ".toml");
   machine.gcode.dialect = c.dialect;
   machine.gcode.feed_mode = c.feed_mode;
+  machine.gcode.mode = c.mode;
   machine.gcode.decimals = std::min(machine.gcode.decimals, max_decimals(c.dialect));
   if (c.dialect == GcodeDialect::Heidenhain || c.dialect == GcodeDialect::Siemens) {
     machine.gcode.program.header.clear();  // the files' own words are LinuxCNC's or Fanuc's
@@ -76,6 +81,7 @@ std::size_t check_case(const Case& c) {
   }
   // One read-back move per planned move, on its line.
   REQUIRE(moves.size() == planned);
+  last_linearised = prog.linearised_blocks;
   const double mm = mm_per_unit(c.units);
   const double linear_tol_mm = 0.5 * std::pow(10.0, -machine.gcode.decimals) * mm + 1e-9;
   const double angle_tol_deg = 0.5 * std::pow(10.0, -machine.gcode.decimals) + 1e-9;
@@ -157,8 +163,10 @@ std::size_t check_case(const Case& c) {
 
 }  // namespace
 
+// [slow]: about 100 jobs (10 s in release): under the sanitizers the real files' case below
+// covers the same writer.
 TEST_CASE("program blocks: every motion block is its plan formatted, in every dialect and mode",
-          "[io][gcode][blocks]") {
+          "[io][gcode][blocks][slow]") {
   std::size_t compared = 0;
   for (const char* machine : {"linuxcnc-xyzac-trt", "haas-umc750", "generic-ac-trt", "paper-ac",
                               "linuxcnc-xyzbc-trt", "linuxcnc-max5"}) {
@@ -170,6 +178,21 @@ TEST_CASE("program blocks: every motion block is its plan formatted, in every di
       }
     }
   }
+  // Machine mode (table-table machines): the joints' words, with the blocks that keep the tip
+  // on its line between points (linearisation).
+  std::size_t linearised = 0;
+  for (const char* machine : {"paper-ac", "generic-ac-trt", "linuxcnc-xyzbc-trt"}) {
+    for (GcodeDialect dialect : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Haas,
+                                 GcodeDialect::Siemens, GcodeDialect::Heidenhain}) {
+      for (FeedMode feed_mode : {FeedMode::UnitsPerMinute, FeedMode::InverseTime}) {
+        if (dialect == GcodeDialect::Heidenhain && feed_mode == FeedMode::InverseTime) continue;
+        compared += check_case({"sine.cls", machine, dialect, LengthUnit::Millimetre, feed_mode,
+                                feed_mode == FeedMode::InverseTime, GcodeMode::Machine});
+        linearised += last_linearised;
+      }
+    }
+  }
+  CHECK(linearised > 0);
   // Inverse time (not on a TNC).
   for (GcodeDialect dialect :
        {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens}) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "controller/feed_word.hpp"
 #include "taxopt/io/gcode.hpp"
 
 namespace taxopt {
@@ -31,7 +32,8 @@ double programmed_move_time_s(const Vec3d& from_tip_mm, const Posed& from, const
       std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
   // A move too small to time still gets a positive time: its words may differ after
   // rounding, and a feed schedule needs a bound for every move.
-  return 60.0 * (tip_mm > 1e-9 ? tip_mm : std::max(rot_deg, 1e-9)) / feed_mm_per_min;
+  const controller::FeedDistance d = controller::feed_distance(tip_mm, rot_deg);
+  return 60.0 * (d.rotary ? std::max(d.distance, 1e-9) : d.distance) / feed_mm_per_min;
 }
 
 namespace controller {

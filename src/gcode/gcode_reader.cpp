@@ -3,6 +3,7 @@
 #include <cmath>
 #include <initializer_list>
 
+#include "controller/feed_word.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 
@@ -475,9 +476,9 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
   if (!(to.feed > 0.0)) return 0.0;
   if (to.inverse_time) return 60.0 / to.feed;
   const double xyz_mm = to.arc ? arc_length_mm(from.xyz_mm, to) : (to.xyz_mm - from.xyz_mm).norm();
-  // A move whose XYZ words repeat has a rounded distance of exactly zero.
-  if (xyz_mm > 0.0) return 60.0 * xyz_mm / (to.feed * mm_per_unit(units));
-  return 60.0 * std::hypot(to.tilt_deg - from.tilt_deg, to.c_deg - from.c_deg) / to.feed;
+  const controller::FeedDistance d = controller::feed_distance(
+      xyz_mm, std::hypot(to.tilt_deg - from.tilt_deg, to.c_deg - from.c_deg));
+  return 60.0 * d.distance / (d.rotary ? to.feed : to.feed * mm_per_unit(units));
 }
 
 }  // namespace taxopt

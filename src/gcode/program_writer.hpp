@@ -166,8 +166,9 @@ class ProgramWriter {
     double programmed_min, time_min;
     bool scheduled;
   };
-  /// TCP: the tip moves at F. Its distance over the block time is the programmed feed unless
-  /// the programmed time is another path's (FeedReference::CutterPath).
+  /// TCP: the tip moves at F (where only A and C turn, they do, in deg/min: feed_word.hpp).
+  /// Its distance over the block time is the programmed feed unless the programmed time is
+  /// another path's (FeedReference::CutterPath).
   std::string tcp_feed(std::size_t i, double programmed_min) const;
   /// F of a joint-space block (machine mode, inverse time, a schedule) from `from` to `to`
   /// that takes `minutes`.

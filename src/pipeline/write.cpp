@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "controller/feed_word.hpp"
 #include "controller/linuxcnc_planner.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
@@ -254,10 +255,12 @@ class ProgramClock {
     // only A and C turn) per minute, or under G93 the block's inverse time.
     const double tip_mm = (tip - was).norm();
     const double rot_deg = std::hypot(to[kA] - q_[kA], to[kC] - q_[kC]);
+    const controller::FeedDistance d = controller::feed_distance(tip_mm, rot_deg);
     const double rate = !(m.feed > 0.0) || m.rapid ? 0.0
                         : m.inverse_time           ? m.feed / 60.0
-                        : tip_mm > 1e-9            ? m.feed * mm_per_unit(units_) / 60.0 / tip_mm
-                                        : (rot_deg > 0.0 ? m.feed / 60.0 / rot_deg : 0.0);
+                        : !d.rotary        ? m.feed * mm_per_unit(units_) / 60.0 / d.distance
+                        : d.distance > 0.0 ? m.feed / 60.0 / d.distance
+                                           : 0.0;
     if (m.rapid || safe_rapid) {
       JointLimits capped = limits_;
       // A rapid written at a joint-safe feed: every axis at that rate along the move.

@@ -65,6 +65,71 @@ std::optional<std::pair<double, bool>> ProgramWriter::arc_programmed_s(
   return std::make_pair(programmed_s, own);
 }
 
+std::optional<ProgramWriter::OutputArc> ProgramWriter::output_arc(const ArcRun& run) const {
+  const PostedOperation& op = *op_;
+  // The arc where the points are now (new axes move the tips by the same vector where the
+  // axis is the same along the arc), in the output frame.
+  const Posed& pose = op.poses[run.start];
+  const Vec3d centre_tip = run.centre_mm + (op.points[run.start].tip_mm - run.start_tip_mm);
+  OutputArc arc;
+  arc.centre = out_xyz(centre_tip, pose);
+  arc.normal = (out_xyz(centre_tip + run.normal, pose) - arc.centre).normalized();
+  arc.axis = -1;
+  for (int q = 0; q < 3; ++q) {
+    if (std::abs(std::abs(arc.normal[q]) - 1.0) < 1e-9) arc.axis = q;
+  }
+  if (arc.axis < 0) return std::nullopt;
+  const Vec3d s0 = out_xyz(op.points[run.start].tip_mm, pose) - arc.centre;
+  const Vec3d u0 = s0 - s0.dot(arc.normal) * arc.normal;
+  arc.radius = u0.norm();
+  if (arc.radius < 1e-3) return std::nullopt;
+  arc.towards_start = u0 / arc.radius;
+  for (std::size_t j = run.start; j <= run.end; ++j) {
+    const Vec3d dj = out_xyz(op.points[j].tip_mm, op.poses[j]) - arc.centre;
+    if (std::abs((dj - dj.dot(arc.normal) * arc.normal).norm() - arc.radius) >
+        1e-6 * std::max(1.0, arc.radius)) {
+      return std::nullopt;
+    }
+  }
+  arc.end = out_xyz(op.points[run.end].tip_mm, op.poses[run.end]);
+  arc.start_height = s0.dot(arc.normal);
+  arc.end_height = (arc.end - arc.centre).dot(arc.normal);
+  return arc;
+}
+
+std::optional<std::vector<ProgramWriter::ArcPiece>> ProgramWriter::arc_pieces(
+    const ArcRun& run, const OutputArc& arc) const {
+  const PostedOperation& op = *op_;
+  const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
+  // Each piece as its words will read: start and end rounded, the centre offset rounded. A
+  // controller refuses an arc whose radii to its rounded ends differ (our reader as LinuxCNC:
+  // 0.002 mm + 0.1 %): a 0.05 in arc at 4 decimals in inches came out 1.2723 against 1.2677
+  // mm and refused taxopt's own program. Such an arc is written as chords.
+  std::vector<ArcPiece> planned(static_cast<std::size_t>(pieces));
+  Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, op.poses[run.start]) * scale_) / scale_;
+  const Vec3d& n = arc.normal;
+  const Vec3d side = n.cross(arc.towards_start);
+  for (int k = 1; k <= pieces; ++k) {
+    const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
+    ArcPiece& pc = planned[static_cast<std::size_t>(k - 1)];
+    pc.to = k == pieces
+                ? arc.end
+                : arc.centre + (arc.start_height + (arc.end_height - arc.start_height) * frac) * n +
+                      arc.radius * (std::cos(th) * arc.towards_start + std::sin(th) * side);
+    pc.offset_mm = arc.centre - from;
+    const Vec3d to_r = rounded(pc.to * scale_) / scale_;
+    const Vec3d centre_r = from + rounded(pc.offset_mm * scale_) / scale_;
+    const auto radius = [&](const Vec3d& p) {
+      const Vec3d d = p - centre_r;
+      return (d - d.dot(n) * n).norm();
+    };
+    const double r_from = radius(from), r_to = radius(to_r);
+    if (std::abs(r_from - r_to) > 0.9 * (0.002 + 1e-3 * r_from)) return std::nullopt;
+    from = to_r;
+  }
+  return planned;
+}
+
 bool ProgramWriter::write_arc(const ArcRun& run) {
   const PostedOperation& op = *op_;
   if (g_.feed_mode != FeedMode::UnitsPerMinute || g_.dialect == GcodeDialect::Heidenhain ||
@@ -87,85 +152,40 @@ bool ProgramWriter::write_arc(const ArcRun& run) {
       last_words_) {
     return false;
   }
-  // The arc where the points are now (new axes move the tips by the same vector where the
-  // axis is the same along the arc), in the output frame.
-  const Posed& pose = op.poses[run.start];
-  const Vec3d centre_tip = run.centre_mm + (op.points[run.start].tip_mm - run.start_tip_mm);
-  const Vec3d c = out_xyz(centre_tip, pose);
-  const Vec3d n = (out_xyz(centre_tip + run.normal, pose) - c).normalized();
-  int axis = -1;
-  for (int q = 0; q < 3; ++q) {
-    if (std::abs(std::abs(n[q]) - 1.0) < 1e-9) axis = q;
-  }
-  if (axis < 0) return false;
-  const Vec3d s0 = out_xyz(op.points[run.start].tip_mm, pose) - c;
-  const Vec3d u0 = s0 - s0.dot(n) * n;
-  const double r0 = u0.norm();
-  if (r0 < 1e-3) return false;
-  for (std::size_t j = run.start; j <= run.end; ++j) {
-    const Vec3d dj = out_xyz(op.points[j].tip_mm, op.poses[j]) - c;
-    if (std::abs((dj - dj.dot(n) * n).norm() - r0) > 1e-6 * std::max(1.0, r0)) return false;
-  }
-  const Vec3d e_out = out_xyz(op.points[run.end].tip_mm, op.poses[run.end]);
-  const double hs = s0.dot(n), he = (e_out - c).dot(n);
-  const double length_mm = std::hypot(run.sweep_rad * r0, he - hs);
+  const std::optional<OutputArc> arc = output_arc(run);
+  if (!arc) return false;
+  const std::optional<std::vector<ArcPiece>> planned = arc_pieces(run, *arc);
+  if (!planned) return false;
+  const double length_mm =
+      std::hypot(run.sweep_rad * arc->radius, arc->end_height - arc->start_height);
   const double feed =
       timed->second ? op.points[run.end].feed_mm_per_min : length_mm / (timed->first / 60.0);
   const std::string f = fmt(feed * scale_, fd_);
-  const int pieces = std::max(1, static_cast<int>(std::ceil(run.sweep_rad / M_PI - 1e-9)));
-  // Each piece as its words will read: start and end rounded, the centre offset rounded. A
-  // controller refuses an arc whose radii to its rounded ends differ (our reader as LinuxCNC:
-  // 0.002 mm + 0.1 %): a 0.05 in arc at 4 decimals in inches came out 1.2723 against 1.2677
-  // mm and refused taxopt's own program. Such an arc is written as chords.
-  struct Piece {
-    Vec3d to, offset_mm, offset;
-  };
-  std::vector<Piece> planned(static_cast<std::size_t>(pieces));
-  Vec3d from = rounded(out_xyz(op.points[run.start].tip_mm, pose) * scale_) / scale_;
-  const Vec3d dir = u0 / r0, side = n.cross(dir);
-  for (int k = 1; k <= pieces; ++k) {
-    const double frac = static_cast<double>(k) / pieces, th = run.sweep_rad * frac;
-    Piece& pc = planned[static_cast<std::size_t>(k - 1)];
-    pc.to = k == pieces
-                ? e_out
-                : c + (hs + (he - hs) * frac) * n + r0 * (std::cos(th) * dir + std::sin(th) * side);
-    pc.offset_mm = c - from;
-    pc.offset = pc.offset_mm * scale_;
-    const Vec3d to_r = rounded(pc.to * scale_) / scale_;
-    const Vec3d centre_r = from + rounded(pc.offset) / scale_;
-    const auto radius = [&](const Vec3d& p) {
-      const Vec3d d = p - centre_r;
-      return (d - d.dot(n) * n).norm();
-    };
-    const double r_from = radius(from), r_to = radius(to_r);
-    if (std::abs(r_from - r_to) > 0.9 * (0.002 + 1e-3 * r_from)) return false;
-    from = to_r;
-  }
-  std::vector<int> piece_line(static_cast<std::size_t>(pieces));
+  std::vector<int> piece_line;
   point_ = run.end;
-  for (int k = 1; k <= pieces; ++k) {
-    const Piece& pc = planned[static_cast<std::size_t>(k - 1)];
+  for (const ArcPiece& pc : *planned) {
     PlannedMove block;
-    block.type =
-        n[axis] > 0.0 ? PlannedMove::Type::ArcCounterClockwise : PlannedMove::Type::ArcClockwise;
+    block.type = arc->normal[arc->axis] > 0.0 ? PlannedMove::Type::ArcCounterClockwise
+                                              : PlannedMove::Type::ArcClockwise;
     block.given = 0x7;
     block.xyz_mm = pc.to;
-    block.arc_axis = axis;
+    block.arc_axis = arc->axis;
     block.centre_offset_mm = pc.offset_mm;
     set_feed(block, f);
-    piece_line[static_cast<std::size_t>(k - 1)] = motion(block, BlockKind::Arc, false);
+    piece_line.push_back(motion(block, BlockKind::Arc, false));
     ++prog_.arc_blocks;
   }
+  const std::size_t pieces = planned->size();
   for (std::size_t j = run.start + 1; j < run.end; ++j) {
     const double frac =
         static_cast<double>(j - run.start) / static_cast<double>(run.end - run.start);
-    const auto piece = std::min<std::size_t>(static_cast<std::size_t>(frac * pieces),
-                                             static_cast<std::size_t>(pieces - 1));
+    const auto piece = std::min<std::size_t>(
+        static_cast<std::size_t>(frac * static_cast<double>(pieces)), pieces - 1);
     emitted_[j] = -piece_line[piece];
   }
   emitted_[run.end] = piece_line.back();
-  last_words_ = xyz_words(e_out) + pose_words;
-  advance_to(e_out, op.poses[run.end], op.points[run.end].tip_mm);
+  last_words_ = xyz_words(arc->end) + pose_words;
+  advance_to(arc->end, op.poses[run.end], op.points[run.end].tip_mm);
   return true;
 }
 

@@ -126,6 +126,25 @@ class ProgramWriter {
   /// cannot be one block run (a rapid, a turn of A or C, a schedule, a change of feed).
   std::optional<std::pair<double, bool>> arc_programmed_s(const ArcRun& run,
                                                           const std::string& pose_words) const;
+  /// A CL arc in the output frame: its centre, its plane's normal (one of the frame's axes,
+  /// `axis`, else no arc), radius, the direction to its start, its end, and the heights of its
+  /// ends along the normal (a helix rises).
+  struct OutputArc {
+    Vec3d centre, normal, towards_start, end;
+    int axis = -1;
+    double radius = 0.0, start_height = 0.0, end_height = 0.0;
+  };
+  /// The arc `run` in the output frame where its points lie on one circle in a plane of the
+  /// frame; empty elsewhere.
+  std::optional<OutputArc> output_arc(const ArcRun& run) const;
+  /// One G2/G3 block of an arc (at most half a turn): its end and its centre's offset from its
+  /// start as written, mm.
+  struct ArcPiece {
+    Vec3d to, offset_mm;
+  };
+  /// The arc's blocks; empty where a block's rounded words would give two radii a controller
+  /// refuses.
+  std::optional<std::vector<ArcPiece>> arc_pieces(const ArcRun& run, const OutputArc& arc) const;
   /// Writes the arc `run` as G2/G3 blocks when it can be (PostedOperation::arcs); false: it
   /// is left to its chords.
   bool write_arc(const ArcRun& run);

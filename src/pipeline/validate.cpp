@@ -299,34 +299,33 @@ std::vector<OperationContext> operation_contexts(const Run& run) {
 
 namespace {
 
-/// The contacts of one ball-end operation and their summary.
-void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
+/// An operation that is no ball-end mill: what is not checked of it.
+void not_a_ball_findings(const Run& run, const OperationContext& o, JobResult& res) {
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
-  const auto t0 = Clock::now();
-  if (!(o.ball_radius_mm > 0.0)) {
-    if (!(op.tool.from_file && op.tool.diameter_mm > 0.0)) {
-      // Said as what was not checked (the program's header, stderr's NOT CHECKED lines): the
-      // run was "ok" with every point not checked, and only the holder named.
-      add_finding(res, FindingCode::NoToolModel, k, op.points.empty() ? 0 : op.points.front().line,
-                  "operation " + op.name +
-                      " has no tool geometry (no TLDATA or CUTTER, or not a mill): none of its "
-                      "moves is checked against the part (" +
-                      run.options.name_of("tool.ball_radius_mm") + " gives it a ball)");
-    }
-    add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
-                not_a_ball(op, run.options) +
-                    (op.tool.from_file && op.tool.diameter_mm > 0.0
-                         ? ", no contact recovery: its flutes are not checked against the part, "
-                           "its shank and holder are"
-                         : ", no contact recovery and no collision check"));
-    return;
+  if (!(op.tool.from_file && op.tool.diameter_mm > 0.0)) {
+    // Said as what was not checked (the program's header, stderr's NOT CHECKED lines): the
+    // run was "ok" with every point not checked, and only the holder named.
+    add_finding(res, FindingCode::NoToolModel, k, op.points.empty() ? 0 : op.points.front().line,
+                "operation " + op.name +
+                    " has no tool geometry (no TLDATA or CUTTER, or not a mill): none of its "
+                    "moves is checked against the part (" +
+                    run.options.name_of("tool.ball_radius_mm") + " gives it a ball)");
   }
+  add_finding(res, FindingCode::NotABallMill, k, op.points.empty() ? 0 : op.points.front().line,
+              not_a_ball(op, run.options) +
+                  (op.tool.from_file && op.tool.diameter_mm > 0.0
+                       ? ", no contact recovery: its flutes are not checked against the part, "
+                         "its shank and holder are"
+                       : ", no contact recovery and no collision check"));
+}
+
+/// The contacts' summary; a ball cutting into the part beyond the contact tolerance, or an
+/// operation that feeds and touches it nowhere, is refused (wrong part, tool or units).
+void summarise_contacts(const Run& run, OperationContext& o) {
+  const Operationd& op = *o.op;
   const Part& part = *run.options.part;
-  o.contacts = recover_contacts(part, op, o.ball_radius_mm, run.options.contact);
   ContactSummary& cs = o.contact;
-  cs.recovered = true;
-  cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact, op.cam_tolerance_mm);
   bool any_feed = false;
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     const ContactPoint& c = o.contacts[i];
@@ -357,8 +356,13 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
         run.tp.source, op.points.front().line,
         "operation " + op.name + ": no CL point touches the part (wrong part or wrong units?)");
   }
-  // Feed points off the part between points of their pass that touch it: the ball cuts air at
-  // feed there -- a pass lifting over a gap, or points made for another part.
+}
+
+/// Feed points off the part between points of their pass that touch it: the ball cuts air at
+/// feed there -- a pass lifting over a gap, or points made for another part.
+void feed_in_air_finding(const OperationContext& o, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
   std::size_t feed_in_air = 0, worst = 0;
   for (const IndexRange& pass : feed_passes(op)) {
     std::size_t first = pass.end, last = pass.begin;
@@ -385,6 +389,24 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
                                        : std::string()) +
             "): a pass lifting over a gap at feed, or points made for another part");
   }
+}
+
+/// The contacts of one ball-end operation and their summary.
+void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
+  const Operationd& op = *o.op;
+  const std::size_t k = o.index;
+  const auto t0 = Clock::now();
+  if (!(o.ball_radius_mm > 0.0)) {
+    not_a_ball_findings(run, o, res);
+    return;
+  }
+  const Part& part = *run.options.part;
+  o.contacts = recover_contacts(part, op, o.ball_radius_mm, run.options.contact);
+  ContactSummary& cs = o.contact;
+  cs.recovered = true;
+  cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact, op.cam_tolerance_mm);
+  summarise_contacts(run, o);
+  feed_in_air_finding(o, res);
   if (cs.local_gouges) {
     add_finding(res, FindingCode::LocalGouge, k, 0,
                 "operation " + op.name + ": " + std::to_string(cs.local_gouges) +

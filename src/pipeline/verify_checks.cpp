@@ -85,6 +85,85 @@ std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionMod
   return found.second == n ? bound : std::min(bound, found);
 }
 
+namespace {
+
+/// A joint's worst rate and the point it belongs to.
+struct Worst {
+  double value = 0.0;
+  std::size_t point = 0;
+};
+struct WorstRates {
+  std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
+};
+
+/// The time of the written blocks into each feed point, s, from the F words read back (a
+/// linearised move: its blocks, each at its own F).
+std::vector<double> written_times_s(const PostedOperation& po,
+                                    const std::vector<const GcodeMove*>& at,
+                                    const std::vector<GcodeMove>& moves, LengthUnit units) {
+  const std::size_t n = po.points.size();
+  std::vector<double> written_s(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
+    const std::ptrdiff_t from = move_index(moves, at[i - 1]), to = move_index(moves, at[i]);
+    if (from >= 0 && to > from + 1) {
+      for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+        written_s[i] += block_time_s(moves[static_cast<std::size_t>(j - 1)],
+                                     moves[static_cast<std::size_t>(j)], units);
+      }
+    } else {
+      written_s[i] = block_time_s(*at[i - 1], *at[i], units);
+    }
+  }
+  return written_s;
+}
+
+/// The joints' worst velocity, acceleration and jerk over the feed chains as written, each
+/// chain from rest to rest: a linearised move is its blocks (machine mode), each at its own F
+/// with its own joints, so that no block between the points is faster than the limits (a
+/// machinist's review, tests/test_program.cpp); each rate belongs to its block's point.
+WorstRates worst_rates(const PostedOperation& po, const std::vector<JointPosition>& joints,
+                       const std::vector<const GcodeMove*>& at, const std::vector<GcodeMove>& moves,
+                       LengthUnit units,
+                       const std::function<JointPosition(const GcodeMove&)>& joint_of) {
+  const std::vector<double> written_s = written_times_s(po, at, moves, units);
+  WorstRates worst;
+  for (const IndexRange& c : feed_chains(po.points)) {
+    std::vector<JointPosition> q = {joints[c.begin - 1]};
+    std::vector<double> t;
+    std::vector<std::size_t> owner = {c.begin - 1};
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      const std::ptrdiff_t from = move_index(moves, at[i - 1]), to = move_index(moves, at[i]);
+      if (at[i] != at[i - 1] && from >= 0 && to > from + 1) {
+        for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
+          const GcodeMove& m = moves[static_cast<std::size_t>(j)];
+          q.push_back(j == to ? joints[i] : joint_of(m));
+          t.push_back(block_time_s(moves[static_cast<std::size_t>(j - 1)], m, units));
+          owner.push_back(i);
+        }
+      } else {
+        q.push_back(joints[i]);
+        t.push_back(written_s[i]);
+        owner.push_back(i);
+      }
+    }
+    const JointRates jr = joint_rates(q, t);
+    const auto keep = [](Worst& w, double v, std::size_t point) {
+      if (v > w.value) w = Worst{v, point};
+    };
+    for (std::size_t j = 0; j < kJointCount; ++j) {
+      keep(worst.velocity[j], jr.max_velocity_per_s[j],
+           owner[std::min(owner.size() - 1, jr.velocity_at[j] + 1)]);
+      keep(worst.accel[j], jr.max_accel_per_s2[j],
+           owner[std::min(owner.size() - 1, jr.accel_at[j])]);
+      keep(worst.jerk[j], jr.max_jerk_per_s3[j], owner[std::min(owner.size() - 1, jr.jerk_at[j])]);
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
 /// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
 /// (0: no limit), as the controller moves: block times from the F words read back, each
 /// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
@@ -97,60 +176,10 @@ void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
                           char tilt_letter, std::size_t op_index,
                           const std::function<JointPosition(const GcodeMove&)>& joint_of,
                           const JobOptions& options) {
-  const std::size_t n = po.points.size();
-  std::vector<double> written_s(n, 0.0);
-  const auto index_of = [&](const GcodeMove* m) { return move_index(moves, m); };
-  for (std::size_t i = 1; i < n; ++i) {
-    if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
-    // A linearised move: the blocks between the points, each at its own F.
-    const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
-    if (from >= 0 && to > from + 1) {
-      for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
-        written_s[i] += block_time_s(moves[static_cast<std::size_t>(j - 1)],
-                                     moves[static_cast<std::size_t>(j)], res.gcode_units);
-      }
-    } else {
-      written_s[i] = block_time_s(*at[i - 1], *at[i], res.gcode_units);
-    }
-  }
-  struct Worst {
-    double value = 0.0;
-    std::size_t point = 0;
-  };
-  std::array<Worst, kJointCount> velocity{}, accel{}, jerk{};
-  for (const IndexRange& c : feed_chains(po.points)) {
-    // The chain as written: a linearised move is its blocks (machine mode), each at its own F
-    // with its own joints, so that no block between the points is faster than the limits
-    // (a machinist's review, tests/test_program.cpp); `owner` maps a block back to its point.
-    std::vector<JointPosition> q = {joints[c.begin - 1]};
-    std::vector<double> t;
-    std::vector<std::size_t> owner = {c.begin - 1};
-    for (std::size_t i = c.begin; i < c.end; ++i) {
-      const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
-      if (at[i] != at[i - 1] && from >= 0 && to > from + 1) {
-        for (std::ptrdiff_t j = from + 1; j <= to; ++j) {
-          const GcodeMove& m = moves[static_cast<std::size_t>(j)];
-          q.push_back(j == to ? joints[i] : joint_of(m));
-          t.push_back(block_time_s(moves[static_cast<std::size_t>(j - 1)], m, res.gcode_units));
-          owner.push_back(i);
-        }
-      } else {
-        q.push_back(joints[i]);
-        t.push_back(written_s[i]);
-        owner.push_back(i);
-      }
-    }
-    const JointRates jr = joint_rates(q, t);
-    for (std::size_t j = 0; j < kJointCount; ++j) {
-      const auto keep = [](Worst& w, double v, std::size_t point) {
-        if (v > w.value) w = Worst{v, point};
-      };
-      keep(velocity[j], jr.max_velocity_per_s[j],
-           owner[std::min(owner.size() - 1, jr.velocity_at[j] + 1)]);
-      keep(accel[j], jr.max_accel_per_s2[j], owner[std::min(owner.size() - 1, jr.accel_at[j])]);
-      keep(jerk[j], jr.max_jerk_per_s3[j], owner[std::min(owner.size() - 1, jr.jerk_at[j])]);
-    }
-  }
+  const WorstRates worst = worst_rates(po, joints, at, moves, res.gcode_units, joint_of);
+  const auto& velocity = worst.velocity;
+  const auto& accel = worst.accel;
+  const auto& jerk = worst.jerk;
   const char* at_feed = scheduled ? " at the scheduled feed" : " at the programmed feed";
   for (std::size_t j = 0; j < kJointCount; ++j) {
     const std::string unit = j < 3 ? "mm" : "deg";

@@ -65,7 +65,13 @@ void check_rotary(const char* name, const RotaryAxis<double>& axis) {
 
 }  // namespace
 
-void validate(const Machine& m) {
+namespace {
+
+/// The joints' letters as the messages name them.
+constexpr const char* kJointLetters = "XYZAC";
+
+/// The kinematics' name agrees with the rotary model; a head's pivot, and no machine mode.
+void validate_kinematics(const Machine& m) {
   const bool bc = m.rotary.tilt_about == TiltAxis::Y;
   TiltAxis tilt = TiltAxis::X;
   RotaryLayout layout = RotaryLayout::TableTable;
@@ -88,6 +94,10 @@ void validate(const Machine& m) {
                        "about the head's pivot): use GcodeMode::Tcp");
     }
   }
+}
+
+/// The rotary axes' ranges, their axes' points, the joints' limits, the linear travel.
+void validate_axes(const Machine& m) {
   check_rotary("tilt", m.rotary.tilt);
   check_rotary("c", m.rotary.c);
   for (int q = 0; q < 3; ++q) {
@@ -96,24 +106,25 @@ void validate(const Machine& m) {
     const Vec3d& p = q == 0 ? m.rotary.c_axis_point_mm : m.rotary.tilt_axis_point_mm;
     if (!p.allFinite()) refuse(f, "finite", p.norm());
   }
-  const char* joint = "XYZAC";
   for (std::size_t j = 0; j < kJointCount; ++j) {
-    const std::string f = std::string("limits[") + joint[j] + "].";
+    const std::string f = std::string("limits[") + kJointLetters[j] + "].";
     const JointLimit& l = m.limits[j];
     check_range(f + "max_velocity_per_s", l.max_velocity_per_s, 0.0, 1e9, "finite and >= 0");
     check_range(f + "max_accel_per_s2", l.max_accel_per_s2, 0.0, 1e12, "finite and >= 0");
     check_range(f + "max_jerk_per_s3", l.max_jerk_per_s3, 0.0, 1e15, "finite and >= 0");
-    check_range(std::string("joint_max_accel_per_s2[") + joint[j] + "]",
+    check_range(std::string("joint_max_accel_per_s2[") + kJointLetters[j] + "]",
                 m.joint_max_accel_per_s2[j], 0.0, 1e12, "finite and >= 0");
   }
   for (std::size_t q = 0; q < 3; ++q) {
     const auto& r = m.linear_range[q];
-    const std::string f = std::string("linear_range[") + joint[q] + "]";
+    const std::string f = std::string("linear_range[") + kJointLetters[q] + "]";
     if (std::isnan(r.min_mm) || std::isnan(r.max_mm) || r.min_mm > r.max_mm) {
       refuse(f + ".min_mm", "a number <= max_mm", r.min_mm);
     }
   }
-  const GcodeSettings& g = m.gcode;
+}
+
+void validate_gcode(const GcodeSettings& g) {
   const std::string dialect = to_string(g.dialect);
   check_range("gcode.decimals", g.decimals, 0, max_decimals(g.dialect),
               "within [0, " + std::to_string(max_decimals(g.dialect)) + "] (the most " + dialect +
@@ -129,8 +140,11 @@ void validate(const Machine& m) {
         "ISO mode has no G93)");
   }
   check_range("gcode.max_feed_ratio", g.max_feed_ratio, 1.0, 100.0, "within [1, 100]");
-  // The machine's [checks] and [holder], which a job uses where its options name none: the
-  // bounds check_options puts on the options themselves.
+}
+
+/// The machine's [checks] and [holder], which a job uses where its options name none: the
+/// bounds check_options puts on the options themselves.
+void validate_checks_and_holder(const Machine& m) {
   for (const auto& [field, v] : {std::make_pair("shank_clearance_mm", m.shank_clearance_mm),
                                  std::make_pair("holder_clearance_mm", m.holder_clearance_mm)}) {
     if (v) check_range(field, *v, 0.0, 50.0, "within [0, 50]");
@@ -141,7 +155,10 @@ void validate(const Machine& m) {
         std::make_pair("holder_gauge_length_mm", m.holder_gauge_length_mm)}) {
     if (v && !(*v > 0.0 && *v <= 1000.0)) refuse(field, "within (0, 1000]", *v);
   }
-  const ProgramTemplate& t = g.program;
+}
+
+void validate_program_template(const Machine& m) {
+  const ProgramTemplate& t = m.gcode.program;
   check_range("gcode.program.number", t.number, 1, 9999, "within [1, 9999]");
   check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");
   check_range("gcode.program.linearise_tolerance_mm", t.linearise_tolerance_mm, 0.0, 1e3,
@@ -159,11 +176,21 @@ void validate(const Machine& m) {
     for (std::size_t q = 0; q < 2; ++q) {
       const double v = (*t.end_park_xy_mm)[q];
       if (!std::isfinite(v) || !m.linear_range[q].contains(v)) {
-        refuse(std::string("gcode.program.end_park_xy_mm[") + joint[q] + "]",
+        refuse(std::string("gcode.program.end_park_xy_mm[") + kJointLetters[q] + "]",
                "finite and within the travel (linear_range)", v);
       }
     }
   }
+}
+
+}  // namespace
+
+void validate(const Machine& m) {
+  validate_kinematics(m);
+  validate_axes(m);
+  validate_gcode(m.gcode);
+  validate_checks_and_holder(m);
+  validate_program_template(m);
 }
 
 int max_decimals(GcodeDialect dialect) {

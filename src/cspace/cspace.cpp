@@ -98,6 +98,9 @@ struct OcclusionMap {
   unsigned char* row(int i) {
     return blocked.data() + static_cast<std::size_t>(i - r0) * static_cast<std::size_t>(n_yaw);
   }
+  const unsigned char* row(int i) const {
+    return blocked.data() + static_cast<std::size_t>(i - r0) * static_cast<std::size_t>(n_yaw);
+  }
 };
 
 /// acos within 2e-8 rad (Abramowitz and Stegun 4.4.46), several times faster than std::acos;
@@ -299,6 +302,180 @@ int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids)
   return id;
 }
 
+/// One free_axes call: the occlusion map of the window's cells, and the two passes of the
+/// walk over the tree (cspace.hpp) that block its cells.
+class CSpaceRasteriser::Walk {
+ public:
+  Walk(const CSpaceRasteriser& part, const ToolModel& tool, const ContactPoint& cp,
+       const Vec3d& centre, const Vec3d& input_axis, double max_dev_rad, const CSpaceGrid& grid,
+       const std::vector<WindowCell>& cells)
+      : part_(part),
+        tool_(tool),
+        cp_(cp),
+        centre_(centre),
+        input_axis_(input_axis),
+        cos_dev_(std::cos(max_dev_rad)),
+        sin_dev_(std::sin(max_dev_rad)),
+        range_(tool.bodies.size()) {
+    // The map over the window's rows; cells outside the window start blocked.
+    g_.n_yaw = grid.yaw_cells();
+    g_.cell_rad = deg_to_rad(grid.cell_deg());
+    g_.r0 = cells.front().i;
+    g_.r1 = cells.back().i + 1;
+    for (int i = g_.r0; i < g_.r1; ++i) {
+      const double a = grid.tilt_rad(i);
+      g_.tilt.push_back(a);
+      g_.cos_tilt.push_back(std::cos(a));
+      g_.sin_tilt.push_back(std::sin(a));
+    }
+    g_.blocked.assign(static_cast<std::size_t>(g_.r1 - g_.r0) * static_cast<std::size_t>(g_.n_yaw),
+                      1);
+    for (const WindowCell& c : cells) g_.row(c.i)[c.j] = 0;
+    // Per yaw: the direction of eq. 11 in the tangent plane and the one across it.
+    yaw_dir_.resize(static_cast<std::size_t>(g_.n_yaw));
+    yaw_side_.resize(yaw_dir_.size());
+    for (int j = 0; j < g_.n_yaw; ++j) {
+      const double b = grid.yaw_rad(j);
+      yaw_dir_[static_cast<std::size_t>(j)] = std::cos(b) * cp.feed_dir + std::sin(b) * cp.side;
+      yaw_side_[static_cast<std::size_t>(j)] = std::cos(b) * cp.side - std::sin(b) * cp.feed_dir;
+    }
+  }
+
+  /// First pass, coarse: one point of the part per small subtree blocks its certain rings, so
+  /// that the second pass finds most of the blocked region already marked.
+  void coarse() {
+    constexpr int kCoarseFaces = 64;
+    std::vector<int> stack = {0};
+    while (!part_.nodes_.empty() && !stack.empty()) {
+      const Node& node = part_.nodes_[static_cast<std::size_t>(stack.back())];
+      stack.pop_back();
+      if (!possible(seen_from(centre_, node.sphere.centre, cp_), node.sphere.radius)) continue;
+      if (node.left < 0 || node.count <= kCoarseFaces) {
+        mark_certain(seen_from(
+            centre_, part_.face_sphere_[static_cast<std::size_t>(node.first)].centre, cp_));
+        continue;
+      }
+      stack.push_back(node.right);
+      stack.push_back(node.left);
+    }
+  }
+
+  /// Second pass: a subtree matters only while its possible rings hold an open cell; a face
+  /// blocks its certain rings, and the exact test decides the open cells of its possible ones.
+  void fine() {
+    std::vector<int> stack(part_.nodes_.empty() ? 0 : 1, 0);
+    while (!stack.empty()) {
+      const Node& node = part_.nodes_[static_cast<std::size_t>(stack.back())];
+      stack.pop_back();
+      const Seen s = seen_from(centre_, node.sphere.centre, cp_);
+      if (!possible(s, node.sphere.radius)) continue;
+      bool open = false;
+      for (std::size_t b = 0; b < range_.size() && !open; ++b) {
+        open = ring_spans(g_, s, ring_of(g_, s, range_[b].first, range_[b].second, true),
+                          [this](int i, int j0, int j1) { return has_open(i, j0, j1); });
+      }
+      if (!open) continue;
+      if (node.left >= 0) {
+        stack.push_back(node.right);
+        stack.push_back(node.left);
+        continue;
+      }
+      for (int f = node.first; f < node.first + node.count; ++f) face(f);
+    }
+  }
+
+  bool blocked(const WindowCell& c) const { return g_.row(c.i)[c.j] != 0; }
+
+ private:
+  /// For a sphere seen at s with radius rho: each body's possible range of V . u, emptied
+  /// where the whole range lies outside the deviation window; true when any is left.
+  bool possible(const Seen& s, double rho) {
+    bool any = false;
+    for (std::size_t b = 0; b < range_.size(); ++b) {
+      auto r = possible_range(tool_.bodies[b], s.d, rho);
+      if (r.first <= r.second && s.d > rho + 1e-12) {
+        // Within psi of u (cos psi = c1) and within max_dev of the input axis.
+        const double sin_psi = std::sqrt(std::max(0.0, 1.0 - r.first * r.first));
+        if (r.first > -cos_dev_ + 1e-12 &&  // max_dev + psi < pi
+            s.u.dot(input_axis_) < cos_dev_ * r.first - sin_dev_ * sin_psi - 1e-9) {
+          r = {1.0, -1.0};
+        }
+      }
+      range_[b] = r;
+      any = any || r.first <= r.second;
+    }
+    return any;
+  }
+
+  bool has_open(int i, int j0, int j1) const {
+    return std::memchr(g_.row(i) + j0, 0, static_cast<std::size_t>(j1 - j0)) != nullptr;
+  }
+  bool mark(int i, int j0, int j1) {
+    std::memset(g_.row(i) + j0, 1, static_cast<std::size_t>(j1 - j0));
+    return false;
+  }
+
+  /// Cells blocked for certain by a point of the part: those whose body holds the point.
+  void mark_certain(const Seen& p) {
+    for (const ToolBody& body : tool_.bodies) {
+      const auto [c1, c2] = certain_range(body, p.d);
+      ring_spans(g_, p, ring_of(g_, p, c1, c2, false),
+                 [this](int i, int j0, int j1) { return mark(i, j0, j1); });
+    }
+  }
+
+  /// One face, row by row: where the possible ring holds an open cell, the certain ring (the
+  /// centroid inside the body) blocks its cells, and the exact test decides the rest.
+  void face(int f) {
+    const Sphere& sphere = part_.face_sphere_[static_cast<std::size_t>(f)];
+    const Seen fs = seen_from(centre_, sphere.centre, cp_);
+    if (!possible(fs, sphere.radius)) return;
+    const auto& t = part_.tri_[static_cast<std::size_t>(f)];
+    const std::array<Vec3d, 3> rel = {t[0] - centre_, t[1] - centre_, t[2] - centre_};
+    for (std::size_t b = 0; b < range_.size(); ++b) {
+      if (range_[b].first > range_[b].second) continue;
+      const ToolBody& body = tool_.bodies[b];
+      const Ring maybe = ring_of(g_, fs, range_[b].first, range_[b].second, true);
+      const auto [c1, c2] = certain_range(body, fs.d);
+      const Ring sure = ring_of(g_, fs, c1, c2, false);
+      for (int i = maybe.i0; i < maybe.i1; ++i) {
+        unsigned char* row = g_.row(i);
+        const auto open_here = [&](int j0, int j1) { return has_open(i, j0, j1); };
+        if (!ring_row(g_, fs, maybe, i, open_here)) continue;
+        if (i >= sure.i0 && i < sure.i1) {
+          ring_row(g_, fs, sure, i, [&](int j0, int j1) { return mark(i, j0, j1); });
+        }
+        const std::size_t r = static_cast<std::size_t>(i - g_.r0);
+        const double ca = g_.cos_tilt[r], sa = g_.sin_tilt[r];
+        ring_row(g_, fs, maybe, i, [&](int j0, int j1) {
+          for (int j = j0; j < j1; ++j) {
+            if (row[j]) continue;
+            // The cell's axis and a frame across it: d/da and d/db of eq. 11, normalised.
+            const Vec3d& dj = yaw_dir_[static_cast<std::size_t>(j)];
+            const Vec3d v = ca * cp_.surface_normal + sa * dj;
+            const Vec3d e1 = ca * dj - sa * cp_.surface_normal;
+            if (detail::meets_in_frame(rel, v, e1, yaw_side_[static_cast<std::size_t>(j)],
+                                       body.radius_mm, body.start_mm, body.end_mm)) {
+              row[j] = 1;
+            }
+          }
+          return false;
+        });
+      }
+    }
+  }
+
+  const CSpaceRasteriser& part_;
+  const ToolModel& tool_;
+  const ContactPoint& cp_;
+  const Vec3d centre_, input_axis_;
+  const double cos_dev_, sin_dev_;
+  OcclusionMap g_;
+  std::vector<Vec3d> yaw_dir_, yaw_side_;
+  /// Each body's possible range of V . u for the sphere last asked about (possible).
+  std::vector<std::pair<double, double>> range_;
+};
+
 CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint& cp,
                                        const Vec3d& centre, const Vec3d& input_axis,
                                        const CSpaceOptions& options) const {
@@ -307,144 +484,11 @@ CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint
   const double max_dev = deg_to_rad(options.max_deviation_deg);
   const std::vector<WindowCell> cells = window(grid, cp, input_axis, max_dev);
   if (cells.empty()) return grid;
-
-  // The map over the window's rows; cells outside the window start blocked.
-  OcclusionMap g;
-  g.n_yaw = grid.yaw_cells();
-  g.cell_rad = deg_to_rad(grid.cell_deg());
-  g.r0 = cells.front().i;
-  g.r1 = cells.back().i + 1;
-  for (int i = g.r0; i < g.r1; ++i) {
-    const double a = grid.tilt_rad(i);
-    g.tilt.push_back(a);
-    g.cos_tilt.push_back(std::cos(a));
-    g.sin_tilt.push_back(std::sin(a));
-  }
-  g.blocked.assign(static_cast<std::size_t>(g.r1 - g.r0) * static_cast<std::size_t>(g.n_yaw), 1);
-  for (const WindowCell& c : cells) g.row(c.i)[c.j] = 0;
-  // Per yaw: the direction of eq. 11 in the tangent plane and the one across it.
-  std::vector<Vec3d> yaw_dir(static_cast<std::size_t>(g.n_yaw)), yaw_side(yaw_dir.size());
-  for (int j = 0; j < g.n_yaw; ++j) {
-    const double b = grid.yaw_rad(j);
-    yaw_dir[static_cast<std::size_t>(j)] = std::cos(b) * cp.feed_dir + std::sin(b) * cp.side;
-    yaw_side[static_cast<std::size_t>(j)] = std::cos(b) * cp.side - std::sin(b) * cp.feed_dir;
-  }
-
-  const double cos_dev = std::cos(max_dev), sin_dev = std::sin(max_dev);
-  const std::size_t n_bodies = tool.bodies.size();
-  std::vector<std::pair<double, double>> range(n_bodies);
-  // For a sphere seen at s with radius rho: each body's possible range of V . u, emptied
-  // where the whole range lies outside the deviation window; true when any is left.
-  const auto possible = [&](const Seen& s, double rho) {
-    bool any = false;
-    for (std::size_t b = 0; b < n_bodies; ++b) {
-      auto r = possible_range(tool.bodies[b], s.d, rho);
-      if (r.first <= r.second && s.d > rho + 1e-12) {
-        // Within psi of u (cos psi = c1) and within max_dev of the input axis.
-        const double sin_psi = std::sqrt(std::max(0.0, 1.0 - r.first * r.first));
-        if (r.first > -cos_dev + 1e-12 &&  // max_dev + psi < pi
-            s.u.dot(input_axis) < cos_dev * r.first - sin_dev * sin_psi - 1e-9) {
-          r = {1.0, -1.0};
-        }
-      }
-      range[b] = r;
-      any = any || r.first <= r.second;
-    }
-    return any;
-  };
-  const auto has_open = [&](int i, int j0, int j1) {
-    return std::memchr(g.row(i) + j0, 0, static_cast<std::size_t>(j1 - j0)) != nullptr;
-  };
-  const auto mark = [&](int i, int j0, int j1) {
-    std::memset(g.row(i) + j0, 1, static_cast<std::size_t>(j1 - j0));
-    return false;
-  };
-  // Cells blocked for certain by a point of the part: those whose body holds the point.
-  const auto mark_certain = [&](const Seen& p) {
-    for (const ToolBody& body : tool.bodies) {
-      const auto [c1, c2] = certain_range(body, p.d);
-      ring_spans(g, p, ring_of(g, p, c1, c2, false), mark);
-    }
-  };
-
-  // First pass, coarse: one point of the part per small subtree blocks its certain rings, so
-  // that the second pass finds most of the blocked region already marked.
-  constexpr int kCoarseFaces = 64;
-  std::vector<int> stack = {0};
-  while (!nodes_.empty() && !stack.empty()) {
-    const Node& node = nodes_[static_cast<std::size_t>(stack.back())];
-    stack.pop_back();
-    if (!possible(seen_from(centre, node.sphere.centre, cp), node.sphere.radius)) continue;
-    if (node.left < 0 || node.count <= kCoarseFaces) {
-      mark_certain(
-          seen_from(centre, face_sphere_[static_cast<std::size_t>(node.first)].centre, cp));
-      continue;
-    }
-    stack.push_back(node.right);
-    stack.push_back(node.left);
-  }
-
-  // Second pass: a subtree matters only while its possible rings hold an open cell; a face
-  // blocks its certain rings, and the exact test decides the open cells of its possible ones.
-  stack.assign(nodes_.empty() ? 0 : 1, 0);
-  while (!stack.empty()) {
-    const Node& node = nodes_[static_cast<std::size_t>(stack.back())];
-    stack.pop_back();
-    const Seen s = seen_from(centre, node.sphere.centre, cp);
-    if (!possible(s, node.sphere.radius)) continue;
-    bool open = false;
-    for (std::size_t b = 0; b < n_bodies && !open; ++b) {
-      open = ring_spans(g, s, ring_of(g, s, range[b].first, range[b].second, true), has_open);
-    }
-    if (!open) continue;
-    if (node.left >= 0) {
-      stack.push_back(node.right);
-      stack.push_back(node.left);
-      continue;
-    }
-    for (int f = node.first; f < node.first + node.count; ++f) {
-      const Sphere& sphere = face_sphere_[static_cast<std::size_t>(f)];
-      const Seen fs = seen_from(centre, sphere.centre, cp);
-      if (!possible(fs, sphere.radius)) continue;
-      // Row by row: where the possible ring holds an open cell, the certain ring (the
-      // centroid inside the body) blocks its cells, and the exact test decides the rest.
-      const auto& t = tri_[static_cast<std::size_t>(f)];
-      const std::array<Vec3d, 3> rel = {t[0] - centre, t[1] - centre, t[2] - centre};
-      for (std::size_t b = 0; b < n_bodies; ++b) {
-        if (range[b].first > range[b].second) continue;
-        const ToolBody& body = tool.bodies[b];
-        const Ring maybe = ring_of(g, fs, range[b].first, range[b].second, true);
-        const auto [c1, c2] = certain_range(body, fs.d);
-        const Ring sure = ring_of(g, fs, c1, c2, false);
-        for (int i = maybe.i0; i < maybe.i1; ++i) {
-          unsigned char* row = g.row(i);
-          const auto open_here = [&](int j0, int j1) { return has_open(i, j0, j1); };
-          if (!ring_row(g, fs, maybe, i, open_here)) continue;
-          if (i >= sure.i0 && i < sure.i1) {
-            ring_row(g, fs, sure, i, [&](int j0, int j1) { return mark(i, j0, j1); });
-          }
-          const std::size_t r = static_cast<std::size_t>(i - g.r0);
-          const double ca = g.cos_tilt[r], sa = g.sin_tilt[r];
-          ring_row(g, fs, maybe, i, [&](int j0, int j1) {
-            for (int j = j0; j < j1; ++j) {
-              if (row[j]) continue;
-              // The cell's axis and a frame across it: d/da and d/db of eq. 11, normalised.
-              const Vec3d& dj = yaw_dir[static_cast<std::size_t>(j)];
-              const Vec3d v = ca * cp.surface_normal + sa * dj;
-              const Vec3d e1 = ca * dj - sa * cp.surface_normal;
-              if (detail::meets_in_frame(rel, v, e1, yaw_side[static_cast<std::size_t>(j)],
-                                         body.radius_mm, body.start_mm, body.end_mm)) {
-                row[j] = 1;
-              }
-            }
-            return false;
-          });
-        }
-      }
-    }
-  }
+  Walk walk(*this, tool, cp, centre, input_axis, max_dev, grid, cells);
+  walk.coarse();
+  walk.fine();
   for (const WindowCell& c : cells) {
-    if (!g.row(c.i)[c.j]) store(grid, c);
+    if (!walk.blocked(c)) store(grid, c);
   }
   return grid;
 }

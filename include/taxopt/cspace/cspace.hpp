@@ -97,6 +97,8 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
     int left = -1, right = -1, first = 0, count = 0;
   };
   int build(int first, int count, std::vector<Vec3d>& centroids);
+  /// One free_axes call's walk of the tree (cspace.cpp).
+  class Walk;
   std::vector<std::array<Vec3d, 3>> tri_;
   std::vector<Sphere> face_sphere_;
   std::vector<Node> nodes_;

@@ -111,15 +111,14 @@ std::vector<Vec3d> Reader::arc_chords(const PendingArc& c, const Vec3d& start,
   return out;
 }
 
-void Reader::expand_arcs() {
-  auto& rd = tp_.reading;
+Reader::ArcVotes Reader::vote_arcs() {
+  ArcVotes v;
   // Which points end or start an arc: the moves into / out of them are not straight.
   std::vector<std::set<std::size_t>> ends(tp_.operations.size()), starts(ends.size());
   for (const auto& a : arcs_) {
     starts[static_cast<std::size_t>(a.op)].insert(a.start);
     ends[static_cast<std::size_t>(a.op)].insert(a.start + 1);
   }
-  int ccw_votes = 0, cw_votes = 0, circles = 0;
   for (auto& a : arcs_) {
     const auto& pts = tp_.operations[static_cast<std::size_t>(a.op)].points;
     const auto o = static_cast<std::size_t>(a.op);
@@ -135,38 +134,29 @@ void Reader::expand_arcs() {
     a.evidence = (in != 0 && out != 0 && in != out) ? 0 : (in != 0 ? in : out);
     a.strong = strong && a.evidence != 0;
     if (a.movarc) continue;  // its sense is written: it does not vote on the CIRCLEs'
-    ++circles;
-    if (a.evidence > 0) ++ccw_votes;
-    if (a.evidence < 0) ++cw_votes;
+    ++v.circles;
+    if (a.evidence > 0) ++v.ccw;
+    if (a.evidence < 0) ++v.cw;
   }
-  if (circles == 0) {
-    // No CIRCLE to decide: the report still names the sense the file's arcs would have had.
-    if (options_.arc_direction != ArcDirection::Auto) {
-      rd.arc_convention = options_.arc_direction;
-      rd.arc_convention_source = "option";
-    } else if (documented_arc_direction(rd.dialect) != ArcDirection::Auto) {
-      rd.arc_convention = documented_arc_direction(rd.dialect);
+  return v;
+}
+
+std::string Reader::arc_lines(int sign) const {
+  std::string out;
+  int n = 0;
+  for (const auto& a : arcs_) {
+    if (a.evidence != sign || a.movarc) continue;
+    if (n++ == 5) {
+      out += ", ...";
+      break;
     }
-    check_movarcs();
-    insert_chords();
-    return;
+    out += (out.empty() ? "" : ", ") + std::to_string(a.line);
   }
-  rd.arcs = circles;
-  rd.arcs_decidable = ccw_votes + cw_votes;
-  const auto lines_of = [this](int sign) {
-    std::string out;
-    int n = 0;
-    for (const auto& a : arcs_) {
-      if (a.evidence != sign || a.movarc) continue;
-      if (n++ == 5) {
-        out += ", ...";
-        break;
-      }
-      out += (out.empty() ? "" : ", ") + std::to_string(a.line);
-    }
-    return out;
-  };
-  const char* dialect = to_string(rd.dialect);
+  return out;
+}
+
+ArcDirection Reader::arc_convention(const ArcVotes& v) {
+  auto& rd = tp_.reading;
   ArcDirection convention = options_.arc_direction;
   if (convention != ArcDirection::Auto) {
     rd.arc_convention_source = "option";
@@ -186,7 +176,7 @@ void Reader::expand_arcs() {
     convention = documented_arc_direction(rd.dialect);
     if (convention == ArcDirection::Auto) {
       // Nothing documented for this CAM system: the file's own arcs must say it clearly.
-      const int decided = ccw_votes + cw_votes;
+      const int decided = v.ccw + v.cw;
       if (decided == 0) {
         convention = ArcDirection::CounterClockwise;
         notice(arcs_.front().line,
@@ -194,14 +184,13 @@ void Reader::expand_arcs() {
                "decide its sense; APT's counter-clockwise about (i,j,k) is assumed "
                "(" +
                    options_.name_of("arc_direction") + " cw|ccw sets it)");
-      } else if (std::max(ccw_votes, cw_votes) >= 0.8 * decided) {
-        convention =
-            ccw_votes > cw_votes ? ArcDirection::CounterClockwise : ArcDirection::Clockwise;
+      } else if (std::max(v.ccw, v.cw) >= 0.8 * decided) {
+        convention = v.ccw > v.cw ? ArcDirection::CounterClockwise : ArcDirection::Clockwise;
         rd.arc_convention_source = "tangents";
         notice(arcs_.front().line,
                std::string("CIRCLE: the CAM system is not recognised; ") +
-                   std::to_string(std::max(ccw_votes, cw_votes)) + " of " +
-                   std::to_string(decided) + " decidable arcs run " +
+                   std::to_string(std::max(v.ccw, v.cw)) + " of " + std::to_string(decided) +
+                   " decidable arcs run " +
                    (convention == ArcDirection::Clockwise ? "clockwise" : "counter-clockwise") +
                    " about their axis by the tangents of the moves beside them, so every arc "
                    "is read so (" +
@@ -209,24 +198,30 @@ void Reader::expand_arcs() {
       } else {
         fail(arcs_.front().line,
              "CIRCLE: the CAM system is not recognised and its arcs disagree: " +
-                 std::to_string(ccw_votes) + " run counter-clockwise (lines " + lines_of(1) +
-                 ") and " + std::to_string(cw_votes) + " clockwise (lines " + lines_of(-1) +
+                 std::to_string(v.ccw) + " run counter-clockwise (lines " + arc_lines(1) +
+                 ") and " + std::to_string(v.cw) + " clockwise (lines " + arc_lines(-1) +
                  ") by the moves beside them; give " + options_.name_of("arc_direction"));
       }
     }
   }
+  return convention;
+}
+
+void Reader::apply_arc_convention(ArcDirection convention, const ArcVotes& v) {
+  auto& rd = tp_.reading;
+  const char* dialect = to_string(rd.dialect);
   rd.arc_convention = convention;
   const int convention_sign = convention == ArcDirection::Clockwise ? -1 : 1;
-  const int agree = convention_sign > 0 ? ccw_votes : cw_votes;
-  const int contra = convention_sign > 0 ? cw_votes : ccw_votes;
+  const int agree = convention_sign > 0 ? v.ccw : v.cw;
+  const int contra = convention_sign > 0 ? v.cw : v.ccw;
   rd.arcs_contradicting = contra;
   const std::string sense =
       convention == ArcDirection::Clockwise ? "clockwise" : "counter-clockwise";
   if (contra > agree && rd.arc_convention_source == "documented") {
     fail(arcs_.front().line,
          "CIRCLE: " + std::to_string(contra) + " of " + std::to_string(contra + agree) +
-             " decidable arcs (lines " + lines_of(-convention_sign) + ") run against the " + sense +
-             " sense " + dialect +
+             " decidable arcs (lines " + arc_lines(-convention_sign) + ") run against the " +
+             sense + " sense " + dialect +
              " files use about (i,j,k), by the moves before and after them; if the file is "
              "right, give " +
              options_.name_of("arc_direction") + " cw|ccw");
@@ -236,7 +231,7 @@ void Reader::expand_arcs() {
            "CIRCLE: " + options_.name_of("arc_direction") + " " +
                std::string(to_string(convention)) + " is against the tangents of " +
                std::to_string(contra) + " of " + std::to_string(contra + agree) +
-               " decidable arcs (lines " + lines_of(-convention_sign) + "); applied as asked");
+               " decidable arcs (lines " + arc_lines(-convention_sign) + "); applied as asked");
   }
   for (auto& a : arcs_) {
     if (a.movarc) continue;
@@ -266,6 +261,24 @@ void Reader::expand_arcs() {
                " files use: the moves before and after each of them run the other way "
                "(" +
                options_.name_of("arc_direction") + " cw|ccw applies one sense to every arc)");
+  }
+}
+
+void Reader::expand_arcs() {
+  auto& rd = tp_.reading;
+  const ArcVotes votes = vote_arcs();
+  if (votes.circles == 0) {
+    // No CIRCLE to decide: the report still names the sense the file's arcs would have had.
+    if (options_.arc_direction != ArcDirection::Auto) {
+      rd.arc_convention = options_.arc_direction;
+      rd.arc_convention_source = "option";
+    } else if (documented_arc_direction(rd.dialect) != ArcDirection::Auto) {
+      rd.arc_convention = documented_arc_direction(rd.dialect);
+    }
+  } else {
+    rd.arcs = votes.circles;
+    rd.arcs_decidable = votes.ccw + votes.cw;
+    apply_arc_convention(arc_convention(votes), votes);
   }
   check_movarcs();
   insert_chords();

@@ -122,6 +122,22 @@ class Reader {
   /// Decides the sense of every arc (the file's convention, checked against the tangents of
   /// the straight moves beside each arc) and inserts their chords.
   void expand_arcs();
+  /// The CIRCLEs' votes: each arc's sense by the tangents of the moves beside it (its
+  /// evidence, strong where both agree clearly), counted over the CIRCLEs (a MOVARC's sense is
+  /// written: it does not vote).
+  struct ArcVotes {
+    int ccw = 0, cw = 0, circles = 0;
+  };
+  ArcVotes vote_arcs();
+  /// The CIRCLEs' lines (the first five) whose evidence is `sign`.
+  std::string arc_lines(int sign) const;
+  /// The sense the file's CIRCLEs run about their axis: the option's, else the CAM system's
+  /// documented one, else the tangents' where they agree (80 %); refused where they do not,
+  /// or where the file shows two CAM systems of opposite senses.
+  ArcDirection arc_convention(const ArcVotes& votes);
+  /// Each CIRCLE's sense: the convention, reversed where its neighbours all clearly contradict
+  /// it (not against an option); a documented convention most arcs contradict is refused.
+  void apply_arc_convention(ArcDirection convention, const ArcVotes& votes);
   /// MOVARC's sense and sweep are written: the GOTO must end the arc ANGLE deg on, and the
   /// moves beside it must not clearly run the other way.
   void check_movarcs();

@@ -42,162 +42,182 @@ bool finite_numbers(std::istringstream& in, int count) {
   return true;
 }
 
-Diagnosis diagnose_text_mesh(const std::string& path, const std::string& ext) {
-  std::ifstream in(path, std::ios::binary);
+/// OBJ: vertices, faces whose corners name them, the records OBJ knows.
+Diagnosis diagnose_obj(std::istream& in) {
   std::string line;
   int n = 0;
   const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
-  if (ext == ".obj") {
-    long vertices = 0;
+  long vertices = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    std::istringstream ls(line);
+    std::string kind;
+    if (!(ls >> kind) || kind[0] == '#') continue;
+    if (kind == "v") {
+      if (!finite_numbers(ls, 3)) return fail("a vertex 'v' needs three finite numbers");
+      ++vertices;
+    } else if (kind == "f") {
+      int corners = 0;
+      for (std::string tok; ls >> tok; ++corners) {
+        char* end = nullptr;
+        const long i = std::strtol(tok.c_str(), &end, 10);
+        if (end == tok.c_str() || (*end != '\0' && *end != '/')) {
+          return fail("face corner '" + tok.substr(0, 40) + "' is no vertex index");
+        }
+        if (i == 0 || i > vertices || -i > vertices) {
+          return fail("face corner " + std::to_string(i) + " names no vertex (" +
+                      std::to_string(vertices) + " so far)");
+        }
+      }
+      if (corners < 3) return fail("a face 'f' needs at least three corners");
+    } else if (kind != "vt" && kind != "vn" && kind != "vp" && kind != "g" && kind != "o" &&
+               kind != "s" && kind != "usemtl" && kind != "mtllib" && kind != "l" && kind != "p") {
+      return fail("'" + kind.substr(0, 40) + "' is no OBJ record");
+    }
+  }
+  return {};
+}
+
+/// OFF: the header, the counts, the vertices, the faces.
+Diagnosis diagnose_off(std::istream& in) {
+  std::string line;
+  int n = 0;
+  const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
+  // Header, counts, vertices, faces; '#' comments and blank lines skipped.
+  const auto next = [&](std::istringstream& ls) {
     while (std::getline(in, line)) {
       ++n;
-      std::istringstream ls(line);
-      std::string kind;
-      if (!(ls >> kind) || kind[0] == '#') continue;
-      if (kind == "v") {
-        if (!finite_numbers(ls, 3)) return fail("a vertex 'v' needs three finite numbers");
-        ++vertices;
-      } else if (kind == "f") {
-        int corners = 0;
-        for (std::string tok; ls >> tok; ++corners) {
-          char* end = nullptr;
-          const long i = std::strtol(tok.c_str(), &end, 10);
-          if (end == tok.c_str() || (*end != '\0' && *end != '/')) {
-            return fail("face corner '" + tok.substr(0, 40) + "' is no vertex index");
-          }
-          if (i == 0 || i > vertices || -i > vertices) {
-            return fail("face corner " + std::to_string(i) + " names no vertex (" +
-                        std::to_string(vertices) + " so far)");
-          }
-        }
-        if (corners < 3) return fail("a face 'f' needs at least three corners");
-      } else if (kind != "vt" && kind != "vn" && kind != "vp" && kind != "g" && kind != "o" &&
-                 kind != "s" && kind != "usemtl" && kind != "mtllib" && kind != "l" &&
-                 kind != "p") {
-        return fail("'" + kind.substr(0, 40) + "' is no OBJ record");
-      }
+      const std::size_t hash = line.find('#');
+      if (hash != std::string::npos) line.erase(hash);
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      ls = std::istringstream(line);
+      return true;
     }
-    return {};
+    return false;
+  };
+  std::istringstream ls;
+  if (!next(ls)) return fail("empty");
+  std::string head;
+  ls >> head;
+  if (head.size() < 3 || head.compare(head.size() - 3, 3, "OFF") != 0) {
+    return fail("the first line must be 'OFF', got '" + head.substr(0, 40) + "'");
   }
-  if (ext == ".off") {
-    // Header, counts, vertices, faces; '#' comments and blank lines skipped.
-    const auto next = [&](std::istringstream& ls) {
-      while (std::getline(in, line)) {
-        ++n;
-        const std::size_t hash = line.find('#');
-        if (hash != std::string::npos) line.erase(hash);
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        ls = std::istringstream(line);
-        return true;
+  long nv = -1, nf = -1, ne = 0;
+  if (!(ls >> nv)) {
+    if (!next(ls)) return fail("no vertex and face counts");
+    ls >> nv;
+  }
+  if (!(ls >> nf >> ne) || nv < 0 || nf < 0) {
+    return fail("the counts must be 'vertices faces edges', whole numbers");
+  }
+  for (long v = 0; v < nv; ++v) {
+    if (!next(ls))
+      return fail("the file ends after " + std::to_string(v) + " of " + std::to_string(nv) +
+                  " vertices");
+    if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
+  }
+  for (long f = 0; f < nf; ++f) {
+    if (!next(ls))
+      return fail("the file ends after " + std::to_string(f) + " of " + std::to_string(nf) +
+                  " faces");
+    long k = 0;
+    if (!(ls >> k) || k < 3) return fail("a face starts with its corner count, at least 3");
+    for (long c = 0; c < k; ++c) {
+      long i = -1;
+      if (!(ls >> i)) return fail("a face lists fewer corners than its count");
+      if (i < 0 || i >= nv) {
+        return fail("face corner " + std::to_string(i) + " names no vertex (0 to " +
+                    std::to_string(nv - 1) + ")");
       }
-      return false;
-    };
-    std::istringstream ls;
-    if (!next(ls)) return fail("empty");
-    std::string head;
-    ls >> head;
-    if (head.size() < 3 || head.compare(head.size() - 3, 3, "OFF") != 0) {
-      return fail("the first line must be 'OFF', got '" + head.substr(0, 40) + "'");
     }
-    long nv = -1, nf = -1, ne = 0;
-    if (!(ls >> nv)) {
-      if (!next(ls)) return fail("no vertex and face counts");
-      ls >> nv;
-    }
-    if (!(ls >> nf >> ne) || nv < 0 || nf < 0) {
-      return fail("the counts must be 'vertices faces edges', whole numbers");
-    }
-    for (long v = 0; v < nv; ++v) {
-      if (!next(ls))
-        return fail("the file ends after " + std::to_string(v) + " of " + std::to_string(nv) +
-                    " vertices");
+  }
+  return {};
+}
+
+/// ASCII STL: solid { facet normal / outer loop / three vertices / endloop / endfacet } endsolid.
+Diagnosis diagnose_stl(std::istream& in) {
+  std::string line;
+  int n = 0;
+  const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
+  // solid { facet normal n n n / outer loop / vertex x3 / endloop / endfacet } endsolid
+  int state = 0, vertices = 0;  // 0 outside solid, 1 in solid, 2 in facet, 3 in loop
+  while (std::getline(in, line)) {
+    ++n;
+    std::istringstream ls(line);
+    std::string kw;
+    if (!(ls >> kw)) continue;
+    if (kw == "solid" && state == 0) {
+      state = 1;
+    } else if (kw == "facet" && state == 1) {
+      std::string normal;
+      if (!(ls >> normal) || normal != "normal" || !finite_numbers(ls, 3)) {
+        return fail("'facet normal' needs three finite numbers");
+      }
+      state = 2;
+    } else if (kw == "outer" && state == 2) {
+      state = 3;
+      vertices = 0;
+    } else if (kw == "vertex" && state == 3) {
       if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
+      ++vertices;
+    } else if (kw == "endloop" && state == 3) {
+      if (vertices != 3) return fail("a facet of " + std::to_string(vertices) + " vertices");
+      state = 2;
+    } else if (kw == "endfacet" && state == 2) {
+      state = 1;
+    } else if (kw == "endsolid" && state == 1) {
+      state = 0;
+    } else {
+      return fail("'" + kw.substr(0, 40) + "' where " +
+                  (state == 0   ? "'solid'"
+                   : state == 1 ? "'facet' or 'endsolid'"
+                   : state == 2 ? "'outer loop' or 'endfacet'"
+                                : "'vertex' or 'endloop'") +
+                  " belongs");
     }
-    for (long f = 0; f < nf; ++f) {
-      if (!next(ls))
-        return fail("the file ends after " + std::to_string(f) + " of " + std::to_string(nf) +
-                    " faces");
-      long k = 0;
-      if (!(ls >> k) || k < 3) return fail("a face starts with its corner count, at least 3");
-      for (long c = 0; c < k; ++c) {
-        long i = -1;
-        if (!(ls >> i)) return fail("a face lists fewer corners than its count");
-        if (i < 0 || i >= nv) {
-          return fail("face corner " + std::to_string(i) + " names no vertex (0 to " +
-                      std::to_string(nv - 1) + ")");
-        }
-      }
-    }
-    return {};
   }
-  if (ext == ".stl") {
-    // solid { facet normal n n n / outer loop / vertex x3 / endloop / endfacet } endsolid
-    int state = 0, vertices = 0;  // 0 outside solid, 1 in solid, 2 in facet, 3 in loop
-    while (std::getline(in, line)) {
-      ++n;
-      std::istringstream ls(line);
-      std::string kw;
-      if (!(ls >> kw)) continue;
-      if (kw == "solid" && state == 0) {
-        state = 1;
-      } else if (kw == "facet" && state == 1) {
-        std::string normal;
-        if (!(ls >> normal) || normal != "normal" || !finite_numbers(ls, 3)) {
-          return fail("'facet normal' needs three finite numbers");
-        }
-        state = 2;
-      } else if (kw == "outer" && state == 2) {
-        state = 3;
-        vertices = 0;
-      } else if (kw == "vertex" && state == 3) {
-        if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
-        ++vertices;
-      } else if (kw == "endloop" && state == 3) {
-        if (vertices != 3) return fail("a facet of " + std::to_string(vertices) + " vertices");
-        state = 2;
-      } else if (kw == "endfacet" && state == 2) {
-        state = 1;
-      } else if (kw == "endsolid" && state == 1) {
-        state = 0;
-      } else {
-        return fail("'" + kw.substr(0, 40) + "' where " +
-                    (state == 0   ? "'solid'"
-                     : state == 1 ? "'facet' or 'endsolid'"
-                     : state == 2 ? "'outer loop' or 'endfacet'"
-                                  : "'vertex' or 'endloop'") +
-                    " belongs");
-      }
-    }
-    if (state != 0) return fail("the file ends inside a solid (no 'endsolid')");
-    return {};
+  if (state != 0) return fail("the file ends inside a solid (no 'endsolid')");
+  return {};
+}
+
+/// PLY: the header, up to its end (the body is CGAL's to read).
+Diagnosis diagnose_ply(std::istream& in) {
+  std::string line;
+  int n = 0;
+  const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
+  if (!std::getline(in, line) || (++n, line.rfind("ply", 0) != 0)) {
+    return fail("the first line must be 'ply'");
   }
-  if (ext == ".ply") {
-    if (!std::getline(in, line) || (++n, line.rfind("ply", 0) != 0)) {
-      return fail("the first line must be 'ply'");
-    }
-    bool format = false;
-    while (std::getline(in, line)) {
-      ++n;
-      std::istringstream ls(line);
-      std::string kw;
-      ls >> kw;
-      if (kw == "format") {
-        std::string f;
-        ls >> f;
-        if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian") {
-          return fail("format '" + f.substr(0, 40) + "' is no PLY format");
-        }
-        format = true;
-      } else if (kw == "end_header") {
-        if (!format) return fail("a header without its 'format' line");
-        return {};
-      } else if (kw != "element" && kw != "property" && kw != "comment" && kw != "obj_info" &&
-                 !kw.empty()) {
-        return fail("'" + kw.substr(0, 40) + "' is no PLY header line");
+  bool format = false;
+  while (std::getline(in, line)) {
+    ++n;
+    std::istringstream ls(line);
+    std::string kw;
+    ls >> kw;
+    if (kw == "format") {
+      std::string f;
+      ls >> f;
+      if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian") {
+        return fail("format '" + f.substr(0, 40) + "' is no PLY format");
       }
+      format = true;
+    } else if (kw == "end_header") {
+      if (!format) return fail("a header without its 'format' line");
+      return {};
+    } else if (kw != "element" && kw != "property" && kw != "comment" && kw != "obj_info" &&
+               !kw.empty()) {
+      return fail("'" + kw.substr(0, 40) + "' is no PLY header line");
     }
-    return fail("the header has no 'end_header'");
   }
+  return fail("the header has no 'end_header'");
+}
+
+Diagnosis diagnose_text_mesh(const std::string& path, const std::string& ext) {
+  std::ifstream in(path, std::ios::binary);
+  if (ext == ".obj") return diagnose_obj(in);
+  if (ext == ".off") return diagnose_off(in);
+  if (ext == ".stl") return diagnose_stl(in);
+  if (ext == ".ply") return diagnose_ply(in);
   return {};
 }
 

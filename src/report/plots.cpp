@@ -58,140 +58,178 @@ constexpr double kW = 960, kH = 360, kL = 80, kR = 200, kT = 40, kB = 55;
 
 }  // namespace
 
-std::string svg_line_plot(const LinePlot& plot) {
-  const double pw = kW - kL - kR, ph = kH - kT - kB;
-  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
-  for (const PlotSeries& s : plot.series) {
-    for (double x : s.x) x0 = std::min(x0, x), x1 = std::max(x1, x);
-    for (double y : s.y) {
-      if (!std::isfinite(y)) continue;
-      y0 = std::min(y0, y), y1 = std::max(y1, y);
-    }
-  }
-  if (!(x1 > x0)) x0 = std::isfinite(x0) ? x0 - 1 : 0, x1 = std::isfinite(x1) ? x1 + 1 : 1;
-  if (!std::isfinite(y0)) y0 = 0, y1 = 1;
-  // Log axis: decades from the largest value down to 1e-4 of it at most.
-  double floor_y = 0.0;
-  if (plot.log_y) {
-    floor_y = y1 > 0 ? std::max(y1 * 1e-4, y0 > 0 ? y0 : 0.0) : 1.0;
-    y0 = std::floor(std::log10(floor_y));
-    y1 = std::ceil(std::log10(std::max(y1, floor_y * 10)));
-  } else {
-    if (!(y1 > y0)) y0 -= 1, y1 += 1;
-    const double pad = 0.05 * (y1 - y0);
-    y0 -= pad, y1 += pad;
-  }
-  const auto ty = [&](double y) {
-    if (plot.log_y) y = std::log10(std::max(y, floor_y));
-    return kT + ph * (1.0 - (y - y0) / (y1 - y0));
-  };
-  const auto tx = [&](double x) { return kL + pw * (x - x0) / (x1 - x0); };
+namespace {
 
-  std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + num(kW) + "\" height=\"" + num(kH) +
-         "\" viewBox=\"0 0 " + num(kW) + " " + num(kH) +
-         "\" font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n";
-  out += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  out += "<text x=\"" + num(kL) + "\" y=\"24\" font-size=\"15\" font-weight=\"bold\">" +
-         esc(plot.title) + "</text>\n";
-  // Grid and ticks.
-  double xs = 1, ys = 1;
-  for (double v : nice_ticks(x0, x1, 8, xs)) {
-    out += "<line x1=\"" + num(tx(v)) + "\" y1=\"" + num(kT) + "\" x2=\"" + num(tx(v)) +
-           "\" y2=\"" + num(kT + ph) + "\" stroke=\"#e6e6e6\"/>\n";
-    out += "<text x=\"" + num(tx(v)) + "\" y=\"" + num(kT + ph + 16) +
-           "\" text-anchor=\"middle\">" + tick_label(v, xs) + "</text>\n";
+/// One line plot drawn: its ranges (a log axis in decades), the transform to the page, then
+/// header, grid and ticks, markers, series and frame with its legend.
+class LinePlotSvg {
+ public:
+  explicit LinePlotSvg(const LinePlot& plot) : plot_(plot) { ranges(); }
+
+  std::string draw() {
+    out_ = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+    out_ += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + num(kW) + "\" height=\"" +
+            num(kH) + "\" viewBox=\"0 0 " + num(kW) + " " + num(kH) +
+            "\" font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n";
+    out_ += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+    out_ += "<text x=\"" + num(kL) + "\" y=\"24\" font-size=\"15\" font-weight=\"bold\">" +
+            esc(plot_.title) + "</text>\n";
+    grid();
+    markers();
+    series();
+    frame();
+    out_ += "</svg>\n";
+    return out_;
   }
-  std::vector<double> yt;
-  if (plot.log_y) {
-    for (double e = y0; e <= y1 + 1e-9; e += 1) yt.push_back(e);
-  } else {
-    yt = nice_ticks(y0, y1, 6, ys);
-  }
-  for (double v : yt) {
-    const double py = plot.log_y ? kT + ph * (1.0 - (v - y0) / (y1 - y0)) : ty(v);
-    out += "<line x1=\"" + num(kL) + "\" y1=\"" + num(py) + "\" x2=\"" + num(kL + pw) + "\" y2=\"" +
-           num(py) + "\" stroke=\"#e6e6e6\"/>\n";
-    const std::string label =
-        plot.log_y ? tick_label(std::pow(10.0, v), std::pow(10.0, v)) : tick_label(v, ys);
-    out += "<text x=\"" + num(kL - 6) + "\" y=\"" + num(py + 4) + "\" text-anchor=\"end\">" +
-           label + "</text>\n";
-  }
-  // Markers (segment boundaries), under the lines: full-height lines when they are few,
-  // else ticks along the top edge (hundreds of lines would hide the curves).
-  const bool few_markers = plot.markers_x.size() <= 40;
-  for (double m : plot.markers_x) {
-    out += "<line x1=\"" + num(tx(m)) + "\" y1=\"" + num(kT) + "\" x2=\"" + num(tx(m)) +
-           "\" y2=\"" + num(few_markers ? kT + ph : kT + 10) +
-           "\" stroke=\"#e67e22\" stroke-width=\"0.8\"" +
-           (few_markers ? " stroke-opacity=\"0.5\"" : "") + "/>\n";
-  }
-  // Series, reduced to min and max per pixel column.
-  for (const PlotSeries& s : plot.series) {
-    std::string pts;
-    const std::size_t n = std::min(s.x.size(), s.y.size());
-    std::size_t i = 0;
-    while (i < n) {
-      const int col = static_cast<int>(tx(s.x[i]));
-      std::size_t lo = i, hi = i, e = i;
-      while (e < n && static_cast<int>(tx(s.x[e])) == col) {
-        if (s.y[e] < s.y[lo]) lo = e;
-        if (s.y[e] > s.y[hi]) hi = e;
-        ++e;
+
+ private:
+  static constexpr double kPw = kW - kL - kR, kPh = kH - kT - kB;
+
+  void ranges() {
+    x0_ = std::numeric_limits<double>::infinity(), x1_ = -x0_, y0_ = x0_, y1_ = -x0_;
+    for (const PlotSeries& s : plot_.series) {
+      for (double x : s.x) x0_ = std::min(x0_, x), x1_ = std::max(x1_, x);
+      for (double y : s.y) {
+        if (!std::isfinite(y)) continue;
+        y0_ = std::min(y0_, y), y1_ = std::max(y1_, y);
       }
-      for (std::size_t k : {i, std::min(lo, hi), std::max(lo, hi), e - 1}) {
-        pts += num(tx(s.x[k])) + "," + num(ty(s.y[k])) + " ";
-      }
-      i = e;
     }
-    out += "<polyline fill=\"none\" stroke=\"" + s.colour + "\" stroke-width=\"1.4\"" +
-           (s.dashed ? " stroke-dasharray=\"5,3\"" : "") + " points=\"" + pts + "\"/>\n";
+    if (!(x1_ > x0_))
+      x0_ = std::isfinite(x0_) ? x0_ - 1 : 0, x1_ = std::isfinite(x1_) ? x1_ + 1 : 1;
+    if (!std::isfinite(y0_)) y0_ = 0, y1_ = 1;
+    // Log axis: decades from the largest value down to 1e-4 of it at most.
+    floor_y_ = 0.0;
+    if (plot_.log_y) {
+      floor_y_ = y1_ > 0 ? std::max(y1_ * 1e-4, y0_ > 0 ? y0_ : 0.0) : 1.0;
+      y0_ = std::floor(std::log10(floor_y_));
+      y1_ = std::ceil(std::log10(std::max(y1_, floor_y_ * 10)));
+    } else {
+      if (!(y1_ > y0_)) y0_ -= 1, y1_ += 1;
+      const double pad = 0.05 * (y1_ - y0_);
+      y0_ -= pad, y1_ += pad;
+    }
   }
-  // Frame, axis labels, legend.
-  out += "<rect x=\"" + num(kL) + "\" y=\"" + num(kT) + "\" width=\"" + num(pw) + "\" height=\"" +
-         num(ph) + "\" fill=\"none\" stroke=\"#444\"/>\n";
-  out += "<text x=\"" + num(kL + pw / 2) + "\" y=\"" + num(kH - 12) + "\" text-anchor=\"middle\">" +
-         esc(plot.x_label) + "</text>\n";
-  out += "<text transform=\"translate(18," + num(kT + ph / 2) +
-         ") rotate(-90)\" text-anchor=\"middle\">" + esc(plot.y_label) + "</text>\n";
-  double ly = kT + 10;
-  const double lx = kL + pw + 16;
-  for (const PlotSeries& s : plot.series) {
-    out += "<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 28) + "\" y2=\"" +
-           num(ly) + "\" stroke=\"" + s.colour + "\" stroke-width=\"2\"" +
-           (s.dashed ? " stroke-dasharray=\"5,3\"" : "") + "/>\n";
-    out +=
-        "<text x=\"" + num(lx + 34) + "\" y=\"" + num(ly + 4) + "\">" + esc(s.label) + "</text>\n";
-    ly += 20;
+
+  double ty(double y) const {
+    if (plot_.log_y) y = std::log10(std::max(y, floor_y_));
+    return kT + kPh * (1.0 - (y - y0_) / (y1_ - y0_));
   }
-  if (!plot.markers_x.empty()) {
-    out += "<line x1=\"" + num(lx + 14) + "\" y1=\"" + num(ly - 6) + "\" x2=\"" + num(lx + 14) +
-           "\" y2=\"" + num(ly + 6) + "\" stroke=\"#e67e22\" stroke-width=\"2\"/>\n";
-    out += "<text x=\"" + num(lx + 34) + "\" y=\"" + num(ly + 4) + "\">" + esc(plot.markers_label) +
-           "</text>\n";
+  double tx(double x) const { return kL + kPw * (x - x0_) / (x1_ - x0_); }
+
+  void grid() {
+    // Grid and ticks.
+    double xs = 1, ys = 1;
+    for (double v : nice_ticks(x0_, x1_, 8, xs)) {
+      out_ += "<line x1=\"" + num(tx(v)) + "\" y1=\"" + num(kT) + "\" x2=\"" + num(tx(v)) +
+              "\" y2=\"" + num(kT + kPh) + "\" stroke=\"#e6e6e6\"/>\n";
+      out_ += "<text x=\"" + num(tx(v)) + "\" y=\"" + num(kT + kPh + 16) +
+              "\" text-anchor=\"middle\">" + tick_label(v, xs) + "</text>\n";
+    }
+    std::vector<double> yt;
+    if (plot_.log_y) {
+      for (double e = y0_; e <= y1_ + 1e-9; e += 1) yt.push_back(e);
+    } else {
+      yt = nice_ticks(y0_, y1_, 6, ys);
+    }
+    for (double v : yt) {
+      const double py = plot_.log_y ? kT + kPh * (1.0 - (v - y0_) / (y1_ - y0_)) : ty(v);
+      out_ += "<line x1=\"" + num(kL) + "\" y1=\"" + num(py) + "\" x2=\"" + num(kL + kPw) +
+              "\" y2=\"" + num(py) + "\" stroke=\"#e6e6e6\"/>\n";
+      const std::string label =
+          plot_.log_y ? tick_label(std::pow(10.0, v), std::pow(10.0, v)) : tick_label(v, ys);
+      out_ += "<text x=\"" + num(kL - 6) + "\" y=\"" + num(py + 4) + "\" text-anchor=\"end\">" +
+              label + "</text>\n";
+    }
   }
-  out += "</svg>\n";
-  return out;
+
+  void markers() {
+    // Markers (segment boundaries), under the lines: full-height lines when they are few,
+    // else ticks along the top edge (hundreds of lines would hide the curves).
+    const bool few_markers = plot_.markers_x.size() <= 40;
+    for (double m : plot_.markers_x) {
+      out_ += "<line x1=\"" + num(tx(m)) + "\" y1=\"" + num(kT) + "\" x2=\"" + num(tx(m)) +
+              "\" y2=\"" + num(few_markers ? kT + kPh : kT + 10) +
+              "\" stroke=\"#e67e22\" stroke-width=\"0.8\"" +
+              (few_markers ? " stroke-opacity=\"0.5\"" : "") + "/>\n";
+    }
+  }
+
+  void series() {
+    // Series, reduced to min and max per pixel column.
+    for (const PlotSeries& s : plot_.series) {
+      std::string pts;
+      const std::size_t n = std::min(s.x.size(), s.y.size());
+      std::size_t i = 0;
+      while (i < n) {
+        const int col = static_cast<int>(tx(s.x[i]));
+        std::size_t lo = i, hi = i, e = i;
+        while (e < n && static_cast<int>(tx(s.x[e])) == col) {
+          if (s.y[e] < s.y[lo]) lo = e;
+          if (s.y[e] > s.y[hi]) hi = e;
+          ++e;
+        }
+        for (std::size_t k : {i, std::min(lo, hi), std::max(lo, hi), e - 1}) {
+          pts += num(tx(s.x[k])) + "," + num(ty(s.y[k])) + " ";
+        }
+        i = e;
+      }
+      out_ += "<polyline fill=\"none\" stroke=\"" + s.colour + "\" stroke-width=\"1.4\"" +
+              (s.dashed ? " stroke-dasharray=\"5,3\"" : "") + " points=\"" + pts + "\"/>\n";
+    }
+  }
+
+  void frame() {
+    // Frame, axis labels, legend.
+    out_ += "<rect x=\"" + num(kL) + "\" y=\"" + num(kT) + "\" width=\"" + num(kPw) +
+            "\" height=\"" + num(kPh) + "\" fill=\"none\" stroke=\"#444\"/>\n";
+    out_ += "<text x=\"" + num(kL + kPw / 2) + "\" y=\"" + num(kH - 12) +
+            "\" text-anchor=\"middle\">" + esc(plot_.x_label) + "</text>\n";
+    out_ += "<text transform=\"translate(18," + num(kT + kPh / 2) +
+            ") rotate(-90)\" text-anchor=\"middle\">" + esc(plot_.y_label) + "</text>\n";
+    double ly = kT + 10;
+    const double lx = kL + kPw + 16;
+    for (const PlotSeries& s : plot_.series) {
+      out_ += "<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 28) +
+              "\" y2=\"" + num(ly) + "\" stroke=\"" + s.colour + "\" stroke-width=\"2\"" +
+              (s.dashed ? " stroke-dasharray=\"5,3\"" : "") + "/>\n";
+      out_ += "<text x=\"" + num(lx + 34) + "\" y=\"" + num(ly + 4) + "\">" + esc(s.label) +
+              "</text>\n";
+      ly += 20;
+    }
+    if (!plot_.markers_x.empty()) {
+      out_ += "<line x1=\"" + num(lx + 14) + "\" y1=\"" + num(ly - 6) + "\" x2=\"" + num(lx + 14) +
+              "\" y2=\"" + num(ly + 6) + "\" stroke=\"#e67e22\" stroke-width=\"2\"/>\n";
+      out_ += "<text x=\"" + num(lx + 34) + "\" y=\"" + num(ly + 4) + "\">" +
+              esc(plot_.markers_label) + "</text>\n";
+    }
+  }
+
+  const LinePlot& plot_;
+  double x0_ = 0.0, x1_ = 0.0, y0_ = 0.0, y1_ = 0.0, floor_y_ = 0.0;
+  std::string out_;
+};
+
+}  // namespace
+
+std::string svg_line_plot(const LinePlot& plot) { return LinePlotSvg(plot).draw(); }
+
+namespace {
+
+/// The C-space map's page: a disc of radius kMapR about (kMapX, kMapY), the tilt as radius.
+constexpr double kMapW = 640, kMapH = 620, kMapX = 320, kMapY = 310, kMapR = 220;
+
+/// "x,y" of a tilt and yaw on the map's disc.
+std::string map_xy(double tilt_deg, double yaw_deg) {
+  const double r = kMapR * tilt_deg / 90.0, b = deg_to_rad(yaw_deg);
+  return num(kMapX + r * std::cos(b)) + "," + num(kMapY - r * std::sin(b));
 }
 
-std::string svg_cspace_map(const CSpaceMap& map, const std::string& title) {
+/// Cells of the half grid (tilt >= 0), run-length per tilt row: free, or blocked within the
+/// cone (outside it the disc's grey shows).
+std::string map_cells(const CSpaceMap& map) {
   const CSpaceGrid& g = map.grid;
-  const double W = 640, H = 620, cx = 320, cy = 310, R = 220;
-  const auto px = [&](double tilt_deg, double yaw_deg) {
-    const double r = R * tilt_deg / 90.0, b = deg_to_rad(yaw_deg);
-    return num(cx + r * std::cos(b)) + "," + num(cy - r * std::sin(b));
-  };
-  std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + num(W) + "\" height=\"" + num(H) +
-         "\" viewBox=\"0 0 " + num(W) + " " + num(H) +
-         "\" font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n";
-  out += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  out +=
-      "<text x=\"16\" y=\"24\" font-size=\"15\" font-weight=\"bold\">" + esc(title) + "</text>\n";
-  out += "<circle cx=\"" + num(cx) + "\" cy=\"" + num(cy) + "\" r=\"" + num(R) +
-         "\" fill=\"#f2f2f2\" stroke=\"#999\"/>\n";
-  // Cells of the half grid (tilt >= 0), run-length per tilt row: 0 outside the cone, 1 free,
-  // 2 blocked.
+  const auto px = map_xy;
+  std::string out;
   const double cos_dev = std::cos(deg_to_rad(map.max_deviation_deg));
   const double ai = deg_to_rad(map.input_tilt_deg), bi = deg_to_rad(map.input_yaw_deg);
   const double cell = g.cell_deg();
@@ -221,7 +259,14 @@ std::string svg_cspace_map(const CSpaceMap& map, const std::string& title) {
       j = e;
     }
   }
-  // Tilt rings and yaw spokes, labelled.
+  return out;
+}
+
+/// Tilt rings and yaw spokes, labelled.
+std::string map_rings() {
+  const double cx = kMapX, cy = kMapY, R = kMapR;
+  const auto px = map_xy;
+  std::string out;
   for (double t : {30.0, 60.0, 90.0}) {
     out += "<circle cx=\"" + num(cx) + "\" cy=\"" + num(cy) + "\" r=\"" + num(R * t / 90.0) +
            "\" fill=\"none\" stroke=\"#777\" stroke-dasharray=\"3,3\"/>\n";
@@ -245,6 +290,15 @@ std::string svg_cspace_map(const CSpaceMap& map, const std::string& title) {
                            : "middle") +
            "\">" + label + "</text>\n";
   }
+  return out;
+}
+
+/// The input and the output axes, and the legend.
+std::string map_axes_and_legend(const CSpaceMap& map) {
+  const double H = kMapH;
+  const double cell = map.grid.cell_deg();
+  const auto px = map_xy;
+  std::string out;
   // Input and output axes.
   const std::string pin = px(map.input_tilt_deg, map.input_yaw_deg);
   const std::string pout = px(map.output_tilt_deg, map.output_yaw_deg);
@@ -276,6 +330,25 @@ std::string svg_cspace_map(const CSpaceMap& map, const std::string& title) {
       "<text x=\"16\" y=\"44\" fill=\"#555\">seen down the contact normal N: radius = tilt, "
       "angle = yaw; cell " +
       num(cell) + "\u00b0</text>\n";
+  return out;
+}
+
+}  // namespace
+
+std::string svg_cspace_map(const CSpaceMap& map, const std::string& title) {
+  const double W = kMapW, H = kMapH, cx = kMapX, cy = kMapY, R = kMapR;
+  std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + num(W) + "\" height=\"" + num(H) +
+         "\" viewBox=\"0 0 " + num(W) + " " + num(H) +
+         "\" font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n";
+  out += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  out +=
+      "<text x=\"16\" y=\"24\" font-size=\"15\" font-weight=\"bold\">" + esc(title) + "</text>\n";
+  out += "<circle cx=\"" + num(cx) + "\" cy=\"" + num(cy) + "\" r=\"" + num(R) +
+         "\" fill=\"#f2f2f2\" stroke=\"#999\"/>\n";
+  out += map_cells(map);
+  out += map_rings();
+  out += map_axes_and_legend(map);
   out += "</svg>\n";
   return out;
 }

@@ -122,14 +122,18 @@ std::string major_word(const std::string& code, std::string& args) {
   return up;
 }
 
-std::vector<LogicalLine> split_logical(const std::string& text, const std::string& source,
-                                       std::string& line_end, bool& final_line_end) {
+namespace {
+
+/// The file's physical lines: any of CR, LF and CRLF ends one (a file may mix them);
+/// `line_end` the one it uses throughout (LF where mixed), `final_line_end` whether its last
+/// line has one. A NUL byte is refused (no CL text file).
+std::vector<std::string> physical_lines(const std::string& text, const std::string& source,
+                                        std::string& line_end, bool& final_line_end) {
   std::vector<std::string> physical;
   line_end = "\n";
   bool saw_crlf = false;
   std::size_t start = 0;
   bool saw_lf = false, saw_cr = false;
-  // Any of CR, LF and CRLF ends a line (a file may mix them).
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (text[i] == '\0') {
       const int line = static_cast<int>(physical.size()) + 1;
@@ -153,87 +157,99 @@ std::vector<LogicalLine> split_logical(const std::string& text, const std::strin
   if (saw_crlf && !saw_lf) line_end = "\r\n";
   if (saw_cr && !saw_lf && !saw_crlf) line_end = "\r";
 
+  return physical;
+}
+
+/// A `$$` comment from line i: one ending in `$` continues on the next line (Creo's `$$->
+/// CSYS / 1.0, 0.0,  $` and its numbers below) unless that line is a record or a comment of
+/// its own: a banner of `$$$$$$$$` or a sentence ending in `US$` before a GOTO joined the GOTO
+/// to the comment, and it vanished. Returns its last line's index.
+std::size_t read_comment(const std::vector<std::string>& physical, std::size_t i, LogicalLine& ll) {
+  const std::string first = trim(physical[i]);
+  ll.kind = RecordKind::Comment;
+  std::string cur = first;
+  while (cur.size() > 2 && cur.back() == '$' && i + 1 < physical.size() &&
+         !starts_record(physical[i + 1])) {
+    ++i;
+    ll.raw += "\n" + physical[i];
+    cur = trim(physical[i]);
+  }
+  return i;
+}
+
+/// Text records (PPRINT, PARTNO, INSERT): `$$` in their text is text.
+bool is_text_record(const std::string& first) {
+  std::string word;
+  for (char ch : first) {
+    if (!std::isalpha(static_cast<unsigned char>(ch))) break;
+    word += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  }
+  const std::size_t after = first.find_first_not_of(" \t", word.size());
+  return (word == "PPRINT" || word == "PARTNO" || word == "INSERT") &&
+         (after == std::string::npos || first[after] == '/' || word == "PARTNO");
+}
+
+/// A record from line i, its `$` continuations joined (the next line follows with no
+/// separator: it may split a number); a text record's `$` at the end continues it (CATIA's
+/// `PPRINT/(=====$` then `=====)`) unless the next line is a record of its own (`PPRINT/TOOL
+/// COST 12 US$` then `GOTO/50,0,5`: the GOTO vanished). Returns its last line's index.
+std::size_t read_record(const std::vector<std::string>& physical, std::size_t i,
+                        const std::string& source, LogicalLine& ll) {
+  const bool text_record = is_text_record(trim(physical[i]));
+  std::string code;
+  std::string piece = physical[i];
+  for (;;) {
+    const std::size_t comment = text_record ? std::string::npos : piece.find("$$");
+    if (comment != std::string::npos) piece = piece.substr(0, comment);
+    std::string t = piece;
+    while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
+    if (!t.empty() && t.back() == '$' &&
+        !(text_record && i + 1 < physical.size() && starts_record(physical[i + 1]))) {
+      // `$` continuation: the next line follows with no separator (it may split a number).
+      t.pop_back();
+      code += t;
+      if (i + 1 >= physical.size()) {
+        throw InputError(source, static_cast<int>(i) + 1,
+                         "record ends in a '$' continuation but the file ends");
+      }
+      ++i;
+      ll.raw += "\n" + physical[i];
+      piece = physical[i];
+      continue;
+    }
+    code += piece;
+    break;
+  }
+  ll.code = trim(code);
+  return i;
+}
+
+}  // namespace
+
+std::vector<LogicalLine> split_logical(const std::string& text, const std::string& source,
+                                       std::string& line_end, bool& final_line_end) {
+  const std::vector<std::string> physical = physical_lines(text, source, line_end, final_line_end);
   std::vector<LogicalLine> out;
-  std::size_t i = 0;
-  while (i < physical.size()) {
+  for (std::size_t i = 0; i < physical.size(); ++i) {
     LogicalLine ll;
     ll.line = static_cast<int>(i) + 1;
     ll.raw = physical[i];
     const std::string first = trim(physical[i]);
-    // A DOS end-of-file mark (Ctrl-Z) alone on the last line: nothing to read, kept for the
-    // round trip.
     if (first.empty() || (first == "\x1a" && i + 1 == physical.size())) {
+      // A DOS end-of-file mark (Ctrl-Z) alone on the last line: nothing to read, kept for
+      // the round trip.
       ll.kind = RecordKind::Blank;
-      out.push_back(ll);
-      ++i;
-      continue;
-    }
-    if (first.rfind("$$", 0) == 0) {
-      // A comment; one ending in `$` continues on the next line (Creo's `$$-> CSYS / 1.0,
-      // 0.0,  $` and its numbers below) unless that line is a record or a comment of its own:
-      // a banner of `$$$$$$$$` or a sentence ending in `US$` before a GOTO joined the GOTO to
-      // the comment, and it vanished.
-      ll.kind = RecordKind::Comment;
-      std::string cur = first;
-      while (cur.size() > 2 && cur.back() == '$' && i + 1 < physical.size() &&
-             !starts_record(physical[i + 1])) {
-        ++i;
-        ll.raw += "\n" + physical[i];
-        cur = trim(physical[i]);
-      }
-      out.push_back(ll);
-      ++i;
-      continue;
-    }
-    if (first.size() >= 6 && upper(first.substr(0, 6)) == "REMARK" &&
-        (first.size() == 6 || std::isspace(static_cast<unsigned char>(first[6])))) {
+    } else if (first.rfind("$$", 0) == 0) {
+      i = read_comment(physical, i, ll);
+    } else if (first.size() >= 6 && upper(first.substr(0, 6)) == "REMARK" &&
+               (first.size() == 6 || std::isspace(static_cast<unsigned char>(first[6])))) {
       // APT's comment statement (ANSI X3.37: REMARK and its text are not processed); Creo's
       // GPOST writes it on line 2.
       ll.kind = RecordKind::Comment;
-      out.push_back(ll);
-      ++i;
-      continue;
+    } else {
+      i = read_record(physical, i, source, ll);
     }
-    std::string code;
-    std::string piece = physical[i];
-    // Text records (PPRINT, PARTNO, INSERT): `$$` in their text is text; a `$` at the end
-    // continues them (CATIA's `PPRINT/(=====$` then `=====)`) unless the next line is a record
-    // of its own (`PPRINT/TOOL COST 12 US$` then `GOTO/50,0,5`: the GOTO vanished).
-    const bool text_record = [&] {
-      std::string word;
-      for (char ch : first) {
-        if (!std::isalpha(static_cast<unsigned char>(ch))) break;
-        word += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
-      }
-      const std::size_t after = first.find_first_not_of(" \t", word.size());
-      return (word == "PPRINT" || word == "PARTNO" || word == "INSERT") &&
-             (after == std::string::npos || first[after] == '/' || word == "PARTNO");
-    }();
-    for (;;) {
-      const std::size_t comment = text_record ? std::string::npos : piece.find("$$");
-      if (comment != std::string::npos) piece = piece.substr(0, comment);
-      std::string t = piece;
-      while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
-      if (!t.empty() && t.back() == '$' &&
-          !(text_record && i + 1 < physical.size() && starts_record(physical[i + 1]))) {
-        // `$` continuation: the next line follows with no separator (it may split a number).
-        t.pop_back();
-        code += t;
-        if (i + 1 >= physical.size()) {
-          throw InputError(source, static_cast<int>(i) + 1,
-                           "record ends in a '$' continuation but the file ends");
-        }
-        ++i;
-        ll.raw += "\n" + physical[i];
-        piece = physical[i];
-        continue;
-      }
-      code += piece;
-      break;
-    }
-    ll.code = trim(code);
     out.push_back(ll);
-    ++i;
   }
   return out;
 }

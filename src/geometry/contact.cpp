@@ -112,75 +112,76 @@ Vec3d normal_towards(const Part& part, const Vec3d& centre, const Part::Closest&
 
 }  // namespace
 
-std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
-                                           double ball_radius_mm, const ContactOptions& options) {
-  const double R = ball_radius_mm;
-  const double tol = contact_tolerance_mm(part, options, op.cam_tolerance_mm);
-  const double agree_cos = std::cos(deg_to_rad(options.fit_normal_agreement_deg));
-  const std::size_t n = op.points.size();
-  std::vector<ContactPoint> out(n);
-  // Contact point, normal and curvature per point: independent, so in parallel.
-  detail::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-    const CLPointd& p = op.points[i];
-    const Vec3d centre = p.tip_mm + R * p.axis;
-    ContactPoint& c = out[i];
-    // The exact answer: the nearest point of the mesh, the normal towards the centre.
-    const Part::Closest near = part.closest(centre);
-    c.cc_mm = near.point;
-    c.gap_mm = near.distance_mm - R;
-    if (c.gap_mm > tol) {
-      c.state = ContactState::InAir;
-      return;
-    }
-    c.state = c.gap_mm < -tol ? ContactState::Gouging : ContactState::Touching;
-    const Vec3d to_centre = centre - near.point;
-    if (to_centre.norm() > 1e-9) {
-      c.normal = to_centre.normalized();
-    } else {
-      // The centre on the mesh (a ball cut in by its radius): the facet's normal, towards the
-      // tool.
-      const auto& f = part.mesh().faces[static_cast<std::size_t>(near.face)];
-      const auto& V = part.mesh().vertices;
-      Vec3d fn = (V[static_cast<std::size_t>(f[1])] - V[static_cast<std::size_t>(f[0])])
-                     .cross(V[static_cast<std::size_t>(f[2])] - V[static_cast<std::size_t>(f[0])])
-                     .normalized();
-      if (fn.dot(p.axis) < 0.0) fn = -fn;
-      c.normal = fn;
-    }
-    // The designed surface's estimate: the point of the mesh whose smooth normal points at
-    // the centre (measured on 0.5 mm meshes of unseen heightfields against their analytic
-    // normals: the facets' 3.45 deg at most, 0.41 on average; the smooth normal at the exact
-    // point 1.89 / 0.13; where it points at the centre 0.29 / 0.035).
-    const Part::SurfaceNormal surface = part.surface_normal(near, c.normal);
-    c.surface_normal = surface.normal;
-    c.surface_cc_mm = c.cc_mm;
-    if (!surface.on_feature) {
-      c.surface_normal = normal_towards(part, centre, near, c.surface_normal);
-      c.surface_cc_mm = centre - R * c.surface_normal;
-    }
-    c.place = !surface.on_feature                      ? SurfacePlace::Smooth
-              : surface.where == Part::Feature::Vertex ? SurfacePlace::Corner
-                                                       : SurfacePlace::Edge;
-    c.normal_uncertainty_rad = angle_between(c.normal, c.surface_normal);
-    // Curvature: the local fit only where it agrees with the surface's contact, else the
-    // mesh's.
-    const LocalFit fit = part.fit_towards(centre, options.fit_neighbours);
-    const Vec3d fit_normal = unit_normal(fit.jet);
-    if (fit.samples > 0 && (fit.jet.p - c.surface_cc_mm).norm() <= tol && fit_normal.allFinite() &&
-        fit_normal.dot(c.surface_normal) >= agree_cos) {
-      c.curvature = principal_curvatures(fit.jet);
-      c.curvature_from = CurvatureSource::Fit;
-    } else {
-      const Part::MeshCurvature mc = part.mesh_curvature(near, c.surface_normal);
-      c.curvature = mc.curvature;
-      c.curvature_from = mc.feature == Part::Feature::Facet  ? CurvatureSource::Facet
-                         : mc.feature == Part::Feature::Edge ? CurvatureSource::Edge
-                                                             : CurvatureSource::Vertex;
-    }
-    c.local_gouge = c.curvature.k1 > 0.0 && 1.0 / c.curvature.k1 < R;
-  });
-  // Feed direction from the neighbouring contact points of the same run, projected on the
-  // tangent plane; then K and the tilt and yaw of the input axis.
+namespace {
+
+/// One point's contact: the nearest point of the mesh (the exact answer) and its normal
+/// towards the centre, the designed surface's estimate, the curvature; in the air beyond the
+/// tolerance `tol`.
+ContactPoint contact_of(const Part& part, const CLPointd& p, double R, double tol, double agree_cos,
+                        const ContactOptions& options) {
+  const Vec3d centre = p.tip_mm + R * p.axis;
+  ContactPoint c;
+  // The exact answer: the nearest point of the mesh, the normal towards the centre.
+  const Part::Closest near = part.closest(centre);
+  c.cc_mm = near.point;
+  c.gap_mm = near.distance_mm - R;
+  if (c.gap_mm > tol) {
+    c.state = ContactState::InAir;
+    return c;
+  }
+  c.state = c.gap_mm < -tol ? ContactState::Gouging : ContactState::Touching;
+  const Vec3d to_centre = centre - near.point;
+  if (to_centre.norm() > 1e-9) {
+    c.normal = to_centre.normalized();
+  } else {
+    // The centre on the mesh (a ball cut in by its radius): the facet's normal, towards the
+    // tool.
+    const auto& f = part.mesh().faces[static_cast<std::size_t>(near.face)];
+    const auto& V = part.mesh().vertices;
+    Vec3d fn = (V[static_cast<std::size_t>(f[1])] - V[static_cast<std::size_t>(f[0])])
+                   .cross(V[static_cast<std::size_t>(f[2])] - V[static_cast<std::size_t>(f[0])])
+                   .normalized();
+    if (fn.dot(p.axis) < 0.0) fn = -fn;
+    c.normal = fn;
+  }
+  // The designed surface's estimate: the point of the mesh whose smooth normal points at
+  // the centre (measured on 0.5 mm meshes of unseen heightfields against their analytic
+  // normals: the facets' 3.45 deg at most, 0.41 on average; the smooth normal at the exact
+  // point 1.89 / 0.13; where it points at the centre 0.29 / 0.035).
+  const Part::SurfaceNormal surface = part.surface_normal(near, c.normal);
+  c.surface_normal = surface.normal;
+  c.surface_cc_mm = c.cc_mm;
+  if (!surface.on_feature) {
+    c.surface_normal = normal_towards(part, centre, near, c.surface_normal);
+    c.surface_cc_mm = centre - R * c.surface_normal;
+  }
+  c.place = !surface.on_feature                      ? SurfacePlace::Smooth
+            : surface.where == Part::Feature::Vertex ? SurfacePlace::Corner
+                                                     : SurfacePlace::Edge;
+  c.normal_uncertainty_rad = angle_between(c.normal, c.surface_normal);
+  // Curvature: the local fit only where it agrees with the surface's contact, else the
+  // mesh's.
+  const LocalFit fit = part.fit_towards(centre, options.fit_neighbours);
+  const Vec3d fit_normal = unit_normal(fit.jet);
+  if (fit.samples > 0 && (fit.jet.p - c.surface_cc_mm).norm() <= tol && fit_normal.allFinite() &&
+      fit_normal.dot(c.surface_normal) >= agree_cos) {
+    c.curvature = principal_curvatures(fit.jet);
+    c.curvature_from = CurvatureSource::Fit;
+  } else {
+    const Part::MeshCurvature mc = part.mesh_curvature(near, c.surface_normal);
+    c.curvature = mc.curvature;
+    c.curvature_from = mc.feature == Part::Feature::Facet  ? CurvatureSource::Facet
+                       : mc.feature == Part::Feature::Edge ? CurvatureSource::Edge
+                                                           : CurvatureSource::Vertex;
+  }
+  c.local_gouge = c.curvature.k1 > 0.0 && 1.0 / c.curvature.k1 < R;
+  return c;
+}
+
+/// Feed direction from the neighbouring contact points of the same run, projected on the
+/// tangent plane; then K and the tilt and yaw of the input axis.
+void contact_frames(const Operationd& op, std::vector<ContactPoint>& out) {
+  const std::size_t n = out.size();
   for (std::size_t i = 0; i < n; ++i) {
     ContactPoint& c = out[i];
     if (c.state != ContactState::Touching) continue;
@@ -205,6 +206,21 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
     c.side = n_s.cross(c.feed_dir);
     tilt_yaw_of(op.points[i].axis, n_s, c.feed_dir, c.tilt_rad, c.yaw_rad);
   }
+}
+
+}  // namespace
+
+std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
+                                           double ball_radius_mm, const ContactOptions& options) {
+  const double tol = contact_tolerance_mm(part, options, op.cam_tolerance_mm);
+  const double agree_cos = std::cos(deg_to_rad(options.fit_normal_agreement_deg));
+  const std::size_t n = op.points.size();
+  std::vector<ContactPoint> out(n);
+  // Contact point, normal and curvature per point: independent, so in parallel.
+  detail::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    out[i] = contact_of(part, op.points[i], ball_radius_mm, tol, agree_cos, options);
+  });
+  contact_frames(op, out);
   return out;
 }
 

@@ -279,6 +279,69 @@ bool read_binary_stl(const std::string& path, std::vector<K::Point_3>& points,
 
 }  // namespace
 
+namespace {
+
+/// Every vertex finite and within +-1e6 mm, every face of three or more vertices it has.
+void check_soup(const std::string& path, const std::vector<K::Point_3>& points,
+                const std::vector<std::vector<std::size_t>>& polygons) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
+      throw InputError(path, 0, "part mesh vertex " + std::to_string(i + 1) + " is not finite");
+    }
+    if (std::max({std::abs(p.x()), std::abs(p.y()), std::abs(p.z())}) > kMaxCoordinateMm) {
+      throw InputError(path, 0,
+                       "part mesh vertex " + std::to_string(i + 1) +
+                           " lies beyond +-1e6 (1 km in mm): not a part on a machine");
+    }
+  }
+  for (std::size_t f = 0; f < polygons.size(); ++f) {
+    if (polygons[f].size() < 3) {
+      throw InputError(path, 0,
+                       "part mesh face " + std::to_string(f + 1) + " has fewer than 3 vertices");
+    }
+    for (std::size_t v : polygons[f]) {
+      if (v >= points.size()) {
+        throw InputError(path, 0,
+                         "part mesh face " + std::to_string(f + 1) + " names a missing vertex");
+      }
+    }
+  }
+}
+
+/// The merged soup as triangles (polygons fanned), slivers of no area dropped and counted.
+TriangleMesh triangles_of(const std::vector<K::Point_3>& points,
+                          const std::vector<std::vector<std::size_t>>& polygons) {
+  TriangleMesh mesh;
+  mesh.vertices.reserve(points.size());
+  Eigen::AlignedBox3d box;
+  for (const auto& p : points) {
+    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+    box.extend(mesh.vertices.back());
+  }
+  const double diag = box.diagonal().norm();
+  const double min_area = 1e-14 * std::max(1.0, diag * diag);
+  for (std::size_t f = 0; f < polygons.size(); ++f) {
+    const auto& poly = polygons[f];
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {  // fan: polygons become triangles
+      const std::array<int, 3> t = {static_cast<int>(poly[0]), static_cast<int>(poly[k]),
+                                    static_cast<int>(poly[k + 1])};
+      const Vec3d& a = mesh.vertices[static_cast<std::size_t>(t[0])];
+      const Vec3d& b = mesh.vertices[static_cast<std::size_t>(t[1])];
+      const Vec3d& c = mesh.vertices[static_cast<std::size_t>(t[2])];
+      if (0.5 * (b - a).cross(c - a).norm() <= min_area) {
+        // A sliver covers no surface: the faces around it hold the part's shape.
+        if (mesh.dropped_degenerate_faces++ == 0) mesh.first_degenerate_mm = a;
+        continue;
+      }
+      mesh.faces.push_back(t);
+    }
+  }
+  return mesh;
+}
+
+}  // namespace
+
 TriangleMesh read_mesh_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -313,57 +376,10 @@ TriangleMesh read_mesh_file(const std::string& path) {
     throw InputError(path, d.line,
                      "part mesh has no faces" + (d.why.empty() ? std::string() : ": " + d.why));
   }
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto& p = points[i];
-    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
-      throw InputError(path, 0, "part mesh vertex " + std::to_string(i + 1) + " is not finite");
-    }
-    if (std::max({std::abs(p.x()), std::abs(p.y()), std::abs(p.z())}) > kMaxCoordinateMm) {
-      throw InputError(path, 0,
-                       "part mesh vertex " + std::to_string(i + 1) +
-                           " lies beyond +-1e6 (1 km in mm): not a part on a machine");
-    }
-  }
-  for (std::size_t f = 0; f < polygons.size(); ++f) {
-    if (polygons[f].size() < 3) {
-      throw InputError(path, 0,
-                       "part mesh face " + std::to_string(f + 1) + " has fewer than 3 vertices");
-    }
-    for (std::size_t v : polygons[f]) {
-      if (v >= points.size()) {
-        throw InputError(path, 0,
-                         "part mesh face " + std::to_string(f + 1) + " names a missing vertex");
-      }
-    }
-  }
+  check_soup(path, points, polygons);
   // An STL is a soup: one copy of a vertex per triangle. Merge exact duplicates.
   CGAL::Polygon_mesh_processing::merge_duplicate_points_in_polygon_soup(points, polygons);
-
-  TriangleMesh mesh;
-  mesh.vertices.reserve(points.size());
-  Eigen::AlignedBox3d box;
-  for (const auto& p : points) {
-    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
-    box.extend(mesh.vertices.back());
-  }
-  const double diag = box.diagonal().norm();
-  const double min_area = 1e-14 * std::max(1.0, diag * diag);
-  for (std::size_t f = 0; f < polygons.size(); ++f) {
-    const auto& poly = polygons[f];
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {  // fan: polygons become triangles
-      const std::array<int, 3> t = {static_cast<int>(poly[0]), static_cast<int>(poly[k]),
-                                    static_cast<int>(poly[k + 1])};
-      const Vec3d& a = mesh.vertices[static_cast<std::size_t>(t[0])];
-      const Vec3d& b = mesh.vertices[static_cast<std::size_t>(t[1])];
-      const Vec3d& c = mesh.vertices[static_cast<std::size_t>(t[2])];
-      if (0.5 * (b - a).cross(c - a).norm() <= min_area) {
-        // A sliver covers no surface: the faces around it hold the part's shape.
-        if (mesh.dropped_degenerate_faces++ == 0) mesh.first_degenerate_mm = a;
-        continue;
-      }
-      mesh.faces.push_back(t);
-    }
-  }
+  TriangleMesh mesh = triangles_of(points, polygons);
   if (mesh.faces.empty()) {
     throw InputError(path, 0,
                      "part mesh: every one of its " +

@@ -108,15 +108,11 @@ class OperationPlanner {
   /// Points and moves of `plan` that hit as the verification judges them (FCL, the same grown
   /// bodies, every point and every move as the machine runs it).
   std::size_t hits(const OptimisedOperation& plan) const {
-    Machine path_machine = run_.machine;
-    if (path_machine.gcode.program.linearise_tolerance_mm > 0.0) {
-      path_machine.gcode.mode = GcodeMode::Tcp;
-    }
     const PosePlan pp = plan_poses(run_.machine.rotary, plan.axes, rapid_into_of(op_), {},
                                    options_.pose_options, plan.preferred);
     if (!pp.ok()) return 0;  // unposable axes are the verification's to report
     const std::vector<char> hit =
-        points_and_moves_hit(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, path_machine,
+        points_and_moves_hit(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, run_.machine,
                              plan.axes, pp.poses, std::vector<char>(op_.points.size(), 1));
     return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
   }

@@ -18,19 +18,21 @@
 namespace taxopt::pipeline {
 
 /// Points of `op` (and the moves into them) whose tool hits the part, among those marked in
-/// `check`, for axes `axes` posed as `poses` (tips from the fixed ball centres); `machine` as
-/// the path is run (machine mode with linearisation runs the straight tip line: pass TCP).
-/// Nothing hits without a model.
+/// `check`, for axes `axes` posed as `poses` (tips from the fixed ball centres), the moves as
+/// `posted_machine` runs them: in machine mode with linearisation the tip runs the straight
+/// line, as in TCP mode. Nothing hits without a model.
 std::vector<char> points_and_moves_hit(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const PartCheck* model,
-                                       const ToolModel* tool, const Machine& machine,
+                                       const ToolModel* tool, const Machine& posted_machine,
                                        const std::vector<Vec3d>& axes,
                                        const std::vector<Posed>& poses,
                                        const std::vector<char>& check) {
   const std::size_t n = op.points.size();
   std::vector<char> hit(n, 0);
   if (!model || !tool) return hit;
+  Machine machine = posted_machine;
+  if (machine.gcode.program.linearise_tolerance_mm > 0.0) machine.gcode.mode = GcodeMode::Tcp;
   std::vector<Vec3d> xyz;
   std::vector<double> a, c;
   for (std::size_t i = 0; i < n; ++i) {
@@ -69,37 +71,22 @@ struct PassRates {
 /// candidate's points that guard_stretches asks for.
 class PassGuard {
  public:
-  PassGuard(const Operationd& op, const std::vector<ContactPoint>& contacts, double ball_radius_mm,
-            const PartCheck* model, const ToolModel* tool, const Machine& machine,
-            const BlockTiming& timing, const PosePlanOptions& pose_options,
-            const GuardReference* reference)
-      : op_(op),
-        contacts_(contacts),
-        ball_radius_mm_(ball_radius_mm),
-        model_(model),
-        tool_(tool),
-        machine_(machine),
-        timing_(timing),
-        pose_options_(pose_options),
-        reference_(reference),
-        n_(op.points.size()),
-        rapid_into_(rapid_into_of(op)),
-        passes_(feed_passes(op)),
-        path_machine_(machine) {
-    for (const CLPointd& p : op.points) in_axes_.push_back(p.axis);
+  PassGuard(const OperationPlanInputs& in, const GuardReference* reference)
+      : reference_(reference),
+        in_(in),
+        n_(in.op.points.size()),
+        rapid_into_(rapid_into_of(in.op)),
+        passes_(feed_passes(in.op)) {
+    for (const CLPointd& p : in.op.points) in_axes_.push_back(p.axis);
     if (reference) {
       in_axes_ = reference->axes;
       in_preferred_ = reference->preferred;
-    }
-    // In machine mode with linearisation the tip runs the straight line as in TCP mode.
-    if (machine.gcode.program.linearise_tolerance_mm > 0.0) {
-      path_machine_.gcode.mode = GcodeMode::Tcp;
     }
   }
 
   StretchGuardResult run(OptimisedOperation& out) {
     const PosePlan in_plan =
-        plan_poses(machine_.rotary, in_axes_, rapid_into_, {}, pose_options_, in_preferred_);
+        plan_poses(in_.machine.rotary, in_axes_, rapid_into_, {}, in_.pose_options, in_preferred_);
     if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n_, KeptWhy::None)};
     const std::vector<char> in_hit = moves_hit(in_axes_, in_plan.poses, std::vector<char>(n_, 1));
     std::vector<char> guarded(passes_.size(), 0);
@@ -125,8 +112,8 @@ class PassGuard {
  private:
   std::vector<char> moves_hit(const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
                               const std::vector<char>& check) const {
-    return points_and_moves_hit(op_, contacts_, ball_radius_mm_, model_, tool_, path_machine_, axes,
-                                poses, check);
+    return points_and_moves_hit(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool,
+                                in_.machine, axes, poses, check);
   }
 
   PassRates rates(const IndexRange& pass, const std::vector<Posed>& poses) const {
@@ -137,7 +124,8 @@ class PassGuard {
     }
     PassRates r{
         rotary_kinematics_from_times(
-            a, c, move_times_s(op_, ball_radius_mm_, machine_.rotary, poses, timing_, pass)),
+            a, c,
+            move_times_s(in_.op, in_.ball_radius_mm, in_.machine.rotary, poses, in_.timing, pass)),
         {}};
     accumulate(r.summary, r.k, c);
     return r;
@@ -163,7 +151,7 @@ class PassGuard {
     StretchVerdicts out{std::vector<PointVerdict>(n_, PointVerdict::Good),
                         std::vector<char>(passes_.size(), 0)};
     const PosePlan plan =
-        plan_poses(machine_.rotary, axes, rapid_into_, {}, pose_options_, preferred_of(why));
+        plan_poses(in_.machine.rotary, axes, rapid_into_, {}, in_.pose_options, preferred_of(why));
     if (!plan.ok()) {
       for (std::size_t i = 0; i < n_; ++i) {
         if (check[i]) out.points[i] = PointVerdict::Hits;
@@ -210,19 +198,11 @@ class PassGuard {
            after.mean_sq_accel() * kRel < before_[q].mean_sq_accel();
   }
 
-  const Operationd& op_;
-  const std::vector<ContactPoint>& contacts_;
-  const double ball_radius_mm_;
-  const PartCheck* model_;
-  const ToolModel* tool_;
-  const Machine& machine_;
-  const BlockTiming& timing_;
-  const PosePlanOptions& pose_options_;
   const GuardReference* reference_;
+  const OperationPlanInputs in_;
   const std::size_t n_;
   const std::vector<bool> rapid_into_;
   const std::vector<IndexRange> passes_;
-  Machine path_machine_;
   std::vector<Vec3d> in_axes_;
   std::vector<std::optional<Posed>> in_preferred_;
   std::vector<std::optional<Posed>> opt_preferred_;
@@ -236,7 +216,7 @@ StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactP
                                 const ToolModel* tool, const Machine& machine,
                                 const BlockTiming& timing, const PosePlanOptions& pose_options,
                                 OptimisedOperation& out, const GuardReference* reference) {
-  return PassGuard(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+  return PassGuard({op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options},
                    reference)
       .run(out);
 }

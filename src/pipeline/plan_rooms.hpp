@@ -78,6 +78,20 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
                                   const PosePlanOptions& pose_options, const PaperOptions& options,
                                   detail::StageProgress& progress);
 
+/// What the planners of one operation work with (the guard, the time objective): its points
+/// and contacts, the ball, the checks' model and judged tool, the machine, the program's block
+/// timing, the pose planner's options.
+struct OperationPlanInputs {
+  const Operationd& op;
+  const std::vector<ContactPoint>& contacts;
+  double ball_radius_mm;
+  const PartCheck* model;
+  const ToolModel* tool;
+  const Machine& machine;
+  const BlockTiming& timing;
+  const PosePlanOptions& pose_options;
+};
+
 std::vector<char> points_and_moves_hit(const Operationd& op,
                                        const std::vector<ContactPoint>& contacts,
                                        double ball_radius_mm, const PartCheck* model,

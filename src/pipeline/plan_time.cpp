@@ -58,24 +58,14 @@ namespace {
 /// schedule runs it, and the choice among them.
 class TimePlanner {
  public:
-  TimePlanner(const Operationd& op, const std::vector<ContactPoint>& contacts,
-              double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-              const Machine& machine, const BlockTiming& timing,
-              const PosePlanOptions& pose_options, const GlobalOptions& options,
-              double fallback_feed, detail::StageProgress& progress)
-      : op_(op),
-        contacts_(contacts),
-        ball_radius_mm_(ball_radius_mm),
-        model_(model),
-        tool_(tool),
-        machine_(machine),
-        timing_(timing),
-        pose_options_(pose_options),
-        options_(options),
+  TimePlanner(const OperationPlanInputs& in, const GlobalOptions& options, double fallback_feed,
+              detail::StageProgress& progress)
+      : options_(options),
         fallback_feed_(fallback_feed),
+        in_(in),
         progress_(progress),
-        rapid_into_(rapid_into_of(op)) {
-    for (const CLPointd& p : op.points) in_axes_.push_back(p.axis);
+        rapid_into_(rapid_into_of(in.op)) {
+    for (const CLPointd& p : in.op.points) in_axes_.push_back(p.axis);
   }
 
   std::string run(OptimisedOperation& out) {
@@ -122,13 +112,13 @@ class TimePlanner {
 
   void refine(const GlobalOptions& options, OptimisedOperation& plan,
               const TimeContext* time = nullptr, const GuardReference* reference = nullptr) {
-    refine_global(op_, contacts_, ball_radius_mm_, model_, tool_, machine_, timing_, pose_options_,
-                  options, plan, progress_, time, reference);
+    refine_global(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool, in_.machine,
+                  in_.timing, in_.pose_options, options, plan, progress_, time, reference);
   }
 
   PosePlan poses_of(const std::vector<Vec3d>& axes,
                     const std::vector<std::optional<Posed>>& preferred) const {
-    return plan_poses(machine_.rotary, axes, rapid_into_, {}, pose_options_, preferred);
+    return plan_poses(in_.machine.rotary, axes, rapid_into_, {}, in_.pose_options, preferred);
   }
 
   /// The time plan's context: the machine's effective limits; every feed block keeps the
@@ -137,8 +127,8 @@ class TimePlanner {
   /// input's poses as alternatives every pass weighs.
   TimeContext time_context(const PosePlan& in_plan, const PosePlan& smooth_plan) const {
     TimeContext time;
-    time.limits = effective_limits(machine_);
-    time.programmed_s = programmed_block_times_s(posted_feeds(op_, fallback_feed_),
+    time.limits = effective_limits(in_.machine);
+    time.programmed_s = programmed_block_times_s(posted_feeds(in_.op, fallback_feed_),
                                                  in_plan.ok() ? in_plan.poses : smooth_plan.poses);
     if (smooth_plan.ok()) time.alternatives.push_back(smooth_plan.poses);
     if (in_plan.ok()) time.alternatives.push_back(in_plan.poses);
@@ -147,9 +137,9 @@ class TimePlanner {
 
   double cycle_of(const std::vector<Vec3d>& axes,
                   const std::vector<std::optional<Posed>>& preferred) const {
-    return operation_cycle_s(op_, contacts_, ball_radius_mm_, model_, tool_, machine_,
-                             deg_to_rad(options_.max_deviation_deg), axes, preferred, pose_options_,
-                             fallback_feed_, programmed_s_);
+    return operation_cycle_s(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool,
+                             in_.machine, deg_to_rad(options_.max_deviation_deg), axes, preferred,
+                             in_.pose_options, fallback_feed_, programmed_s_);
   }
   double cycle(const OptimisedOperation& o) const { return cycle_of(o.axes, o.preferred); }
 
@@ -158,13 +148,9 @@ class TimePlanner {
     if (!in_plan.ok()) return std::numeric_limits<double>::infinity();
     const double input_s = cycle_of(in_axes_, {});
     if (!std::isfinite(input_s)) return input_s;
-    Machine path_machine = machine_;
-    if (machine_.gcode.program.linearise_tolerance_mm > 0.0) {
-      path_machine.gcode.mode = GcodeMode::Tcp;
-    }
-    const std::vector<char> hit =
-        points_and_moves_hit(op_, contacts_, ball_radius_mm_, model_, tool_, path_machine, in_axes_,
-                             in_plan.poses, std::vector<char>(op_.points.size(), 1));
+    const std::vector<char> hit = points_and_moves_hit(
+        in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool, in_.machine, in_axes_,
+        in_plan.poses, std::vector<char>(in_.op.points.size(), 1));
     return std::find(hit.begin(), hit.end(), 1) != hit.end()
                ? std::numeric_limits<double>::infinity()
                : input_s;
@@ -181,11 +167,11 @@ class TimePlanner {
       c.push_back(rad_to_deg(q.c_rad));
     }
     std::vector<double> into = {0.0};
-    for (double t : move_times_s(op_, ball_radius_mm_, machine_.rotary, pp.poses, timing_,
-                                 IndexRange{0, op_.points.size()})) {
+    for (double t : move_times_s(in_.op, in_.ball_radius_mm, in_.machine.rotary, pp.poses,
+                                 in_.timing, IndexRange{0, in_.op.points.size()})) {
       into.push_back(t);
     }
-    return summarise_timed(op_, a, c, into).max_accel_deg_s2;
+    return summarise_timed(in_.op, a, c, into).max_accel_deg_s2;
   }
 
   /// Within the tie band of the shortest cycle, the smoothest plan wins (then the shorter,
@@ -226,16 +212,9 @@ class TimePlanner {
     return line;
   }
 
-  const Operationd& op_;
-  const std::vector<ContactPoint>& contacts_;
-  const double ball_radius_mm_;
-  const PartCheck* model_;
-  const ToolModel* tool_;
-  const Machine& machine_;
-  const BlockTiming& timing_;
-  const PosePlanOptions& pose_options_;
   const GlobalOptions& options_;
   const double fallback_feed_;
+  const OperationPlanInputs in_;
   detail::StageProgress& progress_;
   const std::vector<bool> rapid_into_;
   std::vector<Vec3d> in_axes_;
@@ -257,7 +236,7 @@ std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& c
                         const PosePlanOptions& pose_options, const GlobalOptions& options,
                         double fallback_feed, OptimisedOperation& out,
                         detail::StageProgress& progress) {
-  return TimePlanner(op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options,
+  return TimePlanner({op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options},
                      options, fallback_feed, progress)
       .run(out);
 }

@@ -116,10 +116,6 @@ int ProgramWriter::motion(const PlannedMove& m, BlockKind kind, bool takes_prefi
   if (takes_prefix) prefix_.clear();
   ProgramBlock& b = prog_.blocks.back();
   b.move = m;
-  if (m.machine_frame) {
-    at_[0] = at_[1] = at_[2] = std::nullopt;
-    return at;
-  }
   for (int q = 0; q < 3; ++q) {
     if (m.given & (1u << q)) at_[q] = round_to(m.xyz_mm[q] * scale_, d_) / scale_;
   }
@@ -137,25 +133,26 @@ void ProgramWriter::retract() {
   const std::vector<std::string> blocks = dialect_.retract(retract_z_);
   if (blocks.empty()) return;
   PlannedMove m = rapid_linear(0x4, Vec3d(0.0, 0.0, g_.program.retract_z_mm));
-  m.machine_frame = true;
   // Fanuc's retract is a reference return (G91 G28 Z0.): to the machine's reference point.
   if (g_.dialect == GcodeDialect::Fanuc) m.xyz_mm.z() = 0.0;
-  line(blocks.front(), BlockKind::Retract);
-  prog_.blocks.back().move = m;
+  machine_frame_move(blocks, m, BlockKind::Retract);
+}
+
+void ProgramWriter::machine_frame_move(const std::vector<std::string>& blocks, PlannedMove m,
+                                       BlockKind kind) {
+  m.machine_frame = true;
+  for (std::size_t j = 0; j < blocks.size(); ++j) {
+    line(blocks[j], kind);
+    if (j == 0) prog_.blocks.back().move = m;
+  }
+  // Where the tip stands in the program's frame is not known after a move in the machine's.
   at_[0] = at_[1] = at_[2] = std::nullopt;
-  for (std::size_t j = 1; j < blocks.size(); ++j) line(blocks[j], BlockKind::Retract);
 }
 
 void ProgramWriter::park(const std::array<double, 2>& xy_mm) {
   const std::vector<std::string> blocks =
       dialect_.park(dialect_.number(xy_mm[0] * scale_, d_), dialect_.number(xy_mm[1] * scale_, d_));
-  PlannedMove m = rapid_linear(0x3, Vec3d(xy_mm[0], xy_mm[1], 0.0));
-  m.machine_frame = true;
-  for (std::size_t j = 0; j < blocks.size(); ++j) {
-    line(blocks[j], BlockKind::End);
-    if (j == 0) prog_.blocks.back().move = m;
-  }
-  at_[0] = at_[1] = at_[2] = std::nullopt;
+  machine_frame_move(blocks, rapid_linear(0x3, Vec3d(xy_mm[0], xy_mm[1], 0.0)), BlockKind::End);
 }
 
 Vec3d ProgramWriter::rounded(const Vec3d& v) const {

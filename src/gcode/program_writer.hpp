@@ -72,6 +72,8 @@ class ProgramWriter {
   /// The dialect's safe retract to machine Z, and the end's park of X and Y.
   void retract();
   void park(const std::array<double, 2>& xy_mm);
+  /// The dialect's `blocks` of a move in machine coordinates, the first carrying `m`.
+  void machine_frame_move(const std::vector<std::string>& blocks, PlannedMove m, BlockKind kind);
   // --- words -----------------------------------------------------------------------------
   Vec3d rounded(const Vec3d& v) const;
   Vec3d out_xyz(const Vec3d& tip, const Posed& pose) const;

@@ -481,10 +481,10 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   // those are written into the program. (Before, only the text and the blocks were replaced:
   // read back with its verbatim lines, the marked program's feed blocks were stepped over,
   // and a finding's G-code line named another block.)
-  const GcodeProgram first =
-      write_gcode(posted, run.machine, res.gcode_units, unverified_comments(run, res));
-  if (first.text.size() <= res.gcode.text.size()) return;
-  const int shift = line_count(first.text) - line_count(res.gcode.text);
+  // Each comment is one line (comment_text folds line ends): the marks add one line per
+  // comment beyond the program's own.
+  const int shift =
+      static_cast<int>(unverified_comments(run, res).size() - program_comments(run, res).size());
   for (Finding& f : res.findings) {
     if (f.gcode_line) *f.gcode_line += shift;
     f.message = shifted_gcode_lines(f.message, shift);
@@ -495,7 +495,7 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   GcodeProgram marked =
       write_gcode(posted, run.machine, res.gcode_units, unverified_comments(run, res));
   if (line_count(marked.text) - line_count(res.gcode.text) != shift) {
-    throw std::logic_error("mark_unverified: the marked program's comments changed in number");
+    throw std::logic_error("mark_unverified: the marks are not one line each");
   }
   GcodeProgram& g = res.gcode;
   g.text = std::move(marked.text);

@@ -140,8 +140,7 @@ Machine machine_of(const Args& a) {
              to_string(machine.gcode.dialect) +
              " dialect; change gcode.dialect in the file instead");
     }
-    for (const auto d : {GcodeDialect::LinuxCNC, GcodeDialect::Fanuc, GcodeDialect::Siemens,
-                         GcodeDialect::Heidenhain, GcodeDialect::Haas}) {
+    for (const GcodeDialect d : gcode_dialects()) {
       if (a.dialect == to_string(d)) machine.gcode.dialect = d;
     }
     if (machine.gcode.decimals > max_decimals(machine.gcode.dialect) ||
@@ -149,11 +148,10 @@ Machine machine_of(const Args& a) {
       refuse("--dialect " + a.dialect + ": the machine file's gcode.decimals or " +
              "feed_decimals are more than the " + a.dialect + " dialect takes");
     }
-    if (machine.gcode.dialect == GcodeDialect::Heidenhain &&
+    if (!has_inverse_time(machine.gcode.dialect) &&
         machine.gcode.feed_mode == FeedMode::InverseTime) {
-      refuse(
-          "--dialect heidenhain: the machine's gcode.feed_mode is inverse-time, which "
-          "the heidenhain dialect does not write (its ISO mode has no G93)");
+      refuse("--dialect " + a.dialect + ": the machine's gcode.feed_mode is inverse-time, which " +
+             "the " + a.dialect + " dialect does not write (its ISO mode has no G93)");
     }
   }
   return machine;

@@ -80,10 +80,15 @@ void add_machine_options(CLI::App& app, Args& a) {
                  "tool number of operations whose CL file calls no tool (LOADTL), 1 to 99999 "
                  "(before the machine file's [defaults] tool_number; none of them: exit 2)")
       ->group("Machine");
+  std::vector<std::string> dialects;
+  std::string dialect_list;
+  for (const GcodeDialect d : gcode_dialects()) {
+    dialect_list += (dialects.empty() ? "" : " | ") + std::string(to_string(d));
+    dialects.emplace_back(to_string(d));
+  }
   app.add_option("--dialect", a.dialect,
-                 "G-code dialect, overriding the machine file's gcode.dialect: linuxcnc | fanuc "
-                 "| siemens | heidenhain | haas")
-      ->check(CLI::IsMember({"linuxcnc", "fanuc", "siemens", "heidenhain", "haas"}))
+                 "G-code dialect, overriding the machine file's gcode.dialect: " + dialect_list)
+      ->check(CLI::IsMember(dialects))
       ->group("Machine");
   app.add_flag("--feed-schedule", a.feed_schedule,
                "write per block the fastest feed the machine's limits allow (never above the "

@@ -1,38 +1,15 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <initializer_list>
 
 #include "controller/feed_word.hpp"
+#include "dialects/dialect_rules.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
 
 namespace taxopt {
 
 namespace {
-
-/// Removes the whole words `keywords` (Sinumerik's TRAORI ...) from a line, outside comments;
-/// `found` receives which were there.
-std::string without_keywords(const std::string& line, std::initializer_list<const char*> keywords,
-                             std::vector<std::string>* found = nullptr) {
-  std::string out = line;
-  for (const char* k : keywords) {
-    const std::string key = k;
-    for (std::size_t at = out.find(key); at != std::string::npos; at = out.find(key, at)) {
-      const bool starts = at == 0 || std::isspace(static_cast<unsigned char>(out[at - 1]));
-      const std::size_t end = at + key.size();
-      const bool ends = end == out.size() || std::isspace(static_cast<unsigned char>(out[end])) ||
-                        out[end] == ';';
-      if (starts && ends) {
-        out.replace(at, key.size(), " ");
-        if (found) found->push_back(key);
-      } else {
-        at = end;
-      }
-    }
-  }
-  return out;
-}
 
 unsigned given_mask(const bool (&given)[5]) {
   unsigned mask = 0;
@@ -62,15 +39,11 @@ class GcodeReader {
  public:
   GcodeReader(const std::string& source, GcodeDialect dialect, char tilt_letter)
       : source_(source),
-        dialect_(dialect),
+        dialect_(gcode::rules_of(dialect)),
+        knows_(dialect_.read_words()),
         tilt_letter_(tilt_letter),
-        // Haas is read as Fanuc is, with G234 (tool centre point control) beside.
-        haas_(dialect == GcodeDialect::Haas),
-        fanuc_like_(dialect == GcodeDialect::Fanuc || haas_),
-        // A TNC applies the length of the tool in the spindle always (its TOOL CALL may come
-        // before the program); LinuxCNC's TCP is its kinematics.
-        length_offset_(dialect == GcodeDialect::Heidenhain),
-        tcp_(dialect == GcodeDialect::LinuxCNC) {}
+        length_offset_(knows_.length_from_start),
+        tcp_(knows_.tcp_from_start) {}
 
   std::vector<GcodeMove> read(const std::string& text, const std::vector<int>& verbatim_lines,
                               const std::vector<std::pair<int, int>>& tool_calls) {
@@ -138,34 +111,14 @@ class GcodeReader {
     }
   }
 
-  /// The dialect's own words and marks taken out of `ln` (Sinumerik's TRAORI, ORIAXES, TRAFOOF,
-  /// SUPA; a TNC's program begin and end blocks and its block end "*"); false: nothing more to
-  /// read in the line.
+  /// The dialect's own words and marks taken out of `ln` (DialectRules::own_words); false:
+  /// nothing more to read in the line.
   bool dialect_words(std::string& ln, BlockWords& b) {
-    if (dialect_ == GcodeDialect::Siemens) {
-      std::vector<std::string> found;
-      ln = without_keywords(ln, {"TRAORI", "ORIAXES", "TRAFOOF", "SUPA"}, &found);
-      for (const auto& k : found) {
-        if (k == "TRAORI") tcp_ = true;
-        if (k == "TRAFOOF") tcp_ = false;
-        if (k == "SUPA") b.machine_coordinates = true;
-      }
-    } else if (dialect_ == GcodeDialect::Heidenhain) {
-      // Program begin and end blocks (%NAME G71 *), and the block end "*".
-      if (ln.find('%') != std::string::npos) {
-        const std::size_t unit = ln.find("G7");
-        if (unit != std::string::npos && unit + 2 < ln.size()) {
-          scale_ = ln[unit + 2] == '0' ? kMmPerInch : 1.0;
-        }
-        return false;
-      }
-      const std::size_t star = ln.rfind('*');
-      const std::size_t semi = ln.find(';');
-      if (star != std::string::npos && (semi == std::string::npos || star < semi)) {
-        ln.erase(star, 1);
-      }
-    }
-    return true;
+    const gcode::LineMarks marks = dialect_.own_words(ln);
+    if (marks.mm_per_unit) scale_ = *marks.mm_per_unit;
+    if (marks.tcp) tcp_ = *marks.tcp;
+    if (marks.machine_coordinates) b.machine_coordinates = true;
+    return !marks.nothing_more;
   }
 
   /// The line without comments and blanks, upper case.
@@ -213,9 +166,8 @@ class GcodeReader {
       case 'I':
       case 'J':
       case 'K':
-        if (dialect_ == GcodeDialect::Heidenhain) {
+        if (!knows_.g2_g3_arcs)
           fail(std::string("word '") + letter + "' is outside taxopt's subset");
-        }
         b.offset[letter - 'I'] = v * scale_;
         b.has_offset[letter - 'I'] = true;
         break;
@@ -226,28 +178,26 @@ class GcodeReader {
 
   void g_word(double v, BlockWords& b) {
     const int gv = static_cast<int>(std::lround(v * 10));
-    const bool iso_units = dialect_ == GcodeDialect::LinuxCNC || fanuc_like_;
     if (gv == 0) {
       motion_ = 0;
     } else if (gv == 10) {
       motion_ = 1;
-    } else if ((gv == 20 || gv == 30) && dialect_ != GcodeDialect::Heidenhain) {
+    } else if ((gv == 20 || gv == 30) && knows_.g2_g3_arcs) {
       motion_ = gv / 10;
     } else if (gv == 170 || gv == 180 || gv == 190) {
       plane_ = gv == 170 ? 2 : gv == 180 ? 1 : 0;
-    } else if (iso_units && (gv == 200 || gv == 210)) {
+    } else if (knows_.g20_g21_units && (gv == 200 || gv == 210)) {
       scale_ = gv == 200 ? kMmPerInch : 1.0;
-    } else if (dialect_ == GcodeDialect::Siemens && (gv == 7000 || gv == 7100)) {
+    } else if (knows_.g700_g710_units && (gv == 7000 || gv == 7100)) {
       scale_ = gv == 7000 ? kMmPerInch : 1.0;
     } else if (gv == 930 || gv == 940) {
       inverse_time_ = gv == 930;
     } else if (gv == 900) {
       incremental_ = false;
-    } else if (gv == 40 &&
-               (dialect_ == GcodeDialect::LinuxCNC || dialect_ == GcodeDialect::Fanuc)) {
+    } else if (gv == 40 && knows_.g4_dwell) {
       b.dwell = true;  // the CL file's DELAY: P is its time
     } else if (gv == 400 || gv == 800 || gv == 540) {
-    } else if (dialect_ == GcodeDialect::LinuxCNC && (gv == 640 || gv == 610)) {
+    } else if (knows_.path_control && (gv == 640 || gv == 610)) {
       b.blending = true;  // path control: G64 P Q, G61
     } else if (!tool_length_word(gv, b)) {
       fail("G" + std::to_string(v) + " is outside taxopt's subset");
@@ -256,20 +206,20 @@ class GcodeReader {
 
   /// The G codes of tool length, TCP, machine coordinates and reference return; false: none.
   bool tool_length_word(int gv, BlockWords& b) {
-    if (gv == 490 && dialect_ != GcodeDialect::Heidenhain && dialect_ != GcodeDialect::Siemens) {
+    if (gv == 490 && knows_.g49_cancels) {
       length_offset_ = false;
-      if (fanuc_like_) tcp_ = false;
-    } else if ((fanuc_like_ || dialect_ == GcodeDialect::LinuxCNC) && gv == 430) {
+      if (knows_.g49_cancels_tcp) tcp_ = false;
+    } else if (knows_.g43_length && gv == 430) {
       length_offset_ = true;
-    } else if ((dialect_ == GcodeDialect::Fanuc && gv == 434) || (haas_ && gv == 2340)) {
+    } else if (knows_.tcp_g_code > 0.0 && gv == std::lround(knows_.tcp_g_code * 10)) {
       length_offset_ = tcp_ = true;
-    } else if ((dialect_ == GcodeDialect::LinuxCNC || fanuc_like_) && gv == 530) {
+    } else if (knows_.g53_machine && gv == 530) {
       // G53: machine coordinates for this block (one-shot, group 00: Fanuc and the controls
       // that follow it, e.g. Mitsubishi M700V manual 14.4).
       b.machine_coordinates = true;
-    } else if (fanuc_like_ && gv == 910) {
+    } else if (knows_.g91_g28 && gv == 910) {
       incremental_ = true;
-    } else if (fanuc_like_ && gv == 280) {
+    } else if (knows_.g91_g28 && gv == 280) {
       b.reference_return = b.machine_coordinates = true;
     } else {
       return false;
@@ -285,8 +235,8 @@ class GcodeReader {
     if (mv == 7 || mv == 8) coolant_ = static_cast<int>(mv);
     if (mv == 9 || mv == 2 || mv == 30) coolant_ = 0;
     if (mv == 6) b.change_tool = true;
-    if (dialect_ == GcodeDialect::Heidenhain && (mv == 128 || mv == 129)) tcp_ = mv == 128;
-    if (dialect_ == GcodeDialect::Heidenhain && mv == 91) b.machine_coordinates = true;
+    if (knows_.m128_m91 && (mv == 128 || mv == 129)) tcp_ = mv == 128;
+    if (knows_.m128_m91 && mv == 91) b.machine_coordinates = true;
   }
 
   void other_word(char letter, double v, BlockWords& b) {
@@ -295,7 +245,7 @@ class GcodeReader {
       case 'T':
         if (!(v >= 0.0 && v <= 1e6) || v != std::floor(v)) fail("bad tool number after 'T'");
         selected_ = static_cast<int>(v);
-        if (dialect_ == GcodeDialect::Heidenhain) {
+        if (knows_.t_calls_tool) {
           length_offset_ = true;  // the tool call: tool and its length
           tool_ = selected_;
         }
@@ -313,13 +263,13 @@ class GcodeReader {
         }
         break;
       case 'H':
-        if (!fanuc_like_ && dialect_ != GcodeDialect::LinuxCNC) fail(outside);
+        if (!knows_.h_word) fail(outside);
         break;
       case 'O':
-        if (!fanuc_like_) fail(outside);
+        if (!knows_.o_word) fail(outside);
         break;
       case 'D':
-        if (dialect_ != GcodeDialect::Siemens) fail(outside);
+        if (!knows_.d_word) fail(outside);
         length_offset_ = v > 0.0;
         break;
       default: fail(outside);
@@ -398,9 +348,9 @@ class GcodeReader {
   }
 
   const std::string& source_;
-  const GcodeDialect dialect_;
+  const gcode::DialectRules& dialect_;
+  const gcode::ReadWords knows_;
   const char tilt_letter_;
-  const bool haas_, fanuc_like_;
   std::vector<GcodeMove> moves_;
   /// Workpiece positions known of X Y Z A C: none before the first full move, nor of an axis
   /// moved in machine coordinates since.

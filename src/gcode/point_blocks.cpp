@@ -132,18 +132,14 @@ std::optional<std::vector<ProgramWriter::ArcPiece>> ProgramWriter::arc_pieces(
 
 bool ProgramWriter::write_arc(const ArcRun& run) {
   const PostedOperation& op = *op_;
-  if (g_.feed_mode != FeedMode::UnitsPerMinute || g_.dialect == GcodeDialect::Heidenhain ||
-      !have_prev_ || run.end >= op.points.size() || run.end <= run.start + 1) {
+  if (g_.feed_mode != FeedMode::UnitsPerMinute || !dialect_.rules().writes_arcs() || !have_prev_ ||
+      run.end >= op.points.size() || run.end <= run.start + 1) {
     return false;
   }
   const std::string pose_words = angle_words(op.poses[run.start]);
   // The rotary words where tool centre point control came on: a Fanuc 30i raises PS5421 for
-  // G2/G3 after A or C has turned under G43.4 (FANUC Series 30i-MODEL A, Tool center point
-  // control for 5-axis machining, A-79348E, pp. 22-24: circular interpolation is allowed
-  // where neither rotary axis moves after the G43.4 command). Haas's G234 is treated alike
-  // (its rule is not published here).
-  if (tcp_ && (g_.dialect == GcodeDialect::Fanuc || g_.dialect == GcodeDialect::Haas) &&
-      pose_words != tcp_angles_) {
+  // G2/G3 after A or C has turned under G43.4 (DialectRules::arc_after_tcp_turn).
+  if (tcp_ && !dialect_.rules().arc_after_tcp_turn() && pose_words != tcp_angles_) {
     return false;  // the table turned under TCP since it came on: chords
   }
   const auto timed = arc_programmed_s(run, pose_words);

@@ -134,7 +134,7 @@ void ProgramWriter::retract() {
   if (blocks.empty()) return;
   PlannedMove m = rapid_linear(0x4, Vec3d(0.0, 0.0, g_.program.retract_z_mm));
   // Fanuc's retract is a reference return (G91 G28 Z0.): to the machine's reference point.
-  if (g_.dialect == GcodeDialect::Fanuc) m.xyz_mm.z() = 0.0;
+  if (dialect_.rules().retract_to_reference()) m.xyz_mm.z() = 0.0;
   machine_frame_move(blocks, m, BlockKind::Retract);
 }
 
@@ -195,17 +195,15 @@ std::string ProgramWriter::feed_word(const std::string& f) {
 
 void ProgramWriter::program_start(const std::vector<std::string>& comments) {
   for (const auto& s : dialect_.start()) raw(s, BlockKind::Start);
-  if (g_.dialect == GcodeDialect::LinuxCNC || g_.dialect == GcodeDialect::Siemens) {
+  if (dialect_.rules().names_program()) {
     raw(dialect_.comment("program " + dialect_.name()), BlockKind::Start);
   }
   for (const auto& c : comments) raw(dialect_.comment(c), BlockKind::Start);
   line(dialect_.setup(g_.feed_mode == FeedMode::InverseTime), BlockKind::Start);
-  if (g_.dialect == GcodeDialect::LinuxCNC) {
-    // The path's blending bound (ProgramTemplate::blend_tolerance_mm).
-    const double blend = g_.program.blend_tolerance_mm;
-    line(blend > 0.0 ? "G64 P" + fmt(blend * scale_, std::max(d_, 4)) + " Q0" : "G61",
-         BlockKind::Start);
-  }
+  // The path's blending bound (ProgramTemplate::blend_tolerance_mm), where the dialect has one.
+  const std::string path =
+      dialect_.rules().path_control(g_.program.blend_tolerance_mm * scale_, d_);
+  if (!path.empty()) line(path, BlockKind::Start);
   if (const std::string w = dialect_.work_offset(); !w.empty()) verbatim({w}, BlockKind::Start);
   verbatim(g_.program.header, BlockKind::Start);
 }
@@ -341,19 +339,17 @@ void ProgramWriter::event(const ProgramEvent& e) {
     case ProgramEvent::Kind::Stop: line("M0", BlockKind::Event); break;
     case ProgramEvent::Kind::OptionalStop: line("M1", BlockKind::Event); break;
     case ProgramEvent::Kind::Comment: raw(dialect_.comment(e.text), BlockKind::Event); break;
-    case ProgramEvent::Kind::Dwell:
-      if (g_.dialect == GcodeDialect::LinuxCNC) {
-        line("G4 P" + fmt(e.dwell_s, 3), BlockKind::Event);  // LinuxCNC: P in seconds
-      } else if (g_.dialect == GcodeDialect::Fanuc) {
-        line("G04 P" + std::to_string(std::lround(e.dwell_s * 1000.0)),
-             BlockKind::Event);  // P in ms
-      } else {
+    case ProgramEvent::Kind::Dwell: {
+      const std::string dwell = dialect_.rules().dwell(e.dwell_s);
+      if (dwell.empty()) {
         throw InputError("CL line " + std::to_string(e.line) +
                          ": DELAY: taxopt writes a dwell for LinuxCNC (G4 P seconds) and "
                          "Fanuc (G04 P milliseconds) only, not for the " +
                          std::string(to_string(g_.dialect)) + " dialect");
       }
+      line(dwell, BlockKind::Event);
       break;
+    }
     case ProgramEvent::Kind::Spindle:
       if (e.spindle_rpm > 0.0) {
         spindle_ = spindle_words(e.spindle_rpm, e.spindle_clockwise);
@@ -396,7 +392,7 @@ void ProgramWriter::length_and_tcp_off() {
 GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
                          LengthUnit units, const std::vector<std::string>& comments) {
   const GcodeSettings& g = machine.gcode;
-  if (g.dialect == GcodeDialect::Heidenhain && g.feed_mode == FeedMode::InverseTime) {
+  if (!gcode::rules_of(g.dialect).inverse_time() && g.feed_mode == FeedMode::InverseTime) {
     throw std::invalid_argument("write_gcode: the heidenhain dialect has no inverse time (G93)");
   }
   if (g.decimals < 0 || g.decimals > max_decimals(g.dialect)) {

@@ -33,7 +33,7 @@ class ProgramWriter {
         // LinuxCNC plans a tcp rapid in the program's axes: where that would run a joint over
         // its velocity limit, the rapid is a feed block at a joint-safe feed
         // (joint_safe_rate_per_s).
-        joint_safe_(tcp_ && g_.dialect == GcodeDialect::LinuxCNC),
+        joint_safe_(tcp_ && dialect_.rules().tcp_planned_in_program_axes()),
         retracts_(g_.program.retract != SafeRetract::None),
         limits_(effective_limits(machine)),
         retract_z_(dialect_.number(g_.program.retract_z_mm * scale_, d_)),

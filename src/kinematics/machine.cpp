@@ -4,20 +4,20 @@
 #include <cmath>
 #include <sstream>
 
+#include "dialects/dialect_rules.hpp"
 #include "taxopt/core/error.hpp"
 
 namespace taxopt {
 
-const char* to_string(GcodeDialect dialect) {
-  switch (dialect) {
-    case GcodeDialect::LinuxCNC: return "linuxcnc";
-    case GcodeDialect::Fanuc: return "fanuc";
-    case GcodeDialect::Siemens: return "siemens";
-    case GcodeDialect::Heidenhain: return "heidenhain";
-    case GcodeDialect::Haas: return "haas";
-  }
-  return "?";
+const char* to_string(GcodeDialect dialect) { return gcode::rules_of(dialect).name(); }
+
+std::vector<GcodeDialect> gcode_dialects() {
+  std::vector<GcodeDialect> out;
+  for (const gcode::DialectRules* r : gcode::all_dialects()) out.push_back(r->id());
+  return out;
 }
+
+bool has_inverse_time(GcodeDialect dialect) { return gcode::rules_of(dialect).inverse_time(); }
 
 Machine default_machine() { return Machine{}; }
 
@@ -134,10 +134,9 @@ void validate_gcode(const GcodeSettings& g) {
         "gcode.feed_decimals", g.feed_decimals, 0, max_feed_decimals(g.dialect),
         "-1 (the dialect's) or within [0, " + std::to_string(max_feed_decimals(g.dialect)) + "]");
   }
-  if (g.dialect == GcodeDialect::Heidenhain && g.feed_mode == FeedMode::InverseTime) {
-    throw InputError(
-        "Machine::gcode.feed_mode inverse-time is not written for the heidenhain dialect (its "
-        "ISO mode has no G93)");
+  if (!has_inverse_time(g.dialect) && g.feed_mode == FeedMode::InverseTime) {
+    throw InputError("Machine::gcode.feed_mode inverse-time is not written for the " + dialect +
+                     " dialect (its ISO mode has no G93)");
   }
   check_range("gcode.max_feed_ratio", g.max_feed_ratio, 1.0, 100.0, "within [1, 100]");
 }
@@ -193,16 +192,9 @@ void validate(const Machine& m) {
   validate_program_template(m);
 }
 
-int max_decimals(GcodeDialect dialect) {
-  switch (dialect) {
-    case GcodeDialect::Fanuc:
-    case GcodeDialect::Haas:
-    case GcodeDialect::Heidenhain: return 4;
-    default: return 8;
-  }
-}
+int max_decimals(GcodeDialect dialect) { return gcode::rules_of(dialect).max_decimals(); }
 
-int max_feed_decimals(GcodeDialect dialect) { return dialect == GcodeDialect::Heidenhain ? 3 : 15; }
+int max_feed_decimals(GcodeDialect dialect) { return gcode::rules_of(dialect).max_feed_decimals(); }
 
 int feed_decimals(const GcodeSettings& settings) {
   if (settings.feed_decimals >= 0) return settings.feed_decimals;

@@ -184,13 +184,9 @@ class MachineParser {
                 "retract_z_mm", "linearise_tolerance_mm", "blend_tolerance_mm",
                 "approach_clearance_mm", "index_threshold_deg", "end_pose", "end_park_xy_mm"});
     // clang-format on
-    choose(*g, "gcode", "dialect",
-           {{"linuxcnc", GcodeDialect::LinuxCNC},
-            {"fanuc", GcodeDialect::Fanuc},
-            {"siemens", GcodeDialect::Siemens},
-            {"heidenhain", GcodeDialect::Heidenhain},
-            {"haas", GcodeDialect::Haas}},
-           m.gcode.dialect);
+    std::vector<std::pair<std::string, GcodeDialect>> dialects;
+    for (const GcodeDialect d : gcode_dialects()) dialects.emplace_back(to_string(d), d);
+    choose(*g, "gcode", "dialect", dialects, m.gcode.dialect);
     choose(*g, "gcode", "mode", {{"tcp", GcodeMode::Tcp}, {"machine", GcodeMode::Machine}},
            m.gcode.mode);
     if (m.gcode.mode == GcodeMode::Machine && head) {
@@ -220,10 +216,11 @@ class MachineParser {
     choose(*g, "gcode", "feed_reference",
            {{"cutter-path", FeedReference::CutterPath}, {"tip", FeedReference::Tip}},
            m.gcode.feed_reference);
-    if (m.gcode.dialect == GcodeDialect::Heidenhain && m.gcode.feed_mode == FeedMode::InverseTime) {
+    if (!has_inverse_time(m.gcode.dialect) && m.gcode.feed_mode == FeedMode::InverseTime) {
       fail(line_of(*g->get("feed_mode")),
-           "gcode.feed_mode \"inverse-time\" is not written for the heidenhain dialect (its ISO "
-           "mode has no G93); use \"units-per-minute\"");
+           "gcode.feed_mode \"inverse-time\" is not written for the " +
+               std::string(to_string(m.gcode.dialect)) +
+               " dialect (its ISO mode has no G93); use \"units-per-minute\"");
     }
     if (auto* n = g->get("max_feed_ratio")) {
       m.gcode.max_feed_ratio = number_of(*n, "gcode.max_feed_ratio");

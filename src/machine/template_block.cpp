@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "dialects/dialect_rules.hpp"
+
 namespace taxopt {
 namespace {
 
@@ -18,10 +20,11 @@ struct Refused {
 };
 [[noreturn]] void refuse(const std::string& why) { throw Refused{why}; }
 
-/// How a block is read: its dialect and the template key that holds it.
+/// How a block is read: its dialect's words and the template key that holds it.
 struct BlockRules {
-  GcodeDialect dialect;
-  bool siemens, heidenhain, parens, tool_change, work_offset, footer;
+  const gcode::DialectRules* dialect;
+  gcode::TemplateWords words;
+  bool tool_change, work_offset, footer;
 };
 
 /// One word: a letter and its number ("G 64" too), or a Sinumerik identifier (FFWON).
@@ -49,12 +52,12 @@ std::string code_of(const std::string& block, const BlockRules& r) {
   for (std::size_t i = 0; i < block.size(); ++i) {
     const char ch = block[i];
     if (ch == '\n' || ch == '\r') refuse("holds a line break: one block per string");
-    if (r.parens && ch == '(') {
+    if (r.words.paren_comments && ch == '(') {
       if (depth > 0) refuse("nests a comment");
       ++depth;
       continue;
     }
-    if (r.parens && ch == ')') {
+    if (r.words.paren_comments && ch == ')') {
       if (depth == 0) refuse("closes a comment it did not open");
       --depth;
       continue;
@@ -95,8 +98,10 @@ std::size_t cycle832_end(const std::string& code, std::size_t e) {
   return close + 1;
 }
 
-/// A Sinumerik identifier at `i` (FFWON, CYCLE832(...)) as one word, where it is one; the end.
-std::size_t siemens_word(const std::string& code, std::size_t i, std::vector<Word>& words) {
+/// A word of several letters at `i` (Sinumerik's FFWON, CYCLE832(...)) as one word, where it
+/// is one; the end.
+std::size_t long_word(const std::string& code, std::size_t i, const BlockRules& r,
+                      std::vector<Word>& words) {
   std::size_t e = i + 1;
   while (e < code.size() && (std::isalnum(static_cast<unsigned char>(code[e])) || code[e] == '_')) {
     ++e;
@@ -106,14 +111,14 @@ std::size_t siemens_word(const std::string& code, std::size_t i, std::vector<Wor
                                return std::isdigit(static_cast<unsigned char>(d)) != 0;
                              });
   if (letter_number || id.size() <= 1) return i;
-  static const std::set<std::string> kSiemens = {"FFWON",   "FFWOF",    "SOFT",     "BRISK",
-                                                 "COMPCAD", "COMPCURV", "COMPSURF", "COMPOF",
-                                                 "UPATH",   "SPATH",    "CYCLE832"};
-  if (!kSiemens.count(id)) {
-    refuse("holds " + id +
-           ", which is not on the list of Sinumerik words a template "
-           "may hold (FFWON, FFWOF, SOFT, BRISK, COMPCAD, COMPCURV, "
-           "COMPSURF, COMPOF, UPATH, SPATH, CYCLE832(...))");
+  const std::vector<std::string>& known = r.words.long_words;
+  if (std::find(known.begin(), known.end(), id) == known.end()) {
+    std::string list;
+    for (const std::string& k : known) {
+      list += (list.empty() ? "" : ", ") + k + (k == "CYCLE832" ? "(...)" : "");
+    }
+    refuse("holds " + id + ", which is not on the list of " + r.dialect->name() +
+           " words a template may hold (" + list + ")");
   }
   if (id == "CYCLE832") e = cycle832_end(code, e);
   words.push_back({id, ""});
@@ -138,8 +143,8 @@ std::vector<Word> words_of(const std::string& code, const BlockRules& r) {
       i += 7;
       continue;
     }
-    if (r.siemens) {
-      if (const std::size_t e = siemens_word(code, i, words); e != i) {
+    if (!r.words.long_words.empty()) {
+      if (const std::size_t e = long_word(code, i, r, words); e != i) {
         i = e;
         continue;
       }
@@ -162,14 +167,14 @@ std::vector<Word> words_of(const std::string& code, const BlockRules& r) {
 
 /// One work offset code: G54 ... G59, G59.1 ... G59.3 (LinuxCNC), G54.1 P1 ... P300 (Fanuc,
 /// Haas), G505 ... G599 (Sinumerik's settable frames).
-void check_work_offset(const std::vector<Word>& words, bool siemens) {
+void check_work_offset(const std::vector<Word>& words, bool settable_frames) {
   bool ok = false;
   if (words.size() == 1 && words[0].letter == "G") {
     for (double g : {54.0, 55.0, 56.0, 57.0, 58.0, 59.0, 59.1, 59.2, 59.3}) {
       ok = ok || g_is(words[0].number, g);
     }
     const double x = std::strtod(words[0].number.c_str(), nullptr);
-    ok = ok || (siemens && x >= 505.0 && x <= 599.0 && x == std::floor(x));
+    ok = ok || (settable_frames && x >= 505.0 && x <= 599.0 && x == std::floor(x));
   } else if (words.size() == 2 && words[0].letter == "G" && g_is(words[0].number, 54.1) &&
              words[1].letter == "P") {
     const double p = std::strtod(words[1].number.c_str(), nullptr);
@@ -202,7 +207,7 @@ bool footer_homes(const std::vector<Word>& words) {
 
 /// An M code: no spindle, coolant, tool or program end (taxopt writes them); a subprogram call
 /// in the tool change only; on LinuxCNC no restore of a modal state.
-void check_m(const Word& w, bool tool_change, GcodeDialect dialect) {
+void check_m(const Word& w, bool tool_change, const gcode::DialectRules& dialect) {
   const std::string word = w.letter + w.number;
   const double x = std::strtod(w.number.c_str(), nullptr);
   if (!(x >= 0.0 && x <= 9999.0) || x != std::floor(x)) {
@@ -216,13 +221,8 @@ void check_m(const Word& w, bool tool_change, GcodeDialect dialect) {
            ": the spindle, coolant, tool and program end are written by taxopt (the CL "
            "file, the job's options, [defaults], gcode.coolant)");
   }
-  // LinuxCNC's M70-M73 (docs: "Save Modal State" ... "Save Autorestore Modal State"): M72
-  // restores what an M70 saved, and rs274 aborts there when none did (a footer's M72, in an
-  // audit); M73 saves for a subroutine's return. Neither is known to a template's block.
-  if (dialect == GcodeDialect::LinuxCNC && (m == 72 || m == 73)) {
-    refuse("holds " + word +
-           ": LinuxCNC restores with M72 only a modal state M70 saved (rs274 aborts where none "
-           "was) and M73 belongs in a subroutine; the program sets every mode it needs");
+  if (const std::string why = dialect.template_refusal('M', x); !why.empty()) {
+    refuse("holds " + word + ": " + why);
   }
   if ((m == 97 || m == 98 || m == 99 || m == 198) && !tool_change) {
     refuse("holds " + word +
@@ -231,33 +231,18 @@ void check_m(const Word& w, bool tool_change, GcodeDialect dialect) {
   }
 }
 
-/// A G code of the list, each in the dialects that know it.
+/// A G code of the dialect's list (DialectRules::template_words).
 void check_g(const Word& w, const BlockRules& r) {
-  static const double kAllowed[] = {4, 40, 80, 61, 61.1, 64, 5.1, 8, 187, 642, 641, 60};
+  char* end = nullptr;
+  const double x = std::strtod(w.number.c_str(), &end);
+  if (end && *end == '\0') {
+    if (const std::string why = r.dialect->template_refusal('G', x); !why.empty()) {
+      refuse("holds " + w.letter + w.number + ": " + why);
+    }
+  }
   bool ok = false;
-  for (double g : kAllowed) ok = ok || g_is(w.number, g);
-  if (g_is(w.number, 65) && r.tool_change) ok = true;
-  if (g_is(w.number, 17) && r.tool_change && r.heidenhain) ok = true;  // TNC: T n G17
-  if ((g_is(w.number, 5.1) || g_is(w.number, 8)) && r.dialect != GcodeDialect::Fanuc &&
-      r.dialect != GcodeDialect::Haas) {
-    ok = false;
-  }
-  if (g_is(w.number, 187) && r.dialect != GcodeDialect::Haas) ok = false;
-  if (r.heidenhain && !(g_is(w.number, 4) || g_is(w.number, 40) || g_is(w.number, 17))) {
-    ok = false;  // a TNC in ISO: dwell and radius compensation off only
-  }
-  if ((g_is(w.number, 642) || g_is(w.number, 641) || g_is(w.number, 60)) && !r.siemens) {
-    ok = false;
-  }
-  // LinuxCNC's path blending is the machine file's: taxopt writes G64 P<blend_tolerance_mm>
-  // Q0 (G61 at 0) after the set-up and the report states it; a template's G64 P50 (or a bare
-  // G64, no bound at all) would override it unseen.
-  if (r.dialect == GcodeDialect::LinuxCNC &&
-      (g_is(w.number, 64) || g_is(w.number, 61) || g_is(w.number, 61.1))) {
-    refuse("holds " + w.letter + w.number +
-           ": on LinuxCNC the path blending is gcode.blend_tolerance_mm's (taxopt writes G64 "
-           "P<it> Q0, or G61 at 0, and the report states it); set that key instead");
-  }
+  for (double g : r.words.g_codes) ok = ok || g_is(w.number, g);
+  for (double g : r.words.tool_change_g_codes) ok = ok || (r.tool_change && g_is(w.number, g));
   if (!ok) {
     refuse("holds " + w.letter + w.number +
            ", a motion, mode or frame code taxopt writes itself or does not know "
@@ -297,7 +282,7 @@ void check_words(const std::vector<Word>& words, const BlockRules& r) {
       continue;
     }
     if (c == 'M') {
-      check_m(w, r.tool_change, r.dialect);
+      check_m(w, r.tool_change, *r.dialect);
       continue;
     }
     if (c == 'G') {
@@ -319,17 +304,15 @@ void check_words(const std::vector<Word>& words, const BlockRules& r) {
 std::string template_block_problem(const std::string& block, const std::string& what,
                                    GcodeDialect dialect, bool footer) {
   BlockRules r{};
-  r.dialect = dialect;
-  r.siemens = dialect == GcodeDialect::Siemens;
-  r.heidenhain = dialect == GcodeDialect::Heidenhain;
-  r.parens = !r.siemens && !r.heidenhain;  // ( ) comments
+  r.dialect = &gcode::rules_of(dialect);
+  r.words = r.dialect->template_words();
   r.tool_change = what == "gcode.tool_change";
   r.work_offset = what == "gcode.work_offset";
   r.footer = footer;
   try {
     const std::vector<Word> words = words_of(code_of(block, r), r);
     if (r.work_offset) {
-      check_work_offset(words, r.siemens);
+      check_work_offset(words, r.words.settable_frames);
       return {};
     }
     if (r.footer && footer_homes(words)) return {};

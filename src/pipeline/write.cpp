@@ -12,6 +12,7 @@
 
 #include "controller/feed_word.hpp"
 #include "controller/linuxcnc_planner.hpp"
+#include "dialects/dialect_rules.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/kinematics/machine.hpp"
@@ -146,7 +147,7 @@ class ProgramClock {
         g_(g),
         tcp_blocks_(tcp_blocks),
         length_mm_(run.options.tool.gauge_length_mm.value_or(0.0)),
-        lcnc_(run.machine.gcode.dialect == GcodeDialect::LinuxCNC) {
+        lcnc_(gcode::rules_of(run.machine.gcode.dialect).tcp_planned_in_program_axes()) {
     tcp_blocks_.clear();
     w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
     w_.joints_after.assign(w_.moves.size(), std::nullopt);

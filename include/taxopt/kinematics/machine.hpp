@@ -24,6 +24,10 @@ namespace taxopt {
 enum class GcodeDialect { LinuxCNC, Fanuc, Siemens, Heidenhain, Haas };
 /// "linuxcnc", "fanuc", "siemens", "heidenhain", "haas".
 TAXOPT_API const char* to_string(GcodeDialect dialect);
+/// Every dialect taxopt writes, in the order of GcodeDialect.
+TAXOPT_API std::vector<GcodeDialect> gcode_dialects();
+/// The dialect writes G93 inverse time (a TNC's ISO mode has none).
+TAXOPT_API bool has_inverse_time(GcodeDialect dialect);
 /// tcp: X Y Z are the tool tip in workpiece coordinates (the controller does TCP);
 /// machine: X Y Z are the joint positions after the table rotation (CLI.md convention).
 enum class GcodeMode { Tcp, Machine };
@@ -118,7 +122,7 @@ struct GcodeSettings {
 };
 
 /// The most decimals a controller takes for positions and angles: LinuxCNC 8, Fanuc 4
-/// (IS-C, 0.0001 mm), Siemens 6, Heidenhain TNC ISO 4 (0.0001 mm).
+/// (IS-C, 0.0001 mm), Siemens 8, Heidenhain TNC ISO 4 (0.0001 mm), Haas 4.
 TAXOPT_API int max_decimals(GcodeDialect dialect);
 /// Decimals of an F word the controller takes: Heidenhain TNC ISO 3; the others 15 (no
 /// limit of theirs is known to taxopt; a feed schedule writes 8 significant digits).

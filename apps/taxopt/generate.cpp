@@ -1,5 +1,6 @@
 // taxopt generate: the CL file and part mesh of a built-in surface (the paper's sine, a plane,
 // a bump, a saddle), its options bounded before anything is allocated.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -22,6 +23,8 @@ std::string data_dir(const char* argv0) {
   if (fs::exists(installed / "demo", ec)) return installed.string();
   return TAXOPT_SOURCE_DATA_DIR;
 }
+
+namespace {
 
 /// The options checked before anything is allocated: the outputs, each number within what a
 /// part and a machine are, the memory the mesh and the raster take. 0, else the exit code.
@@ -92,58 +95,54 @@ int generate_refusal(const GenerateArgs& g) {
   return 0;
 }
 
-int run_generate(const GenerateArgs& g) {
-  if (const int code = generate_refusal(g)) return code;
-  SineSurfaced sine;
-  sine.height_mm = g.height_mm;
-  sine.wavelength_mm = g.wavelength_mm;
-  sine.x1_mm = g.width_mm;
-  sine.y1_mm = g.length_mm;
-  Planed plane;
-  plane.u_size_mm = g.width_mm;
-  plane.v_size_mm = g.length_mm;
-  std::vector<GeneratedPoint> pts;
-  TriangleMesh mesh;
-  // The mesh extends beyond the path by the tool's reach so that a tool at the path's edge
-  // still sees the part around it.
+/// The raster of CL points over the chosen surface, and the surface's mesh over the domain grown
+/// by the tool's reach (so that a tool at the path's edge still sees the part around it).
+void raster_and_mesh(const GenerateArgs& g, std::vector<GeneratedPoint>& pts, TriangleMesh& mesh) {
   const double margin = 4.0 * g.raster.tool_radius_mm;
   const auto cells = [&](double size) {
     return std::max(1, static_cast<int>(std::ceil(size / g.mesh_step_mm)));
   };
-  try {
-    // The raster over a surface on x, y, and its mesh over the domain grown by the margin.
-    const auto raster_and_mesh = [&](const auto& surface) {
-      pts = generate_raster(surface, g.raster);
-      auto big = surface;
-      big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
-      mesh = tessellate(big, cells(big.x1_mm - big.x0_mm), cells(big.y1_mm - big.y0_mm));
+  // The raster over a surface on x, y, and its mesh over the domain grown by the margin.
+  const auto over = [&](const auto& surface) {
+    pts = generate_raster(surface, g.raster);
+    auto big = surface;
+    big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
+    mesh = tessellate(big, cells(big.x1_mm - big.x0_mm), cells(big.y1_mm - big.y0_mm));
+  };
+  if (g.surface == "sine") {
+    SineSurfaced sine;
+    sine.height_mm = g.height_mm;
+    sine.wavelength_mm = g.wavelength_mm;
+    sine.x1_mm = g.width_mm;
+    sine.y1_mm = g.length_mm;
+    over(sine);
+  } else if (g.surface == "bump" || g.surface == "saddle") {
+    // Centred on the path's rectangle: the bump's sigma a quarter of --wavelength, the
+    // saddle's half-widths the rectangle's; both --height high.
+    const auto heightfield = [&](auto field) {
+      over(HeightfieldSurface<double, decltype(field)>{{0.0, g.width_mm, 0.0, g.length_mm}, field});
     };
-    if (g.surface == "sine") {
-      raster_and_mesh(sine);
-    } else if (g.surface == "bump" || g.surface == "saddle") {
-      // Centred on the path's rectangle: the bump's sigma a quarter of --wavelength, the
-      // saddle's half-widths the rectangle's; both --height high.
-      const auto heightfield = [&](auto field) {
-        raster_and_mesh(HeightfieldSurface<double, decltype(field)>{
-            {0.0, g.width_mm, 0.0, g.length_mm}, field});
-      };
-      if (g.surface == "bump") {
-        heightfield(BumpField<double>{g.height_mm, g.wavelength_mm / 4.0, g.width_mm / 2.0,
-                                      g.length_mm / 2.0});
-      } else {
-        heightfield(SaddleField<double>{g.height_mm, g.width_mm / 2.0, g.length_mm / 2.0,
-                                        g.width_mm / 2.0, g.length_mm / 2.0});
-      }
+    if (g.surface == "bump") {
+      heightfield(BumpField<double>{g.height_mm, g.wavelength_mm / 4.0, g.width_mm / 2.0,
+                                    g.length_mm / 2.0});
     } else {
-      pts = generate_raster(plane, g.raster);
-      Planed big = plane;
-      big.origin = Vec3d(-margin, -margin, 0.0);
-      big.u_size_mm += 2 * margin, big.v_size_mm += 2 * margin;
-      mesh = tessellate(big, cells(big.u_size_mm), cells(big.v_size_mm));
+      heightfield(SaddleField<double>{g.height_mm, g.width_mm / 2.0, g.length_mm / 2.0,
+                                      g.width_mm / 2.0, g.length_mm / 2.0});
     }
-  } catch (const std::invalid_argument& e) {
-    return error(std::string("generate: ") + e.what(), 2);
+  } else {
+    Planed plane;
+    plane.u_size_mm = g.width_mm;
+    plane.v_size_mm = g.length_mm;
+    pts = generate_raster(plane, g.raster);
+    Planed big = plane;
+    big.origin = Vec3d(-margin, -margin, 0.0);
+    big.u_size_mm += 2 * margin, big.v_size_mm += 2 * margin;
+    mesh = tessellate(big, cells(big.u_size_mm), cells(big.v_size_mm));
   }
+}
+
+/// The generated points as one operation of a ball-end tool at the job's feed and spindle.
+Operationd generated_operation(const GenerateArgs& g, const std::vector<GeneratedPoint>& pts) {
   Operationd op;
   op.name = g.surface == "sine" ? "SINE_FINISH" : "PLANE_FINISH";
   op.tool = Tool::ball_end_mill(2 * g.raster.tool_radius_mm, 5 * g.raster.tool_radius_mm);
@@ -151,7 +150,6 @@ int run_generate(const GenerateArgs& g) {
       "BALL_MILL_D" + std::to_string(static_cast<int>(std::lround(2 * g.raster.tool_radius_mm)));
   op.tool.number = 1;
   op.spindle_rpm = g.spindle_rpm;
-  std::size_t gouging = 0;
   for (const auto& p : pts) {
     CLPointd c;
     c.tip_mm = p.tip_mm;
@@ -159,8 +157,23 @@ int run_generate(const GenerateArgs& g) {
     c.motion = p.rapid ? Motion::Rapid : Motion::Feed;
     c.feed_mm_per_min = p.rapid ? 0.0 : g.feed_mm_per_min;
     op.points.push_back(c);
-    gouging += p.gouges ? 1 : 0;
   }
+  return op;
+}
+
+}  // namespace
+
+int run_generate(const GenerateArgs& g) {
+  if (const int code = generate_refusal(g)) return code;
+  std::vector<GeneratedPoint> pts;
+  TriangleMesh mesh;
+  try {
+    raster_and_mesh(g, pts, mesh);
+  } catch (const std::invalid_argument& e) {
+    return error(std::string("generate: ") + e.what(), 2);
+  }
+  const std::size_t gouging = static_cast<std::size_t>(
+      std::count_if(pts.begin(), pts.end(), [](const GeneratedPoint& p) { return p.gouges; }));
   if (gouging) {
     return error(
         "generate: " + std::to_string(gouging) +
@@ -168,6 +181,7 @@ int run_generate(const GenerateArgs& g) {
             "would gouge (eq. 19); use a longer wavelength, a lower height or a smaller tool",
         2);
   }
+  const Operationd op = generated_operation(g, pts);
   OutputTransaction tx;
   if (!g.out_cls.empty()) tx.stage(g.out_cls, format_new_cl({op}));
   if (!g.out_mesh.empty())

@@ -25,31 +25,6 @@ int tangent_vote(const Vec3d& move, const Vec3d& radius, const Vec3d& n, bool& s
 
 }  // namespace
 
-Vec3d Reader::spline_point(const std::vector<double>& U, const std::vector<Eigen::Vector4d>& P,
-                           int p, double t) {
-  const int n = static_cast<int>(P.size()) - 1;
-  // The knot span of t: the last k in [p, n] with U[k] <= t, by bisection (a walk from p made
-  // reading one NURBS quadratic in its knots: 40k knots 8.2 s).
-  const auto first_above = std::upper_bound(U.begin() + p + 1, U.begin() + n + 1, t);
-  const int k = static_cast<int>(first_above - U.begin()) - 1;
-  std::vector<Eigen::Vector4d> d(static_cast<std::size_t>(p + 1));
-  for (int j = 0; j <= p; ++j) {
-    const Eigen::Vector4d& c = P[static_cast<std::size_t>(j + k - p)];
-    d[static_cast<std::size_t>(j)] << c.head<3>() * c[3], c[3];
-  }
-  for (int r = 1; r <= p; ++r) {
-    for (int j = p; j >= r; --j) {
-      const double lo = U[static_cast<std::size_t>(j + k - p)];
-      const double hi = U[static_cast<std::size_t>(j + 1 + k - r)];
-      const double alpha = hi > lo ? (t - lo) / (hi - lo) : 0.0;
-      d[static_cast<std::size_t>(j)] = (1.0 - alpha) * d[static_cast<std::size_t>(j - 1)] +
-                                       alpha * d[static_cast<std::size_t>(j)];
-    }
-  }
-  const Eigen::Vector4d& h = d[static_cast<std::size_t>(p)];
-  return h.head<3>() / h[3];
-}
-
 void Reader::count_curve_points(std::size_t n, const std::string& what, int line) {
   // A budget for what a few records may ask: every point costs about 1 kB through the run
   // (measured: four MOVARC records of 400 turns at r 1000 mm, 3.6e6 chords, took 3.9 GB and
@@ -380,20 +355,8 @@ void Reader::index_records() {
   }
 }
 
-void Reader::finish_spline() {
-  PendingSpline sp = std::move(*spline_);
-  spline_.reset();
-  const std::string what = "NURBS at line " + std::to_string(sp.line);
-  if (sp.control.empty() || sp.knots.empty()) fail(sp.line, "NURBS without KNOT and CNTRL");
-  const Vec3d start = last_point("NURBS", sp.line).tip_mm;
-  const int m = static_cast<int>(sp.control.size());
-  const int p = m + 1 - static_cast<int>(sp.knots.size());
-  if (p < 1 || p > 9) {
-    fail(sp.line, what + ": " + std::to_string(sp.knots.size()) + " knots and " +
-                      std::to_string(m) +
-                      " control points do not fit NX's layout (degree = control points + 1 - "
-                      "knots, from 1 to 9)");
-  }
+std::vector<double> Reader::clamped_knots(const PendingSpline& sp, int p,
+                                          const std::string& what) const {
   double prev = 0.0;
   for (double k : sp.knots) {
     if (k < prev || k > 1.0 + 1e-9) {
@@ -421,44 +384,108 @@ void Reader::finish_spline() {
       fail(sp.line, what + ": an inner knot repeats more than the degree");
     }
   }
+  return U;
+}
+
+namespace {
+
+/// Rational B-spline point at t (de Boor on homogeneous coordinates).
+Vec3d spline_point(const std::vector<double>& U, const std::vector<Eigen::Vector4d>& P, int p,
+                   double t) {
+  const int n = static_cast<int>(P.size()) - 1;
+  // The knot span of t: the last k in [p, n] with U[k] <= t, by bisection (a walk from p made
+  // reading one NURBS quadratic in its knots: 40k knots 8.2 s).
+  const auto first_above = std::upper_bound(U.begin() + p + 1, U.begin() + n + 1, t);
+  const int k = static_cast<int>(first_above - U.begin()) - 1;
+  std::vector<Eigen::Vector4d> d(static_cast<std::size_t>(p + 1));
+  for (int j = 0; j <= p; ++j) {
+    const Eigen::Vector4d& c = P[static_cast<std::size_t>(j + k - p)];
+    d[static_cast<std::size_t>(j)] << c.head<3>() * c[3], c[3];
+  }
+  for (int r = 1; r <= p; ++r) {
+    for (int j = p; j >= r; --j) {
+      const double lo = U[static_cast<std::size_t>(j + k - p)];
+      const double hi = U[static_cast<std::size_t>(j + 1 + k - r)];
+      const double alpha = hi > lo ? (t - lo) / (hi - lo) : 0.0;
+      d[static_cast<std::size_t>(j)] = (1.0 - alpha) * d[static_cast<std::size_t>(j - 1)] +
+                                       alpha * d[static_cast<std::size_t>(j)];
+    }
+  }
+  const Eigen::Vector4d& h = d[static_cast<std::size_t>(p)];
+  return h.head<3>() / h[3];
+}
+
+/// A NURBS curve (knots U, weighted control points P, degree p) sampled within a chordal
+/// tolerance.
+struct SplineSampler {
+  const std::vector<double>& U;
+  const std::vector<Eigen::Vector4d>& P;
+  int p;
+  double tol_mm;
+  std::vector<Vec3d> out;
+
+  /// The curve from t0 (at a) to t1 (at b), halved while it strays from the chord; false
+  /// past 1e6 points.
+  bool piece(double t0, const Vec3d& a, double t1, const Vec3d& b, int depth) {
+    const Vec3d chord = b - a;
+    const double len = chord.norm();
+    double dev = 0.0;
+    for (double f : {0.25, 0.5, 0.75}) {
+      const Vec3d q = spline_point(U, P, p, t0 + f * (t1 - t0)) - a;
+      const double along = len > 0.0 ? q.dot(chord) / len : 0.0;
+      dev = std::max(dev, len > 0.0 ? (q - along * chord / len).norm() : q.norm());
+    }
+    if (dev > tol_mm && depth < 40) {
+      const double tm = 0.5 * (t0 + t1);
+      const Vec3d mpt = spline_point(U, P, p, tm);
+      return piece(t0, a, tm, mpt, depth + 1) && piece(tm, mpt, t1, b, depth + 1);
+    }
+    if (out.size() >= 1000000) return false;
+    out.push_back(b);
+    return true;
+  }
+
+  /// The whole curve from `start`: each knot span in 4 pieces, then halved.
+  bool curve(const Vec3d& start) {
+    Vec3d a = start;
+    double t0 = 0.0;
+    for (std::size_t i = static_cast<std::size_t>(p); i + 1 < U.size(); ++i) {
+      if (!(U[i + 1] > U[i])) continue;
+      for (int k = 1; k <= 4; ++k) {
+        const double t1 = U[i] + (U[i + 1] - U[i]) * k / 4.0;
+        const Vec3d b = spline_point(U, P, p, t1);
+        if (!piece(t0, a, t1, b, 0)) return false;
+        a = b;
+        t0 = t1;
+      }
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+void Reader::finish_spline() {
+  PendingSpline sp = std::move(*spline_);
+  spline_.reset();
+  const std::string what = "NURBS at line " + std::to_string(sp.line);
+  if (sp.control.empty() || sp.knots.empty()) fail(sp.line, "NURBS without KNOT and CNTRL");
+  const Vec3d start = last_point("NURBS", sp.line).tip_mm;
+  const int m = static_cast<int>(sp.control.size());
+  const int p = m + 1 - static_cast<int>(sp.knots.size());
+  if (p < 1 || p > 9) {
+    fail(sp.line, what + ": " + std::to_string(sp.knots.size()) + " knots and " +
+                      std::to_string(m) +
+                      " control points do not fit NX's layout (degree = control points + 1 - "
+                      "knots, from 1 to 9)");
+  }
+  const std::vector<double> U = clamped_knots(sp, p, what);
   std::vector<Eigen::Vector4d> P;
   P.emplace_back(start.x(), start.y(), start.z(), 1.0);
   P.insert(P.end(), sp.control.begin(), sp.control.end());
-  const double tol = options_.arc_tolerance_mm;
-  std::vector<Vec3d> out;
-  // Each knot span in 4 pieces, then halved while the curve strays from the chord.
-  std::function<void(double, const Vec3d&, double, const Vec3d&, int)> sample =
-      [&](double t0, const Vec3d& a, double t1, const Vec3d& b, int depth) {
-        const Vec3d chord = b - a;
-        const double len = chord.norm();
-        double dev = 0.0;
-        for (double f : {0.25, 0.5, 0.75}) {
-          const Vec3d q = spline_point(U, P, p, t0 + f * (t1 - t0)) - a;
-          const double along = len > 0.0 ? q.dot(chord) / len : 0.0;
-          dev = std::max(dev, len > 0.0 ? (q - along * chord / len).norm() : q.norm());
-        }
-        if (dev > tol && depth < 40) {
-          const double tm = 0.5 * (t0 + t1);
-          const Vec3d mpt = spline_point(U, P, p, tm);
-          sample(t0, a, tm, mpt, depth + 1);
-          sample(tm, mpt, t1, b, depth + 1);
-          return;
-        }
-        if (out.size() >= 1000000) fail(sp.line, what + " needs more than 1e6 points");
-        out.push_back(b);
-      };
-  Vec3d a = start;
-  double t0 = 0.0;
-  for (std::size_t i = static_cast<std::size_t>(p); i + 1 < U.size(); ++i) {
-    if (!(U[i + 1] > U[i])) continue;
-    for (int piece = 1; piece <= 4; ++piece) {
-      const double t1 = U[i] + (U[i + 1] - U[i]) * piece / 4.0;
-      const Vec3d b = spline_point(U, P, p, t1);
-      sample(t0, a, t1, b, 0);
-      a = b;
-      t0 = t1;
-    }
-  }
+  SplineSampler sampler{U, P, p, options_.arc_tolerance_mm, {}};
+  if (!sampler.curve(start)) fail(sp.line, what + " needs more than 1e6 points");
+  const std::vector<Vec3d>& out = sampler.out;
   count_curve_points(out.size(), what, sp.line);
   for (const Vec3d& q : out) add_point(q, sp.motion, sp.record, sp.line);
   ++tp_.reading.splines;

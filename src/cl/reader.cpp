@@ -118,40 +118,49 @@ void Reader::notice(int line, const std::string& what) {
   tp_.notices.push_back(format_location(source_, line, what));
 }
 
-void Reader::determine_units(const std::vector<LogicalLine>& lines) {
+/// What a CL file says of its units: the first UNITS record, the first motion, the first feed
+/// word in inches and in millimetres (Reader::determine_units).
+struct Reader::UnitEvidence {
   std::optional<LengthUnit> declared;
   std::string declared_record;
   int declared_line = 0, motion_line = 0, inch_feed_line = 0, mm_feed_line = 0;
+};
+
+void Reader::units_record(const LogicalLine& ll, const std::string& major, const std::string& args,
+                          UnitEvidence& e) const {
+  const auto fields = split_args(args);
+  const std::string a = upper(fields.empty() ? std::string() : fields[0]);
+  LengthUnit u = LengthUnit::Millimetre;
+  if (fields.size() == 1 && (a == "INCHES" || a == "INCH" || a == "IN")) {
+    u = LengthUnit::Inch;
+  } else if (fields.size() != 1 ||
+             !(a == "MM" || a == "MILLIMETERS" || a == "MILLIMETRES" || a == "METRIC")) {
+    fail(ll.line, major + " expects INCHES or MM, got '" + trim(args) + "'");
+  }
+  if (e.declared && *e.declared != u) {
+    fail(ll.line, major + "/" + a + " contradicts the " + to_string(*e.declared) + " of line " +
+                      std::to_string(e.declared_line) +
+                      (e.motion_line && e.motion_line < ll.line
+                           ? " after motion (line " + std::to_string(e.motion_line) + ")"
+                           : std::string()) +
+                      ": a change of units inside a file is not interpreted");
+  }
+  if (!e.declared) {
+    e.declared = u;
+    e.declared_line = ll.line;
+    e.declared_record = major + "/" + trim(args);
+  }
+}
+
+Reader::UnitEvidence Reader::unit_evidence(const std::vector<LogicalLine>& lines) const {
+  UnitEvidence e;
   for (const auto& ll : lines) {
     if (ll.kind != RecordKind::Record) continue;
     std::string args;
     const std::string major = major_word(ll.code, args);
     const ClWord* w = find_cl_word(major);
-    if (w && w->meaning == ClWordMeaning::Motion && motion_line == 0) motion_line = ll.line;
-    if (major == "UNITS" || major == "UNIT") {
-      const auto fields = split_args(args);
-      const std::string a = upper(fields.empty() ? std::string() : fields[0]);
-      LengthUnit u = LengthUnit::Millimetre;
-      if (fields.size() == 1 && (a == "INCHES" || a == "INCH" || a == "IN")) {
-        u = LengthUnit::Inch;
-      } else if (fields.size() != 1 ||
-                 !(a == "MM" || a == "MILLIMETERS" || a == "MILLIMETRES" || a == "METRIC")) {
-        fail(ll.line, major + " expects INCHES or MM, got '" + trim(args) + "'");
-      }
-      if (declared && *declared != u) {
-        fail(ll.line, major + "/" + a + " contradicts the " + to_string(*declared) + " of line " +
-                          std::to_string(declared_line) +
-                          (motion_line && motion_line < ll.line
-                               ? " after motion (line " + std::to_string(motion_line) + ")"
-                               : std::string()) +
-                          ": a change of units inside a file is not interpreted");
-      }
-      if (!declared) {
-        declared = u;
-        declared_line = ll.line;
-        declared_record = major + "/" + trim(args);
-      }
-    }
+    if (w && w->meaning == ClWordMeaning::Motion && e.motion_line == 0) e.motion_line = ll.line;
+    if (major == "UNITS" || major == "UNIT") units_record(ll, major, args, e);
     if (major == "FEDRAT") {
       int inch = 0, mm = 0;
       for (const auto& a : split_args(args)) {
@@ -162,43 +171,52 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
       if (inch && mm) {
         fail(ll.line, "FEDRAT/" + trim(args) + ": both an inch and a millimetre feed word");
       }
-      if (inch && !inch_feed_line) inch_feed_line = ll.line;
-      if (mm && !mm_feed_line) mm_feed_line = ll.line;
+      if (inch && !e.inch_feed_line) e.inch_feed_line = ll.line;
+      if (mm && !e.mm_feed_line) e.mm_feed_line = ll.line;
     }
   }
+  return e;
+}
+
+void Reader::determine_units(const std::vector<LogicalLine>& lines) {
+  const UnitEvidence e = unit_evidence(lines);
   // A file states its units before it moves: declared after the first motion, the units of
   // the moves before it are not known (they were read in the declared ones without a word).
-  if (declared && motion_line && motion_line < declared_line && !options_.units) {
-    const char* unit = *declared == LengthUnit::Inch ? "inches" : "millimetres";
-    fail(declared_line, declared_record + " comes after the first motion (line " +
-                            std::to_string(motion_line) + "): whether the moves before it are in " +
-                            unit + " too is not known; give " + options_.name_of("units") +
-                            " in|mm");
+  if (e.declared && e.motion_line && e.motion_line < e.declared_line && !options_.units) {
+    const char* unit = *e.declared == LengthUnit::Inch ? "inches" : "millimetres";
+    fail(e.declared_line, e.declared_record + " comes after the first motion (line " +
+                              std::to_string(e.motion_line) +
+                              "): whether the moves before it are in " + unit +
+                              " too is not known; give " + options_.name_of("units") + " in|mm");
   }
   const LengthUnit from_file =
-      declared ? *declared : (inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
+      e.declared ? *e.declared : (e.inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
   tp_.units = options_.units ? *options_.units : from_file;
+  notice_units(e);
+}
+
+void Reader::notice_units(const UnitEvidence& e) {
   const char* name = to_string(tp_.units);
   // --units reads the whole file in its unit, the feed words' too (a Creo file saying UNITS /
   // INCHES over millimetre numbers, read with --units mm, kept its 1193.66 IPM as 30319 mm/min).
-  const int other_feed_line = tp_.units == LengthUnit::Inch ? mm_feed_line : inch_feed_line;
-  if (options_.units && declared && *declared != *options_.units) {
-    notice(declared_line, options_.name_of("units") + " " + name + " read the file in " + name +
-                              " though it says " + to_string(*declared) + " here" +
-                              (other_feed_line ? ", its feed words too" : ""));
+  const int other_feed_line = tp_.units == LengthUnit::Inch ? e.mm_feed_line : e.inch_feed_line;
+  if (options_.units && e.declared && *e.declared != *options_.units) {
+    notice(e.declared_line, options_.name_of("units") + " " + name + " read the file in " + name +
+                                " though it says " + to_string(*e.declared) + " here" +
+                                (other_feed_line ? ", its feed words too" : ""));
   } else if (options_.units && other_feed_line) {
     notice(other_feed_line,
            options_.name_of("units") + " " + name + " read the file in " + name +
                ", its feed words too, though they say " +
                (tp_.units == LengthUnit::Inch ? "millimetres (MMPM/MMPR)" : "inches (IPM/IPR)") +
                " from here");
-  } else if (tp_.units == LengthUnit::Millimetre && inch_feed_line) {
-    notice(inch_feed_line,
+  } else if (tp_.units == LengthUnit::Millimetre && e.inch_feed_line) {
+    notice(e.inch_feed_line,
            "a feed in inches (IPM/IPR) in a file read in millimetres: the "
            "feed is taken as its word says, the coordinates in mm (" +
                options_.name_of("units") + " mm reads the feeds in mm too)");
-  } else if (tp_.units == LengthUnit::Inch && mm_feed_line) {
-    notice(mm_feed_line,
+  } else if (tp_.units == LengthUnit::Inch && e.mm_feed_line) {
+    notice(e.mm_feed_line,
            "a feed in millimetres (MMPM/MMPR) in a file read in inches: the feed "
            "is taken as its word says, the coordinates in inches (" +
                options_.name_of("units") + " in reads the feeds in inches too)");

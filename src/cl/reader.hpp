@@ -95,6 +95,11 @@ class Reader {
   /// record, else inches when a feed is IPM/IPR, else mm. A change of unit is refused; feed
   /// words and --units that contradict the file's unit are said (not behind -v).
   void determine_units(const std::vector<LogicalLine>& lines);
+  struct UnitEvidence;
+  UnitEvidence unit_evidence(const std::vector<LogicalLine>& lines) const;
+  void units_record(const LogicalLine& ll, const std::string& major, const std::string& args,
+                    UnitEvidence& e) const;
+  void notice_units(const UnitEvidence& e);
   std::vector<double> numbers(const std::vector<std::string>& args, std::size_t from,
                               std::size_t to, const std::string& major, int line) const;
   Operationd& current_op();
@@ -147,14 +152,14 @@ class Reader {
   /// Records' operation and point ranges from the points (after arcs were inserted and empty
   /// operations dropped).
   void index_records();
-  /// Rational B-spline point at t (de Boor on homogeneous coordinates).
-  static Vec3d spline_point(const std::vector<double>& U, const std::vector<Eigen::Vector4d>& P,
-                            int p, double t);
   /// Evaluates the NURBS collected since its NURBS record into points within the chordal
   /// tolerance. NX's layout (docs/cl-files.md): the current point is the first control
   /// point, the CNTRL records the others; KNOT lists the knots after the p + 1 zeros and the
   /// last of the p + 1 ones, so the degree is p = (CNTRL count + 1) - (KNOT count).
   void finish_spline();
+  /// The clamped knot vector of `sp` of degree p (p + 1 zeros, its knots, p + 1 ones), its
+  /// knots checked.
+  std::vector<double> clamped_knots(const PendingSpline& sp, int p, const std::string& what) const;
   void handle(const LogicalLine& ll);
   /// A feed word's value: FEDRAT/f, /{MMPM|IPM|PERMIN|MMPR|IPR|PERREV},f or /f,unit, in
   /// mm/min at the spindle speed in force (0 for a feed per revolution with none). With

@@ -16,10 +16,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "geometry/mesh_surface.hpp"
 #include "taxopt/core/error.hpp"
 
 namespace taxopt {
 namespace {
+
+using detail::chordal_error_of;
+using detail::face_normal;
+using detail::surface_model_of;
+using detail::SurfaceModel;
+using detail::width_across;
 
 using K = CGAL::Simple_cartesian<double>;
 using Triangles = std::vector<K::Triangle_3>;
@@ -34,164 +41,6 @@ Vec3d to_eigen(const K::Point_3& p) { return {p.x(), p.y(), p.z()}; }
 
 /// Monomials of the height jet up to degree 3: 1, x, y, x2, xy, y2, x3, x2y, xy2, y3.
 constexpr int kTerms3 = 10, kTerms2 = 6;
-
-/// Unit normal of face f (by its vertex order), zero for a degenerate face.
-Vec3d face_normal(const TriangleMesh& m, const std::array<int, 3>& f) {
-  const Vec3d& a = m.vertices[static_cast<std::size_t>(f[0])];
-  const Vec3d n = (m.vertices[static_cast<std::size_t>(f[1])] - a)
-                      .cross(m.vertices[static_cast<std::size_t>(f[2])] - a);
-  const double l = n.norm();
-  return l > 0.0 ? Vec3d(n / l) : Vec3d::Zero();
-}
-
-/// Distance of face f's vertex opposite the edge (a, b) from that edge's line, and the vertex.
-double width_across(const TriangleMesh& m, const std::array<int, 3>& f, int a, int b,
-                    Vec3d* opposite = nullptr) {
-  int o = f[0];
-  for (int v : f) {
-    if (v != a && v != b) o = v;
-  }
-  const Vec3d& pa = m.vertices[static_cast<std::size_t>(a)];
-  const Vec3d e = (m.vertices[static_cast<std::size_t>(b)] - pa).normalized();
-  const Vec3d d = m.vertices[static_cast<std::size_t>(o)] - pa;
-  if (opposite) *opposite = m.vertices[static_cast<std::size_t>(o)];
-  return (d - d.dot(e) * e).norm();
-}
-
-/// An edge of a face as (low vertex, high vertex, face).
-struct HalfEdge {
-  int a, b, face;
-};
-
-/// Every face's edges, sorted so that the faces sharing an edge stand next to each other.
-std::vector<HalfEdge> sorted_half_edges(const TriangleMesh& m) {
-  std::vector<HalfEdge> edges;
-  edges.reserve(3 * m.faces.size());
-  for (std::size_t f = 0; f < m.faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = m.faces[f][static_cast<std::size_t>(k)];
-      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
-    }
-  }
-  std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
-  });
-  return edges;
-}
-
-/// A turn between two facets from this angle on is a designed edge, not a tessellated curve
-/// (the chordal error's and the smooth normals' one threshold).
-constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
-
-/// A face smaller than this times the biggest face of a corner (by least height) does not
-/// enter the corner's normal (an evenly or gradually refined mesh never has one).
-constexpr double kSmallerFace = 0.25;
-
-/// The designed surface as the mesh gives it (Part::surface_normal).
-struct SurfaceModel {
-  /// Per face corner (3 f + k): the surface's normal there, the angle-weighted mean of the
-  /// normals of the corner's faces that turn less than kCreaseRad from this face (so split
-  /// across creases); zero for a degenerate face. Floats: 36 bytes a face.
-  std::vector<Eigen::Vector3f> corner_normal;
-  /// The edges (low vertex, high vertex) that are no tessellated curve -- a crease, a border
-  /// or a non-manifold edge --, sorted; and the vertices on them.
-  std::vector<std::pair<int, int>> feature_edges;
-  std::vector<bool> feature_vertex;
-};
-
-/// Builds the SurfaceModel of a mesh.
-SurfaceModel surface_model_of(const TriangleMesh& m) {
-  SurfaceModel s;
-  const std::size_t nf = m.faces.size(), nv = m.vertices.size();
-  std::vector<Vec3d> fn(nf);
-  for (std::size_t f = 0; f < nf; ++f) fn[f] = face_normal(m, m.faces[f]);
-  // The faces around each vertex (compressed rows), with the face's angle at it.
-  std::vector<std::size_t> start(nv + 1, 0);
-  for (const auto& f : m.faces) {
-    for (int v : f) ++start[static_cast<std::size_t>(v) + 1];
-  }
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<std::pair<int, double>> around(start[nv]);
-  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const auto& F = m.faces[f];
-      const Vec3d& p = m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])];
-      const Vec3d e1 =
-          m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>((k + 1) % 3)])] - p;
-      const Vec3d e2 =
-          m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>((k + 2) % 3)])] - p;
-      const double l = e1.norm() * e2.norm();
-      const double angle = l > 0.0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) : 0.0;
-      around[fill[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])]++] = {
-          static_cast<int>(f), angle};
-    }
-  }
-  // A face's size: its least height (2 area / longest edge), the width of a fillet's strip.
-  std::vector<double> size(nf, 0.0);
-  for (std::size_t f = 0; f < nf; ++f) {
-    const auto& F = m.faces[f];
-    const Vec3d& a = m.vertices[static_cast<std::size_t>(F[0])];
-    const Vec3d& b = m.vertices[static_cast<std::size_t>(F[1])];
-    const Vec3d& c = m.vertices[static_cast<std::size_t>(F[2])];
-    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    if (longest > 0.0) size[f] = (b - a).cross(c - a).norm() / longest;
-  }
-  const double crease_cos = std::cos(kCreaseRad);
-  s.corner_normal.assign(3 * nf, Eigen::Vector3f::Zero());
-  for (std::size_t f = 0; f < nf; ++f) {
-    if (fn[f].isZero()) continue;
-    for (int k = 0; k < 3; ++k) {
-      const auto v = static_cast<std::size_t>(m.faces[f][static_cast<std::size_t>(k)]);
-      // The corner's faces on this side of any crease (either orientation: a mesh's faces
-      // need not agree on theirs), and the biggest of them.
-      const auto same_side = [&](int g) {
-        return std::abs(fn[static_cast<std::size_t>(g)].dot(fn[f])) >= crease_cos;
-      };
-      double biggest = 0.0;
-      for (std::size_t r = start[v]; r < start[v + 1]; ++r) {
-        if (same_side(around[r].first)) {
-          biggest = std::max(biggest, size[static_cast<std::size_t>(around[r].first)]);
-        }
-      }
-      // A big face beside a fillet's thin strips is a designed plane, tangent to the fillet
-      // where they meet: the corner takes its normal alone (mixed with the strips', a CAD
-      // part's 60 mm top tilted by 1.9 deg beside a 4 mm fillet in 12 strips, and a fillet's
-      // first strip by half its turn where it meets the floor).
-      Vec3d sum = Vec3d::Zero();
-      for (std::size_t r = start[v]; r < start[v + 1]; ++r) {
-        const auto [g, angle] = around[r];
-        if (!same_side(g) || size[static_cast<std::size_t>(g)] < kSmallerFace * biggest) continue;
-        const Vec3d& ng = fn[static_cast<std::size_t>(g)];
-        sum += (ng.dot(fn[f]) < 0.0 ? -angle : angle) * ng;
-      }
-      if (sum.norm() > 0.0)
-        s.corner_normal[3 * f + static_cast<std::size_t>(k)] = sum.normalized().cast<float>();
-    }
-  }
-  // Edges no tessellated curve runs over: not shared by exactly two faces, or turning by
-  // kCreaseRad or more between them.
-  const std::vector<HalfEdge> edges = sorted_half_edges(m);
-  s.feature_vertex.assign(nv, false);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
-    bool feature = j - i != 2;
-    if (!feature) {
-      const Vec3d& n1 = fn[static_cast<std::size_t>(edges[i].face)];
-      const Vec3d& n2 = fn[static_cast<std::size_t>(edges[i + 1].face)];
-      feature = n1.isZero() || n2.isZero() || std::abs(n1.dot(n2)) < crease_cos;
-    }
-    if (feature) {
-      s.feature_edges.push_back({edges[i].a, edges[i].b});
-      s.feature_vertex[static_cast<std::size_t>(edges[i].a)] = true;
-      s.feature_vertex[static_cast<std::size_t>(edges[i].b)] = true;
-    }
-    i = j;
-  }
-  return s;
-}
 
 /// Barycentric coordinates w of point p in face f (false for a degenerate face).
 bool barycentric(const TriangleMesh& m, const std::array<int, 3>& f, const Vec3d& p, double w[3]) {
@@ -240,66 +89,6 @@ struct Part::Impl {
   double chordal_error = 0.0;
   SurfaceModel surface;
 };
-
-namespace {
-
-/// The chordal error estimate of Part::chordal_error_mm.
-double chordal_error_of(const TriangleMesh& m) {
-  const std::vector<HalfEdge> edges = sorted_half_edges(m);
-  // Every edge two facets share, with its turn below 30 deg (sharper is a designed edge).
-  struct Turn {
-    int a, b, f1, f2;
-    double angle_rad;
-  };
-  std::vector<Turn> turns;
-  const double sharp = kCreaseRad;
-  for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
-    const HalfEdge& e = edges[i];
-    const HalfEdge& g = edges[i + 1];
-    if (e.a != g.a || e.b != g.b) continue;
-    if (i + 2 < edges.size() && edges[i + 2].a == e.a && edges[i + 2].b == e.b) continue;
-    const Vec3d n1 = face_normal(m, m.faces[static_cast<std::size_t>(e.face)]);
-    const Vec3d n2 = face_normal(m, m.faces[static_cast<std::size_t>(g.face)]);
-    if (n1.isZero() || n2.isZero()) continue;
-    // Consistently oriented neighbours share the edge in opposite directions: the angle
-    // between their normals is the turn; else one is flipped.
-    const double angle = std::acos(std::clamp(std::abs(n1.dot(n2)), 0.0, 1.0));
-    // Below 1e-5 rad: one plane (an STL's float coordinates turn its facets by about 1e-7).
-    if (angle > 1e-5 && angle < sharp) turns.push_back({e.a, e.b, e.face, g.face, angle});
-  }
-  // The largest turn at each vertex: a facet's far vertex on a curved surface carries a turn
-  // of the same order; on a flat face beside a designed crease (or chamfer) it carries none.
-  std::vector<double> vertex_turn(m.vertices.size(), 0.0);
-  for (const Turn& t : turns) {
-    for (int v : {t.a, t.b}) {
-      double& w = vertex_turn[static_cast<std::size_t>(v)];
-      w = std::max(w, t.angle_rad);
-    }
-  }
-  double largest = 0.0;
-  for (const Turn& t : turns) {
-    const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(t.f1)];
-    const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(t.f2)];
-    const auto far_vertex_turn = [&](const std::array<int, 3>& f) {
-      for (int v : f) {
-        if (v != t.a && v != t.b) return vertex_turn[static_cast<std::size_t>(v)];
-      }
-      return 0.0;
-    };
-    // A curved surface's tessellation: both facets' far vertices turn too (by at least a
-    // quarter of this edge's turn); a crease between flat faces, or a lone chamfer, not.
-    if (far_vertex_turn(f1) < 0.25 * t.angle_rad || far_vertex_turn(f2) < 0.25 * t.angle_rad) {
-      continue;
-    }
-    const double h = std::min(width_across(m, f1, t.a, t.b), width_across(m, f2, t.a, t.b));
-    // The sagitta of an arc turning by the angle over a chord h: h/2 tan(angle/4) (h angle/8
-    // to first order; exact for a circle tessellated evenly, so never below it there).
-    largest = std::max(largest, 0.5 * h * std::tan(0.25 * t.angle_rad));
-  }
-  return largest;
-}
-
-}  // namespace
 
 Part::Part(TriangleMesh mesh) : impl_(std::make_unique<Impl>()) {
   // As the mesh readers check a file: a mesh built in code has not been read.
@@ -506,70 +295,57 @@ std::vector<int> Part::faces_within(const Vec3d& q, double radius_mm) const {
   return out;
 }
 
-LocalFit Part::fit_towards(const Vec3d& q, int neighbours) const {
-  const Closest c = closest(q);
-  const auto& f = impl_->mesh.faces[static_cast<std::size_t>(c.face)];
-  const auto& V = impl_->mesh.vertices;
-  Vec3d w = q - c.point;
-  if (w.norm() > 1e-9) {
-    w.normalize();
-  } else {
-    w = (V[static_cast<std::size_t>(f[1])] - V[static_cast<std::size_t>(f[0])])
-            .cross(V[static_cast<std::size_t>(f[2])] - V[static_cast<std::size_t>(f[0])])
-            .normalized();
-  }
-  const Vec3d u = w.unitOrthogonal(), v = w.cross(u);
-  const Vec3d qa(0.0, 0.0, (q - c.point).dot(w));  // q in the local frame
+namespace {
 
-  // Samples: nearest vertices, dropping those steeper than 60 deg off the tangent plane
-  // (the far side of a thin wall or of a sharp edge).
-  std::vector<Eigen::Vector3d> local;
-  Knn search(impl_->kd, to_cgal(c.point), static_cast<unsigned>(std::max(neighbours, 6)));
-  double radius = 0.0;
-  for (const auto& nb : search) {
-    const Vec3d d = to_eigen(nb.first) - c.point;
-    const Eigen::Vector3d l(d.dot(u), d.dot(v), d.dot(w));
-    if (std::abs(l.z()) > 1.7320508 * std::hypot(l.x(), l.y()) + 1e-12) continue;
-    local.push_back(l);
-    radius = std::max(radius, std::hypot(l.x(), l.y()));
-  }
-  LocalFit out;
-  const int terms = local.size() >= 15 ? kTerms3 : (local.size() >= 8 ? kTerms2 : 0);
+/// The monomials of the height jet at (x, y): 1, x, y, x2, xy, y2, x3, x2y, xy2, y3.
+void monomials(double x, double y, double m[kTerms3]) {
+  const double v[kTerms3] = {1,     x,         y,         x * x,     x * y,
+                             y * y, x * x * x, x * x * y, x * y * y, y * y * y};
+  std::copy(v, v + kTerms3, m);
+}
+
+/// The height jet's coefficients (kTerms3, zero beyond those fitted) by least squares through
+/// `local` (x, y, height), of degree 3 from 15 samples, 2 from 8, else none (all zero).
+Eigen::VectorXd fit_height_jet(const std::vector<Eigen::Vector3d>& local, double radius) {
   Eigen::VectorXd a = Eigen::VectorXd::Zero(kTerms3);
-  if (terms > 0 && radius > 0.0) {
-    // Least squares in coordinates scaled by the sample radius (well conditioned).
-    const double s = radius;
-    Eigen::MatrixXd A(static_cast<Eigen::Index>(local.size()), terms);
-    Eigen::VectorXd b(static_cast<Eigen::Index>(local.size()));
-    for (std::size_t i = 0; i < local.size(); ++i) {
-      const double x = local[i].x() / s, y = local[i].y() / s;
-      const double m[kTerms3] = {1,     x,         y,         x * x,     x * y,
-                                 y * y, x * x * x, x * x * y, x * y * y, y * y * y};
-      for (int k = 0; k < terms; ++k) A(static_cast<Eigen::Index>(i), k) = m[k];
-      b(static_cast<Eigen::Index>(i)) = local[i].z();
-    }
-    const Eigen::VectorXd sol = A.colPivHouseholderQr().solve(b);
-    // Back to unscaled coefficients.
-    const double sc[kTerms3] = {1,     s,         s,         s * s,     s * s,
-                                s * s, s * s * s, s * s * s, s * s * s, s * s * s};
-    for (int k = 0; k < terms; ++k) a(k) = sol(k) / sc[k];
-    out.samples = static_cast<int>(local.size());
+  const int terms = local.size() >= 15 ? kTerms3 : (local.size() >= 8 ? kTerms2 : 0);
+  if (terms == 0 || !(radius > 0.0)) return a;
+  // Least squares in coordinates scaled by the sample radius (well conditioned).
+  const double s = radius;
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(local.size()), terms);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(local.size()));
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    double m[kTerms3];
+    monomials(local[i].x() / s, local[i].y() / s, m);
+    for (int k = 0; k < terms; ++k) A(static_cast<Eigen::Index>(i), k) = m[k];
+    b(static_cast<Eigen::Index>(i)) = local[i].z();
   }
-  // h and derivatives of the jet at (x, y).
-  const auto eval = [&a](double x, double y, double d[6]) {
-    d[0] = a(0) + a(1) * x + a(2) * y + a(3) * x * x + a(4) * x * y + a(5) * y * y +
-           a(6) * x * x * x + a(7) * x * x * y + a(8) * x * y * y + a(9) * y * y * y;
-    d[1] = a(1) + 2 * a(3) * x + a(4) * y + 3 * a(6) * x * x + 2 * a(7) * x * y + a(8) * y * y;
-    d[2] = a(2) + a(4) * x + 2 * a(5) * y + a(7) * x * x + 2 * a(8) * x * y + 3 * a(9) * y * y;
-    d[3] = 2 * a(3) + 6 * a(6) * x + 2 * a(7) * y;
-    d[4] = a(4) + 2 * a(7) * x + 2 * a(8) * y;
-    d[5] = 2 * a(5) + 2 * a(8) * x + 6 * a(9) * y;
-  };
-  // Point of the fitted surface nearest to q: Newton on |S(x, y) - q|^2.
+  const Eigen::VectorXd sol = A.colPivHouseholderQr().solve(b);
+  // Back to unscaled coefficients.
+  double sc[kTerms3];
+  monomials(s, s, sc);
+  for (int k = 0; k < terms; ++k) a(k) = sol(k) / sc[k];
+  return a;
+}
+
+/// The jet's height and derivatives at (x, y): h, hx, hy, hxx, hxy, hyy.
+void jet_at(const Eigen::VectorXd& a, double x, double y, double d[6]) {
+  d[0] = a(0) + a(1) * x + a(2) * y + a(3) * x * x + a(4) * x * y + a(5) * y * y +
+         a(6) * x * x * x + a(7) * x * x * y + a(8) * x * y * y + a(9) * y * y * y;
+  d[1] = a(1) + 2 * a(3) * x + a(4) * y + 3 * a(6) * x * x + 2 * a(7) * x * y + a(8) * y * y;
+  d[2] = a(2) + a(4) * x + 2 * a(5) * y + a(7) * x * x + 2 * a(8) * x * y + 3 * a(9) * y * y;
+  d[3] = 2 * a(3) + 6 * a(6) * x + 2 * a(7) * y;
+  d[4] = a(4) + 2 * a(7) * x + 2 * a(8) * y;
+  d[5] = 2 * a(5) + 2 * a(8) * x + 6 * a(9) * y;
+}
+
+/// The point (x, y) of the jet's surface nearest to (0, 0, qz): Newton on |S(x, y) - q|^2,
+/// its steps at most half the sample radius.
+Eigen::Vector2d nearest_on_jet(const Eigen::VectorXd& a, double qz, double radius) {
   double x = 0.0, y = 0.0, d[6];
   for (int it = 0; it < 30; ++it) {
-    eval(x, y, d);
-    const double r = d[0] - qa.z();
+    jet_at(a, x, y, d);
+    const double r = d[0] - qz;
     const Eigen::Vector2d g(x + r * d[1], y + r * d[2]);
     Eigen::Matrix2d H;
     H << 1 + d[1] * d[1] + r * d[3], d[1] * d[2] + r * d[4], d[1] * d[2] + r * d[4],
@@ -586,8 +362,44 @@ LocalFit Part::fit_towards(const Vec3d& q, int neighbours) const {
     y += step.y();
     if (step.norm() < 1e-12) break;
   }
-  eval(x, y, d);
-  out.jet.p = c.point + x * u + y * v + d[0] * w;
+  return {x, y};
+}
+
+}  // namespace
+
+LocalFit Part::fit_towards(const Vec3d& q, int neighbours) const {
+  const Closest c = closest(q);
+  const auto& f = impl_->mesh.faces[static_cast<std::size_t>(c.face)];
+  const auto& V = impl_->mesh.vertices;
+  Vec3d w = q - c.point;
+  if (w.norm() > 1e-9) {
+    w.normalize();
+  } else {
+    w = (V[static_cast<std::size_t>(f[1])] - V[static_cast<std::size_t>(f[0])])
+            .cross(V[static_cast<std::size_t>(f[2])] - V[static_cast<std::size_t>(f[0])])
+            .normalized();
+  }
+  const Vec3d u = w.unitOrthogonal(), v = w.cross(u);
+
+  // Samples: nearest vertices, dropping those steeper than 60 deg off the tangent plane
+  // (the far side of a thin wall or of a sharp edge).
+  std::vector<Eigen::Vector3d> local;
+  Knn search(impl_->kd, to_cgal(c.point), static_cast<unsigned>(std::max(neighbours, 6)));
+  double radius = 0.0;
+  for (const auto& nb : search) {
+    const Vec3d d = to_eigen(nb.first) - c.point;
+    const Eigen::Vector3d l(d.dot(u), d.dot(v), d.dot(w));
+    if (std::abs(l.z()) > 1.7320508 * std::hypot(l.x(), l.y()) + 1e-12) continue;
+    local.push_back(l);
+    radius = std::max(radius, std::hypot(l.x(), l.y()));
+  }
+  LocalFit out;
+  const Eigen::VectorXd a = fit_height_jet(local, radius);
+  if (local.size() >= 8 && radius > 0.0) out.samples = static_cast<int>(local.size());
+  const Eigen::Vector2d at = nearest_on_jet(a, (q - c.point).dot(w), radius);  // q: (0, 0, qz)
+  double d[6];
+  jet_at(a, at.x(), at.y(), d);
+  out.jet.p = c.point + at.x() * u + at.y() * v + d[0] * w;
   out.jet.su = u + d[1] * w;
   out.jet.sv = v + d[2] * w;
   out.jet.suu = d[3] * w;

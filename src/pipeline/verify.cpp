@@ -108,13 +108,64 @@ void check_turns_in_cut(const Run& run, const OperationContext& o, const Written
               format_location(run.tp.source, op.points[first].line, os.str()));
 }
 
+/// The written point `last` within the rotary axes' ranges (its row marked at a range's end)
+/// and, its joints in machine coordinates, within the machine's linear travel.
+void check_point_ranges(const Run& run, const OperationContext& o, const GcodeMove& last,
+                        const CLPointd& want, PointRow& row, OperationResult& r, JobResult& res) {
+  const Operationd& op = *o.op;
+  const Machine& machine = run.machine;
+  const Posed written{deg_to_rad(last.tilt_deg), deg_to_rad(last.c_deg)};
+  // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
+  const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
+    const double near_rad = deg_to_rad(0.01);
+    return !range.continuous &&
+           (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
+  };
+  if (at_limit(machine.rotary.tilt, written.tilt_rad) ||
+      at_limit(machine.rotary.c, written.c_rad)) {
+    row.mark(PointMark::AxisLimit);
+  }
+  if (!machine.rotary.tilt.contains(written.tilt_rad) ||
+      !machine.rotary.c.contains(written.c_rad)) {
+    if (r.verification.within_axis_limits) {
+      add_finding(res, FindingCode::AxisRangeExceeded, o.index, want.line,
+                  format_location(
+                      run.tp.source, want.line,
+                      "operation " + op.name + ": written " + machine.rotary.tilt_letter() + " " +
+                          std::to_string(last.tilt_deg) + " / C " + std::to_string(last.c_deg) +
+                          " deg is outside the machine's axis ranges"));
+    }
+    r.verification.within_axis_limits = false;
+  }
+  // The linear travel, in machine coordinates, where the machine file gives it: the
+  // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
+  const Vec3d joints_mm = joints_of_written_mm(machine, last.xyz_mm, written) +
+                          Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
+  for (int q = 0; q < 3; ++q) {
+    const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
+    if (!outside) continue;
+    row.mark(PointMark::TravelExceeded);
+    if (r.verification.within_axis_limits) {
+      std::ostringstream os;
+      os << "operation " << op.name << ": "
+         << "XYZ"[q] << " would be " << joints_mm[q] << " mm in machine coordinates";
+      if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
+        os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
+      }
+      os << *outside;
+      add_finding(res, FindingCode::TravelExceeded, o.index, want.line,
+                  format_location(run.tp.source, want.line, os.str()));
+    }
+    r.verification.within_axis_limits = false;
+  }
+}
+
 /// Point i as read back: the tool length and TCP on, the round trip, within the axes' ranges
 /// and the machine's travel; its row's place.
 void check_point_written(const Run& run, const OperationContext& o, const PostedOperation& po,
                          const GcodeMove* last, std::size_t i, WrittenAxes& ax, OperationResult& r,
                          JobResult& res) {
   const Operationd& op = *o.op;
-  const std::size_t k = o.index;
   const Machine& machine = run.machine;
   const int decimals = machine.gcode.decimals;
   // Where TCP is asked for, the controller's must be on, with the tool length offset
@@ -122,7 +173,7 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
   const bool tcp_mode = machine.gcode.mode == GcodeMode::Tcp;
   if (!last->length_offset || (tcp_mode && !last->tcp)) {
     if (r.verification.tool_length_active) {
-      add_finding(res, FindingCode::ToolLengthOffsetOff, k, op.points[i].line,
+      add_finding(res, FindingCode::ToolLengthOffsetOff, o.index, op.points[i].line,
                   "operation " + op.name + ": G-code line " + std::to_string(last->line) +
                       " moves with " +
                       (!last->length_offset ? std::string("the tool length offset off")
@@ -146,49 +197,7 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
       std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
   r.verification.roundtrip_max_deg =
       std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
-  // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
-  const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
-    const double near_rad = deg_to_rad(0.01);
-    return !range.continuous &&
-           (v_rad <= range.min_rad + near_rad || v_rad >= range.max_rad - near_rad);
-  };
-  if (at_limit(machine.rotary.tilt, written.tilt_rad) ||
-      at_limit(machine.rotary.c, written.c_rad)) {
-    r.rows[i].mark(PointMark::AxisLimit);
-  }
-  if (!machine.rotary.tilt.contains(written.tilt_rad) ||
-      !machine.rotary.c.contains(written.c_rad)) {
-    if (r.verification.within_axis_limits) {
-      add_finding(res, FindingCode::AxisRangeExceeded, k, want.line,
-                  format_location(
-                      run.tp.source, want.line,
-                      "operation " + op.name + ": written " + machine.rotary.tilt_letter() + " " +
-                          std::to_string(last->tilt_deg) + " / C " + std::to_string(last->c_deg) +
-                          " deg is outside the machine's axis ranges"));
-    }
-    r.verification.within_axis_limits = false;
-  }
-  // The linear travel, in machine coordinates, where the machine file gives it: the
-  // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
-  const Vec3d joints_mm = joints_of_written_mm(machine, last->xyz_mm, written) +
-                          Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
-  for (int q = 0; q < 3; ++q) {
-    const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
-    if (!outside) continue;
-    r.rows[i].mark(PointMark::TravelExceeded);
-    if (r.verification.within_axis_limits) {
-      std::ostringstream os;
-      os << "operation " << op.name << ": "
-         << "XYZ"[q] << " would be " << joints_mm[q] << " mm in machine coordinates";
-      if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
-        os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
-      }
-      os << *outside;
-      add_finding(res, FindingCode::TravelExceeded, k, want.line,
-                  format_location(run.tp.source, want.line, os.str()));
-    }
-    r.verification.within_axis_limits = false;
-  }
+  check_point_ranges(run, o, *last, want, r.rows[i], r, res);
   r.max_axis_change_deg =
       std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
   set_point_row(want, i, ax, r.rows[i]);

@@ -102,6 +102,124 @@ bool tidy(std::vector<Stretch>& stretches, const IndexRange& pass) {
   return stretches.size() == 1 && stretches[0].begin == pass.begin && stretches[0].end == pass.end;
 }
 
+/// One run of the guard over the passes: their states, stretches and the candidate axes.
+class Guard {
+ public:
+  Guard(const std::vector<IndexRange>& passes, const std::vector<char>& guarded,
+        const std::vector<Vec3d>& optimised, const std::vector<Vec3d>& input,
+        const StretchGuardOptions& options)
+      : passes_(passes),
+        optimised_(optimised),
+        input_(input),
+        options_(options),
+        state_(passes.size(), State::Settled),
+        stretches_(passes.size()) {
+    out_.axes = optimised;
+    out_.why.assign(optimised.size(), KeptWhy::None);
+    for (std::size_t q = 0; q < passes.size(); ++q) {
+      if (q < guarded.size() && guarded[q] && passes[q].size() > 0) state_[q] = State::Open;
+    }
+  }
+
+  StretchGuardResult run(const StretchEvaluation& evaluate) {
+    for (std::size_t round = 0;; ++round) {
+      std::vector<char> check;
+      if (!open_points(check)) break;
+      const StretchVerdicts verdicts = evaluate(out_.axes, out_.why, check);
+      for (std::size_t q = 0; q < passes_.size(); ++q) {
+        if (state_[q] == State::Open) judge(q, verdicts, round);
+      }
+    }
+    totals();
+    return std::move(out_);
+  }
+
+ private:
+  /// The points of the open passes in `check`; false: none is open.
+  bool open_points(std::vector<char>& check) const {
+    check.assign(optimised_.size(), 0);
+    bool any_open = false;
+    for (std::size_t q = 0; q < passes_.size(); ++q) {
+      if (state_[q] != State::Open) continue;
+      any_open = true;
+      std::fill(check.begin() + static_cast<long>(passes_[q].begin),
+                check.begin() + static_cast<long>(passes_[q].end), 1);
+    }
+    return any_open;
+  }
+
+  /// Pass q after a round's verdicts: settled, its stretches grown, or kept whole.
+  void judge(std::size_t q, const StretchVerdicts& verdicts, std::size_t round) {
+    const std::vector<PointVerdict>& verdict = verdicts.points;
+    const IndexRange& pass = passes_[q];
+    bool worse = false, hit = false;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      worse = worse || verdict[i] != PointVerdict::Good;
+      hit = hit || verdict[i] == PointVerdict::Hits;
+    }
+    const bool gains = q < verdicts.gains.size() && verdicts.gains[q];
+    if (!worse && (stretches_[q].empty() || gains)) {
+      state_[q] = State::Settled;
+      return;
+    }
+    bool whole = !worse || round + 1 >= options_.rounds;
+    if (!whole) {
+      mark(stretches_[q], pass, verdict, options_.first_blend);
+      whole = tidy(stretches_[q], pass);
+    }
+    if (whole) {
+      for (const Stretch& s : stretches_[q]) hit = hit || s.hit;
+      stretches_[q] = {{pass.begin, pass.end, 0, hit, 0}};
+      state_[q] = State::Whole;
+    }
+    apply(q);
+  }
+
+  /// The candidate of pass q from its stretches: the input's axes on them, blended at their
+  /// ends, the optimised elsewhere.
+  void apply(std::size_t q) {
+    const IndexRange& pass = passes_[q];
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      out_.axes[i] = optimised_[i];
+      out_.why[i] = KeptWhy::None;
+    }
+    for (const Stretch& s : stretches_[q]) {
+      for (std::size_t i = s.begin; i < s.end; ++i) {
+        out_.axes[i] = input_[i];
+        out_.why[i] = s.hit ? KeptWhy::Collision : KeptWhy::PeakRate;
+      }
+      for_each_blend_point(s, pass, [&](std::size_t i, double weight) {
+        if (angle_between(optimised_[i], input_[i]) > Constants<double>::pi() - 1e-6) {
+          out_.axes[i] = input_[i];  // no unique arc between them: the input's
+        } else {
+          out_.axes[i] = slerp(optimised_[i], input_[i], weight).normalized();
+        }
+        out_.why[i] = KeptWhy::Join;
+      });
+    }
+  }
+
+  void totals() {
+    for (std::size_t q = 0; q < passes_.size(); ++q) {
+      if (state_[q] == State::Whole) ++out_.whole_passes;
+      if (state_[q] == State::Settled) out_.stretches += stretches_[q].size();
+    }
+    for (const KeptWhy w : out_.why) {
+      out_.points_hit += w == KeptWhy::Collision;
+      out_.points_rate += w == KeptWhy::PeakRate;
+      out_.points_blended += w == KeptWhy::Join;
+    }
+  }
+
+  const std::vector<IndexRange>& passes_;
+  const std::vector<Vec3d>& optimised_;
+  const std::vector<Vec3d>& input_;
+  const StretchGuardOptions& options_;
+  std::vector<State> state_;
+  std::vector<std::vector<Stretch>> stretches_;
+  StretchGuardResult out_;
+};
+
 }  // namespace
 
 StretchGuardResult guard_stretches(const std::vector<IndexRange>& passes,
@@ -110,85 +228,7 @@ StretchGuardResult guard_stretches(const std::vector<IndexRange>& passes,
                                    const std::vector<Vec3d>& input,
                                    const StretchEvaluation& evaluate,
                                    const StretchGuardOptions& options) {
-  const std::size_t n = optimised.size();
-  StretchGuardResult out;
-  out.axes = optimised;
-  out.why.assign(n, KeptWhy::None);
-  std::vector<State> state(passes.size(), State::Settled);
-  for (std::size_t q = 0; q < passes.size(); ++q) {
-    if (q < guarded.size() && guarded[q] && passes[q].size() > 0) state[q] = State::Open;
-  }
-  std::vector<std::vector<Stretch>> stretches(passes.size());
-  // The candidate of pass q from its state and stretches.
-  const auto apply = [&](std::size_t q) {
-    const IndexRange& pass = passes[q];
-    for (std::size_t i = pass.begin; i < pass.end; ++i) {
-      out.axes[i] = optimised[i];
-      out.why[i] = KeptWhy::None;
-    }
-    for (const Stretch& s : stretches[q]) {
-      for (std::size_t i = s.begin; i < s.end; ++i) {
-        out.axes[i] = input[i];
-        out.why[i] = s.hit ? KeptWhy::Collision : KeptWhy::PeakRate;
-      }
-      for_each_blend_point(s, pass, [&](std::size_t i, double weight) {
-        if (angle_between(optimised[i], input[i]) > Constants<double>::pi() - 1e-6) {
-          out.axes[i] = input[i];  // no unique arc between them: the input's
-        } else {
-          out.axes[i] = slerp(optimised[i], input[i], weight).normalized();
-        }
-        out.why[i] = KeptWhy::Join;
-      });
-    }
-  };
-  for (std::size_t round = 0;; ++round) {
-    std::vector<char> check(n, 0);
-    bool any_open = false;
-    for (std::size_t q = 0; q < passes.size(); ++q) {
-      if (state[q] != State::Open) continue;
-      any_open = true;
-      std::fill(check.begin() + static_cast<long>(passes[q].begin),
-                check.begin() + static_cast<long>(passes[q].end), 1);
-    }
-    if (!any_open) break;
-    const StretchVerdicts verdicts = evaluate(out.axes, out.why, check);
-    const std::vector<PointVerdict>& verdict = verdicts.points;
-    for (std::size_t q = 0; q < passes.size(); ++q) {
-      if (state[q] != State::Open) continue;
-      const IndexRange& pass = passes[q];
-      bool worse = false, hit = false;
-      for (std::size_t i = pass.begin; i < pass.end; ++i) {
-        worse = worse || verdict[i] != PointVerdict::Good;
-        hit = hit || verdict[i] == PointVerdict::Hits;
-      }
-      const bool gains = q < verdicts.gains.size() && verdicts.gains[q];
-      if (!worse && (stretches[q].empty() || gains)) {
-        state[q] = State::Settled;
-        continue;
-      }
-      bool whole = !worse || round + 1 >= options.rounds;
-      if (!whole) {
-        mark(stretches[q], pass, verdict, options.first_blend);
-        whole = tidy(stretches[q], pass);
-      }
-      if (whole) {
-        for (const Stretch& s : stretches[q]) hit = hit || s.hit;
-        stretches[q] = {{pass.begin, pass.end, 0, hit, 0}};
-        state[q] = State::Whole;
-      }
-      apply(q);
-    }
-  }
-  for (std::size_t q = 0; q < passes.size(); ++q) {
-    if (state[q] == State::Whole) ++out.whole_passes;
-    if (state[q] == State::Settled) out.stretches += stretches[q].size();
-  }
-  for (const KeptWhy w : out.why) {
-    out.points_hit += w == KeptWhy::Collision;
-    out.points_rate += w == KeptWhy::PeakRate;
-    out.points_blended += w == KeptWhy::Join;
-  }
-  return out;
+  return Guard(passes, guarded, optimised, input, options).run(evaluate);
 }
 
 }  // namespace taxopt

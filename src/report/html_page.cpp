@@ -267,25 +267,10 @@ json mesh_json(const TriangleMesh* part_mm, const HtmlBudget& budget) {
   return data["mesh"];
 }
 
-/// An operation's series for the plots (every `plot_stride`-th row kept by plotted_rows) and
-/// its tool axes before and after at every `axes_every`-th point.
-json operation_series_json(const OperationResult& r, const Machine& machine,
-                           std::size_t plot_stride, std::size_t axes_every,
-                           std::size_t& plotted_total) {
-  json o;
-  o["name"] = r.name;
-  o["points"] = r.rows.size();
-  // The page's script reads -1 as "not checked" (with `checked` false).
-  o["checked"] = r.colliding_after.has_value();
-  o["colliding_after"] = r.colliding_after.value_or(-1);
-  o["colliding_moves"] = r.verification.colliding_moves.value_or(-1);
-  o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
-                {"omega_after", r.after.max_omega_deg_s},
-                {"accel_before", r.before.max_accel_deg_s2},
-                {"accel_after", r.after.max_accel_deg_s2}};
-  o["programmed_feed_mm_min"] = r.feed_mm_min;
-  const std::vector<std::size_t> shown = plotted_rows(r.rows, plot_stride);
-  plotted_total += shown.size();
+/// The plots' series of the rows `shown` (plotted_rows) into `o`: index, CL line, arc length,
+/// the rotary angles, rates and feeds before and after, the pass and the tip's path.
+void add_point_series(const std::vector<PointRow>& rows, const std::vector<std::size_t>& shown,
+                      json& o) {
   json idx = json::array(), line = json::array(), arc = json::array(), ab = json::array(),
        aa = json::array(), cb = json::array(), ca = json::array(), wb = json::array(),
        wa = json::array(), gb = json::array(), ga = json::array(), fb = json::array(),
@@ -295,8 +280,8 @@ json operation_series_json(const OperationResult& r, const Machine& machine,
   // The plots' x: the rows' arc length over the passes (the paper's L), carried over the
   // points outside them (rapids), so that it never runs back.
   double arc_mm = 0.0;
-  for (std::size_t i = 0; i < r.rows.size(); ++i) {
-    const PointRow& p = r.rows[i];
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const PointRow& p = rows[i];
     arc_mm = std::max(arc_mm, p.arc_mm);
     if (i > 0 && !p.feed_mm_min) ++pass_number;  // a rapid (or a move the schedule skips)
     if (at >= shown.size() || shown[at] != i) continue;
@@ -334,22 +319,49 @@ json operation_series_json(const OperationResult& r, const Machine& machine,
   o["feed_after"] = std::move(fa);
   o["pass"] = std::move(pass);
   o["path"] = std::move(path);
-  json keys = json::array();
-  for (const PointRow& p : r.rows) {
-    if (p.key) keys.push_back(rounded(p.arc_mm));
-  }
-  o["key_arc_mm"] = std::move(keys);
-  // The tool axes, before and after, at every N-th point: tip, axis before, axis after, the
-  // synthetic a before and after.
+}
+
+/// The tool axes, before and after, at every `axes_every`-th point: index, tip, axis before,
+/// axis after, the synthetic a before and after.
+json tool_axes_json(const std::vector<PointRow>& rows, const Machine& machine,
+                    std::size_t axes_every) {
   json axes = json::array();
-  for (std::size_t i = 0; i < r.rows.size(); i += axes_every) {
-    const PointRow& p = r.rows[i];
+  for (std::size_t i = 0; i < rows.size(); i += axes_every) {
+    const PointRow& p = rows[i];
     const Vec3d before = machine.rotary.forward(
         Posed{deg_to_rad(p.tilt_axis_before_deg), deg_to_rad(p.c_before_deg)});
     axes.push_back({i, vec_json(p.tip_mm, 3), vec_json(before, 4), vec_json(p.axis, 4),
                     rounded(p.accel_before_deg_s2), rounded(p.accel_deg_s2)});
   }
-  o["axes"] = std::move(axes);
+  return axes;
+}
+
+/// An operation's series for the plots (every `plot_stride`-th row kept by plotted_rows) and
+/// its tool axes before and after at every `axes_every`-th point.
+json operation_series_json(const OperationResult& r, const Machine& machine,
+                           std::size_t plot_stride, std::size_t axes_every,
+                           std::size_t& plotted_total) {
+  json o;
+  o["name"] = r.name;
+  o["points"] = r.rows.size();
+  // The page's script reads -1 as "not checked" (with `checked` false).
+  o["checked"] = r.colliding_after.has_value();
+  o["colliding_after"] = r.colliding_after.value_or(-1);
+  o["colliding_moves"] = r.verification.colliding_moves.value_or(-1);
+  o["peaks"] = {{"omega_before", r.before.max_omega_deg_s},
+                {"omega_after", r.after.max_omega_deg_s},
+                {"accel_before", r.before.max_accel_deg_s2},
+                {"accel_after", r.after.max_accel_deg_s2}};
+  o["programmed_feed_mm_min"] = r.feed_mm_min;
+  const std::vector<std::size_t> shown = plotted_rows(r.rows, plot_stride);
+  plotted_total += shown.size();
+  add_point_series(r.rows, shown, o);
+  json keys = json::array();
+  for (const PointRow& p : r.rows) {
+    if (p.key) keys.push_back(rounded(p.arc_mm));
+  }
+  o["key_arc_mm"] = std::move(keys);
+  o["axes"] = tool_axes_json(r.rows, machine, axes_every);
   return o;
 }
 

@@ -282,6 +282,52 @@ nlohmann::json verification_json(const OperationResult& r, const JobResult& resu
   return v;
 }
 
+/// The paper's metric of an operation (eq. 16-18) before and after, on the designed surface
+/// and on the mesh's facets.
+nlohmann::json paper_metric_json(const OperationResult& r) {
+  const auto paper_json = [](const RotarySummary& p) {
+    return nlohmann::json{{"max_omega_deg_s", p.max_omega_deg_s},
+                          {"max_accel_deg_s2", p.max_accel_deg_s2},
+                          {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
+  };
+  return {{"before", paper_json(r.paper_before)},
+          {"after", paper_json(r.paper_after)},
+          {"facets",
+           {{"before", paper_json(r.paper_before_facets)},
+            {"after", paper_json(r.paper_after_facets)}}},
+          {"claimed", r.paper_gain_claimed},
+          {"what",
+           "eq. 16-18 over the designed surface's contact-point arc lengths "
+           "at the metric feed (the paper's comparison; before/after are "
+           "the program's own timing); `facets` over the mesh's own contact "
+           "points; `claimed`: its peak a falls under both"}};
+}
+
+/// How the guard and the time objective chose an operation's axes, where they ran.
+void add_choices_json(const OperationResult& r, nlohmann::json& o) {
+  if (r.kept_input_points) {
+    const auto& kept = *r.kept_input_points;
+    o["kept_input_points"] = {{"total", kept.total()},
+                              {"by_reason",
+                               {{"collision", kept.collision},
+                                {"peak_rate", kept.peak_rate},
+                                {"no_free_axis", kept.no_free_axis}}},
+                              {"join_points", kept.join_points},
+                              {"whole_passes", kept.passes},
+                              {"stretches", kept.stretches}};
+  }
+  if (r.time_choice) {
+    const auto& t = *r.time_choice;
+    o["time_objective"] = {{"plan", t.plan},
+                           {"cycle_s", t.cycle_s},
+                           {"peak_accel_deg_s2", t.peak_accel_deg_s2},
+                           {"shortest_plan", t.shortest_plan},
+                           {"shortest_cycle_s", t.shortest_cycle_s},
+                           {"shortest_peak_accel_deg_s2", t.shortest_peak_accel_deg_s2},
+                           {"tie_band", t.tie_band}};
+  }
+}
+
 /// One operation: its rates before and after, its tool, contacts, verification and timings.
 nlohmann::json operation_json(const OperationResult& r, const JobResult& result,
                               const Toolpath& toolpath, const JobOptions& options) {
@@ -291,22 +337,7 @@ nlohmann::json operation_json(const OperationResult& r, const JobResult& result,
   o["feed_mm_min"] = r.feed_mm_min;
   o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
   o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
-  const auto paper_json = [](const RotarySummary& p) {
-    return nlohmann::json{{"max_omega_deg_s", p.max_omega_deg_s},
-                          {"max_accel_deg_s2", p.max_accel_deg_s2},
-                          {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
-  };
-  o["paper_metric"] = {{"before", paper_json(r.paper_before)},
-                       {"after", paper_json(r.paper_after)},
-                       {"facets",
-                        {{"before", paper_json(r.paper_before_facets)},
-                         {"after", paper_json(r.paper_after_facets)}}},
-                       {"claimed", r.paper_gain_claimed},
-                       {"what",
-                        "eq. 16-18 over the designed surface's contact-point arc lengths "
-                        "at the metric feed (the paper's comparison; before/after are "
-                        "the program's own timing); `facets` over the mesh's own contact "
-                        "points; `claimed`: its peak a falls under both"}};
+  o["paper_metric"] = paper_metric_json(r);
   o["feed_schedule_written"] = options.feed_schedule;
   if (r.feed_words) {
     o["feed_words"] = {{"blocks", r.feed_words->blocks},
@@ -341,27 +372,7 @@ nlohmann::json operation_json(const OperationResult& r, const JobResult& result,
                     {"optimise", r.time_optimise_s},
                     {"post", r.time_post_s},
                     {"verify", r.time_verify_s}};
-  if (r.kept_input_points) {
-    const auto& kept = *r.kept_input_points;
-    o["kept_input_points"] = {{"total", kept.total()},
-                              {"by_reason",
-                               {{"collision", kept.collision},
-                                {"peak_rate", kept.peak_rate},
-                                {"no_free_axis", kept.no_free_axis}}},
-                              {"join_points", kept.join_points},
-                              {"whole_passes", kept.passes},
-                              {"stretches", kept.stretches}};
-  }
-  if (r.time_choice) {
-    const auto& t = *r.time_choice;
-    o["time_objective"] = {{"plan", t.plan},
-                           {"cycle_s", t.cycle_s},
-                           {"peak_accel_deg_s2", t.peak_accel_deg_s2},
-                           {"shortest_plan", t.shortest_plan},
-                           {"shortest_cycle_s", t.shortest_cycle_s},
-                           {"shortest_peak_accel_deg_s2", t.shortest_peak_accel_deg_s2},
-                           {"tie_band", t.tie_band}};
-  }
+  add_choices_json(r, o);
   return o;
 }
 

@@ -27,22 +27,22 @@ void print_summary(const JobResult& result) {
   std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %-26s %7s\n", "operation", "points",
               "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "feed time s",
               "cycle time s", "time s");
-  for (const auto& r : result.operations) {
-    const auto count = [](const std::optional<long>& before, const std::optional<long>& after) {
-      return !before || !after ? std::string("-")
-                               : std::to_string(*before) + "->" + std::to_string(*after);
+  const auto pair = [](const BeforeAfter<double>& v) {
+    return before_after(v.before, v.after, "%.1f");
+  };
+  for (const SummaryRow& r : summary_rows(result)) {
+    const auto count = [](long before, long after) {
+      return std::to_string(before) + "->" + std::to_string(after);
     };
-    const std::string collide = result.collision_checked
-                                    ? count(r.colliding_before, r.colliding_after)
-                                    : std::string("unchecked");
-    std::printf(
-        "%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %-26s %7.2f\n", r.name.c_str(), r.points,
-        before_after(r.before.max_omega_deg_s, r.after.max_omega_deg_s, "%.1f").c_str(),
-        before_after(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, "%.1f").c_str(),
-        count(r.before.c_jumps, r.after.c_jumps).c_str(), collide.c_str(), r.max_axis_change_deg,
-        before_after(r.feed_before.feed_time_s, r.feed_after.feed_time_s, "%.1f").c_str(),
-        before_after(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, "%.1f").c_str(),
-        r.time_contacts_s + r.time_cspace_s + r.time_optimise_s + r.time_post_s + r.time_verify_s);
+    const std::string collide = !result.collision_checked ? std::string("unchecked")
+                                : r.colliding_points
+                                    ? count(r.colliding_points->before, r.colliding_points->after)
+                                    : std::string("-");
+    std::printf("%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %-26s %7.2f\n",
+                r.operation.c_str(), r.points, pair(r.peak_omega_deg_s).c_str(),
+                pair(r.peak_accel_deg_s2).c_str(), count(r.c_jumps.before, r.c_jumps.after).c_str(),
+                collide.c_str(), r.max_axis_change_deg, pair(r.feed_time_s).c_str(),
+                pair(r.cycle_time_s).c_str(), r.compute_s);
   }
 }
 

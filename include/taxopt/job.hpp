@@ -530,4 +530,36 @@ TAXOPT_API std::string report_json(const JobResult& result, const Toolpath& tool
 /// Per-point CSV (CLI.md column names).
 TAXOPT_API std::string points_csv(const JobResult& result);
 
+/// A quantity before the run's method and after it (the written program).
+template <class T>
+struct BeforeAfter {
+  T before{};
+  T after{};
+};
+
+/// One operation's summary, the numbers the CLI's table prints and the HTML page's summary
+/// shows (each chooses its columns and formats): one place that reads them off the
+/// OperationResult, so that the two never say different things.
+struct SummaryRow {
+  std::string operation;
+  std::size_t points = 0;
+  /// The rotary rates as the machine runs the program (OperationResult::before, after).
+  BeforeAfter<double> peak_omega_deg_s, peak_accel_deg_s2, rms_accel_deg_s2;
+  BeforeAfter<long> c_jumps;
+  /// Colliding points; empty: not checked for this operation.
+  std::optional<BeforeAfter<long>> colliding_points;
+  /// Moves of the written program that collide; empty: not checked.
+  std::optional<long> colliding_moves;
+  /// Points where the guard kept the input's axes; empty: no guard ran.
+  std::optional<std::size_t> input_axes_kept;
+  double max_axis_change_deg = 0.0;
+  /// Feed time and cycle time of the program (feed blocks; with rapids and dwells).
+  BeforeAfter<double> feed_time_s, cycle_time_s;
+  /// What the operation took to compute: contacts, C-space, optimisation, post, verification.
+  double compute_s = 0.0;
+};
+
+/// The summary of every operation of a run, in order.
+TAXOPT_API std::vector<SummaryRow> summary_rows(const JobResult& result);
+
 }  // namespace taxopt

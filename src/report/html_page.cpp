@@ -146,25 +146,23 @@ std::string summary_table(const JobResult& result) {
        "<th>C flips<br>before &rarr; after</th>"
        "<th>colliding points<br>before &rarr; after</th><th>colliding moves</th>"
        "<th>input axes kept</th><th>cycle s<br>before &rarr; after</th></tr></thead><tbody>";
-  const auto pair = [](double b, double a, int d) {
-    return fixed(b, d) + " &rarr; " + fixed(a, d);
+  const auto pair = [](const BeforeAfter<double>& v, int d) {
+    return fixed(v.before, d) + " &rarr; " + fixed(v.after, d);
   };
-  for (const OperationResult& r : result.operations) {
-    t << "<tr><td>" << escape_html(r.name) << "</td><td>" << r.points << "</td><td>"
-      << pair(r.before.max_omega_deg_s, r.after.max_omega_deg_s, 2) << "</td><td>"
-      << pair(r.before.max_accel_deg_s2, r.after.max_accel_deg_s2, 1) << "</td><td>"
-      << pair(r.before.rms_accel_deg_s2, r.after.rms_accel_deg_s2, 1) << "</td><td>"
-      << r.before.c_jumps << " &rarr; " << r.after.c_jumps << "</td><td>";
-    if (!r.colliding_after) {
+  for (const SummaryRow& r : summary_rows(result)) {
+    t << "<tr><td>" << escape_html(r.operation) << "</td><td>" << r.points << "</td><td>"
+      << pair(r.peak_omega_deg_s, 2) << "</td><td>" << pair(r.peak_accel_deg_s2, 1) << "</td><td>"
+      << pair(r.rms_accel_deg_s2, 1) << "</td><td>" << r.c_jumps.before << " &rarr; "
+      << r.c_jumps.after << "</td><td>";
+    if (!r.colliding_points) {
       t << "<span class=\"unchecked\">NOT CHECKED</span></td><td>"
            "<span class=\"unchecked\">NOT CHECKED</span>";
     } else {
-      t << r.colliding_before.value_or(-1) << " &rarr; " << *r.colliding_after << "</td><td>"
-        << r.verification.colliding_moves.value_or(-1);
+      t << r.colliding_points->before << " &rarr; " << r.colliding_points->after << "</td><td>"
+        << (r.colliding_moves ? std::to_string(*r.colliding_moves) : std::string("-"));
     }
-    t << "</td><td>" << (r.kept_input_points ? std::to_string(r.kept_input_points->total()) : "-")
-      << "</td><td>" << pair(r.feed_before.cycle_time_s, r.feed_after.cycle_time_s, 2)
-      << "</td></tr>";
+    t << "</td><td>" << (r.input_axes_kept ? std::to_string(*r.input_axes_kept) : "-")
+      << "</td><td>" << pair(r.cycle_time_s, 2) << "</td></tr>";
   }
   t << "</tbody></table>";
   return t.str();

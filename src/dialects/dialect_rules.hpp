@@ -99,6 +99,15 @@ struct ReadWords {
   bool t_calls_tool = false;       ///< T is the tool call, length included (TNC: T n G17)
   bool length_from_start = false;  ///< the tool's length is applied from the start (TNC)
   bool tcp_from_start = false;     ///< TCP is the controller's kinematics (LinuxCNC)
+
+  /// A control whose units, tool length and machine coordinates have words of its own
+  /// (Sinumerik's G700 D SUPA, a TNC's program block, tool call and M91): none of G20/G21,
+  /// G43, G49, G53, H.
+  static ReadWords without_iso_words() {
+    ReadWords r;
+    r.g20_g21_units = r.g43_length = r.g49_cancels = r.g53_machine = r.h_word = false;
+    return r;
+  }
 };
 
 /// The words a machine file's program template may hold in the dialect (template_block.cpp).

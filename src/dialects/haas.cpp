@@ -33,18 +33,19 @@ class Haas final : public DialectRules {
   std::vector<std::string> finish(const ProgramName&) const override { return {"%"}; }
   bool point_in_every_number() const override { return true; }
 
+  /// Read as Fanuc's, with G234 for G43.4 and no dwell written.
   ReadWords read_words() const override {
-    ReadWords r;
-    r.g49_cancels_tcp = true;
+    ReadWords r = fanuc_rules().read_words();
+    r.g4_dwell = false;
     r.tcp_g_code = 234;
-    r.g91_g28 = true;
-    r.o_word = true;
     return r;
   }
 
-  /// Fanuc's G5.1 and G8, and G187 (smoothness) besides the common codes.
+  /// Fanuc's, and G187 (smoothness).
   TemplateWords template_words() const override {
-    return {true, {4, 40, 80, 61, 61.1, 64, 5.1, 8, 187}, {65}, {}, false};
+    TemplateWords t = fanuc_rules().template_words();
+    t.g_codes.push_back(187);
+    return t;
   }
 };
 

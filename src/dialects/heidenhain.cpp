@@ -49,13 +49,8 @@ class Heidenhain final : public DialectRules {
   }
 
   ReadWords read_words() const override {
-    ReadWords r;
+    ReadWords r = ReadWords::without_iso_words();
     r.g2_g3_arcs = false;
-    r.g20_g21_units = false;
-    r.g43_length = false;
-    r.g49_cancels = false;
-    r.g53_machine = false;
-    r.h_word = false;
     r.m128_m91 = true;
     r.t_calls_tool = true;
     r.length_from_start = true;  // the TOOL CALL may come before the program

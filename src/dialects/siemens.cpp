@@ -57,13 +57,8 @@ class Siemens final : public DialectRules {
   }
 
   ReadWords read_words() const override {
-    ReadWords r;
-    r.g20_g21_units = false;
+    ReadWords r = ReadWords::without_iso_words();
     r.g700_g710_units = true;
-    r.g43_length = false;
-    r.g49_cancels = false;
-    r.g53_machine = false;
-    r.h_word = false;
     r.d_word = true;
     return r;
   }

@@ -313,8 +313,8 @@ int run_main_job(Args& a, const Invocation& how) {
              " (about 5 SVG files each): split the file, or leave out --plots");
     }
     const std::optional<Part> part = part_of(a, toolpath);
+    // The tool's dimensions, known now in the CL file's units: run_job checks them first.
     options.tool = tool_dimensions_of(a, toolpath);
-    check_options(options);
     if (part) options.part = &*part;
     ProgressPrinter printer(!a.quiet && isatty(STDERR_FILENO), !a.quiet && a.verbose > 0);
     if (!a.quiet) {

@@ -12,6 +12,9 @@ namespace taxopt::controller {
 struct FeedDistance {
   double distance = 0.0;  ///< mm, or deg where `rotary`
   bool rotary = false;
+  /// The factor from mm to the program's length unit (`units_per_mm`) for this distance and
+  /// its feed: 1 where it is rotary (deg and deg/min whatever the unit, G20 too).
+  double scale(double units_per_mm) const { return rotary ? 1.0 : units_per_mm; }
 };
 
 inline FeedDistance feed_distance(double linear_mm, double rotary_deg) {

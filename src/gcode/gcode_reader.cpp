@@ -428,7 +428,7 @@ double block_time_s(const GcodeMove& from, const GcodeMove& to, LengthUnit units
   const double xyz_mm = to.arc ? arc_length_mm(from.xyz_mm, to) : (to.xyz_mm - from.xyz_mm).norm();
   const controller::FeedDistance d = controller::feed_distance(
       xyz_mm, std::hypot(to.tilt_deg - from.tilt_deg, to.c_deg - from.c_deg));
-  return 60.0 * d.distance / (d.rotary ? to.feed : to.feed * mm_per_unit(units));
+  return 60.0 * d.distance / (to.feed * d.scale(mm_per_unit(units)));
 }
 
 }  // namespace taxopt

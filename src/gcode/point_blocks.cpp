@@ -314,9 +314,8 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
                                     rad_to_deg(pose.c_rad - prev_pose_.c_rad));
   const double per_min = 60.0 * rate_per_s;
   const controller::FeedDistance d = controller::feed_distance(tip_mm, rot_deg);
-  const double feed = g_.feed_mode == FeedMode::InverseTime
-                          ? per_min
-                          : (d.rotary ? d.distance : d.distance * scale_) * per_min;
+  const double feed =
+      g_.feed_mode == FeedMode::InverseTime ? per_min : d.distance * d.scale(scale_) * per_min;
   const int digits = std::clamp(
       7 - static_cast<int>(std::floor(std::log10(std::max(feed, 1e-300)))), fd_, max_fd_);
   const double unit = std::pow(10.0, digits);
@@ -403,7 +402,7 @@ std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const 
   const bool own = std::abs(feed - p.feed_mm_per_min) <= 1e-9 * p.feed_mm_per_min;
   // A turn of A and C alone is read in deg/min whatever the length unit (G20 too): F is not
   // scaled to inches there (it was, and such a block ran 25.4 times slower than planned).
-  return fmt((own ? p.feed_mm_per_min : feed) * (d.rotary ? 1.0 : scale_), fd_);
+  return fmt((own ? p.feed_mm_per_min : feed) * d.scale(scale_), fd_);
 }
 
 std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,
@@ -418,7 +417,7 @@ std::string ProgramWriter::joint_feed(const Vec3d& from, const Posed& from_pose,
   const double rot = std::hypot(rad_to_deg(to_pose.tilt_rad - from_pose.tilt_rad),
                                 rad_to_deg(to_pose.c_rad - from_pose.c_rad));
   const controller::FeedDistance d = controller::feed_distance(joint, rot);
-  const double unrounded = (d.rotary ? d.distance : d.distance * scale_) / minutes;
+  const double unrounded = d.distance * d.scale(scale_) / minutes;
   if (g_.feed_mode == FeedMode::InverseTime) return fmt_feed(1.0 / minutes);
   if (scheduled) {
     // The controller times the block from the written (rounded) words: so does F.

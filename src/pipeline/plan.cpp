@@ -59,22 +59,19 @@ class OperationPlanner {
         res_(res),
         // The written program's timing (the guard's, the global objective's, the report's).
         timing_(block_timing(op_, run.machine, options_.pose_options, o.metric_feed_mm_per_min)),
-        global_(global_options(options_)) {}
+        global_(global_options(options_)),
+        in_{op_,   o_.contacts,  radius_mm_, check_,
+            tool_, run_.machine, timing_,    options_.pose_options} {}
 
   void run() {
     const auto t0 = Clock::now();
-    o_.optimised =
-        optimise_paper(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine,
-                       o_.metric_feed_mm_per_min, options_.pose_options, options_.paper, progress_);
+    o_.optimised = optimise_paper(in_, o_.metric_feed_mm_per_min, options_.paper, progress_);
     OptimisedOperation& out = *o_.optimised;
-    out.guard = guard_passes(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
-                             options_.pose_options, out);
+    out.guard = guard_passes(in_, out);
     std::string time_line;
     if (options_.method == Method::Global) {
       if (global_.objective == GlobalObjective::Time) {
-        time_line = refine_time(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
-                                options_.pose_options, global_, run_.fallback_feed_mm_per_min, out,
-                                progress_);
+        time_line = refine_time(in_, global_, run_.fallback_feed_mm_per_min, out, progress_);
       } else {
         refine_global(out);
       }
@@ -101,8 +98,7 @@ class OperationPlanner {
   }
 
   void refine_global(OptimisedOperation& plan) {
-    pipeline::refine_global(op_, o_.contacts, radius_mm_, check_, tool_, run_.machine, timing_,
-                            options_.pose_options, global_, plan, progress_);
+    pipeline::refine_global(in_, global_, plan, progress_);
   }
 
   /// Points and moves of `plan` that hit as the verification judges them (FCL, the same grown
@@ -112,8 +108,8 @@ class OperationPlanner {
                                    options_.pose_options, plan.preferred);
     if (!pp.ok()) return 0;  // unposable axes are the verification's to report
     const std::vector<char> hit =
-        points_and_moves_hit(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, run_.machine,
-                             plan.axes, pp.poses, std::vector<char>(op_.points.size(), 1));
+        points_and_moves_hit(in_.judged_by(&*run_.collision), plan.axes, pp.poses,
+                             std::vector<char>(op_.points.size(), 1));
     return static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
   }
 
@@ -130,9 +126,7 @@ class OperationPlanner {
       out = std::move(alt);
       how = "the global method's plan is used for this operation";
     } else {
-      const StretchGuardResult g =
-          guard_passes(op_, o_.contacts, radius_mm_, &*run_.collision, tool_, run_.machine, timing_,
-                       options_.pose_options, out);
+      const StretchGuardResult g = guard_passes(in_.judged_by(&*run_.collision), out);
       out.guard.points_hit += g.points_hit;
       out.guard.stretches += g.stretches;
       out.guard.whole_passes += g.whole_passes;
@@ -196,6 +190,8 @@ class OperationPlanner {
   JobResult& res_;
   const BlockTiming timing_;
   const GlobalOptions global_;
+  /// What every planner of the operation takes, judged by the planner's check.
+  const OperationPlanInputs in_;
 };
 
 }  // namespace

@@ -22,27 +22,23 @@ namespace taxopt::pipeline {
 /// new pass ends; a guard gives a pass back the paper's axes (or `reference`'s) where its peak
 /// a would rise or its moves would hit the part. With `time` (--objective time) the passes get
 /// their joints, programmed times and alternatives from it.
-void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                   double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                   const Machine& machine, const BlockTiming& timing,
-                   const PosePlanOptions& pose_options, const GlobalOptions& options,
+void refine_global(const OperationPlanInputs& in, const GlobalOptions& options,
                    OptimisedOperation& out, detail::StageProgress& progress,
                    const TimeContext* time, const GuardReference* reference) {
+  const Operationd& op = in.op;
+  const std::vector<ContactPoint>& contacts = in.contacts;
+  const double ball_radius_mm = in.ball_radius_mm;
+  const Machine& machine = in.machine;
   const std::size_t n = op.points.size();
   const std::vector<IndexRange> passes = feed_passes(op);
-  const PosePlan warm = plan_poses(machine.rotary, out.axes, rapid_into_of(op), {}, pose_options);
+  const PosePlan warm =
+      plan_poses(machine.rotary, out.axes, rapid_into_of(op), {}, in.pose_options);
   if (!warm.ok()) {
     for (std::size_t q = 0; q < passes.size(); ++q) progress.advance();
     return;
   }
   const GuardReference paper{out.axes, {}};
-  const Acceptance acceptable_at{op,
-                                 contacts,
-                                 ball_radius_mm,
-                                 model,
-                                 tool,
-                                 machine.rotary,
-                                 deg_to_rad(options.max_deviation_deg)};
+  const Acceptance acceptable_at{in, deg_to_rad(options.max_deviation_deg)};
   // Each pass's cut: from the first to the last contact of the pass (all of it without a part).
   // The points in the air before and after keep the axis of the nearest contact, as with the
   // paper method: the tool comes down and leaves along the axis it cuts with.
@@ -60,7 +56,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
     // The program's own timing with the warm start's tips (move_times_s: the report's and the
     // guard's); a move too short to time gets a floor (it would divide).
     problem.segment_time_s =
-        move_times_s(op, ball_radius_mm, machine.rotary, warm.poses, timing, pass);
+        move_times_s(op, ball_radius_mm, machine.rotary, warm.poses, in.timing, pass);
     for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
     const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
       return acceptable_at.in_cone(pass.begin + j, axis);
@@ -96,8 +92,7 @@ void refine_global(const Operationd& op, const std::vector<ContactPoint>& contac
   out.preferred.assign(n, std::nullopt);
   plan_passes(op, contacts, acceptable_at, out, progress, plan_pass,
               [&](std::size_t, const PassAxes&) { ++out.global_passes; });
-  out.global_guard = guard_passes(op, contacts, ball_radius_mm, model, tool, machine, timing,
-                                  pose_options, out, reference ? reference : &paper);
+  out.global_guard = guard_passes(in, out, reference ? reference : &paper);
 }
 
 namespace {

@@ -21,33 +21,34 @@ namespace taxopt::pipeline {
 /// `check`, for axes `axes` posed as `poses` (tips from the fixed ball centres), the moves as
 /// `posted_machine` runs them: in machine mode with linearisation the tip runs the straight
 /// line, as in TCP mode. Nothing hits without a model.
-std::vector<char> points_and_moves_hit(const Operationd& op,
-                                       const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const PartCheck* model,
-                                       const ToolModel* tool, const Machine& posted_machine,
+std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
                                        const std::vector<Vec3d>& axes,
                                        const std::vector<Posed>& poses,
                                        const std::vector<char>& check) {
+  const Operationd& op = in.op;
+  const std::vector<ContactPoint>& contacts = in.contacts;
   const std::size_t n = op.points.size();
   std::vector<char> hit(n, 0);
-  if (!model || !tool) return hit;
-  Machine machine = posted_machine;
+  if (!in.model || !in.tool) return hit;
+  const PartCheck& model = *in.model;
+  const ToolModel& tool = *in.tool;
+  Machine machine = in.machine;
   if (machine.gcode.program.linearise_tolerance_mm > 0.0) machine.gcode.mode = GcodeMode::Tcp;
   std::vector<Vec3d> xyz;
   std::vector<double> a, c;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3d tip = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
+    const Vec3d tip = tip_for_axis(op.points[i], in.ball_radius_mm, axes[i]);
     xyz.push_back(written_xyz_mm(machine, tip, poses[i]));
     a.push_back(rad_to_deg(poses[i].tilt_rad));
     c.push_back(rad_to_deg(poses[i].c_rad));
   }
   std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
   for (std::size_t i :
-       colliding_moves(*model, *tool, machine, xyz, a, c, contacts.empty() ? air : contacts,
-                       nullptr, nullptr, &check)) {
+       colliding_moves(model, tool, machine, xyz, a, c, contacts.empty() ? air : contacts, nullptr,
+                       nullptr, &check)) {
     hit[i] = 1;
   }
-  for (std::size_t i : colliding_points(*model, *tool, op, axes, contacts, nullptr, &check)) {
+  for (std::size_t i : colliding_points(model, tool, op, axes, contacts, nullptr, &check)) {
     hit[i] = 1;
   }
   return hit;
@@ -112,8 +113,7 @@ class PassGuard {
  private:
   std::vector<char> moves_hit(const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
                               const std::vector<char>& check) const {
-    return points_and_moves_hit(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool,
-                                in_.machine, axes, poses, check);
+    return points_and_moves_hit(in_, axes, poses, check);
   }
 
   PassRates rates(const IndexRange& pass, const std::vector<Posed>& poses) const {
@@ -211,14 +211,9 @@ class PassGuard {
 
 }  // namespace
 
-StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                double ball_radius_mm, const PartCheck* model,
-                                const ToolModel* tool, const Machine& machine,
-                                const BlockTiming& timing, const PosePlanOptions& pose_options,
-                                OptimisedOperation& out, const GuardReference* reference) {
-  return PassGuard({op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options},
-                   reference)
-      .run(out);
+StretchGuardResult guard_passes(const OperationPlanInputs& in, OptimisedOperation& out,
+                                const GuardReference* reference) {
+  return PassGuard(in, reference).run(out);
 }
 
 }  // namespace taxopt::pipeline

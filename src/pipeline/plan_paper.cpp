@@ -35,12 +35,14 @@ IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRa
 /// when the machine reaches it and, with a part, the tool above the ball (and the ball, where
 /// it is in the air) misses the part. Points outside the feed passes keep their axes. Then
 /// each pass's stretches near the pole get C re-planned in machine space (pole_passage.hpp).
-OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                  double ball_radius_mm, const PartCheck* model,
-                                  const ToolModel* tool, const Machine& machine,
+OptimisedOperation optimise_paper(const OperationPlanInputs& in,
                                   const std::vector<double>& metric_feed,
-                                  const PosePlanOptions& pose_options, const PaperOptions& options,
-                                  detail::StageProgress& progress) {
+                                  const PaperOptions& options, detail::StageProgress& progress) {
+  const Operationd& op = in.op;
+  const std::vector<ContactPoint>& contacts = in.contacts;
+  const double ball_radius_mm = in.ball_radius_mm;
+  const Machine& machine = in.machine;
+  const PosePlanOptions& pose_options = in.pose_options;
   OptimisedOperation out;
   for (const CLPointd& p : op.points) out.axes.push_back(p.axis);
   const double R = ball_radius_mm;
@@ -48,7 +50,7 @@ OptimisedOperation optimise_paper(const Operationd& op, const std::vector<Contac
   const auto touching = [&](std::size_t i) {
     return !contacts.empty() && contacts[i].state == ContactState::Touching;
   };
-  const Acceptance acceptable_at{op, contacts, R, model, tool, machine.rotary, max_dev_rad};
+  const Acceptance acceptable_at{in, max_dev_rad};
   std::vector<PassPlan> plans(feed_passes(op).size());
   std::vector<std::size_t> pole_stretches(plans.size(), 0);
   const auto plan_pass = [&](std::size_t q, const IndexRange& pass) {

@@ -15,26 +15,41 @@
 
 namespace taxopt::pipeline {
 
-/// Whether an axis is acceptable at point i of an operation: the machine reaches it and, with
-/// a part, the tool above the ball (and the ball, where it is in the air) misses the part.
-struct Acceptance {
+/// What the planners of one operation work with (the paper's optimiser, the guard, the
+/// global method, the time objective): its points and contacts, the ball, the checks' model and
+/// judged tool, the machine, the program's block timing, the pose planner's options.
+struct OperationPlanInputs {
   const Operationd& op;
   const std::vector<ContactPoint>& contacts;
   double ball_radius_mm;
   const PartCheck* model;
   const ToolModel* tool;
-  const MachineKinematicsd& machine;
+  const Machine& machine;
+  const BlockTiming& timing;
+  const PosePlanOptions& pose_options;
+  /// The same, judged by another model (the verification's FCL model).
+  OperationPlanInputs judged_by(const PartCheck* other) const {
+    return {op, contacts, ball_radius_mm, other, tool, machine, timing, pose_options};
+  }
+};
+
+/// Whether an axis is acceptable at point i of an operation: the machine reaches it and, with
+/// a part, the tool above the ball (and the ball, where it is in the air) misses the part.
+struct Acceptance {
+  const OperationPlanInputs& in;
   /// The deviation cone's half-angle, rad (--max-deviation).
   double max_deviation_rad;
   bool operator()(std::size_t i, const Vec3d& axis) const {
-    if (!machine.reachable(axis)) return false;
-    if (!model) return true;
-    const bool in_air = contacts.empty() || contacts[i].state != ContactState::Touching;
-    return !model->collides(*tool, reference_point(op.points[i], ball_radius_mm), axis, in_air);
+    if (!in.machine.rotary.reachable(axis)) return false;
+    if (!in.model) return true;
+    const bool in_air = in.contacts.empty() || in.contacts[i].state != ContactState::Touching;
+    return !in.model->collides(*in.tool, reference_point(in.op.points[i], in.ball_radius_mm), axis,
+                               in_air);
   }
   /// Acceptable and within the cone around point i's input axis.
   bool in_cone(std::size_t i, const Vec3d& axis) const {
-    return angle_between(axis, op.points[i].axis) <= max_deviation_rad + 1e-12 && (*this)(i, axis);
+    return angle_between(axis, in.op.points[i].axis) <= max_deviation_rad + 1e-12 &&
+           (*this)(i, axis);
   }
 };
 
@@ -71,60 +86,28 @@ struct TimeContext {
 
 IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRange& pass);
 
-OptimisedOperation optimise_paper(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                  double ball_radius_mm, const PartCheck* model,
-                                  const ToolModel* tool, const Machine& machine,
+OptimisedOperation optimise_paper(const OperationPlanInputs& in,
                                   const std::vector<double>& metric_feed,
-                                  const PosePlanOptions& pose_options, const PaperOptions& options,
-                                  detail::StageProgress& progress);
+                                  const PaperOptions& options, detail::StageProgress& progress);
 
-/// What the planners of one operation work with (the guard, the time objective): its points
-/// and contacts, the ball, the checks' model and judged tool, the machine, the program's block
-/// timing, the pose planner's options.
-struct OperationPlanInputs {
-  const Operationd& op;
-  const std::vector<ContactPoint>& contacts;
-  double ball_radius_mm;
-  const PartCheck* model;
-  const ToolModel* tool;
-  const Machine& machine;
-  const BlockTiming& timing;
-  const PosePlanOptions& pose_options;
-};
-
-std::vector<char> points_and_moves_hit(const Operationd& op,
-                                       const std::vector<ContactPoint>& contacts,
-                                       double ball_radius_mm, const PartCheck* model,
-                                       const ToolModel* tool, const Machine& machine,
+std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
                                        const std::vector<Vec3d>& axes,
                                        const std::vector<Posed>& poses,
                                        const std::vector<char>& check);
 
-StretchGuardResult guard_passes(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                                double ball_radius_mm, const PartCheck* model,
-                                const ToolModel* tool, const Machine& machine,
-                                const BlockTiming& timing, const PosePlanOptions& pose_options,
-                                OptimisedOperation& out, const GuardReference* reference = nullptr);
+StretchGuardResult guard_passes(const OperationPlanInputs& in, OptimisedOperation& out,
+                                const GuardReference* reference = nullptr);
 
-void refine_global(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                   double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                   const Machine& machine, const BlockTiming& timing,
-                   const PosePlanOptions& pose_options, const GlobalOptions& options,
+void refine_global(const OperationPlanInputs& in, const GlobalOptions& options,
                    OptimisedOperation& out, detail::StageProgress& progress,
                    const TimeContext* time = nullptr, const GuardReference* reference = nullptr);
 
-double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                         double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                         const Machine& machine, double max_deviation_rad,
+double operation_cycle_s(const OperationPlanInputs& in, double max_deviation_rad,
                          const std::vector<Vec3d>& axes,
-                         const std::vector<std::optional<Posed>>& preferred,
-                         const PosePlanOptions& pose_options, double fallback_feed,
+                         const std::vector<std::optional<Posed>>& preferred, double fallback_feed,
                          const std::vector<double>& programmed_s);
 
-std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                        double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                        const Machine& machine, const BlockTiming& timing,
-                        const PosePlanOptions& pose_options, const GlobalOptions& options,
+std::string refine_time(const OperationPlanInputs& in, const GlobalOptions& options,
                         double fallback_feed, OptimisedOperation& out,
                         detail::StageProgress& progress);
 

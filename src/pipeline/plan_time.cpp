@@ -20,15 +20,15 @@ namespace taxopt::pipeline {
 /// with tool axes `axes` about the fixed ball centres, posed as run_job poses them (the turns
 /// between passes in one move); `programmed_s` the least time of every move. Infinite when the
 /// axes cannot be posed.
-double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                         double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                         const Machine& machine, double max_deviation_rad,
+double operation_cycle_s(const OperationPlanInputs& in, double max_deviation_rad,
                          const std::vector<Vec3d>& axes,
-                         const std::vector<std::optional<Posed>>& preferred,
-                         const PosePlanOptions& pose_options, double fallback_feed,
+                         const std::vector<std::optional<Posed>>& preferred, double fallback_feed,
                          const std::vector<double>& programmed_s) {
+  const Operationd& op = in.op;
+  const Machine& machine = in.machine;
+  const double ball_radius_mm = in.ball_radius_mm;
   const PosePlan plan =
-      plan_poses(machine.rotary, axes, rapid_into_of(op), {}, pose_options, preferred);
+      plan_poses(machine.rotary, axes, rapid_into_of(op), {}, in.pose_options, preferred);
   if (!plan.ok()) return std::numeric_limits<double>::infinity();
   PostedOperation po;
   po.points = posted_feeds(op, fallback_feed);
@@ -37,8 +37,8 @@ double operation_cycle_s(const Operationd& op, const std::vector<ContactPoint>& 
     po.points[i].axis = axes[i];
     po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
   }
-  spread_turns_in_air(op, contacts, ball_radius_mm, model, tool ? *tool : ToolModel{}, machine,
-                      max_deviation_rad, po);
+  spread_turns_in_air(op, in.contacts, ball_radius_mm, in.model, in.tool ? *in.tool : ToolModel{},
+                      machine, max_deviation_rad, po);
   std::vector<Vec3d> tips;
   for (const CLPointd& p : po.points) tips.push_back(p.tip_mm);
   std::vector<double> programmed = programmed_block_times_s(po.points, po.poses);
@@ -112,8 +112,7 @@ class TimePlanner {
 
   void refine(const GlobalOptions& options, OptimisedOperation& plan,
               const TimeContext* time = nullptr, const GuardReference* reference = nullptr) {
-    refine_global(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool, in_.machine,
-                  in_.timing, in_.pose_options, options, plan, progress_, time, reference);
+    refine_global(in_, options, plan, progress_, time, reference);
   }
 
   PosePlan poses_of(const std::vector<Vec3d>& axes,
@@ -137,9 +136,8 @@ class TimePlanner {
 
   double cycle_of(const std::vector<Vec3d>& axes,
                   const std::vector<std::optional<Posed>>& preferred) const {
-    return operation_cycle_s(in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool,
-                             in_.machine, deg_to_rad(options_.max_deviation_deg), axes, preferred,
-                             in_.pose_options, fallback_feed_, programmed_s_);
+    return operation_cycle_s(in_, deg_to_rad(options_.max_deviation_deg), axes, preferred,
+                             fallback_feed_, programmed_s_);
   }
   double cycle(const OptimisedOperation& o) const { return cycle_of(o.axes, o.preferred); }
 
@@ -148,9 +146,8 @@ class TimePlanner {
     if (!in_plan.ok()) return std::numeric_limits<double>::infinity();
     const double input_s = cycle_of(in_axes_, {});
     if (!std::isfinite(input_s)) return input_s;
-    const std::vector<char> hit = points_and_moves_hit(
-        in_.op, in_.contacts, in_.ball_radius_mm, in_.model, in_.tool, in_.machine, in_axes_,
-        in_plan.poses, std::vector<char>(in_.op.points.size(), 1));
+    const std::vector<char> hit = points_and_moves_hit(in_, in_axes_, in_plan.poses,
+                                                       std::vector<char>(in_.op.points.size(), 1));
     return std::find(hit.begin(), hit.end(), 1) != hit.end()
                ? std::numeric_limits<double>::infinity()
                : input_s;
@@ -230,15 +227,10 @@ class TimePlanner {
 /// shortest scheduled cycle (ties to the sum-squares plan, then the paper's). `out` holds the
 /// paper's plan on entry. The input's axes are kept instead where their cycle is shorter still
 /// and none of their points or moves hits the part. Returns a line for the log.
-std::string refine_time(const Operationd& op, const std::vector<ContactPoint>& contacts,
-                        double ball_radius_mm, const PartCheck* model, const ToolModel* tool,
-                        const Machine& machine, const BlockTiming& timing,
-                        const PosePlanOptions& pose_options, const GlobalOptions& options,
+std::string refine_time(const OperationPlanInputs& in, const GlobalOptions& options,
                         double fallback_feed, OptimisedOperation& out,
                         detail::StageProgress& progress) {
-  return TimePlanner({op, contacts, ball_radius_mm, model, tool, machine, timing, pose_options},
-                     options, fallback_feed, progress)
-      .run(out);
+  return TimePlanner(in, options, fallback_feed, progress).run(out);
 }
 
 }  // namespace taxopt::pipeline

@@ -432,7 +432,6 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
   const Machine& machine = run.machine;
-  const JobOptions& options = run.options;
   const auto t_verify = Clock::now();
   OperationResult r;
   r.name = op.name;
@@ -470,11 +469,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];
   }
   r.feed_words = written_feed_words(op, po, w.point_moves[k], res.gcode_units, machine);
-  check_dynamic_limits(
-      r, po, written_joints(machine, w.point_moves[k]), w.point_moves[k], w.moves, res,
-      run.tp.source, options.feed_schedule ? effective_limits(machine) : machine.limits,
-      options.feed_schedule, machine.rotary.tilt_letter(), k,
-      [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); }, options);
+  check_dynamic_limits(run, k, po, w.point_moves[k], w.moves, r, res);
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
   return r;

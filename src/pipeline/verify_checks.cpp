@@ -164,19 +164,18 @@ WorstRates worst_rates(const PostedOperation& po, const std::vector<JointPositio
 
 }  // namespace
 
-/// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
-/// (0: no limit), as the controller moves: block times from the F words read back, each
-/// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
-/// problems, jerk a warning (the schedule does not bound it).
-void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
-                          const std::vector<JointPosition>& joints,
+void check_dynamic_limits(const Run& run, std::size_t op_index, const PostedOperation& po,
                           const std::vector<const GcodeMove*>& at,
-                          const std::vector<GcodeMove>& moves, JobResult& res,
-                          const std::string& source, const JointLimits& check, bool scheduled,
-                          char tilt_letter, std::size_t op_index,
-                          const std::function<JointPosition(const GcodeMove&)>& joint_of,
-                          const JobOptions& options) {
-  const WorstRates worst = worst_rates(po, joints, at, moves, res.gcode_units, joint_of);
+                          const std::vector<GcodeMove>& moves, OperationResult& r, JobResult& res) {
+  const Machine& machine = run.machine;
+  const JobOptions& options = run.options;
+  const bool scheduled = options.feed_schedule;
+  const JointLimits check = scheduled ? effective_limits(machine) : machine.limits;
+  const std::string& source = run.tp.source;
+  const char tilt_letter = machine.rotary.tilt_letter();
+  const WorstRates worst =
+      worst_rates(po, written_joints(machine, at), at, moves, res.gcode_units,
+                  [&](const GcodeMove& m) { return written_joints(machine, {&m}).front(); });
   const auto& velocity = worst.velocity;
   const auto& accel = worst.accel;
   const auto& jerk = worst.jerk;

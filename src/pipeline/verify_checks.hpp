@@ -28,18 +28,15 @@ std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionMod
                                                               const std::vector<Vec3d>& axes,
                                                               detail::StageProgress* progress);
 
-/// Checks the joints' velocity, acceleration and jerk at the written feeds against `check`
-/// (0: no limit), as the controller moves: block times from the F words read back, each
-/// chain of feed moves from rest to rest. Velocity and acceleration beyond a limit are
-/// problems, jerk a warning (the schedule does not bound it).
-void check_dynamic_limits(OperationResult& r, const PostedOperation& po,
-                          const std::vector<JointPosition>& joints,
+/// Checks operation `op_index`'s joints' velocity, acceleration and jerk at the written feeds
+/// (`at`: its points' blocks among the program's `moves`, read back) against the machine's
+/// limits (0: none; with a feed schedule the effective ones it was planned to), as the
+/// controller moves: block times from the F words, each chain of feed moves from rest to rest.
+/// Velocity and acceleration beyond a limit are problems, jerk a warning (the schedule does
+/// not bound it).
+void check_dynamic_limits(const Run& run, std::size_t op_index, const PostedOperation& po,
                           const std::vector<const GcodeMove*>& at,
-                          const std::vector<GcodeMove>& moves, JobResult& res,
-                          const std::string& source, const JointLimits& check, bool scheduled,
-                          char tilt_letter, std::size_t op_index,
-                          const std::function<JointPosition(const GcodeMove&)>& joint_of,
-                          const JobOptions& options);
+                          const std::vector<GcodeMove>& moves, OperationResult& r, JobResult& res);
 
 /// What hits at point i (axis `axis`): the first body of the judged `tool` past the flutes
 /// that meets the part, how far its real body (`real_tool`) stays from it (or that it enters

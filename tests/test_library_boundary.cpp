@@ -299,3 +299,51 @@ TEST_CASE(
   CHECK(results > 0);
   CHECK(refusals > 0);
 }
+
+TEST_CASE(
+    "library boundary: a program template built in code is held to the machine file's rules "
+    "(a header that moves the tool would be written and never checked)",
+    "[library][bad-input]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::None;
+  const Toolpath tp = pass_in_code();
+  const auto refusal = [&](const Machine& m) {
+    return input_error_of([&] { (void)run_job(tp, m, options); });
+  };
+  {
+    Machine m = default_machine();
+    m.gcode.program.header = {"G0 X10 Y10 Z-2"};  // through the part, unseen by the read-back
+    const std::string why = refusal(m);
+    CHECK_THAT(why, Catch::Contains("gcode.header") && Catch::Contains("holds G0"));
+  }
+  {
+    Machine m = default_machine();
+    m.gcode.program.footer = {"M30"};  // the program end is taxopt's
+    CHECK_THAT(refusal(m), Catch::Contains("gcode.footer"));
+  }
+  {
+    Machine m = default_machine();
+    m.gcode.program.tool_change = {"M6"};  // calls no tool: the program's tool is not known
+    CHECK_THAT(refusal(m), Catch::Contains("gcode.tool_change") && Catch::Contains("{tool}"));
+  }
+  {
+    Machine m = default_machine();
+    m.gcode.program.work_offset = "G10 L2 P1 X0";
+    CHECK_THAT(refusal(m), Catch::Contains("gcode.work_offset"));
+  }
+  {
+    // A template of the dialect's own words runs, and is written as it is.
+    Machine m = default_machine();
+    m.gcode.program.header = {"M64 P0"};
+    m.gcode.program.tool_change = {"T{tool} M6", "G43 H{tool}"};
+    const std::string why = refusal(m);
+    INFO(why);
+    CHECK_THAT(why, Catch::Contains("gcode.tool_change"));  // an H offset is taxopt's
+    m.gcode.program.tool_change = {"T{tool} M6"};
+    const JobResult r = run_job(tp, m, options);
+    CHECK(r.ok());
+    CHECK(r.gcode.text.find("M64 P0") != std::string::npos);
+  }
+}

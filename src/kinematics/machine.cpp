@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "dialects/dialect_rules.hpp"
+#include "machine/template_block.hpp"
 #include "taxopt/core/error.hpp"
 
 namespace taxopt {
@@ -156,8 +157,42 @@ void validate_checks_and_holder(const Machine& m) {
   }
 }
 
+/// The template's blocks, written as they are and stepped over by the read-back, checked by
+/// what they do in the machine's dialect (template_block_problem): a Machine built in code is
+/// held to what a machine file's is (a header's "G0 X10" would move the tool unchecked).
+void validate_template_blocks(const Machine& m) {
+  const ProgramTemplate& t = m.gcode.program;
+  const std::pair<const char*, const std::vector<std::string>*> keys[] = {
+      {"header", &t.header},
+      {"footer", &t.footer},
+      {"tool_change", &t.tool_change},
+      {"tcp_on", &t.tcp_on},
+      {"tcp_off", &t.tcp_off}};
+  for (const auto& [key, blocks] : keys) {
+    const std::string what = std::string("gcode.") + key;
+    bool calls_tool = false;
+    for (const std::string& block : *blocks) {
+      const std::string why =
+          template_block_problem(block, what, m.gcode.dialect, std::string(key) == "footer");
+      if (!why.empty()) throw InputError("Machine::" + what + ": '" + block + "' " + why);
+      calls_tool = calls_tool || block.find("{tool}") != std::string::npos;
+    }
+    if (std::string(key) == "tool_change" && !blocks->empty() && !calls_tool) {
+      throw InputError("Machine::" + what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
+    }
+  }
+  if (!t.work_offset.empty() && t.work_offset != "none") {
+    const std::string why =
+        template_block_problem(t.work_offset, "gcode.work_offset", m.gcode.dialect, false);
+    if (!why.empty()) {
+      throw InputError("Machine::gcode.work_offset: '" + t.work_offset + "' " + why);
+    }
+  }
+}
+
 void validate_program_template(const Machine& m) {
   const ProgramTemplate& t = m.gcode.program;
+  validate_template_blocks(m);
   check_range("gcode.program.number", t.number, 1, 9999, "within [1, 9999]");
   check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");
   check_range("gcode.program.linearise_tolerance_mm", t.linearise_tolerance_mm, 0.0, 1e3,

@@ -334,6 +334,14 @@ TEST_CASE(
     CHECK_THAT(refusal(m), Catch::Contains("gcode.work_offset"));
   }
   {
+    // A TNC writes the name into its begin block: a line break there would start a block.
+    Machine m = default_machine();
+    m.gcode.dialect = GcodeDialect::Heidenhain;
+    m.gcode.decimals = 4;
+    m.gcode.program.name = "PART\nG00 Z-50";
+    CHECK_THAT(refusal(m), Catch::Contains("gcode.program.name"));
+  }
+  {
     // A template of the dialect's own words runs, and is written as it is.
     Machine m = default_machine();
     m.gcode.program.header = {"M64 P0"};

@@ -1,6 +1,7 @@
 #include "taxopt/kinematics/machine.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -193,6 +194,16 @@ void validate_template_blocks(const Machine& m) {
 void validate_program_template(const Machine& m) {
   const ProgramTemplate& t = m.gcode.program;
   validate_template_blocks(m);
+  // A TNC program name is a file name (and a line break in it would start a block of its
+  // own); the others go into a comment. Empty: "TAXOPT".
+  const bool name_ok =
+      t.name.size() <= 24 && std::all_of(t.name.begin(), t.name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+      });
+  if (!name_ok) {
+    throw InputError("Machine::gcode.program.name '" + t.name +
+                     "' must have up to 24 letters, digits, '_' and '-'");
+  }
   check_range("gcode.program.number", t.number, 1, 9999, "within [1, 9999]");
   check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");
   check_range("gcode.program.linearise_tolerance_mm", t.linearise_tolerance_mm, 0.0, 1e3,

@@ -1,6 +1,7 @@
 // The command line as scripts see it: exit codes, the error line, atomic outputs.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cctype>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
@@ -8,6 +9,7 @@
 #include "support.hpp"
 #include "taxopt/core/digest.hpp"
 #include "taxopt/core/types.hpp"
+#include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
 
 using namespace taxopt::test;
@@ -559,6 +561,20 @@ TEST_CASE("cli: the machine file's dialect picks the controller's program format
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK_THAT(read_file(t.path("o.nc")), Catch::Contains(tcp_word));
+  }
+}
+
+TEST_CASE("cli: generate names the operation after its surface", "[cli]") {
+  TempDir t;
+  for (const std::string surface : {"sine", "plane", "bump", "saddle"}) {
+    REQUIRE(run_taxopt("generate --surface " + surface + " --mesh-step 2 " + "--out-cls " +
+                       t.path(surface + ".cls"))
+                .code == 0);
+    std::string name = surface + "_FINISH";
+    for (char& ch : name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    const taxopt::Toolpath tp = taxopt::read_cl_file(t.path(surface + ".cls"));
+    REQUIRE(tp.operations.size() == 1);
+    CHECK(tp.operations[0].name == name);
   }
 }
 

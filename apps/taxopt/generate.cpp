@@ -1,6 +1,7 @@
 // taxopt generate: the CL file and part mesh of a built-in surface (the paper's sine, a plane,
 // a bump, a saddle), its options bounded before anything is allocated.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -144,7 +145,9 @@ void raster_and_mesh(const GenerateArgs& g, std::vector<GeneratedPoint>& pts, Tr
 /// The generated points as one operation of a ball-end tool at the job's feed and spindle.
 Operationd generated_operation(const GenerateArgs& g, const std::vector<GeneratedPoint>& pts) {
   Operationd op;
-  op.name = g.surface == "sine" ? "SINE_FINISH" : "PLANE_FINISH";
+  // Named after its surface (SINE_FINISH, BUMP_FINISH, ...): a bump's was PLANE_FINISH.
+  op.name = g.surface + "_FINISH";
+  for (char& ch : op.name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
   op.tool = Tool::ball_end_mill(2 * g.raster.tool_radius_mm, 5 * g.raster.tool_radius_mm);
   op.tool.name =
       "BALL_MILL_D" + std::to_string(static_cast<int>(std::lround(2 * g.raster.tool_radius_mm)));

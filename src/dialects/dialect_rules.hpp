@@ -216,6 +216,13 @@ class DialectRules {
   virtual std::vector<std::string> finish(const ProgramName&) const { return {}; }
   /// Every number carries its decimal point (Fanuc reads "10" as 0.010 mm).
   virtual bool point_in_every_number() const { return false; }
+  /// A coordinate as written: `decimals` decimals, with its point where the controller needs
+  /// one.
+  std::string number(double v, int decimals) const {
+    std::string s = fmt(v, decimals);
+    if (point_in_every_number() && s.find('.') == std::string::npos) s += '.';
+    return s;
+  }
 
   // --- Reading back ------------------------------------------------------------------------
   virtual ReadWords read_words() const { return {}; }

@@ -56,22 +56,25 @@ class Heidenhain final : public DialectRules {
     r.length_from_start = true;  // the TOOL CALL may come before the program
     return r;
   }
-  /// The program's begin and end blocks (%NAME G71 *) set the units; the block end "*" goes.
+  /// The program's begin and end blocks (%NAME G71 *: a '%' before any comment) set the units
+  /// by their last G70/G71 (a name may hold "G70" too); the block end "*" goes. A '%' in a
+  /// comment ("; 50% stepover *") is the comment's.
   LineMarks own_words(std::string& line) const override {
     LineMarks marks;
-    if (line.find('%') != std::string::npos) {
-      const std::size_t unit = line.find("G7");
-      if (unit != std::string::npos && unit + 2 < line.size()) {
+    const std::size_t semi = line.find(';');
+    const auto before_comment = [&](std::size_t at) {
+      return at != std::string::npos && (semi == std::string::npos || at < semi);
+    };
+    if (before_comment(line.find('%'))) {
+      const std::size_t unit = line.rfind("G7", semi);
+      if (before_comment(unit) && unit + 2 < line.size()) {
         marks.mm_per_unit = line[unit + 2] == '0' ? kMmPerInch : 1.0;
       }
       marks.nothing_more = true;
       return marks;
     }
     const std::size_t star = line.rfind('*');
-    const std::size_t semi = line.find(';');
-    if (star != std::string::npos && (semi == std::string::npos || star < semi)) {
-      line.erase(star, 1);
-    }
+    if (before_comment(star)) line.erase(star, 1);
     return marks;
   }
 

@@ -85,12 +85,8 @@ class Dialect {
   std::string linear() const { return r_.linear(); }
   std::string end() const { return r_.end(); }
   std::vector<std::string> finish() const { return r_.finish(program_); }
-  /// A coordinate as written: with its decimal point where the controller needs one.
-  std::string number(double v, int decimals) const {
-    std::string s = fmt(v, decimals);
-    if (r_.point_in_every_number() && s.find('.') == std::string::npos) s += '.';
-    return s;
-  }
+  /// A coordinate as written (DialectRules::number).
+  std::string number(double v, int decimals) const { return r_.number(v, decimals); }
 
  private:
   /// The tool's length offset number: the tool's, at least 1.

@@ -18,8 +18,8 @@ using taxopt::gcode::DialectRules;
 
 namespace {
 
-/// A small tcp-mode program in `r`'s words alone (no writer): start, set-up, tool, length and
-/// TCP on, a rapid and two feed blocks, TCP off, the retract, the park and the end.
+/// A small tcp-mode program in `r`'s words alone (no writer): start, a comment, set-up, tool,
+/// length and TCP on, a rapid and two feed blocks, TCP off, the retract, the park and the end.
 struct SmallProgram {
   std::string text;
   int last_feed_line = 0;  // the line of the second feed block
@@ -32,20 +32,17 @@ SmallProgram small_program(const DialectRules& r, bool inch) {
   int n = 0;
   const auto add = [&](const std::string& s) { lines.push_back(s); };
   const auto block = [&](const std::string& words) { add(r.block(words, n)); };
-  const gcode::ProgramName name{"DIALECT TEST", 7, inch};
+  // Hostile words in the name and a comment: a unit code and a '%' (a TNC's begin block).
+  const gcode::ProgramName name{"G70-G71-TEST", 7, inch};
   for (const auto& s : r.start(name)) add(s);
-  add(r.comment("a comment (with parentheses)", n));
+  add(r.comment("a comment (with parentheses) at 50% of G70", n));
   block(r.setup(inch, false));
   if (const std::string w = r.default_work_offset(); !w.empty()) block(w);
   for (const auto& s : r.tool_change(3)) block(s);
   block("S8000 M3");
   for (const auto& s : r.length_on(true, 3)) block(s);
   for (const auto& s : r.tcp_on(3)) block(s);
-  const auto num = [&](double v) {
-    std::string s = gcode::fmt(v, 4);
-    if (r.point_in_every_number() && s.find('.') == std::string::npos) s += '.';
-    return s;
-  };
+  const auto num = [&](double v) { return r.number(v, 4); };
   block(r.first_move_prefix(true, 3) + r.rapid() + " X" + num(10) + " Y" + num(20) + " Z" + num(5) +
         " A" + num(15) + " C" + num(30));
   block(r.linear() + " X" + num(12) + " Y" + num(20) + " Z" + num(4) + " F" + num(600));

@@ -27,7 +27,7 @@ class Haas final : public DialectRules {
   std::vector<std::string> tcp_on(int offset) const override {
     return {"G234 H" + std::to_string(offset)};
   }
-  // G49 ends G234 too: it is in G49's group 08.
+  // tcp_off: the default G49 ends G234 too (G234 is in G49's group 08).
   /// G234 is treated as Fanuc's G43.4 (its rule on arcs is not published here).
   bool arc_after_tcp_turn() const override { return false; }
   std::vector<std::string> finish(const ProgramName&) const override { return {"%"}; }

@@ -52,16 +52,13 @@ class OperationPlanner {
         o_(o),
         op_(*o.op),
         k_(o.index),
-        radius_mm_(o.ball_radius_mm),
-        check_(run.planner_check()),
-        tool_(o.judged_tool()),
         progress_(progress),
         res_(res),
         // The written program's timing (the guard's, the global objective's, the report's).
         timing_(block_timing(op_, run.machine, options_.pose_options, o.metric_feed_mm_per_min)),
         global_(global_options(options_)),
-        in_{op_,   o_.contacts,  radius_mm_, check_,
-            tool_, run_.machine, timing_,    options_.pose_options} {}
+        in_{op_,          o_.contacts, o.ball_radius_mm,     run.planner_check(), o.judged_tool(),
+            run_.machine, timing_,     options_.pose_options} {}
 
   void run() {
     const auto t0 = Clock::now();
@@ -76,7 +73,7 @@ class OperationPlanner {
         refine_global(out);
       }
     }
-    if (options_.method == Method::Paper && run_.collision && tool_ &&
+    if (options_.method == Method::Paper && run_.collision && in_.tool &&
         run_.paper_fallback.count(k_)) {
       replan_refused(out);
     }
@@ -183,14 +180,12 @@ class OperationPlanner {
   OperationContext& o_;
   const Operationd& op_;
   const std::size_t k_;
-  const double radius_mm_;
-  const PartCheck* check_;
-  const ToolModel* tool_;
   detail::StageProgress& progress_;
   JobResult& res_;
   const BlockTiming timing_;
   const GlobalOptions global_;
-  /// What every planner of the operation takes, judged by the planner's check.
+  /// What every planner of the operation takes (the ball, the judged tool), judged by the
+  /// planner's check.
   const OperationPlanInputs in_;
 };
 

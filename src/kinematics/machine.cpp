@@ -1,7 +1,6 @@
 #include "taxopt/kinematics/machine.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -163,23 +162,18 @@ void validate_checks_and_holder(const Machine& m) {
 /// held to what a machine file's is (a header's "G0 X10" would move the tool unchecked).
 void validate_template_blocks(const Machine& m) {
   const ProgramTemplate& t = m.gcode.program;
-  const std::pair<const char*, const std::vector<std::string>*> keys[] = {
-      {"header", &t.header},
-      {"footer", &t.footer},
-      {"tool_change", &t.tool_change},
-      {"tcp_on", &t.tcp_on},
-      {"tcp_off", &t.tcp_off}};
-  for (const auto& [key, blocks] : keys) {
+  for (const auto& [key, list] : kTemplateLists) {
+    const std::vector<std::string>& blocks = t.*list;
     const std::string what = std::string("gcode.") + key;
     bool calls_tool = false;
-    for (const std::string& block : *blocks) {
+    for (const std::string& block : blocks) {
       const std::string why =
           template_block_problem(block, what, m.gcode.dialect, std::string(key) == "footer");
       if (!why.empty()) throw InputError("Machine::" + what + ": '" + block + "' " + why);
       calls_tool = calls_tool || block.find("{tool}") != std::string::npos;
     }
-    if (std::string(key) == "tool_change" && !blocks->empty() && !calls_tool) {
-      throw InputError("Machine::" + what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
+    if (std::string(key) == "tool_change" && !blocks.empty() && !calls_tool) {
+      throw InputError("Machine::" + what + " " + kToolChangeCallsTool);
     }
   }
   if (!t.work_offset.empty() && t.work_offset != "none") {
@@ -194,13 +188,8 @@ void validate_template_blocks(const Machine& m) {
 void validate_program_template(const Machine& m) {
   const ProgramTemplate& t = m.gcode.program;
   validate_template_blocks(m);
-  // A TNC program name is a file name (and a line break in it would start a block of its
-  // own); the others go into a comment. Empty: "TAXOPT".
-  const bool name_ok =
-      t.name.size() <= 24 && std::all_of(t.name.begin(), t.name.end(), [](char ch) {
-        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
-      });
-  if (!name_ok) {
+  // Empty: "TAXOPT".
+  if (t.name.size() > 24 || !program_name_characters_ok(t.name)) {
     throw InputError("Machine::gcode.program.name '" + t.name +
                      "' must have up to 24 letters, digits, '_' and '-'");
   }

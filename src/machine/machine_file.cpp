@@ -3,7 +3,6 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -248,11 +247,8 @@ class MachineParser {
     ProgramTemplate& t = m.gcode.program;
     if (auto* n = g->get("program_name")) {
       t.name = string_of(*n, "gcode.program_name");
-      // A TNC program name is a file name; the others go into a comment.
-      for (char ch : t.name) {
-        if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-')) {
-          fail(line_of(*n), "gcode.program_name may hold letters, digits, '_' and '-' only");
-        }
+      if (!program_name_characters_ok(t.name)) {
+        fail(line_of(*n), "gcode.program_name may hold letters, digits, '_' and '-' only");
       }
       if (t.name.empty() || t.name.size() > 24) {
         fail(line_of(*n), "gcode.program_name must have 1 to 24 characters");
@@ -344,13 +340,8 @@ class MachineParser {
   void parse_template_blocks(const toml::table& gt, Machine& m) {
     const toml::table* g = &gt;
     ProgramTemplate& t = m.gcode.program;
-    const std::pair<const char*, std::vector<std::string>*> blocks[] = {
-        {"header", &t.header},
-        {"footer", &t.footer},
-        {"tool_change", &t.tool_change},
-        {"tcp_on", &t.tcp_on},
-        {"tcp_off", &t.tcp_off}};
-    for (const auto& [key, out] : blocks) {
+    for (const auto& [key, list] : kTemplateLists) {
+      std::vector<std::string>* out = &(t.*list);
       const toml::node* n = g->get(key);
       if (!n) continue;
       const std::string what = std::string("gcode.") + key;
@@ -363,7 +354,7 @@ class MachineParser {
                             e.value<std::string>().value().find("{tool}") != std::string::npos);
         }
         if (!calls) {
-          fail(line_of(*n), what + " must call the tool by \"{tool}\" (\"T{tool} M6\")");
+          fail(line_of(*n), what + " " + kToolChangeCallsTool);
         }
       }
       for (const toml::node& e : *n->as_array()) {

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <set>
 #include <utility>
 #include <vector>
@@ -32,10 +33,17 @@ struct Word {
   std::string letter, number;
 };
 
-bool g_is(const std::string& v, double want) {
+/// The number `v` is, where all of it is one.
+std::optional<double> number_of(const std::string& v) {
   char* end = nullptr;
   const double x = std::strtod(v.c_str(), &end);
-  return end && *end == '\0' && x == want;
+  if (!end || *end != '\0') return std::nullopt;
+  return x;
+}
+
+bool g_is(const std::string& v, double want) {
+  const std::optional<double> x = number_of(v);
+  return x && *x == want;
 }
 
 bool has(const std::vector<Word>& words, const char* letter, double v) {
@@ -233,10 +241,8 @@ void check_m(const Word& w, bool tool_change, const gcode::DialectRules& dialect
 
 /// A G code of the dialect's list (DialectRules::template_words).
 void check_g(const Word& w, const BlockRules& r) {
-  char* end = nullptr;
-  const double x = std::strtod(w.number.c_str(), &end);
-  if (end && *end == '\0') {
-    if (const std::string why = r.dialect->template_refusal('G', x); !why.empty()) {
+  if (const std::optional<double> x = number_of(w.number)) {
+    if (const std::string why = r.dialect->template_refusal('G', *x); !why.empty()) {
       refuse("holds " + w.letter + w.number + ": " + why);
     }
   }
@@ -321,6 +327,12 @@ std::string template_block_problem(const std::string& block, const std::string& 
     return e.why;
   }
   return {};
+}
+
+bool program_name_characters_ok(const std::string& name) {
+  return std::all_of(name.begin(), name.end(), [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+  });
 }
 
 }  // namespace taxopt

@@ -3,10 +3,31 @@
 /// tcp_on, tcp_off, work_offset), checked by what they do.
 
 #include <string>
+#include <vector>
 
 #include "taxopt/kinematics/machine.hpp"
 
 namespace taxopt {
+
+/// The template's lists of blocks by their key (gcode.<key> in a machine file): the machine
+/// file's reader and validate(Machine) check the same lists.
+struct TemplateList {
+  const char* key;
+  std::vector<std::string> ProgramTemplate::*blocks;
+};
+inline const TemplateList kTemplateLists[] = {{"header", &ProgramTemplate::header},
+                                              {"footer", &ProgramTemplate::footer},
+                                              {"tool_change", &ProgramTemplate::tool_change},
+                                              {"tcp_on", &ProgramTemplate::tcp_on},
+                                              {"tcp_off", &ProgramTemplate::tcp_off}};
+
+/// What a tool change template must do: the program is checked for the tool it calls.
+inline constexpr const char* kToolChangeCallsTool =
+    "must call the tool by \"{tool}\" (\"T{tool} M6\")";
+
+/// A program name of letters, digits, '_' and '-' only: a TNC's is a file name (written into
+/// its begin block, where a line break would start a block), the others' go into a comment.
+bool program_name_characters_ok(const std::string& name);
 
 /// Why `block` may not stand in the template key `what` ("gcode.header", ...) of a `dialect`
 /// program; empty where it may. A block of the template is written as it is and stepped over

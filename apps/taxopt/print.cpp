@@ -30,10 +30,10 @@ void print_summary(const JobResult& result) {
   const auto pair = [](const BeforeAfter<double>& v) {
     return before_after(v.before, v.after, "%.1f");
   };
+  const auto count = [](long before, long after) {
+    return std::to_string(before) + "->" + std::to_string(after);
+  };
   for (const SummaryRow& r : summary_rows(result)) {
-    const auto count = [](long before, long after) {
-      return std::to_string(before) + "->" + std::to_string(after);
-    };
     const std::string collide = !result.collision_checked ? std::string("unchecked")
                                 : r.colliding_points
                                     ? count(r.colliding_points->before, r.colliding_points->after)

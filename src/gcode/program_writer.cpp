@@ -392,7 +392,7 @@ void ProgramWriter::length_and_tcp_off() {
 GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
                          LengthUnit units, const std::vector<std::string>& comments) {
   const GcodeSettings& g = machine.gcode;
-  if (!gcode::rules_of(g.dialect).inverse_time() && g.feed_mode == FeedMode::InverseTime) {
+  if (!has_inverse_time(g.dialect) && g.feed_mode == FeedMode::InverseTime) {
     throw std::invalid_argument("write_gcode: the heidenhain dialect has no inverse time (G93)");
   }
   if (g.decimals < 0 || g.decimals > max_decimals(g.dialect)) {

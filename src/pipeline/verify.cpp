@@ -108,13 +108,13 @@ void check_turns_in_cut(const Run& run, const OperationContext& o, const Written
               format_location(run.tp.source, op.points[first].line, os.str()));
 }
 
-/// The written point `last` within the rotary axes' ranges (its row marked at a range's end)
-/// and, its joints in machine coordinates, within the machine's linear travel.
+/// The written point `last` (its pose `written`) within the rotary axes' ranges (its row marked
+/// at a range's end) and, its joints in machine coordinates, within the machine's linear travel.
 void check_point_ranges(const Run& run, const OperationContext& o, const GcodeMove& last,
-                        const CLPointd& want, PointRow& row, OperationResult& r, JobResult& res) {
+                        const Posed& written, const CLPointd& want, PointRow& row,
+                        OperationResult& r, JobResult& res) {
   const Operationd& op = *o.op;
   const Machine& machine = run.machine;
-  const Posed written{deg_to_rad(last.tilt_deg), deg_to_rad(last.c_deg)};
   // At a range's end (within 0.01 deg) or past it: the page's "limit reached".
   const auto at_limit = [](const RotaryAxis<double>& range, double v_rad) {
     const double near_rad = deg_to_rad(0.01);
@@ -197,7 +197,7 @@ void check_point_written(const Run& run, const OperationContext& o, const Posted
       std::max(r.verification.roundtrip_max_mm, (tip - want.tip_mm).norm());
   r.verification.roundtrip_max_deg =
       std::max(r.verification.roundtrip_max_deg, rad_to_deg(angle_between(axis, want.axis)));
-  check_point_ranges(run, o, *last, want, r.rows[i], r, res);
+  check_point_ranges(run, o, *last, written, want, r.rows[i], r, res);
   r.max_axis_change_deg =
       std::max(r.max_axis_change_deg, rad_to_deg(angle_between(op.points[i].axis, want.axis)));
   set_point_row(want, i, ax, r.rows[i]);

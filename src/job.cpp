@@ -137,6 +137,8 @@ const char* to_string(FindingCode code) {
     case FindingCode::TcpJointLimit: return "tcp_joint_limit";
     case FindingCode::FeedInAir: return "feed_in_air";
     case FindingCode::MeshSlivers: return "mesh_slivers";
+    case FindingCode::PartTolerance: return "part_tolerance";
+    case FindingCode::AxisRateRose: return "axis_rate_rose";
     case FindingCode::MissingFeed: return "missing_feed";
     case FindingCode::JerkLimitExceeded: return "jerk_limit_exceeded";
     case FindingCode::LongerCycle: return "longer_cycle";
@@ -271,11 +273,11 @@ namespace {
 /// One run of the pipeline; between its stages (and inside the long ones) a stop requested
 /// ends it with Cancelled.
 JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions& options,
-                   const std::set<std::size_t>& paper_fallback) {
+                   const std::set<std::size_t>& refused) {
   JobResult res;
   const StopSource& stop = options.stop;
   pipeline::Run run = pipeline::validate(tp, machine, options, res);
-  run.paper_fallback = paper_fallback;
+  run.refused_operations = refused;
   std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
   pipeline::recover_contacts(run, ops, res);
   stop.throw_if_stop_requested();
@@ -292,12 +294,13 @@ JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions&
   return res;
 }
 
-/// The default method's output verifies wherever a program exists (tests/test_paper_method.cpp):
+/// Every method's output verifies wherever a program exists (tests/test_paper_method.cpp):
 /// operations whose points or moves the verification found hitting the part are planned again with
-/// the fallbacks of plan_operation. Only failed runs pay for the second run.
+/// the fallbacks of plan.cpp (the other method's plan, else the input's axes where they hit).
+/// Only failed runs pay for the second run.
 JobResult run_with_fallback(const Toolpath& tp, const Machine& machine, const JobOptions& options) {
   JobResult res = run_once(tp, machine, options, {});
-  if (options.method != Method::Paper || !options.part) return res;
+  if (options.method == Method::None || !options.part) return res;
   std::set<std::size_t> refused;
   for (const Finding& f : res.findings) {
     if ((f.code == FindingCode::PointCollision || f.code == FindingCode::MoveCollision) &&

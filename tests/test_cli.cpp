@@ -143,7 +143,15 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
                             "rms_omega_deg_s", "c_jumps", "colliding_points"}) {
       CHECK(op[side].contains(key));
     }
+    // Each rotary axis on its own; no share without the machine file's limits.
+    for (const char* axis : {"A", "C"}) {
+      for (const char* key : {"max_omega_deg_s", "max_accel_deg_s2", "rms_accel_deg_s2"}) {
+        CHECK(op[side]["axes"][axis].contains(key));
+      }
+      CHECK(op[side]["axes"][axis]["accel_share"].is_null());
+    }
   }
+  CHECK(op.contains("worst_axis"));
   CHECK(op["max_axis_change_deg"] == 0.0);
   CHECK(op["verification"]["within_axis_limits"] == true);
   CHECK(op["verification"]["roundtrip_max_mm"].get<double>() < 1e-4);
@@ -161,7 +169,7 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
   const auto kept =
       nlohmann::json::parse(read_file(t.path("r.json")))["operations"].at(0)["kept_input_points"];
   std::size_t by_reason = 0;
-  for (const char* why : {"collision", "peak_rate", "no_free_axis"}) {
+  for (const char* why : {"collision", "peak_rate", "no_gain", "no_free_axis", "method_choice"}) {
     by_reason += kept["by_reason"][why].get<std::size_t>();
   }
   CHECK(kept["total"].get<std::size_t>() == by_reason);
@@ -171,7 +179,9 @@ TEST_CASE("cli: report, CSV and CL file carry the contract's names", "[cli]") {
       csv, Catch::StartsWith(
                "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
                "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_"
-               "line,findings,gap_mm,surface,normal_uncertainty_deg\n"));
+               "line,findings,gap_mm,surface,normal_uncertainty_deg,omega_tilt_deg_s,"
+               "omega_C_deg_s,accel_tilt_deg_s2,accel_C_deg_s2,tilt_after_deg,"
+               "cutting_diameter_before_mm,cutting_diameter_mm\n"));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
   CHECK(read_file(t.path("o.cls")) == kSmallCl);
 }

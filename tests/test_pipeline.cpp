@@ -398,7 +398,7 @@ TEST_CASE(
   given.paper.grid_deg = 4.0;
   JobResult res;
   pipeline::Run run = pipeline::validate(tp, machine, given, res);
-  run.paper_fallback = {0};  // as run_job does after a refused first run
+  run.refused_operations = {0};  // as run_job does after a refused first run
   std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
   pipeline::recover_contacts(run, ops, res);
   pipeline::plan_operations(run, ops, res);
@@ -535,5 +535,76 @@ TEST_CASE(
     }
     CHECK(named);
     CHECK_FALSE(res.problems.empty());
+  }
+}
+
+TEST_CASE(
+    "pipeline: every method keeps its promise per rotary axis -- where the input is free no "
+    "axis's peak omega or a rises above the input's, the kept counts are the axes written as "
+    "the input's, and an asked least tilt from the normal is held where the input keeps it",
+    "[pipeline][promise]") {
+  std::mt19937 rng(59);
+  const std::vector<Heightfield> parts = random_heightfields(rng);
+  for (std::size_t h = 0; h < 2 && h < parts.size(); ++h) {
+    const Heightfield& hf = parts[h];
+    INFO(hf.name);
+    // Two operations of one job: a pass led 5 deg and one led 12 deg off the normal.
+    Toolpath tp =
+        parse_cl(raster_cl(hf, 3.0, 5.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0).text, "p.cls");
+    const Toolpath second =
+        parse_cl(raster_cl(hf, 3.0, 12.0, 2, 0.5, 20.0, 30.0, 5.0, 45.0, 80.0).text, "q.cls");
+    tp.operations.push_back(second.operations.front());
+    tp.operations.back().name = "SECOND";
+    const Part part(heightfield_mesh(hf, 0.5, 0.0, 50.0, 10.0, 40.0));
+    Machine machine = default_machine();
+    machine.limits[static_cast<std::size_t>(Joint::Tilt)] = {100.0, 1000.0, 0.0};
+    machine.limits[static_cast<std::size_t>(Joint::C)] = {200.0, 2000.0, 0.0};
+    for (const bool global : {false, true}) {
+      for (const bool tilt : {false, true}) {
+        INFO("global " << global << ", least tilt asked " << tilt);
+        JobOptions options;
+        options.part = &part;
+        options.method = global ? Method::Global : Method::Paper;
+        options.paper.grid_deg = 4.0;
+        if (tilt) options.min_tilt_deg = 4.0;
+        const JobResult res = run_job(tp, machine, options);
+        REQUIRE(res.operations.size() == 2);
+        for (std::size_t k = 0; k < res.operations.size(); ++k) {
+          const OperationResult& r = res.operations[k];
+          const Operationd& op = tp.operations[k];
+          INFO(r.name);
+          REQUIRE(r.colliding_before);
+          REQUIRE(r.worst_axis);  // the machine gives both rotary limits
+          if (*r.colliding_before == 0) {
+            CHECK(r.after.tilt.max_omega_deg_s <=
+                  std::max(r.before.tilt.max_omega_deg_s * 1.001, pipeline::kStillOmegaDegS));
+            CHECK(r.after.c.max_omega_deg_s <=
+                  std::max(r.before.c.max_omega_deg_s * 1.001, pipeline::kStillOmegaDegS));
+            CHECK(r.after.tilt.max_accel_deg_s2 <=
+                  std::max(r.before.tilt.max_accel_deg_s2 * 1.001, pipeline::kStillAccelDegS2));
+            CHECK(r.after.c.max_accel_deg_s2 <=
+                  std::max(r.before.c.max_accel_deg_s2 * 1.001, pipeline::kStillAccelDegS2));
+            CHECK_FALSE(res.has(FindingCode::AxisRateRose));
+          }
+          // Kept counts: the feed passes' points written with their input axes.
+          REQUIRE(r.kept_input_points);
+          std::size_t written_as_input = 0;
+          for (const IndexRange& pass : feed_passes(op)) {
+            for (std::size_t i = pass.begin; i < pass.end; ++i) {
+              written_as_input += angle_between(r.rows[i].axis, op.points[i].axis) <= 1e-6;
+            }
+          }
+          CHECK(r.kept_input_points->total() == written_as_input);
+          REQUIRE(r.cutting);
+          if (tilt) {
+            CHECK(r.cutting->least_tilt_given);
+            // Held wherever the input itself keeps it (none of these inputs comes nearer).
+            CHECK(r.cutting->least_tilt_before_deg >= 4.0);
+            CHECK(r.cutting->points_below == 0);
+            CHECK(r.cutting->least_tilt_after_deg >= 4.0 - pipeline::kTiltAllowanceDeg);
+          }
+        }
+      }
+    }
   }
 }

@@ -27,7 +27,7 @@ struct Args {
   bool force = false, quiet = false, feed_schedule = false;
   int verbose = 0;
   std::string part, plots, html;
-  std::optional<double> grid, max_deviation, shank_radius, flute_length, holder_radius,
+  std::optional<double> grid, max_deviation, min_tilt, shank_radius, flute_length, holder_radius,
       holder_length, gauge_length;
 };
 

@@ -98,6 +98,7 @@ const OptionNames& cli_option_names() {
   static const OptionNames names = {
       {"JobOptions::part", "--part"},
       {"JobOptions::max_deviation_deg", "--max-deviation"},
+      {"JobOptions::min_tilt_deg", "--min-tilt"},
       {"JobOptions::paper.grid_deg", "--grid"},
       {"JobOptions::global.jerk_weight_s2", "--jerk-weight"},
       {"JobOptions::feed_mm_per_min", "--feed"},
@@ -206,6 +207,7 @@ JobOptions job_options_of(const Args& a) {
   if (a.jerk_weight) options.global.jerk_weight_s2 = *a.jerk_weight;
   if (a.grid) options.paper.grid_deg = *a.grid;
   options.max_deviation_deg = a.max_deviation;
+  options.min_tilt_deg = a.min_tilt;
   options.shank_clearance_mm = a.shank_clearance_mm;
   options.holder_clearance_mm = a.holder_clearance_mm;
   options.part_tolerance_mm = a.part_tolerance;

@@ -116,6 +116,11 @@ void add_method_options(CLI::App& app, Args& a) {
   app.add_option("--max-deviation", a.max_deviation,
                  "largest angle between an output axis and its input axis, deg (30)")
       ->group("Method");
+  app.add_option("--min-tilt", a.min_tilt,
+                 "least angle between an output axis and the surface normal at a contact, deg "
+                 "(default: per operation the input's least, rounded down to 0.1; never below "
+                 "the input's own angle at a point)")
+      ->group("Method");
 }
 
 void add_tool_options(CLI::App& app, Args& a) {
@@ -223,6 +228,7 @@ void name_option_values(CLI::App& app) {
                                                     {"--gauge-length", "LENGTH"},
                                                     {"--grid", "DEG"},
                                                     {"--max-deviation", "DEG"},
+                                                    {"--min-tilt", "DEG"},
                                                     {"--plots", "FOLDER"},
                                                     {"--html", "FILE"}};
   for (CLI::Option* o : app.get_options()) {

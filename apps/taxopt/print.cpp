@@ -23,10 +23,25 @@ int error(const std::string& what, int code) {
   return code;
 }
 
+/// The headline of a row: the axis nearest its machine limit, as shares of the limit, where
+/// the machine file gives limits; else the paper's combined peak a.
+static std::string worst_axis_cell(const SummaryRow& r) {
+  if (!r.worst_axis) {
+    return "(combined a) " +
+           before_after(r.peak_accel_deg_s2.before, r.peak_accel_deg_s2.after, "%.1f");
+  }
+  const AxisShare& w = *r.worst_axis;
+  return std::string(1, w.axis) + " " + (w.rate == "omega" ? "omega " : "a ") +
+         before_after(100.0 * w.before, 100.0 * w.after, "%.0f%%");
+}
+
 void print_summary(const JobResult& result) {
-  std::printf("%-20s %7s %-28s %-30s %-9s %-9s %7s %-26s %-26s %7s\n", "operation", "points",
-              "peak omega deg/s", "peak a deg/s^2", "C jumps", "collide", "dev deg", "feed time s",
-              "cycle time s", "time s");
+  const std::string tilt(1, result.tilt_letter);
+  std::printf("%-20s %7s %-26s %-26s %-28s %-28s %-32s %-22s %-9s %-9s %7s %-26s %-26s %7s\n",
+              "operation", "points", ("peak omega " + tilt + " deg/s").c_str(),
+              "peak omega C deg/s", ("peak a " + tilt + " deg/s^2").c_str(), "peak a C deg/s^2",
+              "worst axis (of its limit)", "least cut dia mm", "C jumps", "collide", "dev deg",
+              "feed time s", "cycle time s", "time s");
   const auto pair = [](const BeforeAfter<double>& v) {
     return before_after(v.before, v.after, "%.1f");
   };
@@ -38,11 +53,17 @@ void print_summary(const JobResult& result) {
                                 : r.colliding_points
                                     ? count(r.colliding_points->before, r.colliding_points->after)
                                     : std::string("-");
-    std::printf("%-20.20s %7zu %-28s %-30s %-9s %-9s %7.2f %-26s %-26s %7.2f\n",
-                r.operation.c_str(), r.points, pair(r.peak_omega_deg_s).c_str(),
-                pair(r.peak_accel_deg_s2).c_str(), count(r.c_jumps.before, r.c_jumps.after).c_str(),
-                collide.c_str(), r.max_axis_change_deg, pair(r.feed_time_s).c_str(),
-                pair(r.cycle_time_s).c_str(), r.compute_s);
+    std::printf(
+        "%-20.20s %7zu %-26s %-26s %-28s %-28s %-32s %-22s %-9s %-9s %7.2f %-26s %-26s %7.2f\n",
+        r.operation.c_str(), r.points, pair(r.peak_omega_tilt_deg_s).c_str(),
+        pair(r.peak_omega_c_deg_s).c_str(), pair(r.peak_accel_tilt_deg_s2).c_str(),
+        pair(r.peak_accel_c_deg_s2).c_str(), worst_axis_cell(r).c_str(),
+        r.least_cutting_diameter_mm ? before_after(r.least_cutting_diameter_mm->before,
+                                                   r.least_cutting_diameter_mm->after, "%.2f")
+                                          .c_str()
+                                    : "-",
+        count(r.c_jumps.before, r.c_jumps.after).c_str(), collide.c_str(), r.max_axis_change_deg,
+        pair(r.feed_time_s).c_str(), pair(r.cycle_time_s).c_str(), r.compute_s);
   }
 }
 

@@ -83,6 +83,14 @@ struct JobOptions {
   /// (--part-tolerance), mm; empty: the contact tolerance (contact_tolerance_mm: max(0.05, the
   /// mesh's chordal error + the CL file's tolerance band)).
   std::optional<double> part_tolerance_mm;
+  /// The least angle a method's axis keeps from the designed surface's normal at a contact
+  /// (--min-tilt), deg: at the ball's tip the cutting speed is zero, so a CAM system leads or
+  /// tilts the tool off the normal. At each contact the bound is the lesser of this and the
+  /// input's own angle there: no method brings the axis nearer the normal than the CAM did, and
+  /// none is refused for an input that comes nearer than asked. Empty: no bound is held; the
+  /// report (OperationResult::Cutting) still measures the written angles against the input's
+  /// least, rounded down to 0.1 deg, and names the points below it.
+  std::optional<double> min_tilt_deg;
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
   bool count_free_cells = false;
@@ -207,6 +215,9 @@ struct PointRow {
   Vec3d axis = Vec3d::UnitZ();
   double tilt_axis_deg = 0.0, c_deg = 0.0;
   double omega_deg_s = 0.0, accel_deg_s2 = 0.0;
+  /// The same per rotary axis (signed): the tilt axis (A or B) and C.
+  double omega_tilt_deg_s = 0.0, omega_c_deg_s = 0.0;
+  double accel_tilt_deg_s2 = 0.0, accel_c_deg_s2 = 0.0;
   /// Contact geometry, when a part was given and the ball touches it here: the designed
   /// surface's contact and normal (ContactPoint::surface_cc_mm, surface_normal), the input
   /// axis's tilt and yaw in its frame, the exact gap to the mesh, where the contact lies and
@@ -220,6 +231,11 @@ struct PointRow {
   /// The same with the input axes as the machine would have run them (the "before").
   double tilt_axis_before_deg = 0.0, c_before_deg = 0.0;
   double omega_before_deg_s = 0.0, accel_before_deg_s2 = 0.0;
+  /// Where the ball touches: the written axis's angle from the designed surface's normal, and
+  /// the ball's effective cutting diameter at the contact, 2 R sin(that angle), with the input
+  /// axis (before) and the written one, mm (OperationResult::Cutting).
+  double tilt_after_deg = 0.0;
+  double cutting_diameter_before_mm = 0.0, cutting_diameter_mm = 0.0;
   /// A key point of the optimiser: an end of one of its intervals (segment boundary).
   bool key = false;
   /// Scheduled feed of the move into this point (the feed the machine can hold there, mm/min:
@@ -293,6 +309,27 @@ struct FeedSummary {
   int sweeps = 0;
 };
 
+/// A rotary axis's peak rate against the machine's limit for it: the machine limits each axis
+/// on its own (a trunnion's tilt is far slower than its C), so a combined figure can fall while
+/// one axis rises.
+struct AxisShare {
+  /// 'A' or 'B' (the tilt axis), or 'C'.
+  char axis = 'C';
+  /// "omega" (peak angular velocity) or "accel" (peak angular acceleration).
+  std::string rate;
+  /// The machine file's limit, deg/s or deg/s^2.
+  double limit = 0.0;
+  /// The peak of the input's axes and of the written program, each over the limit.
+  double before = 0.0, after = 0.0;
+};
+
+/// The axis and rate whose peak comes nearest its limit (the larger of its before and after
+/// share), among the limits the machine gives (Machine::limits; the defaults a schedule falls
+/// back on are no machine's); empty where it gives none for A/B or C.
+TAXOPT_API std::optional<AxisShare> worst_axis_share(const RotarySummary& before,
+                                                     const RotarySummary& after,
+                                                     const Machine& machine);
+
 /// Result of one operation.
 struct OperationResult {
   std::string name;
@@ -303,6 +340,32 @@ struct OperationResult {
   /// feed move at the time the controller takes from the words written (tip path / F, the
   /// block's kept time, or with --feed-schedule the scheduled one), the input's likewise.
   RotarySummary before, after;
+  /// The axis whose peak rate comes nearest the machine's limit for it (worst_axis_share);
+  /// empty where the machine gives no rotary limit.
+  std::optional<AxisShare> worst_axis;
+  /// The cutting conditions at the contacts (with a part and a ball): at the ball's tip the
+  /// cutting speed is zero, so the angle between the axis and the designed surface's normal
+  /// sets the effective cutting diameter 2 R sin(angle) and speed pi D n.
+  struct Cutting {
+    /// The least tilt measured against (JobOptions::min_tilt_deg, else the input's least
+    /// rounded down to 0.1 deg) and whether it was given (and so held by the methods).
+    double least_tilt_deg = 0.0;
+    bool least_tilt_given = false;
+    /// Touching feed points whose written axis is nearer the normal than the least tilt (less
+    /// kTiltAllowanceDeg): where the input itself was nearer (the methods keep the input's angle
+    /// there), the first one's CL line and the least angle written.
+    std::size_t points_below = 0;
+    int first_line_below = 0;
+    /// Over the touching feed points: the least angle from the normal, deg, and the effective
+    /// cutting diameter's least and mean, mm; before (input axes) and after (written).
+    double least_tilt_before_deg = 0.0, least_tilt_after_deg = 0.0;
+    double least_diameter_before_mm = 0.0, mean_diameter_before_mm = 0.0;
+    double least_diameter_after_mm = 0.0, mean_diameter_after_mm = 0.0;
+    /// The spindle speed the diameters turn at (rpm; 0: the file gives none, no speed).
+    double spindle_rpm = 0.0;
+    std::size_t points = 0;
+  };
+  std::optional<Cutting> cutting;
   /// The paper's metric (eq. 16-18): the angles over the contact points' arc lengths at the
   /// metric feed. For comparison with the paper only: on a meshed part the contact points
   /// carry the facets, and no optimiser or guard judges by it.
@@ -321,14 +384,20 @@ struct OperationResult {
   /// writing (the write shared evenly), the verification without the raster.
   double time_contacts_s = 0.0, time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0,
          time_verify_s = 0.0;
-  /// With an optimiser: the points that kept their input axes, by why. `collision`: the
-  /// optimised axes' points or moves hit the part; `peak_rate`: they raised the pass's peak
-  /// omega or a; `no_free_axis`: no acceptable axis within the cone. `join_points` were
-  /// blended between kept and optimised axes.
+  /// With an optimiser: the points of the feed passes whose written axis is their input
+  /// axis, by why. `collision`: the method's axes' points or moves hit the part; `peak_rate`:
+  /// they raised a rotary axis's omega or a above the input's peak over the pass; `no_gain`:
+  /// they gained nothing on the pass; `no_free_axis`: no acceptable axis within the cone;
+  /// `method_choice`: the method chose the input's axis itself (the time objective's input
+  /// plan, a fallback). `join_points` were blended between kept and optimised axes; `passes`
+  /// are written whole with the input's axes.
   struct KeptInputPoints {
-    std::size_t collision = 0, peak_rate = 0, no_free_axis = 0, join_points = 0;
+    std::size_t collision = 0, peak_rate = 0, no_gain = 0, no_free_axis = 0, method_choice = 0;
+    std::size_t join_points = 0;
     std::size_t passes = 0, stretches = 0;
-    std::size_t total() const { return collision + peak_rate + no_free_axis; }
+    std::size_t total() const {
+      return collision + peak_rate + no_gain + no_free_axis + method_choice;
+    }
   };
   std::optional<KeptInputPoints> kept_input_points;
   /// --objective time: the plan kept (paper, sum-squares, sum-squares-fine, time, input), its
@@ -381,6 +450,8 @@ enum class FindingCode {
   TcpJointLimit,      ///< LinuxCNC tcp: a rapid its planner moves drives a joint past its limit
   FeedInAir,          ///< feed points in the air between touching points of their pass
   MeshSlivers,        ///< zero-area faces of the part's file dropped (no surface lost)
+  PartTolerance,      ///< the part tolerance is not the larger contact tolerance given
+  AxisRateRose,       ///< a rotary axis's peak omega or a above the input's (and why)
   // Problems: the output is not to be used (JobResult::ok() is false).
   NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
   UnreachablePose,       ///< no pose within the machine's axis ranges
@@ -543,8 +614,18 @@ struct BeforeAfter {
 struct SummaryRow {
   std::string operation;
   std::size_t points = 0;
-  /// The rotary rates as the machine runs the program (OperationResult::before, after).
+  /// The rotary rates as the machine runs the program (OperationResult::before, after):
+  /// combined (the paper's sqrt(tilt^2 + C^2)) and per axis.
   BeforeAfter<double> peak_omega_deg_s, peak_accel_deg_s2, rms_accel_deg_s2;
+  BeforeAfter<double> peak_omega_tilt_deg_s, peak_omega_c_deg_s;
+  BeforeAfter<double> peak_accel_tilt_deg_s2, peak_accel_c_deg_s2;
+  /// The machine's tilt axis letter ('A' or 'B').
+  char tilt_letter = 'A';
+  /// The axis nearest its machine limit (OperationResult::worst_axis); empty: no limits given.
+  std::optional<AxisShare> worst_axis;
+  /// The ball's least effective cutting diameter at the contacts, mm (OperationResult::
+  /// Cutting); empty: no contacts.
+  std::optional<BeforeAfter<double>> least_cutting_diameter_mm;
   BeforeAfter<long> c_jumps;
   /// Colliding points; empty: not checked for this operation.
   std::optional<BeforeAfter<long>> colliding_points;

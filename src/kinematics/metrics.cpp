@@ -91,18 +91,29 @@ void accumulate(RotarySummary& s, const RotaryKinematics& k, const std::vector<d
   for (std::size_t i = 0; i < n; ++i) {
     s.max_omega_deg_s = std::max(s.max_omega_deg_s, k.omega_deg_s[i]);
     s.max_accel_deg_s2 = std::max(s.max_accel_deg_s2, k.accel_deg_s2[i]);
+    s.tilt.max_omega_deg_s = std::max(s.tilt.max_omega_deg_s, std::abs(k.omega_tilt_deg_s[i]));
+    s.c.max_omega_deg_s = std::max(s.c.max_omega_deg_s, std::abs(k.omega_c_deg_s[i]));
+    s.tilt.max_accel_deg_s2 = std::max(s.tilt.max_accel_deg_s2, std::abs(k.accel_tilt_deg_s2[i]));
+    s.c.max_accel_deg_s2 = std::max(s.c.max_accel_deg_s2, std::abs(k.accel_c_deg_s2[i]));
     if (i + 1 < n) {
       s.sum_sq_omega += k.omega_deg_s[i] * k.omega_deg_s[i];
       ++s.omega_samples;
     }
     if (i > 0 && i + 1 < n) {
       s.sum_sq_accel += k.accel_deg_s2[i] * k.accel_deg_s2[i];
+      s.tilt.sum_sq_accel += k.accel_tilt_deg_s2[i] * k.accel_tilt_deg_s2[i];
+      s.c.sum_sq_accel += k.accel_c_deg_s2[i] * k.accel_c_deg_s2[i];
       ++s.accel_samples;
     }
     if (i > 0 && std::abs(c_deg[i] - c_deg[i - 1]) > 90.0) ++s.c_jumps;
   }
   s.rms_accel_deg_s2 =
       s.accel_samples ? std::sqrt(s.sum_sq_accel / static_cast<double>(s.accel_samples)) : 0.0;
+  for (AxisPeaks* axis : {&s.tilt, &s.c}) {
+    axis->rms_accel_deg_s2 =
+        s.accel_samples ? std::sqrt(axis->sum_sq_accel / static_cast<double>(s.accel_samples))
+                        : 0.0;
+  }
   s.rms_omega_deg_s =
       s.omega_samples ? std::sqrt(s.sum_sq_omega / static_cast<double>(s.omega_samples)) : 0.0;
 }

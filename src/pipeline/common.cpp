@@ -30,6 +30,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::TcpJointLimit:
     case FindingCode::FeedInAir:
     case FindingCode::MeshSlivers: return Severity::Warning;
+    case FindingCode::PartTolerance: return Severity::Warning;
+    case FindingCode::AxisRateRose: return Severity::Warning;
     default: return Severity::Problem;
   }
 }
@@ -75,11 +77,27 @@ ToolMargins margins_of(const JobOptions& options, const Operationd& op) {
   ToolMargins m;
   m.shank_clearance_mm = options.shank_clearance_mm.value_or(kDefaultShankClearanceMm);
   m.holder_clearance_mm = options.holder_clearance_mm.value_or(kDefaultHolderClearanceMm);
-  if (options.part) {
-    m.flute_tolerance_mm = options.part_tolerance_mm.value_or(
-        contact_tolerance_mm(*options.part, options.contact, op.cam_tolerance_mm));
-  }
+  if (options.part) m.flute_tolerance_mm = part_tolerance_mm(options, op);
   return m;
+}
+
+/// The part tolerance: how deep the flutes may reach into the mesh (--part-tolerance), else
+/// what the contact tolerance is derived from (the mesh's chordal error and the CL file's
+/// tolerance) -- never the contact tolerance as given: a tolerance that lets a ball sit on a
+/// coarse mesh is no budget for the tool's side to gouge the part.
+double part_tolerance_mm(const JobOptions& options, const Operationd& op) {
+  if (options.part_tolerance_mm) return *options.part_tolerance_mm;
+  ContactOptions derived = options.contact;
+  derived.tolerance_mm = 0.0;
+  return contact_tolerance_mm(*options.part, derived, op.cam_tolerance_mm);
+}
+
+/// Where part_tolerance_mm comes from, in words.
+std::string part_tolerance_source(const JobOptions& options, const Operationd& op) {
+  if (options.part_tolerance_mm) return "as given";
+  ContactOptions derived = options.contact;
+  derived.tolerance_mm = 0.0;
+  return contact_tolerance_source(*options.part, derived, op.cam_tolerance_mm);
 }
 
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does
@@ -191,6 +209,12 @@ RotarySummary summarise_passes(const Operationd& op, const std::vector<double>& 
         PointRow& r = (*rows)[pass.begin + j];
         (rows_before ? r.omega_before_deg_s : r.omega_deg_s) = k.omega_deg_s[j];
         (rows_before ? r.accel_before_deg_s2 : r.accel_deg_s2) = k.accel_deg_s2[j];
+        if (!rows_before) {
+          r.omega_tilt_deg_s = k.omega_tilt_deg_s[j];
+          r.omega_c_deg_s = k.omega_c_deg_s[j];
+          r.accel_tilt_deg_s2 = k.accel_tilt_deg_s2[j];
+          r.accel_c_deg_s2 = k.accel_c_deg_s2[j];
+        }
         // A flip as RotarySummary::c_jumps counts it (metrics.cpp).
         if (j > 0 && std::abs(c[j] - c[j - 1]) > 90.0) {
           r.mark(rows_before ? PointMark::CFlipBefore : PointMark::CFlip);

@@ -51,62 +51,110 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
   for (std::size_t i : colliding_points(model, tool, op, axes, contacts, nullptr, &check)) {
     hit[i] = 1;
   }
+  // Where the input's flutes clear the part, an axis other than the input's must clear it too.
+  std::vector<char> strict(n, 0);
+  bool any_strict = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    strict[i] = check[i] && !hit[i] && in.held_to_input(i) &&
+                angle_between(axes[i], op.points[i].axis) > 1e-12;
+    any_strict = any_strict || strict[i];
+  }
+  if (any_strict) {
+    for (std::size_t i :
+         colliding_points(model, *in.strict_tool, op, axes, contacts, nullptr, &strict)) {
+      hit[i] = 1;
+    }
+  }
   return hit;
 }
 
 namespace {
 
-/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks and the
-/// sum of squares of a over the interior points (metrics' accumulate).
+/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks per axis
+/// and the sums of squares of a over the interior points (metrics' accumulate).
 struct PassRates {
   RotaryKinematics k;
   RotarySummary summary;
-  double mean_sq_accel() const {
-    return summary.accel_samples ? summary.sum_sq_accel / static_cast<double>(summary.accel_samples)
-                                 : 0.0;
-  }
 };
 
+/// The largest share of its machine limit any rotary axis reaches: of the peaks of a (`rms`
+/// false) or of the RMS of a (true). The limits are the machine's effective ones (its own,
+/// else the defaults), so that a B far slower than its C weighs as the machine feels it.
+double worst_accel_share(const RotarySummary& s, const JointLimits& limits, bool rms) {
+  const double tilt_limit = limits[static_cast<std::size_t>(Joint::Tilt)].max_accel_per_s2;
+  const double c_limit = limits[static_cast<std::size_t>(Joint::C)].max_accel_per_s2;
+  const double tilt = rms ? s.tilt.rms_accel_deg_s2 : s.tilt.max_accel_deg_s2;
+  const double c = rms ? s.c.rms_accel_deg_s2 : s.c.max_accel_deg_s2;
+  return std::max(tilt / tilt_limit, c / c_limit);
+}
+
+/// A pass gains on its reference when its worst axis's peak a falls by more than this share,
+/// or the worst axis's RMS a by more than kRmsGain: below that the axes would turn for an
+/// improvement the machine cannot feel (and the rounding of the written words can undo).
+constexpr double kPeakGain = 1e-3;
+constexpr double kRmsGain = 1e-2;
+
 /// The guard of an operation's passes (guard_passes): the reference's poses (the input's
-/// unless given), which passes it guards (those whose reference is free), and the verdict on a
-/// candidate's points that guard_stretches asks for.
+/// unless given), which passes it guards (those whose reference is free), the input's peaks per
+/// axis that bound every guarded pass, and the verdict on a candidate's points that
+/// guard_stretches asks for.
 class PassGuard {
  public:
   PassGuard(const OperationPlanInputs& in, const GuardReference* reference)
-      : reference_(reference),
-        in_(in),
+      : in_(in),
         n_(in.op.points.size()),
         rapid_into_(rapid_into_of(in.op)),
-        passes_(feed_passes(in.op)) {
-    for (const CLPointd& p : in.op.points) in_axes_.push_back(p.axis);
+        passes_(feed_passes(in.op)),
+        limits_(effective_limits(in.machine)) {
+    for (const CLPointd& p : in.op.points) input_axes_.push_back(p.axis);
+    ref_axes_ = input_axes_;
     if (reference) {
-      in_axes_ = reference->axes;
-      in_preferred_ = reference->preferred;
+      ref_axes_ = reference->axes;
+      ref_preferred_ = reference->preferred;
+      judge_gain_ = reference->judge_gain;
     }
   }
 
   StretchGuardResult run(OptimisedOperation& out) {
-    const PosePlan in_plan =
-        plan_poses(in_.machine.rotary, in_axes_, rapid_into_, {}, in_.pose_options, in_preferred_);
-    if (!in_plan.ok()) return {out.axes, std::vector<KeptWhy>(n_, KeptWhy::None)};
-    const std::vector<char> in_hit = moves_hit(in_axes_, in_plan.poses, std::vector<char>(n_, 1));
+    const PosePlan ref_plan = plan_poses(in_.machine.rotary, ref_axes_, rapid_into_, {},
+                                         in_.pose_options, ref_preferred_);
+    const PosePlan input_plan =
+        plan_poses(in_.machine.rotary, input_axes_, rapid_into_, {}, in_.pose_options);
+    if (!ref_plan.ok() || !input_plan.ok()) {
+      return {out.axes, std::vector<KeptWhy>(n_, KeptWhy::None)};
+    }
+    const std::vector<char> ref_hit =
+        moves_hit(ref_axes_, ref_plan.poses, std::vector<char>(n_, 1));
     std::vector<char> guarded(passes_.size(), 0);
     before_.assign(passes_.size(), {});
+    bound_.assign(passes_.size(), {});
     for (std::size_t q = 0; q < passes_.size(); ++q) {
       const IndexRange& pass = passes_[q];
-      bool input_safe = true;
-      for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !in_hit[i];
-      if (!input_safe || pass.size() == 0) continue;
+      bool ref_safe = true;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) ref_safe = ref_safe && !ref_hit[i];
+      if (!ref_safe || pass.size() == 0) continue;
       guarded[q] = 1;
-      before_[q] = rates(pass, in_plan.poses);
+      before_[q] = rates(pass, ref_plan.poses).summary;
+      // The promise is the input's, per axis, whatever the reference.
+      bound_[q] = rates(pass, input_plan.poses).summary;
     }
     opt_preferred_ = out.preferred;
     const StretchEvaluation evaluate =
         [this](const std::vector<Vec3d>& axes, const std::vector<KeptWhy>& why,
                const std::vector<char>& check) { return verdicts(axes, why, check); };
-    StretchGuardResult guard = guard_stretches(passes_, guarded, out.axes, in_axes_, evaluate);
+    StretchGuardResult guard = guard_stretches(passes_, guarded, out.axes, ref_axes_, evaluate);
     out.axes = guard.axes;
     if (!out.preferred.empty()) out.preferred = preferred_of(guard.why);
+    // The points between passes were carried from the method's pass ends: where the guard gave
+    // a pass end back its reference axis, the points in the air next to it take theirs back too
+    // (the tool does not turn in the air for a pass that kept its axes).
+    carry_between_passes(in_.op, passes_, [&](std::size_t to, std::size_t from) {
+      if (angle_between(out.axes[from], ref_axes_[from]) > 1e-12) return;
+      out.axes[to] = ref_axes_[to];
+      if (!out.preferred.empty()) {
+        out.preferred[to] = ref_preferred_.empty() ? std::nullopt : ref_preferred_[to];
+      }
+    });
     return guard;
   }
 
@@ -137,15 +185,17 @@ class PassGuard {
     std::vector<std::optional<Posed>> preferred = opt_preferred_;
     for (std::size_t i = 0; i < preferred.size() && i < why.size(); ++i) {
       if (why[i] == KeptWhy::Join) preferred[i] = std::nullopt;
-      if (why[i] == KeptWhy::Collision || why[i] == KeptWhy::PeakRate) {
-        preferred[i] = in_preferred_.empty() ? std::nullopt : in_preferred_[i];
+      if (why[i] == KeptWhy::Collision || why[i] == KeptWhy::PeakRate ||
+          why[i] == KeptWhy::NoGain) {
+        preferred[i] = ref_preferred_.empty() ? std::nullopt : ref_preferred_[i];
       }
     }
     return preferred;
   }
 
-  /// A candidate's points: those whose points or moves hit, those that raise their guarded
-  /// pass's peak omega or a above the reference's; and the passes whose rates it improves.
+  /// A candidate's points: those whose points or moves hit, those that raise an axis's omega or
+  /// a above the input's peak over their guarded pass; and the passes where it gains on the
+  /// reference.
   StretchVerdicts verdicts(const std::vector<Vec3d>& axes, const std::vector<KeptWhy>& why,
                            const std::vector<char>& check) const {
     StretchVerdicts out{std::vector<PointVerdict>(n_, PointVerdict::Good),
@@ -167,7 +217,8 @@ class PassGuard {
     return out;
   }
 
-  /// Pass q's points judged (see verdicts); true when the pass gains.
+  /// Pass q's points judged (see verdicts), each rotary axis on its own; true when the pass
+  /// gains on its reference.
   bool pass_verdicts(std::size_t q, const std::vector<Posed>& poses, const std::vector<char>& hit,
                      std::vector<PointVerdict>& verdict) const {
     const IndexRange& pass = passes_[q];
@@ -181,32 +232,43 @@ class PassGuard {
       }
     };
     constexpr double kRel = 1.0 + 1e-9;
-    const bool rates_count = !reference_ || reference_->rates;
-    for (std::size_t j = 0; rates_count && j < pass.size(); ++j) {
-      if (!reference_ && k.omega_deg_s[j] > before_[q].summary.max_omega_deg_s * kRel) {
+    const AxisPeaks& tilt = bound_[q].tilt;
+    const AxisPeaks& c = bound_[q].c;
+    const auto above = [&](double value, double bound, double still) {
+      return std::abs(value) > std::max(bound * kRel, still);
+    };
+    for (std::size_t j = 0; j < pass.size(); ++j) {
+      if (above(k.omega_tilt_deg_s[j], tilt.max_omega_deg_s, kStillOmegaDegS) ||
+          above(k.omega_c_deg_s[j], c.max_omega_deg_s, kStillOmegaDegS)) {
         raises(j, j + 1);
       }
-      if (k.accel_deg_s2[j] > before_[q].summary.max_accel_deg_s2 * kRel) {
+      if (above(k.accel_tilt_deg_s2[j], tilt.max_accel_deg_s2, kStillAccelDegS2) ||
+          above(k.accel_c_deg_s2[j], c.max_accel_deg_s2, kStillAccelDegS2)) {
         raises(j ? j - 1 : 0, j + 1);
       }
     }
     for (std::size_t i = pass.begin; i < pass.end; ++i) {
       if (hit[i]) verdict[i] = PointVerdict::Hits;
     }
-    return !rates_count ||
-           after.summary.max_accel_deg_s2 * kRel < before_[q].summary.max_accel_deg_s2 ||
-           after.mean_sq_accel() * kRel < before_[q].mean_sq_accel();
+    if (!judge_gain_) return true;
+    return worst_accel_share(after.summary, limits_, false) <
+               worst_accel_share(before_[q], limits_, false) * (1.0 - kPeakGain) ||
+           worst_accel_share(after.summary, limits_, true) <
+               worst_accel_share(before_[q], limits_, true) * (1.0 - kRmsGain);
   }
 
-  const GuardReference* reference_;
   const OperationPlanInputs in_;
   const std::size_t n_;
   const std::vector<bool> rapid_into_;
   const std::vector<IndexRange> passes_;
-  std::vector<Vec3d> in_axes_;
-  std::vector<std::optional<Posed>> in_preferred_;
+  const JointLimits limits_;
+  std::vector<Vec3d> input_axes_, ref_axes_;
+  std::vector<std::optional<Posed>> ref_preferred_;
   std::vector<std::optional<Posed>> opt_preferred_;
-  std::vector<PassRates> before_;
+  bool judge_gain_ = true;
+  /// Per pass: the reference's rates (what a candidate must gain on) and the input's (what no
+  /// axis may exceed).
+  std::vector<RotarySummary> before_, bound_;
 };
 
 }  // namespace

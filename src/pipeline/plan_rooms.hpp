@@ -27,9 +27,30 @@ struct OperationPlanInputs {
   const Machine& machine;
   const BlockTiming& timing;
   const PosePlanOptions& pose_options;
+  /// The tool with its flutes held to kInputDepthAllowanceMm, and per point whether the input
+  /// axis clears the part so (both empty without a part): there a method's axis must clear it
+  /// too. The part tolerance is the input's budget, never a method's: no new axis puts the
+  /// tool's side deeper into the part than the input did.
+  const ToolModel* strict_tool = nullptr;
+  const std::vector<char>* input_clear = nullptr;
+  /// Per point the least angle a new axis keeps from the designed surface's normal, rad
+  /// (least_tilt_of; empty or 0: no bound).
+  const std::vector<double>* least_tilt_rad = nullptr;
   /// The same, judged by another model (the verification's FCL model).
   OperationPlanInputs judged_by(const PartCheck* other) const {
-    return {op, contacts, ball_radius_mm, other, tool, machine, timing, pose_options};
+    return {op,     contacts,     ball_radius_mm, other,       tool,          machine,
+            timing, pose_options, strict_tool,    input_clear, least_tilt_rad};
+  }
+  /// Whether `axis` keeps point i's least tilt from the surface normal.
+  bool keeps_tilt(std::size_t i, const Vec3d& axis) const {
+    if (!least_tilt_rad || i >= least_tilt_rad->size() || !((*least_tilt_rad)[i] > 0.0)) {
+      return true;
+    }
+    return angle_between(axis, contacts[i].surface_normal) >= (*least_tilt_rad)[i] - 1e-9;
+  }
+  /// Whether point i's new axes are held to the input's depth (strict_tool).
+  bool held_to_input(std::size_t i) const {
+    return strict_tool && input_clear && i < input_clear->size() && (*input_clear)[i];
   }
 };
 
@@ -41,9 +62,11 @@ struct Acceptance {
   double max_deviation_rad;
   bool operator()(std::size_t i, const Vec3d& axis) const {
     if (!in.machine.rotary.reachable(axis)) return false;
+    if (!in.keeps_tilt(i, axis)) return false;
     if (!in.model) return true;
     const bool in_air = in.contacts.empty() || in.contacts[i].state != ContactState::Touching;
-    return !in.model->collides(*in.tool, reference_point(in.op.points[i], in.ball_radius_mm), axis,
+    const ToolModel& tool = in.held_to_input(i) ? *in.strict_tool : *in.tool;
+    return !in.model->collides(tool, reference_point(in.op.points[i], in.ball_radius_mm), axis,
                                in_air);
   }
   /// Acceptable and within the cone around point i's input axis.
@@ -62,17 +85,18 @@ struct PassAxes {
 };
 
 /// The guard after the optimiser (plan/stretch_guard.hpp): where the optimised axes would
-/// raise a pass's peak omega or a, or sweep the tool through the part between two CL points as
-/// the machine moves it, the pass keeps its input axes over those stretches, provided the
-/// input pass is itself safe; whole when a few rounds of joins do not make it good.
-/// With `reference` given (--method global against the paper's axes, with its preferred poses)
-/// the stretches keep those instead, when the peak a rises or the moves hit.
-/// With `rates` false (--objective time, whose objective is the schedule, not the peaks) only
-/// the moves that hit give stretches back.
+/// raise any rotary axis's omega or a above the input's peak over its pass, or sweep the tool
+/// through the part between two CL points as the machine moves it, the pass keeps its
+/// reference axes over those stretches, provided the reference pass is itself safe; whole when
+/// a few rounds of joins do not make it good, or when the pass gains nothing on the reference.
+/// The reference is the input unless given (--method global against the paper's axes, with its
+/// preferred poses); the bound on the rates is always the input's, axis by axis.
+/// With `judge_gain` false (--objective time, whose objective is the schedule, judged after)
+/// a pass within the bounds is not asked to gain on the reference's rates.
 struct GuardReference {
   std::vector<Vec3d> axes;
   std::vector<std::optional<Posed>> preferred;
-  bool rates = true;
+  bool judge_gain = true;
 };
 
 /// What --objective time adds to an operation's passes: the least time of the move into every

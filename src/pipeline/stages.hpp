@@ -56,10 +56,11 @@ struct Run {
   std::optional<CollisionModel> collision;
   std::optional<CSpaceRasteriser> checker;
   const PartCheck* planner_check() const { return checker ? &*checker : nullptr; }
-  /// --method paper: operations whose paper plan the verification refused (a point or move
-  /// hit the part) in a first run; run_job plans them again, falling back to the global
-  /// method's plan, else the input's axes where those are free (plan_operation).
-  std::set<std::size_t> paper_fallback = {};
+  /// Operations whose plan the verification refused (a point or move hit the part) in a first
+  /// run; run_job plans them again, falling back to the other method's plan (the global
+  /// method's for the paper's, the paper's for the global method's), else the input's axes
+  /// where those are free (plan.cpp).
+  std::set<std::size_t> refused_operations = {};
   /// The tool number and spindle speed of operations whose CL file gives none: the options',
   /// else the machine file's [defaults] (validate refuses an operation that needs one of them
   /// when neither gives it).
@@ -105,6 +106,16 @@ struct OperationContext {
   /// The tool as built from the file and the overrides, and as the checks judge it (with the
   /// margins); built once, where the contacts were recovered.
   std::optional<ToolModel> real_tool, tool;
+  /// The tool with its flutes held to kInputDepthAllowanceMm (the other margins as `tool`'s):
+  /// where the input's flutes clear the part by it, a new axis's must too.
+  std::optional<ToolModel> strict_tool;
+  /// The least tilt from the designed surface's normal a method keeps (JobOptions::
+  /// min_tilt_deg, else the input's least over its touching feed points rounded down to
+  /// 0.1 deg), whether it was given, and per point the bound (the lesser of it and the input's
+  /// own angle there; 0 where the ball does not touch). Set by the plan stage.
+  double least_tilt_deg = 0.0;
+  bool least_tilt_given = false;
+  std::vector<double> least_tilt_rad;
   // plan: the method's axes (none: empty).
   std::optional<OptimisedOperation> optimised;
   // post: the input axes as the machine would have run them (the "before"; empty where they
@@ -268,6 +279,27 @@ double ball_radius_mm(const Operationd& op, const JobOptions& options);
 /// Why an operation with no ball radius is left alone.
 std::string not_a_ball(const Operationd& op, const JobOptions& options);
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
+/// How far nearer the normal than the least tilt a written axis may come and still count as
+/// keeping it, deg: the round-off of the written words' angles (a 4-decimal A/C and the
+/// normals' arithmetic), not a tolerance.
+constexpr double kTiltAllowanceDeg = 0.01;
+
+/// The cutting conditions at an operation's contacts (cutting.cpp).
+void cutting_conditions(const OperationContext& o, const PostedOperation& po, OperationResult& r);
+
+/// A rotary axis moving slower than this is still, as the promise "no axis faster than the
+/// input's" reads: where the input holds an axis still, a method may move it this little (a
+/// pole passage's C, the rounding of the written words) but no more. deg/s and deg/s^2.
+constexpr double kStillOmegaDegS = 0.1;
+constexpr double kStillAccelDegS2 = 1.0;
+
+/// How much deeper than the input's a new axis may put the flutes into the part, mm: the
+/// arithmetic of the checks (FCL's distances on a mesh), not a tolerance. The part tolerance
+/// bounds the input's own axes; a method's axes are held to the input's depth where the input
+/// clears the part (OperationPlanInputs::input_clear).
+constexpr double kInputDepthAllowanceMm = 0.001;
+double part_tolerance_mm(const JobOptions& options, const Operationd& op);
+std::string part_tolerance_source(const JobOptions& options, const Operationd& op);
 ToolMargins margins_of(const JobOptions& options, const Operationd& op);
 
 /// A number for a message, as a stream writes it (6 significant digits).

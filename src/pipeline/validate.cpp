@@ -72,6 +72,8 @@ void check_options(const JobOptions& o) {
   // A part tolerance that is still one (1 mm), clearances a machine keeps (50 mm is more than
   // any holder's): larger values turn the checks off or make them hang.
   within("part_tolerance_mm", o.part_tolerance_mm, 0.0, 1.0, "[0, 1] mm");
+  // Beyond 60 deg off the normal a ball-end mill cuts with its side.
+  within("min_tilt_deg", o.min_tilt_deg, 0.0, 60.0, "[0, 60] deg");
   within("shank_clearance_mm", o.shank_clearance_mm, 0.0, 50.0, "[0, 50] mm");
   within("holder_clearance_mm", o.holder_clearance_mm, 0.0, 50.0, "[0, 50] mm");
   // A tool is no larger than a metre: larger dimensions make the checks hang.
@@ -138,6 +140,28 @@ void check_points(const Toolpath& tp) {
 
 namespace {
 
+/// The part tolerance is its own number: where --contact-tolerance is given and the part
+/// tolerance is not, say what the flutes are held to (the tolerance the contact tolerance would
+/// have been, not the one given), so that nobody reads a contact tolerance as a gouge budget.
+void part_tolerance_note(const Toolpath& tp, const JobOptions& given, JobResult& res) {
+  if (!given.part || given.part_tolerance_mm || !(given.contact.tolerance_mm > 0.0)) return;
+  // Said once, for the first operation it concerns (the others differ only by the CL file's
+  // tolerance band, which the report's tool and checks give per operation).
+  for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+    const Operationd& op = tp.operations[k];
+    const double part_mm = part_tolerance_mm(given, op);
+    if (part_mm >= given.contact.tolerance_mm) continue;
+    add_finding(res, FindingCode::PartTolerance, std::nullopt, 0,
+                "the part tolerance stays " + shown(part_mm) + " mm (" +
+                    part_tolerance_source(given, op) + "; operation " + op.name +
+                    "), not the contact tolerance " + shown(given.contact.tolerance_mm) +
+                    " mm given (" + given.name_of("contact.tolerance_mm") +
+                    "): no part of the tool but the ball may reach deeper into the part; " +
+                    given.name_of("part_tolerance_mm") + " sets it");
+    return;
+  }
+}
+
 /// What the run leaves unchecked or unwritten by the machine's and the part's set-up: no part,
 /// no holder model, slivers dropped from the mesh, no safe retract, no coolant, no
 /// linearisation; and the CL file's own notes.
@@ -164,6 +188,7 @@ void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions
                     given.name_of("tool.holder_length_mm") +
                     "): the holder is not checked against the part, only the tool");
   }
+  part_tolerance_note(tp, given, res);
   if (given.part && given.part->mesh().dropped_degenerate_faces > 0) {
     const TriangleMesh& m = given.part->mesh();
     std::ostringstream os;
@@ -436,7 +461,11 @@ void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& r
   for (OperationContext& o : ops) {
     if (!o.contact.recovered) continue;
     o.real_tool = ToolModel::ball_end(o.op->tool, run.options.tool);
-    o.tool = o.real_tool->judged(margins_of(run.options, *o.op));
+    const ToolMargins margins = margins_of(run.options, *o.op);
+    o.tool = o.real_tool->judged(margins);
+    ToolMargins strict = margins;
+    strict.flute_tolerance_mm = std::min(margins.flute_tolerance_mm, kInputDepthAllowanceMm);
+    o.strict_tool = o.real_tool->judged(strict);
   }
 }
 

@@ -252,32 +252,90 @@ void check_round_trip(const Run& run, const OperationContext& o, const PostedOpe
   }
 }
 
-/// Why points kept their input axes (the guards, no free axis in the cone), and the cone
-/// proved on what is written.
-void kept_points(const Run& run, const OperationContext& o, OperationResult& r, JobResult& res) {
+/// The written axes within this of the input's count as kept, rad (a pose's forward
+/// kinematics round-trip is good to about 1e-15).
+constexpr double kKeptAxisRad = 1e-9;
+
+/// A rise of an axis's peak rate over the input's below this share is the rounding of the
+/// written words (the guards hold the plan's rates to the input's exactly).
+constexpr double kRiseShare = 1e-3;
+
+/// The reasons of the kept points, in words.
+std::string kept_reasons(const OperationResult::KeptInputPoints& kept) {
+  std::string out;
+  const auto add = [&](std::size_t count, const char* what) {
+    if (count == 0) return;
+    if (!out.empty()) out += "; ";
+    out += std::to_string(count) + " " + what;
+  };
+  add(kept.collision, "where the method's axes swept the tool through the part");
+  add(kept.peak_rate,
+      "where the method's axes raised a rotary axis's omega or a above the input's");
+  add(kept.no_gain, "where the method's axes gained nothing on the pass");
+  add(kept.no_free_axis, "with no acceptable axis within the cone");
+  add(kept.method_choice, "where the method itself chose the input's axes");
+  return out;
+}
+
+/// Why point i kept its input axis, as the method's own guards say: the last guard that gave
+/// the point back its reference (global against the paper's, the paper's against the input).
+KeptWhy kept_why(const OptimisedOperation& opt, std::size_t i) {
+  for (const StretchGuardResult* g : {&opt.global_guard, &opt.guard}) {
+    if (i < g->why.size() && g->why[i] != KeptWhy::None && g->why[i] != KeptWhy::Join) {
+      return g->why[i];
+    }
+  }
+  return KeptWhy::None;
+}
+
+/// The points of the feed passes whose written axis is their input axis, by why; and the cone
+/// proved on what is written. The counts come from the axes written, whatever method and
+/// fallback chose them: a guard's count of what it kept is not what a later stage wrote.
+void kept_points(const Run& run, const OperationContext& o, const PostedOperation& po,
+                 OperationResult& r, JobResult& res) {
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
   r.segments = static_cast<int>(o.optimised->intervals);
-  // Why points kept their input axes: the paper's guard, else no free axis in the cone.
   const OptimisedOperation& opt = *o.optimised;
   OperationResult::KeptInputPoints kept;
-  kept.passes = opt.guard.whole_passes;
-  kept.stretches = opt.guard.stretches;
-  std::vector<KeptWhy> why = opt.guard.why;
-  why.resize(op.points.size(), KeptWhy::None);
+  std::vector<char> no_free(op.points.size(), 0);
   for (std::size_t i : opt.no_free_axis) {
-    if (why[i] == KeptWhy::None) ++kept.no_free_axis;
+    no_free[i] = 1;
     r.rows[i].mark(PointMark::NoFreeAxis);
   }
-  for (std::size_t i = 0; i < why.size(); ++i) {
-    if (why[i] == KeptWhy::Collision) r.rows[i].mark(PointMark::KeptCollision);
-    if (why[i] == KeptWhy::PeakRate) r.rows[i].mark(PointMark::KeptPeakRate);
-    if (why[i] == KeptWhy::Join) r.rows[i].mark(PointMark::KeptJoin);
+  for (const IndexRange& pass : feed_passes(op)) {
+    std::size_t kept_here = 0;
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      const KeptWhy why = kept_why(opt, i);
+      if (why == KeptWhy::None && i < opt.guard.why.size() && opt.guard.why[i] == KeptWhy::Join) {
+        r.rows[i].mark(PointMark::KeptJoin);
+        ++kept.join_points;
+      }
+      // The written axis is the input's: within the round-off of a pose's forward kinematics.
+      if (angle_between(po.points[i].axis, op.points[i].axis) > kKeptAxisRad) continue;
+      ++kept_here;
+      if (no_free[i]) {
+        ++kept.no_free_axis;
+      } else if (why == KeptWhy::Collision) {
+        ++kept.collision;
+        r.rows[i].mark(PointMark::KeptCollision);
+      } else if (why == KeptWhy::PeakRate) {
+        ++kept.peak_rate;
+        r.rows[i].mark(PointMark::KeptPeakRate);
+      } else if (why == KeptWhy::NoGain) {
+        ++kept.no_gain;
+      } else {
+        ++kept.method_choice;
+      }
+    }
+    if (kept_here == pass.size()) ++kept.passes;
   }
-  for (const KeptWhy kw : why) {
-    kept.collision += kw == KeptWhy::Collision;
-    kept.peak_rate += kw == KeptWhy::PeakRate;
-    kept.join_points += kw == KeptWhy::Join;
+  kept.stretches = opt.guard.stretches + opt.global_guard.stretches;
+  if (kept.total() > 0) {
+    add_finding(res, FindingCode::InputAxesKept, k, 0,
+                "operation " + op.name + ": " + std::to_string(kept.total()) +
+                    " points keep their input axes as written (" + std::to_string(kept.passes) +
+                    " whole passes): " + kept_reasons(kept));
   }
   r.kept_input_points = kept;
   r.time_choice = opt.time_choice;
@@ -425,6 +483,36 @@ void rates(const OperationContext& o, const Written& w, const WrittenAxes& ax, O
       r.paper_after_facets.max_accel_deg_s2 < r.paper_before_facets.max_accel_deg_s2;
 }
 
+/// A rotary axis whose peak omega or a the method raised above the input's, said with its axis
+/// and why: the guards hold every pass whose input is free to the input's peaks per axis, so a
+/// rise is where the input's own axes hit the part (the method's avoid it) or no pose of the
+/// input's could be planned.
+void axis_rise_finding(const Run& run, const OperationContext& o, const OperationResult& r,
+                       JobResult& res) {
+  std::string rose;
+  const auto check = [&](char letter, const char* rate, double before, double after) {
+    const double still = std::string(rate) == "omega" ? kStillOmegaDegS : kStillAccelDegS2;
+    if (!(after > std::max(before * (1.0 + kRiseShare), still))) return;
+    std::ostringstream os;
+    os << (rose.empty() ? "" : ", ") << letter << "'s peak " << rate << " " << before << " -> "
+       << after;
+    rose += os.str();
+  };
+  const char tilt = run.machine.rotary.tilt_letter();
+  check(tilt, "omega", r.before.tilt.max_omega_deg_s, r.after.tilt.max_omega_deg_s);
+  check(tilt, "a", r.before.tilt.max_accel_deg_s2, r.after.tilt.max_accel_deg_s2);
+  check('C', "omega", r.before.c.max_omega_deg_s, r.after.c.max_omega_deg_s);
+  check('C', "a", r.before.c.max_accel_deg_s2, r.after.c.max_accel_deg_s2);
+  if (rose.empty()) return;
+  const std::string why =
+      r.colliding_before && *r.colliding_before > 0
+          ? "the input's axes hit the part at " + std::to_string(*r.colliding_before) +
+                " points, and the method's axes that avoid it turn faster there"
+          : "no pass's input was both free and posable for the guard to hold it to";
+  add_finding(res, FindingCode::AxisRateRose, o.index, 0,
+              "operation " + o.op->name + ": " + rose + " (deg/s, deg/s^2): " + why);
+}
+
 /// One operation verified as written.
 OperationResult verify_operation(const Run& run, const OperationContext& o,
                                  const PostedOperation& po, const Written& w, std::size_t n_posted,
@@ -449,7 +537,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
   r.contact = o.contact;
   r.time_contacts_s = o.contacts_s;
   r.time_optimise_s = o.optimise_s;
-  if (o.optimised) kept_points(run, o, r, res);
+  if (o.optimised) kept_points(run, o, po, r, res);
   if (run.collision && r.contact.recovered) {
     check_collisions(run, o, po, w, ax.xyz_w, ax.a_w, ax.c_w, checking, r, res);
   } else if (run.collision && !(o.ball_radius_mm > 0.0) && op.tool.from_file &&
@@ -460,7 +548,10 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
   }
   contact_rows(run, o, checking, r);
+  cutting_conditions(o, po, r);
   rates(o, w, ax, r);
+  r.worst_axis = worst_axis_share(r.before, r.after, machine);
+  if (o.optimised) axis_rise_finding(run, o, r, res);
   r.feed_after = w.schedule_after[k].summary;
   r.feed_before = w.schedule_before[k].summary;
   longer_cycle_finding(machine, o, r, res);

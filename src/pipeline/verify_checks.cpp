@@ -349,11 +349,7 @@ void tell_point_collisions(const Run& run, const OperationContext& o,
          hit_detail);
   const double flute_tolerance_mm = margins_of(run.options, op).flute_tolerance_mm;
   report(gouges, "where the flutes reach into the part deeper than the part tolerance " +
-                     shown(flute_tolerance_mm) + " mm (" +
-                     (run.options.part_tolerance_mm
-                          ? std::string("as given")
-                          : contact_tolerance_source(*run.options.part, run.options.contact,
-                                                     op.cam_tolerance_mm)) +
+                     shown(flute_tolerance_mm) + " mm (" + part_tolerance_source(run.options, op) +
                      "; a gouge; " + run.options.name_of("part_tolerance_mm") + ")");
   if (hits.empty() && gouges.empty()) {
     report(after, "where the tool hits the part");  // never: the bodies are the same

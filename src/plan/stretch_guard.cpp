@@ -13,6 +13,8 @@ enum class State { Open, Settled, Whole };
 struct Stretch {
   std::size_t begin = 0, end = 0, blend = 0;
   bool hit = false;
+  /// Kept because the method gains nothing over the pass (KeptWhy::NoGain).
+  bool no_gain = false;
   /// Times its blend was doubled.
   int doublings = 0;
 };
@@ -158,8 +160,15 @@ class Guard {
       hit = hit || verdict[i] == PointVerdict::Hits;
     }
     const bool gains = q < verdicts.gains.size() && verdicts.gains[q];
-    if (!worse && (stretches_[q].empty() || gains)) {
+    if (!worse && gains) {
       state_[q] = State::Settled;
+      return;
+    }
+    if (!worse && stretches_[q].empty()) {
+      // Nothing worse and nothing better: the axes would turn for nothing.
+      stretches_[q] = {{pass.begin, pass.end, 0, false, true, 0}};
+      state_[q] = State::Whole;
+      apply(q);
       return;
     }
     bool whole = !worse || round + 1 >= options_.rounds;
@@ -169,7 +178,7 @@ class Guard {
     }
     if (whole) {
       for (const Stretch& s : stretches_[q]) hit = hit || s.hit;
-      stretches_[q] = {{pass.begin, pass.end, 0, hit, 0}};
+      stretches_[q] = {{pass.begin, pass.end, 0, hit, false, 0}};
       state_[q] = State::Whole;
     }
     apply(q);
@@ -186,7 +195,7 @@ class Guard {
     for (const Stretch& s : stretches_[q]) {
       for (std::size_t i = s.begin; i < s.end; ++i) {
         out_.axes[i] = input_[i];
-        out_.why[i] = s.hit ? KeptWhy::Collision : KeptWhy::PeakRate;
+        out_.why[i] = s.no_gain ? KeptWhy::NoGain : s.hit ? KeptWhy::Collision : KeptWhy::PeakRate;
       }
       for_each_blend_point(s, pass, [&](std::size_t i, double weight) {
         if (angle_between(optimised_[i], input_[i]) > Constants<double>::pi() - 1e-6) {
@@ -208,6 +217,7 @@ class Guard {
       out_.points_hit += w == KeptWhy::Collision;
       out_.points_rate += w == KeptWhy::PeakRate;
       out_.points_blended += w == KeptWhy::Join;
+      out_.points_no_gain += w == KeptWhy::NoGain;
     }
   }
 

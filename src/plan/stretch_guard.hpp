@@ -21,8 +21,9 @@
 /// is the trouble (a join too sharp), and widens the stretch to the point when it hits (a
 /// longer blend would not move the tool out of the part). Stretches whose blends meet merge;
 /// one whose blend would leave the pass reaches the pass's end. A pass covered by its stretch,
-/// or still worse after the last round, or good at every point but with stretches and no gain
-/// on the input (its peak and its RMS no lower), keeps its input axes whole. A pass the guard
+/// or still worse after the last round, or good at every point but with no gain on the input
+/// (StretchVerdicts::gains), keeps its input axes whole: a method never turns the axes where
+/// nothing improves. A pass the guard
 /// leaves optimised, even in part, was judged good as a whole in its last round.
 ///
 /// Serial and deterministic; the evaluation may run in parallel.
@@ -41,7 +42,8 @@ enum class KeptWhy : unsigned char {
   None,       ///< optimised
   Collision,  ///< the optimised axes' points or moves hit the part
   PeakRate,   ///< the optimised axes raised the pass's peak rate
-  Join        ///< blended between kept and optimised axes (neither one)
+  Join,       ///< blended between kept and optimised axes (neither one)
+  NoGain      ///< the optimised axes were no better over the pass: turning them gains nothing
 };
 
 /// The caller's verdict on one point of a candidate.
@@ -64,7 +66,7 @@ struct StretchGuardResult {
   /// Passes kept whole; stretches kept within passes that stay optimised elsewhere.
   std::size_t whole_passes = 0, stretches = 0;
   /// Points kept by why, and points blended.
-  std::size_t points_hit = 0, points_rate = 0, points_blended = 0;
+  std::size_t points_hit = 0, points_rate = 0, points_blended = 0, points_no_gain = 0;
 };
 
 /// The caller's verdicts on a candidate.
@@ -72,9 +74,9 @@ struct StretchVerdicts {
   /// Per point of the operation (Good outside the passes asked about). The verdict on point i
   /// covers the move into i and the rates at i.
   std::vector<PointVerdict> points;
-  /// Per pass asked about: the candidate gains on the input over the pass (a lower peak or a
-  /// lower RMS of the rates). A pass with kept stretches and no gain keeps its input whole:
-  /// a mix of input and optimised axes no better than the input is not worth its joins.
+  /// Per pass asked about: the candidate gains on the input over the pass (the caller says
+  /// what gains). A pass with no gain keeps its input whole: axes turned, or a mix of input and
+  /// optimised axes, no better than the input are not worth the turn or the joins.
   std::vector<char> gains;
 };
 

@@ -311,7 +311,9 @@ void add_choices_json(const OperationResult& r, nlohmann::json& o) {
                               {"by_reason",
                                {{"collision", kept.collision},
                                 {"peak_rate", kept.peak_rate},
-                                {"no_free_axis", kept.no_free_axis}}},
+                                {"no_gain", kept.no_gain},
+                                {"no_free_axis", kept.no_free_axis},
+                                {"method_choice", kept.method_choice}}},
                               {"join_points", kept.join_points},
                               {"whole_passes", kept.passes},
                               {"stretches", kept.stretches}};
@@ -328,15 +330,101 @@ void add_choices_json(const OperationResult& r, nlohmann::json& o) {
   }
 }
 
+/// Each rotary axis's peaks, and where the machine file gives its limit, their shares of it.
+nlohmann::json axes_json(const RotarySummary& s, const Machine& machine) {
+  nlohmann::json axes = nlohmann::json::object();
+  const auto axis = [&](Joint joint, const AxisPeaks& p) {
+    const JointLimit& limit = machine.limits[static_cast<std::size_t>(joint)];
+    nlohmann::json j = {{"max_omega_deg_s", p.max_omega_deg_s},
+                        {"max_accel_deg_s2", p.max_accel_deg_s2},
+                        {"rms_accel_deg_s2", p.rms_accel_deg_s2}};
+    nlohmann::json why = nlohmann::json::object();
+    const auto share = [&](const char* key, double peak, double limit_value) {
+      if (limit_value > 0.0) {
+        j[key] = peak / limit_value;
+      } else {
+        j[key] = nullptr;
+        why[key] = "the machine file gives no limit for this axis";
+      }
+    };
+    share("omega_share", p.max_omega_deg_s, limit.max_velocity_per_s);
+    share("accel_share", p.max_accel_deg_s2, limit.max_accel_per_s2);
+    if (!why.empty()) j["null_reasons"] = why;
+    axes[joint == Joint::C ? std::string("C") : std::string(1, machine.rotary.tilt_letter())] = j;
+  };
+  axis(Joint::Tilt, s.tilt);
+  axis(Joint::C, s.c);
+  return axes;
+}
+
+/// The axis nearest its limit (OperationResult::worst_axis), or null with the reason.
+void worst_axis_json(const OperationResult& r, nlohmann::json& o) {
+  if (!r.worst_axis) {
+    o["worst_axis"] = nullptr;
+    o["null_reasons"]["worst_axis"] =
+        "the machine file gives no rotary limit: the combined figure (before, after) is the "
+        "headline";
+    return;
+  }
+  const AxisShare& w = *r.worst_axis;
+  o["worst_axis"] = {{"axis", std::string(1, w.axis)},
+                     {"rate", w.rate},
+                     {"limit", w.limit},
+                     {"share_before", w.before},
+                     {"share_after", w.after}};
+}
+
+/// The cutting conditions at the contacts (OperationResult::Cutting), or null with the reason.
+void cutting_json(const OperationResult& r, nlohmann::json& o) {
+  if (!r.cutting) {
+    o["cutting"] = nullptr;
+    o["null_reasons"]["cutting"] = "no contacts: no part, or no ball-end mill";
+    return;
+  }
+  const OperationResult::Cutting& c = *r.cutting;
+  const auto speed = [&](double diameter_mm) {
+    // pi D n, m/min: the cutting speed at the contact.
+    return c.spindle_rpm > 0.0
+               ? nlohmann::json(Constants<double>::pi() * diameter_mm * c.spindle_rpm / 1000.0)
+               : nlohmann::json(nullptr);
+  };
+  o["cutting"] = {{"least_tilt_deg", c.least_tilt_deg},
+                  {"least_tilt_from", c.least_tilt_given ? "option" : "input"},
+                  {"least_tilt_held", c.least_tilt_given},
+                  {"points", c.points},
+                  {"points_below_least_tilt", c.points_below},
+                  {"first_line_below",
+                   c.points_below ? nlohmann::json(c.first_line_below) : nlohmann::json(nullptr)},
+                  {"before",
+                   {{"least_tilt_deg", c.least_tilt_before_deg},
+                    {"least_diameter_mm", c.least_diameter_before_mm},
+                    {"mean_diameter_mm", c.mean_diameter_before_mm},
+                    {"least_speed_m_min", speed(c.least_diameter_before_mm)},
+                    {"mean_speed_m_min", speed(c.mean_diameter_before_mm)}}},
+                  {"after",
+                   {{"least_tilt_deg", c.least_tilt_after_deg},
+                    {"least_diameter_mm", c.least_diameter_after_mm},
+                    {"mean_diameter_mm", c.mean_diameter_after_mm},
+                    {"least_speed_m_min", speed(c.least_diameter_after_mm)},
+                    {"mean_speed_m_min", speed(c.mean_diameter_after_mm)}}},
+                  {"spindle_rpm",
+                   c.spindle_rpm > 0.0 ? nlohmann::json(c.spindle_rpm) : nlohmann::json(nullptr)}};
+}
+
 /// One operation: its rates before and after, its tool, contacts, verification and timings.
 nlohmann::json operation_json(const OperationResult& r, const JobResult& result,
-                              const Toolpath& toolpath, const JobOptions& options) {
+                              const Toolpath& toolpath, const JobOptions& options,
+                              const Machine& machine) {
   nlohmann::json o;
   o["name"] = r.name;
   o["points"] = r.points;
   o["feed_mm_min"] = r.feed_mm_min;
   o["before"] = summary_json(r.before, r.colliding_before, r.feed_before);
   o["after"] = summary_json(r.after, r.colliding_after, r.feed_after);
+  o["before"]["axes"] = axes_json(r.before, machine);
+  o["after"]["axes"] = axes_json(r.after, machine);
+  worst_axis_json(r, o);
+  cutting_json(r, o);
   o["paper_metric"] = paper_metric_json(r);
   o["feed_schedule_written"] = options.feed_schedule;
   if (r.feed_words) {
@@ -423,7 +511,7 @@ std::string report_json(const JobResult& result, const Toolpath& toolpath, const
   j["gcode"] = gcode_json(result);
   nlohmann::json ops = nlohmann::json::array();
   for (const OperationResult& r : result.operations) {
-    ops.push_back(operation_json(r, result, toolpath, options));
+    ops.push_back(operation_json(r, result, toolpath, options, machine));
   }
   j["operations"] = ops;
   j["axis_limits"] = axis_limits_json(machine);
@@ -435,7 +523,9 @@ std::string points_csv(const JobResult& result) {
   std::string out =
       "op,index,arc_mm,tip_x,tip_y,tip_z,axis_i,axis_j,axis_k,cc_x,cc_y,cc_z,n_x,n_y,n_z,"
       "tilt_deg,yaw_deg,A_deg,C_deg,omega_deg_s,accel_deg_s2,free_cells,feed_mm_min,cl_line,"
-      "findings,gap_mm,surface,normal_uncertainty_deg\n";
+      "findings,gap_mm,surface,normal_uncertainty_deg,omega_tilt_deg_s,omega_C_deg_s,"
+      "accel_tilt_deg_s2,accel_C_deg_s2,tilt_after_deg,cutting_diameter_before_mm,"
+      "cutting_diameter_mm\n";
   char buf[512];
   // A value that rounds to zero is written without its sign ("-0.000000" would say a side).
   const auto no_negative_zero = [](char* text) {
@@ -493,6 +583,17 @@ std::string points_csv(const JobResult& result) {
         std::snprintf(buf, sizeof buf, ",%.6f,%s,%.4f", p.gap_mm, to_string(p.place),
                       p.normal_uncertainty_deg);
         no_negative_zero(buf);
+        out += buf;
+      } else {
+        out += ",,,";
+      }
+      std::snprintf(buf, sizeof buf, ",%.6f,%.6f,%.6f,%.6f", p.omega_tilt_deg_s, p.omega_c_deg_s,
+                    p.accel_tilt_deg_s2, p.accel_c_deg_s2);
+      no_negative_zero(buf);
+      out += buf;
+      if (p.has_contact) {
+        std::snprintf(buf, sizeof buf, ",%.4f,%.6f,%.6f", p.tilt_after_deg,
+                      p.cutting_diameter_before_mm, p.cutting_diameter_mm);
         out += buf;
       } else {
         out += ",,,";

@@ -197,28 +197,30 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "stretch guard: a mix of kept and optimised axes with no gain on the input keeps the "
-    "input whole -- a pass never kept needs no gain",
+    "stretch guard: a pass with no gain on the input keeps the input whole, with kept stretches "
+    "or without -- a method never turns the axes where nothing improves",
     "[plan][guard]") {
-  const Case c = make_case(100);
-  const std::vector<IndexRange> passes = {{0, 50}, {50, 100}};
-  // Points 20..22 of the first pass hit while optimised; the second pass is good at every
-  // point. Neither gains on its input.
+  const Case c = make_case(150);
+  const std::vector<IndexRange> passes = {{0, 50}, {50, 100}, {100, 150}};
+  // Points 20..22 of the first pass hit while optimised; the second and third passes are good
+  // at every point. Only the third gains on its input.
   std::size_t calls = 0;
   const StretchEvaluation evaluate = [&](const std::vector<Vec3d>& axes,
                                          const std::vector<KeptWhy>&, const std::vector<char>&) {
     ++calls;
-    StretchVerdicts out{std::vector<PointVerdict>(axes.size(), PointVerdict::Good), {0, 0}};
+    StretchVerdicts out{std::vector<PointVerdict>(axes.size(), PointVerdict::Good), {0, 0, 1}};
     for (std::size_t i = 20; i <= 22; ++i) {
       if (!same(axes[i], c.input[i])) out.points[i] = PointVerdict::Hits;
     }
     return out;
   };
-  const StretchGuardResult r = guard_stretches(passes, {1, 1}, c.optimised, c.input, evaluate);
+  const StretchGuardResult r = guard_stretches(passes, {1, 1, 1}, c.optimised, c.input, evaluate);
   CHECK(calls == 2);
-  CHECK(r.whole_passes == 1);
+  CHECK(r.whole_passes == 2);
   CHECK(r.stretches == 0);
   CHECK(r.points_hit == 50);
-  for (std::size_t i = 0; i < 50; ++i) CHECK(same(r.axes[i], c.input[i]));
-  for (std::size_t i = 50; i < 100; ++i) CHECK(same(r.axes[i], c.optimised[i]));
+  CHECK(r.points_no_gain == 50);
+  for (std::size_t i = 0; i < 100; ++i) CHECK(same(r.axes[i], c.input[i]));
+  for (std::size_t i = 50; i < 100; ++i) CHECK(r.why[i] == KeptWhy::NoGain);
+  for (std::size_t i = 100; i < 150; ++i) CHECK(same(r.axes[i], c.optimised[i]));
 }

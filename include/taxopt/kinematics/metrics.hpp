@@ -28,10 +28,23 @@ struct RotaryKinematics {
   std::vector<double> accel_tilt_deg_s2, accel_c_deg_s2, accel_deg_s2;
 };
 
-/// Summary of the rotary kinematics of one or more passes.
-struct RotarySummary {
+/// One rotary axis's peaks (absolute values): a machine limits each axis on its own, and a
+/// combined figure can fall while one axis rises.
+struct AxisPeaks {
   double max_omega_deg_s = 0.0;
   double max_accel_deg_s2 = 0.0;
+  /// RMS of a over the interior points.
+  double rms_accel_deg_s2 = 0.0;
+  double sum_sq_accel = 0.0;
+};
+
+/// Summary of the rotary kinematics of one or more passes.
+struct RotarySummary {
+  /// Synthetic sqrt(tilt^2 + C^2) (eq. 17-18), the paper's combined figure.
+  double max_omega_deg_s = 0.0;
+  double max_accel_deg_s2 = 0.0;
+  /// Per axis: the tilt axis (A or B) and C.
+  AxisPeaks tilt, c;
   double rms_accel_deg_s2 = 0.0;
   /// RMS of omega over the segments (every point but each pass's last).
   double rms_omega_deg_s = 0.0;

@@ -216,6 +216,40 @@ void check_dynamic_limits(const Run& run, std::size_t op_index, const PostedOper
   }
 }
 
+/// The flute length from the tip (mm, to 0.01) with which the shank, the tool's first body past
+/// the flutes, no longer hits the part at point i with `axis`: the flutes as judged run on over
+/// the shank's first x mm. Empty: the shank hits nowhere, or no length up to its end clears it.
+/// With `known_mm` (a length from the tip) that already clears the point, that length.
+static std::optional<double> flutes_clearing(const CollisionModel& model, const ToolModel& tool,
+                                             const Operationd& op, std::size_t i, const Vec3d& axis,
+                                             double known_mm = 0.0) {
+  const std::size_t b = static_cast<std::size_t>(tool.flute_bodies);
+  if (b >= tool.bodies.size() || b == 0 || static_cast<int>(b) == tool.holder_body) return {};
+  const Vec3d centre = op.points[i].tip_mm + tool.ball_radius_mm * axis;
+  const double s0 = tool.bodies[b].start_mm, s1 = tool.bodies[b].end_mm;
+  if (!(s1 > s0)) return {};
+  const auto clear_with = [&](double x) {
+    ToolModel g = tool;
+    g.bodies.erase(g.bodies.begin(), g.bodies.begin() + static_cast<long>(b));
+    g.bodies.front().start_mm = s0 + x;
+    ToolBody flutes = tool.bodies.front();
+    flutes.start_mm = s0;
+    flutes.end_mm = s0 + x;
+    if (x > 0.0) g.bodies.insert(g.bodies.begin(), flutes);
+    return !model.collides(g, centre, axis, false);
+  };
+  if (clear_with(0.0)) return {};
+  const double known = known_mm - s0 - tool.ball_radius_mm;
+  if (known > 0.0 && known < s1 - s0 && clear_with(known)) return known_mm;
+  if (!clear_with(s1 - s0 - 1e-6)) return {};
+  double lo = 0.0, hi = s1 - s0 - 1e-6;
+  while (hi - lo > 0.01) {
+    const double mid = 0.5 * (lo + hi);
+    (clear_with(mid) ? hi : lo) = mid;
+  }
+  return hi + s0 + tool.ball_radius_mm;
+}
+
 /// What hits at point i (axis `axis`): the first body of the judged `tool` past the flutes
 /// that meets the part, how far its real body (`real_tool`) stays from it (or that it enters
 /// it), and, for the shank, the flute length that would clear it when one does: the words a
@@ -255,25 +289,8 @@ std::string what_hits(const CollisionModel& model, const ToolModel& tool,
          << " mm)";
     }
     if (!holder && b == first && tool.bodies[b].end_mm > tool.bodies[b].start_mm) {
-      // Longer flutes (the flute body as judged) over the shank's first x mm.
-      const double s0 = tool.bodies[b].start_mm, s1 = tool.bodies[b].end_mm;
-      const auto clear_with = [&](double x) {
-        ToolModel g = tool;
-        g.bodies.erase(g.bodies.begin(), g.bodies.begin() + static_cast<long>(b));
-        g.bodies.front().start_mm = s0 + x;
-        ToolBody flutes = tool.bodies.front();
-        flutes.start_mm = s0;
-        flutes.end_mm = s0 + x;
-        if (x > 0.0) g.bodies.insert(g.bodies.begin(), flutes);
-        return !model.collides(g, centre, axis, false);
-      };
-      if (clear_with(s1 - s0 - 1e-6)) {
-        double lo = 0.0, hi = s1 - s0 - 1e-6;
-        while (hi - lo > 0.01) {
-          const double mid = 0.5 * (lo + hi);
-          (clear_with(mid) ? hi : lo) = mid;
-        }
-        os << "; flutes of " << hi + s0 + tool.ball_radius_mm << " mm from the tip ("
+      if (const std::optional<double> flutes = flutes_clearing(model, tool, op, i, axis)) {
+        os << "; flutes of " << *flutes << " mm from the tip ("
            << options.name_of("tool.flute_length_mm") << ") would clear it here";
       } else {
         os << "; no flute length up to the gauge length clears it here";
@@ -282,6 +299,35 @@ std::string what_hits(const CollisionModel& model, const ToolModel& tool,
     return os.str();
   }
   return in_air ? "the ball, in the air, meets the part" : "";
+}
+
+/// One refusal, one remedy: the flute length that clears the shank at every point of `hits`
+/// it can clear (the longest of theirs), in mm and in the CL file's units, so that the next run
+/// does not stop at the next point; empty where no shank hit is cleared by longer flutes.
+static std::string flutes_for_every_point(const Run& run, const OperationContext& o,
+                                          const ToolModel& tool,
+                                          const std::vector<std::size_t>& hits,
+                                          const std::vector<Vec3d>& axes) {
+  double longest = 0.0;
+  std::size_t cleared = 0;
+  for (std::size_t i : hits) {
+    if (const std::optional<double> f =
+            flutes_clearing(*run.collision, tool, *o.op, i, axes[i], longest)) {
+      longest = std::max(longest, *f);
+      ++cleared;
+    }
+  }
+  if (cleared < 2) return "";
+  std::ostringstream os;
+  os.precision(3);
+  os << std::fixed << "; flutes of " << longest << " mm from the tip";
+  if (run.tp.units == LengthUnit::Inch) {
+    os.precision(4);
+    os << " (" << longest / kMmPerInch << " in, the CL file's unit)";
+  }
+  os << " would clear the shank at all " << cleared << " of these points it can clear ("
+     << run.options.name_of("tool.flute_length_mm") << ")";
+  return os.str();
 }
 
 /// The points `at` of an operation that collide, `what` they hit, the first's detail.
@@ -346,7 +392,7 @@ void tell_point_collisions(const Run& run, const OperationContext& o,
   report(hits,
          "where the tool hits the part (the shank or holder within its clearance, or a "
          "ball in the air)",
-         hit_detail);
+         hit_detail + flutes_for_every_point(run, o, tool, hits, out_axes));
   const double flute_tolerance_mm = margins_of(run.options, op).flute_tolerance_mm;
   report(gouges, "where the flutes reach into the part deeper than the part tolerance " +
                      shown(flute_tolerance_mm) + " mm (" + part_tolerance_source(run.options, op) +

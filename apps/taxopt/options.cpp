@@ -117,9 +117,9 @@ void add_method_options(CLI::App& app, Args& a) {
                  "largest angle between an output axis and its input axis, deg (30)")
       ->group("Method");
   app.add_option("--min-tilt", a.min_tilt,
-                 "least angle between an output axis and the surface normal at a contact, deg "
-                 "(default: per operation the input's least, rounded down to 0.1; never below "
-                 "the input's own angle at a point)")
+                 "least angle between an output axis and the surface normal at a contact, held "
+                 "where the input's own angle there is not less, deg (default: none held; the "
+                 "report measures against the input's least)")
       ->group("Method");
 }
 

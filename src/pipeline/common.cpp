@@ -29,8 +29,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::ClFileNote:
     case FindingCode::TcpJointLimit:
     case FindingCode::FeedInAir:
-    case FindingCode::MeshSlivers: return Severity::Warning;
-    case FindingCode::PartTolerance: return Severity::Warning;
+    case FindingCode::MeshSlivers:
+    case FindingCode::PartTolerance:
     case FindingCode::AxisRateRose: return Severity::Warning;
     default: return Severity::Problem;
   }
@@ -81,23 +81,31 @@ ToolMargins margins_of(const JobOptions& options, const Operationd& op) {
   return m;
 }
 
+namespace {
+
+/// The contact options with the tolerance left to its default (derived from the mesh and the
+/// CL file): what the part tolerance follows.
+ContactOptions derived_contact(const JobOptions& options) {
+  ContactOptions derived = options.contact;
+  derived.tolerance_mm = 0.0;
+  return derived;
+}
+
+}  // namespace
+
 /// The part tolerance: how deep the flutes may reach into the mesh (--part-tolerance), else
 /// what the contact tolerance is derived from (the mesh's chordal error and the CL file's
 /// tolerance) -- never the contact tolerance as given: a tolerance that lets a ball sit on a
 /// coarse mesh is no budget for the tool's side to gouge the part.
 double part_tolerance_mm(const JobOptions& options, const Operationd& op) {
   if (options.part_tolerance_mm) return *options.part_tolerance_mm;
-  ContactOptions derived = options.contact;
-  derived.tolerance_mm = 0.0;
-  return contact_tolerance_mm(*options.part, derived, op.cam_tolerance_mm);
+  return contact_tolerance_mm(*options.part, derived_contact(options), op.cam_tolerance_mm);
 }
 
 /// Where part_tolerance_mm comes from, in words.
 std::string part_tolerance_source(const JobOptions& options, const Operationd& op) {
   if (options.part_tolerance_mm) return "as given";
-  ContactOptions derived = options.contact;
-  derived.tolerance_mm = 0.0;
-  return contact_tolerance_source(*options.part, derived, op.cam_tolerance_mm);
+  return contact_tolerance_source(*options.part, derived_contact(options), op.cam_tolerance_mm);
 }
 
 /// Point whose path length the metrics measure: the ball centre for a ball-end mill (it does

@@ -40,6 +40,35 @@ std::string out_of_reach(const MachineKinematicsd& ac, const Vec3d& axis) {
   return os.str();
 }
 
+/// The operation's least tilt (OperationContext::least_tilt_deg) and each point's bound.
+void least_tilt_of(const JobOptions& options, OperationContext& o) {
+  const Operationd& op = *o.op;
+  const std::size_t n = op.points.size();
+  o.least_tilt_rad.assign(n, 0.0);
+  if (o.contacts.size() != n) return;
+  const auto cutting = [&](std::size_t i) {
+    return op.points[i].motion == Motion::Feed && o.contacts[i].state == ContactState::Touching;
+  };
+  double least_rad = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (cutting(i)) least_rad = std::min(least_rad, o.contacts[i].tilt_rad);
+  }
+  if (!std::isfinite(least_rad)) return;
+  o.least_tilt_given = options.min_tilt_deg.has_value();
+  // Rounded down to 0.1 deg: the CAM's "5 deg" lead, read back through the mesh's contact
+  // normals, is 4.99..; the bound is the lead the programmer set, not its last digit.
+  o.least_tilt_deg = options.min_tilt_deg.value_or(std::floor(rad_to_deg(least_rad) * 10.0) / 10.0);
+  // Enforced only where asked: held by default, the bound cost the paper method nearly all of
+  // its gain on the generated sine at fine meshes (its slerp between keys crosses the cap
+  // round the normal; docs/results.md), so the report measures it and --min-tilt holds it.
+  if (!o.least_tilt_given) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (cutting(i)) {
+      o.least_tilt_rad[i] = std::min(deg_to_rad(o.least_tilt_deg), o.contacts[i].tilt_rad);
+    }
+  }
+}
+
 /// The method's axes for one ball-end operation, and the findings of its guards. The stages:
 /// the paper's optimiser and its guard, the global method (cone, pyramid, objective), the
 /// plan again after the verification refused the paper's, the findings, the log line.
@@ -58,7 +87,6 @@ class OperationPlanner {
         timing_(block_timing(op_, run.machine, options_.pose_options, o.metric_feed_mm_per_min)),
         global_(global_options(options_)),
         input_clear_(input_clear_of(run, o)),
-        least_tilt_(least_tilt_of(run.options, o)),
         in_{op_,
             o_.contacts,
             o.ball_radius_mm,
@@ -128,37 +156,6 @@ class OperationPlanner {
       clear[i] = 0;
     }
     return clear;
-  }
-
-  /// The operation's least tilt (OperationContext::least_tilt_deg) and each point's bound.
-  static bool least_tilt_of(const JobOptions& options, OperationContext& o) {
-    const Operationd& op = *o.op;
-    const std::size_t n = op.points.size();
-    o.least_tilt_rad.assign(n, 0.0);
-    if (o.contacts.size() != n) return false;
-    const auto cutting = [&](std::size_t i) {
-      return op.points[i].motion == Motion::Feed && o.contacts[i].state == ContactState::Touching;
-    };
-    double least_rad = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (cutting(i)) least_rad = std::min(least_rad, o.contacts[i].tilt_rad);
-    }
-    if (!std::isfinite(least_rad)) return false;
-    o.least_tilt_given = options.min_tilt_deg.has_value();
-    // Rounded down to 0.1 deg: the CAM's "5 deg" lead, read back through the mesh's contact
-    // normals, is 4.99..; the bound is the lead the programmer set, not its last digit.
-    o.least_tilt_deg =
-        options.min_tilt_deg.value_or(std::floor(rad_to_deg(least_rad) * 10.0) / 10.0);
-    // Enforced only where asked: held by default, the bound cost the paper method nearly all of
-    // its gain on the generated sine at fine meshes (its slerp between keys crosses the cap
-    // round the normal; docs/results.md), so the report measures it and --min-tilt holds it.
-    if (!o.least_tilt_given) return true;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (cutting(i)) {
-        o.least_tilt_rad[i] = std::min(deg_to_rad(o.least_tilt_deg), o.contacts[i].tilt_rad);
-      }
-    }
-    return true;
   }
 
   /// The paper's optimiser checks its keys and its interpolation, not the axes its joint
@@ -259,7 +256,6 @@ class OperationPlanner {
   const BlockTiming timing_;
   const GlobalOptions global_;
   const std::vector<char> input_clear_;
-  const bool least_tilt_;  ///< set o.least_tilt_* (least_tilt_of) before in_ takes them
   /// What every planner of the operation takes (the ball, the judged tool), judged by the
   /// planner's check.
   const OperationPlanInputs in_;
@@ -287,6 +283,7 @@ void plan_operations(const Run& run, std::vector<OperationContext>& ops, JobResu
       continue;
     }
     if (options.part && !o.contact.recovered) continue;
+    least_tilt_of(options, o);
     OperationPlanner(run, o, progress, res).run();
   }
 }

@@ -113,13 +113,16 @@ class PassGuard {
       ref_preferred_ = reference->preferred;
       judge_gain_ = reference->judge_gain;
     }
+    reference_is_input_ = !reference;
   }
 
   StretchGuardResult run(OptimisedOperation& out) {
     const PosePlan ref_plan = plan_poses(in_.machine.rotary, ref_axes_, rapid_into_, {},
                                          in_.pose_options, ref_preferred_);
-    const PosePlan input_plan =
-        plan_poses(in_.machine.rotary, input_axes_, rapid_into_, {}, in_.pose_options);
+    // Without a reference of its own the reference is the input: its plan is the input's.
+    const PosePlan input_plan = reference_is_input_ ? ref_plan
+                                                    : plan_poses(in_.machine.rotary, input_axes_,
+                                                                 rapid_into_, {}, in_.pose_options);
     if (!ref_plan.ok() || !input_plan.ok()) {
       return {out.axes, std::vector<KeptWhy>(n_, KeptWhy::None)};
     }
@@ -136,7 +139,7 @@ class PassGuard {
       guarded[q] = 1;
       before_[q] = rates(pass, ref_plan.poses).summary;
       // The promise is the input's, per axis, whatever the reference.
-      bound_[q] = rates(pass, input_plan.poses).summary;
+      bound_[q] = reference_is_input_ ? before_[q] : rates(pass, input_plan.poses).summary;
     }
     opt_preferred_ = out.preferred;
     const StretchEvaluation evaluate =
@@ -266,6 +269,7 @@ class PassGuard {
   std::vector<std::optional<Posed>> ref_preferred_;
   std::vector<std::optional<Posed>> opt_preferred_;
   bool judge_gain_ = true;
+  bool reference_is_input_ = true;
   /// Per pass: the reference's rates (what a candidate must gain on) and the input's (what no
   /// axis may exceed).
   std::vector<RotarySummary> before_, bound_;

@@ -350,7 +350,7 @@ nlohmann::json axes_json(const RotarySummary& s, const Machine& machine) {
     share("omega_share", p.max_omega_deg_s, limit.max_velocity_per_s);
     share("accel_share", p.max_accel_deg_s2, limit.max_accel_per_s2);
     if (!why.empty()) j["null_reasons"] = why;
-    axes[joint == Joint::C ? std::string("C") : std::string(1, machine.rotary.tilt_letter())] = j;
+    axes[joint_name(joint, machine.rotary.tilt_letter())] = j;
   };
   axis(Joint::Tilt, s.tilt);
   axis(Joint::C, s.c);

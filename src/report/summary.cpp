@@ -8,7 +8,7 @@ std::optional<AxisShare> worst_axis_share(const RotarySummary& before, const Rot
   std::optional<AxisShare> worst;
   const auto consider = [&](Joint joint, const AxisPeaks& b, const AxisPeaks& a) {
     const JointLimit& limit = machine.limits[static_cast<std::size_t>(joint)];
-    const char letter = joint == Joint::C ? 'C' : machine.rotary.tilt_letter();
+    const char letter = joint_name(joint, machine.rotary.tilt_letter()).front();
     const auto share = [&](const char* rate, double limit_value, double peak_before,
                            double peak_after) {
       if (!(limit_value > 0.0)) return;

@@ -5,15 +5,18 @@
 # under ThreadSanitizer, and fuzzes the readers for a bounded time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Each stage says when it starts, in seconds since the script did (CI's time is bounded).
+started=$SECONDS
+stage() { echo "== [$((SECONDS - started)) s] $*"; }
 bash scripts/setup.sh
 
 jobs=$(nproc)
-echo "== release build and tests"
+stage "release build and tests"
 cmake --preset release
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
 
-echo "== install and build the example consumer against it"
+stage "install and build the example consumer against it"
 prefix="$PWD/build/install"
 rm -rf "$prefix" build/consumer
 cmake --install build/release --prefix "$prefix"
@@ -31,7 +34,7 @@ cmake --build build/in-memory-post
 ./build/in-memory-post/taxopt_in_memory_post build/in-memory-post/ac.ngc build/in-memory-post/head.ngc
 for p in ac head; do rs274 -g build/in-memory-post/$p.ngc > build/in-memory-post/rs274-$p.log; done
 
-echo "== the library shared, and both installs through pkg-config"
+stage "the library shared, and both installs through pkg-config"
 # A shared build carries its private dependencies: the consumer finds Eigen only, links
 # libtaxopt alone, and runs the same job. pkg-config builds the consumer against each install
 # (the static one with --static: its private libraries). The shared library exports what the
@@ -79,13 +82,13 @@ for v in shared static; do
   cmp build/consumer/demo.ngc build/consumer-pc/demo-$v.ngc
 done
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
+stage "AddressSanitizer + UndefinedBehaviorSanitizer"
 cmake --preset asan
 cmake --build --preset asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --preset asan -j "$jobs"
 
-echo "== ThreadSanitizer (the parallel loops run on std::threads here: src/util/parallel.hpp)"
+stage "ThreadSanitizer (the parallel loops run on std::threads here: src/util/parallel.hpp)"
 # What it adds is on the parallel stages: the tests that run every one of them (contacts, the
 # C-space raster, the optimisers, the verification) in-process, and the CLI's 1-against-2-thread
 # byte comparisons. The rest of the suite runs under ASan + UBSan above.
@@ -93,5 +96,6 @@ cmake --preset tsan
 cmake --build --preset tsan -j "$jobs"
 TSAN_OPTIONS=halt_on_error=1 ctest --preset tsan -j "$jobs" -R "threads|pipeline:|cspace"
 
-echo "== fuzzing (libFuzzer, bounded)"
+stage "fuzzing (libFuzzer, bounded)"
 bash scripts/fuzz.sh 30
+stage "done"

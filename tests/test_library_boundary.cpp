@@ -95,6 +95,47 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "library boundary: a tool built in code is range-checked as the CL reader checks one -- a "
+    "size that is negative, not finite or beyond 1000 mm, or a described tool with no diameter, "
+    "is an InputError naming the operation and field before any work",
+    "[library][bad-input]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::Paper;
+  struct Bad {
+    const char* what;
+    std::function<void(Tool&)> change;
+    const char* said;
+  };
+  const std::vector<Bad> bad = {
+      {"no diameter", [](Tool& t) { t.diameter_mm = 0.0; }, "from_file says the tool is described"},
+      {"a negative diameter", [](Tool& t) { t.diameter_mm = -6.0; }, "tool.diameter_mm -6"},
+      {"a negative diameter, not described",
+       [](Tool& t) {
+         t.diameter_mm = -6.0;
+         t.from_file = false;
+       },
+       "tool.diameter_mm -6"},
+      {"a NaN diameter", [](Tool& t) { t.diameter_mm = kNaN; }, "tool.diameter_mm nan"},
+      {"a 2 m flute", [](Tool& t) { t.flute_length_mm = 2000.0; }, "tool.flute_length_mm 2000"},
+      {"a negative corner", [](Tool& t) { t.corner_radius_mm = -1.0; }, "corner_radius_mm -1"},
+      {"a corner beyond the radius", [](Tool& t) { t.corner_radius_mm = 4.0; },
+       "exceeds half the diameter"},
+      {"an infinite gauge", [](Tool& t) { t.gauge_length_mm = kInf; }, "gauge_length_mm inf"},
+      {"a taper of 90 deg", [](Tool& t) { t.taper_rad = 2.0; }, "taper_rad 2"},
+  };
+  for (const Bad& b : bad) {
+    INFO(b.what);
+    Toolpath tp = pass_in_code();
+    b.change(tp.operations[0].tool);
+    const std::string e = input_error_of([&] { (void)run_job(tp, default_machine(), options); });
+    CHECK_THAT(e, Catch::Contains("operation POST: Operation::tool."));
+    CHECK_THAT(e, Catch::Contains(b.said));
+  }
+}
+
+TEST_CASE(
     "library boundary: one deviation cone per run -- a cone given where run_job does not read "
     "it is refused naming the field to set",
     "[library][bad-input]") {

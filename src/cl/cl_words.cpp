@@ -65,7 +65,11 @@ constexpr ClWord kWords[] = {
      "the tool: APT's d,r,e,f,a,b,h (diameter, corner radius, height); r > d/2 is a tapered "
      "ball mill of taper b where d = 2 r (1 - sin b) / cos b, else refused",
      "CATIA, SOLIDWORKS CAM, generic APT", kApt, false},
-    {"LOADTL", M::State, "the tool number", "CATIA, Creo", kApt, false},
+    {"LOADTL", M::State,
+     "the tool number; OSETNO / ADJUST with the tool's own register, LENGTH (the collision "
+     "check's gauge length unless an option or the machine file gives one), IN (the pocket, not "
+     "written), or Fusion's t, pocket, length, register by position",
+     "CATIA, Creo, Fusion", kApt, false},
     {"TOOLNO", M::Information,
      "TOOLNO/n,d: the tool number and diameter of the LOADTL that follows, checked against it "
      "and the CUTTER (the LOADTL changes the tool)",
@@ -112,9 +116,11 @@ constexpr ClWord kWords[] = {
      "generic APT", kApt, true},
     {"INSERT", M::Program,
      "a bracketed operator's note (INSERT/[HOLDER=...]) dropped with a note; prose "
-     "(INSERT/Stock Size X135. Y135. Z30.) written as a comment where it stands; address "
-     "words only (INSERT/M00) are code for the controller: refused, taxopt does not pass "
-     "uninterpreted code into a program (--skip-record INSERT drops it)",
+     "(INSERT/Stock Size X135. Y135. Z30.) written as a comment where it stands; a program "
+     "stop M00 / M01 alone or beside a note (INSERT/M00 (REMOVE CLAMP)) written as STOP / "
+     "OPSTOP, the note as a comment before it; a stop or end among other text, and other "
+     "address words (INSERT/G54 G90), are refused: taxopt does not pass uninterpreted code "
+     "into a program, nor drop a stop (--skip-record INSERT drops every INSERT)",
      "SOLIDWORKS CAM, generic APT", kApt, true},
     // Structure.
     {"TOOL PATH", M::Structure, "opens an operation (its name and tool)", "NX", kNx, false},

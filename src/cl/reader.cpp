@@ -189,6 +189,15 @@ void Reader::determine_units(const std::vector<LogicalLine>& lines) {
                               "): whether the moves before it are in " + unit +
                               " too is not known; give " + options_.name_of("units") + " in|mm");
   }
+  // Without UNITS the feed words are the only evidence; where they say both, one FEDRAT/IPM
+  // among millimetre feeds read the whole file in inches (X30 as 762 mm): not known.
+  if (!e.declared && !options_.units && e.inch_feed_line && e.mm_feed_line) {
+    fail(std::max(e.inch_feed_line, e.mm_feed_line),
+         "the file states no UNITS and its feeds say inches (IPM/IPR, line " +
+             std::to_string(e.inch_feed_line) + ") and millimetres (MMPM/MMPR, line " +
+             std::to_string(e.mm_feed_line) + "): the unit of its coordinates is not known; give " +
+             options_.name_of("units") + " in|mm");
+  }
   const LengthUnit from_file =
       e.declared ? *e.declared : (e.inch_feed_line ? LengthUnit::Inch : LengthUnit::Millimetre);
   tp_.units = options_.units ? *options_.units : from_file;

@@ -82,6 +82,14 @@ struct ClRecordArgs {
   int line;
 };
 
+/// What may follow a LOADTL's tool number, as CAM systems write it: ADJUST,h (NX's LOAD/TOOL)
+/// or OSETNO,h (Creo) -- the length offset register; LENGTH,l (the tool's length, in the file's
+/// unit); IN,p (the magazine pocket: the T word is the tool number, so it is read and not
+/// written). Fusion's APT post writes them by position: LOADTL/t, p, l, h.
+struct LoadtlWords {
+  std::optional<double> register_, length;
+};
+
 class Reader {
  public:
   Reader(const std::string& source, const ClReadOptions& options)
@@ -271,8 +279,15 @@ class Reader {
   /// A spindle or coolant change: the operation's own setting before its first point, an
   /// event where it stands after (none before any operation: current_op copies the state).
   void state_change(const ProgramEvent& e, int line);
+  /// An INSERT that holds a program stop or end: written as the stop (its notes as a comment
+  /// before it) and true, refused where it is not alone, false where `text` holds none.
+  bool insert_stop(const std::string& text, const std::string& shown, int line);
   /// An event before the operation's next point.
   void add_event(ProgramEvent e, int line);
+  /// What follows a LOADTL's tool number at args[at] (state_records.cpp); `positional` takes
+  /// Fusion's LOADTL/t, p, l, h.
+  LoadtlWords loadtl_words(const std::vector<std::string>& args, std::size_t at, bool positional,
+                           int line, const std::string& shown);
   /// APT's CUTTER/d,r,e,f,a,b,h with r > d/2: a tapered ball-end mill of ball radius r whose
   /// flanks, at b from the axis, are tangent to the ball (e = 0, f = r, a = 0); d is the
   /// diameter where the flank line meets the tip plane, 2 r (1 - sin b) / cos b.

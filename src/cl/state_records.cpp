@@ -134,6 +134,44 @@ void Reader::cutter(const ClRecordArgs& r) {
   set_tool(v[0], v.size() > 1 ? v[1] : 0.0, v.size() > 6 ? v[6] : 0.0, line);
 }
 
+namespace {
+
+std::string args_text_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+LoadtlWords Reader::loadtl_words(const std::vector<std::string>& args, std::size_t at,
+                                 bool positional, int line, const std::string& shown) {
+  LoadtlWords w;
+  double n[3];
+  if (positional && args.size() == at + 4 && parse_number(args[at + 1], n[0]) &&
+      parse_number(args[at + 2], n[1]) && parse_number(args[at + 3], n[2])) {
+    w.length = n[1];
+    w.register_ = n[2];
+    return w;
+  }
+  for (std::size_t k = at + 1; k < args.size(); ++k) {
+    const std::string word = upper(args[k]);
+    double value = 0.0;
+    const bool valued = k + 1 < args.size() && parse_number(args[k + 1], value);
+    if (valued && (word == "ADJUST" || word == "OSETNO")) {
+      w.register_ = value;
+    } else if (valued && word == "LENGTH") {
+      w.length = value;
+    } else if (!(valued && word == "IN")) {
+      fail(line, shown + ": '" + args[k] +
+                     "' not interpreted (ADJUST or OSETNO with the tool's own number, LENGTH "
+                     "and IN with a number may follow, or Fusion's pocket, length and offset)");
+    }
+    ++k;
+  }
+  return w;
+}
+
 void Reader::load_tool(const ClRecordArgs& r) {
   [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
   if (major == "LOAD" && (args.empty() || upper(args[0]) != "TOOL")) {
@@ -146,23 +184,16 @@ void Reader::load_tool(const ClRecordArgs& r) {
   if (!(v[0] >= 0.0 && v[0] <= 99999.0 && v[0] == std::floor(v[0]))) {
     fail(line, major + ": tool number must be a whole number from 0 to 99999");
   }
-  // NX: LOAD/TOOL,n,ADJUST,h (its real files: h = n). taxopt writes the length offset of
-  // the tool's own register (H n): another register is refused, not dropped (the machine
-  // would run with another tool's length).
-  for (std::size_t k = at + 1; k < args.size(); ++k) {
-    const std::string w = upper(args[k]);
-    double h = 0.0;
-    if (w == "ADJUST" && k + 1 < args.size() && parse_number(args[k + 1], h)) {
-      if (h != v[0]) {
-        fail(line, major + "/" + args_text + ": the length offset register " + args[k + 1] +
-                       " is not the tool's number; taxopt writes the tool's own (H" + args[at] +
-                       "): give the tool its own register in the CAM system");
-      }
-      ++k;
-      continue;
-    }
-    fail(line, major + "/" + args_text + ": '" + args[k] +
-                   "' not interpreted (only ADJUST,n with the tool's own number may follow)");
+  const LoadtlWords words =
+      loadtl_words(args, at, major == "LOADTL", line, major + "/" + args_text);
+  if (words.length && !(*words.length > 0.0 && *words.length * scale_ <= 1000.0)) {
+    fail(line, major + "/" + args_text + ": the tool length must be in (0, 1000] mm");
+  }
+  if (words.register_ && *words.register_ != v[0]) {
+    fail(line, major + "/" + args_text + ": the length offset register " +
+                   args_text_number(*words.register_) +
+                   " is not the tool's number; taxopt writes the tool's own (H" + args[at] +
+                   "): give the tool its own register in the CAM system");
   }
   if (announced_tool_ && announced_tool_->number != static_cast<int>(v[0])) {
     fail(line, major + "/" + args_text + " loads tool " + args[at] + " where TOOLNO at line " +
@@ -173,6 +204,13 @@ void Reader::load_tool(const ClRecordArgs& r) {
   }
   announced_tool_.reset();
   tool_.number = static_cast<int>(v[0]);
+  tool_.gauge_length_mm = words.length ? *words.length * scale_ : 0.0;
+  if (words.length) {
+    notice(line, major + ": the tool's length below the holder, " +
+                     args_text_number(tool_.gauge_length_mm) +
+                     " mm, is the collision check's gauge length unless an option or the "
+                     "machine file's holder gives one");
+  }
   tool_changed();
 }
 

@@ -32,6 +32,22 @@ void add_holder(ToolModel& m, const ToolOverrides& o, double shank_mm, double fa
   }
 }
 
+/// The gauge length where no option gives one: the CL file's (LOADTL LENGTH), else the longer
+/// of the flutes and 10 diameters.
+double default_gauge_mm(const Tool& tool, double flute_mm, double diameter_mm) {
+  return tool.gauge_length_mm > 0.0 ? tool.gauge_length_mm : std::max(flute_mm, 10.0 * diameter_mm);
+}
+
+/// Refuses a gauge length shorter than the flutes, naming where it came from.
+void check_gauge(const Tool& tool, const ToolOverrides& o, double gauge_mm, double flute_mm) {
+  if (gauge_mm >= flute_mm) return;
+  throw InputError(!o.gauge_length_mm && tool.gauge_length_mm > 0.0
+                       ? "the CL file's tool length (LOADTL LENGTH) is shorter than the flute "
+                         "length: give the gauge length (--gauge-length, or the machine file's "
+                         "holder.gauge_length_mm)"
+                       : "gauge length must be at least the flute length");
+}
+
 }  // namespace
 
 ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
@@ -40,10 +56,10 @@ ToolModel ToolModel::ball_end(const Tool& tool, const ToolOverrides& o) {
   const double d = 2.0 * R;
   const double flute =
       o.flute_length_mm.value_or(tool.flute_length_mm > 0.0 ? tool.flute_length_mm : 4.0 * d);
-  const double gauge = o.gauge_length_mm.value_or(std::max(flute, 10.0 * d));
+  const double gauge = o.gauge_length_mm.value_or(default_gauge_mm(tool, flute, d));
   const double shank = o.shank_radius_mm.value_or(R);
   if (!(flute > R)) throw InputError("flute length must exceed the ball radius");
-  if (!(gauge >= flute)) throw InputError("gauge length must be at least the flute length");
+  check_gauge(tool, o, gauge, flute);
   if (!(shank > 0.0)) throw InputError("shank radius must be positive");
   ToolModel m;
   m.ball_radius_mm = R;
@@ -79,10 +95,10 @@ ToolModel ToolModel::shank_and_holder(const Tool& tool, const ToolOverrides& o) 
   const double r = std::clamp(tool.corner_radius_mm, 0.0, 0.5 * D);
   const double flute =
       o.flute_length_mm.value_or(tool.flute_length_mm > 0.0 ? tool.flute_length_mm : 4.0 * D);
-  const double gauge = o.gauge_length_mm.value_or(std::max(flute, 10.0 * D));
+  const double gauge = o.gauge_length_mm.value_or(default_gauge_mm(tool, flute, D));
   const double shank = o.shank_radius_mm.value_or(0.5 * D);
   if (!(flute > r)) throw InputError("flute length must exceed the corner radius");
-  if (!(gauge >= flute)) throw InputError("gauge length must be at least the flute length");
+  check_gauge(tool, o, gauge, flute);
   if (!(shank > 0.0)) throw InputError("shank radius must be positive");
   ToolModel m;
   m.ball_radius_mm = r;

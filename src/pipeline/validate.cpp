@@ -100,6 +100,38 @@ void check_options(const JobOptions& o) {
 namespace taxopt::pipeline {
 namespace {
 
+/// An operation's tool as the CL reader makes one (a tool built in code has not been read): every
+/// size finite, none negative, within the tool options' bound (1000 mm), the corner radius at
+/// most half the diameter, and a tool said to be described (from_file) with a diameter. A
+/// negative diameter was taken as "no tool geometry" and the job ran unchecked.
+void check_tool(const Toolpath& tp, const Operationd& op) {
+  const Tool& t = op.tool;
+  const auto refuse = [&](const std::string& what) {
+    throw InputError(tp.source, op.points.empty() ? 0 : op.points.front().line,
+                     "operation " + op.name + ": " + what);
+  };
+  for (const auto& [field, v] : {std::make_pair("diameter_mm", t.diameter_mm),
+                                 std::make_pair("corner_radius_mm", t.corner_radius_mm),
+                                 std::make_pair("flute_length_mm", t.flute_length_mm),
+                                 std::make_pair("gauge_length_mm", t.gauge_length_mm)}) {
+    if (!(v >= 0.0 && v <= 1000.0)) {
+      refuse(std::string("Operation::tool.") + field + " " + shown(v) +
+             ", expected within [0, 1000] mm");
+    }
+  }
+  if (!(t.taper_rad >= 0.0 && t.taper_rad < deg_to_rad(90.0))) {
+    refuse("Operation::tool.taper_rad " + shown(t.taper_rad) + ", expected within [0, pi/2)");
+  }
+  if (t.from_file && !(t.diameter_mm > 0.0)) {
+    refuse("Operation::tool.from_file says the tool is described, and its diameter_mm is " +
+           shown(t.diameter_mm) + " (set the diameter, or from_file false for no geometry)");
+  }
+  if (t.corner_radius_mm > 0.5 * t.diameter_mm * (1.0 + 1e-6)) {
+    refuse("Operation::tool.corner_radius_mm " + shown(t.corner_radius_mm) +
+           " exceeds half the diameter " + shown(t.diameter_mm));
+  }
+}
+
 /// Every point as the CL reader makes them (a toolpath built in code has not been read): a
 /// finite tip within reach, a unit axis (as the reader normalises it: a point taxopt changed
 /// silently would be posted where the caller did not put it), a finite feed >= 0.
@@ -108,6 +140,7 @@ void check_points(const Toolpath& tp) {
     throw InputError(tp.source, 0, "no CL point in any operation: there is nothing to post");
   }
   for (const Operationd& op : tp.operations) {
+    check_tool(tp, op);
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       const CLPointd& p = op.points[i];
       const auto refuse = [&](const std::string& what) {

@@ -137,11 +137,30 @@ nlohmann::json limit_json(const JointLimit& l) {
   return j;
 }
 
+/// The axis nearest its machine limit as shares of the limit (the CLI's table says the same),
+/// else the paper's combined peak a.
+std::string worst_axis_cell(const SummaryRow& r) {
+  if (!r.worst_axis) {
+    return "(combined a) " + fixed(r.peak_accel_deg_s2.before, 1) + " &rarr; " +
+           fixed(r.peak_accel_deg_s2.after, 1);
+  }
+  const AxisShare& w = *r.worst_axis;
+  return std::string(1, w.axis) + (w.rate == "omega" ? " &omega; " : " a ") +
+         fixed(100.0 * w.before, 0) + " % &rarr; " + fixed(100.0 * w.after, 0) + " %";
+}
+
 std::string summary_table(const JobResult& result) {
   std::ostringstream t;
+  // Per rotary axis: one combined figure hid a tilt axis whose peak rose while C's fell.
+  const std::string tilt(1, result.tilt_letter);
   t << "<table class=\"summary\"><thead><tr><th>operation</th><th>points</th>"
-       "<th>peak &omega; deg/s<br>before &rarr; after</th>"
-       "<th>peak a deg/s&sup2;<br>before &rarr; after</th>"
+       "<th>peak &omega; "
+    << tilt
+    << " deg/s<br>before &rarr; after</th><th>peak &omega; C deg/s<br>before &rarr; after</th>"
+    << "<th>peak a " << tilt
+    << " deg/s&sup2;<br>before &rarr; after</th><th>peak a C deg/s&sup2;<br>before &rarr; "
+       "after</th>"
+       "<th>nearest its limit<br>before &rarr; after</th>"
        "<th>RMS a deg/s&sup2;<br>before &rarr; after</th>"
        "<th>C flips<br>before &rarr; after</th>"
        "<th>colliding points<br>before &rarr; after</th><th>colliding moves</th>"
@@ -151,7 +170,9 @@ std::string summary_table(const JobResult& result) {
   };
   for (const SummaryRow& r : summary_rows(result)) {
     t << "<tr><td>" << escape_html(r.operation) << "</td><td>" << r.points << "</td><td>"
-      << pair(r.peak_omega_deg_s, 2) << "</td><td>" << pair(r.peak_accel_deg_s2, 1) << "</td><td>"
+      << pair(r.peak_omega_tilt_deg_s, 2) << "</td><td>" << pair(r.peak_omega_c_deg_s, 2)
+      << "</td><td>" << pair(r.peak_accel_tilt_deg_s2, 1) << "</td><td>"
+      << pair(r.peak_accel_c_deg_s2, 1) << "</td><td>" << worst_axis_cell(r) << "</td><td>"
       << pair(r.rms_accel_deg_s2, 1) << "</td><td>" << r.c_jumps.before << " &rarr; "
       << r.c_jumps.after << "</td><td>";
     if (!r.colliding_points) {

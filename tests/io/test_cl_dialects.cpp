@@ -416,9 +416,10 @@ TEST_CASE(
   // Given before the spindle speed: 300 from the SPINDL on (it was the 1000 mm/min default).
   CHECK(feeds("FEDRAT/0.1,MMPR\nSPINDL/RPM,3000,CLW\nGOTO/0,0,10\nGOTO/0,0,0\n") ==
         std::vector<double>{300, 300});
-  // Inches per revolution; a feed per minute after it no longer follows the spindle.
-  CHECK(feeds("SPINDL/RPM,1000\nFEDRAT/IPR,0.004\nGOTO/0,0,1\nFEDRAT/MMPM,250\nSPINDL/2000\n"
-              "GOTO/1,0,1\n") == std::vector<double>{0.004 * 25.4 * 1000, 250});
+  // Inches per revolution; a feed per minute after it no longer follows the spindle. (Feed
+  // words in both units say nothing of the coordinates' unit: the file states it.)
+  CHECK(feeds("UNITS/MM\nSPINDL/RPM,1000\nFEDRAT/IPR,0.004\nGOTO/0,0,1\nFEDRAT/MMPM,250\n"
+              "SPINDL/2000\nGOTO/1,0,1\n") == std::vector<double>{0.004 * 25.4 * 1000, 250});
   const std::string off = test::input_error_of([&] {
     parse_cl("FEDRAT/0.1,MMPR\nSPINDL/RPM,3000,CLW\nGOTO/0,0,10\nSPINDL/OFF\nGOTO/0,0,0\n",
              "r.cls");

@@ -3,6 +3,7 @@
 
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
+#include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/io/cl_file.hpp"
 
 using namespace taxopt;
@@ -239,6 +240,16 @@ TEST_CASE("cl reader: units from UNITS, from IPM feeds, and from the option", "[
             .operations[0]
             .points[0]
             .feed_mm_per_min == Approx(254.0));
+  // No UNITS, feeds in both: one FEDRAT/IPM among MMPM feeds is no evidence of inches (it read
+  // X30 as 762 mm); refused naming both lines and the option, which reads it.
+  const std::string mixed = "FEDRAT/MMPM,500\nGOTO/30,0,0\nFEDRAT/IPM,20\nGOTO/40,0,0\n";
+  CHECK_THAT(test::input_error_of([&] { parse_cl(mixed, "m.cls"); }),
+             Catch::StartsWith("m.cls:3: ") && Catch::Contains("line 3") &&
+                 Catch::Contains("line 1") && Catch::Contains("ClReadOptions::units"));
+  ClReadOptions mm;
+  mm.units = LengthUnit::Millimetre;
+  CHECK(parse_cl(mixed, "m.cls", mm).operations[0].points[0].tip_mm.x() == Approx(30.0));
+  CHECK(parse_cl("UNITS/MM\n" + mixed, "m.cls").operations[0].points[0].tip_mm.x() == Approx(30.0));
 }
 
 TEST_CASE("cl reader: passes are split at rapids", "[io][cl]") {
@@ -403,9 +414,46 @@ TEST_CASE(
   CHECK(format_cl(z, z.operations) == body + "FINI\n\x1a");
   const Toolpath nx = parse_cl("LOAD/TOOL,5,ADJUST,5\n" + body, "nx.cls");
   CHECK(nx.operations.front().tool.number == 5);
-  check_refused_at_line_1(
-      {"LOAD/TOOL,5,ADJUST,7\n", "LOAD/TOOL,5,LENGTH,7\n", "CYCLE/TAP,FEDTO,10,RAPTO,2,MMPM,100\n"},
-      body);
+  check_refused_at_line_1({"LOAD/TOOL,5,ADJUST,7\n", "LOAD/TOOL,5,SPINDLE,7\n",
+                           "CYCLE/TAP,FEDTO,10,RAPTO,2,MMPM,100\n"},
+                          body);
+}
+
+TEST_CASE(
+    "cl reader: LOADTL as CAM systems write it -- Creo's OSETNO, Fusion's pocket, length and "
+    "offset by position, IN and LENGTH -- the register the tool's own, the length the tool "
+    "model's gauge length -- another register or a word not known is refused naming the line",
+    "[io][cl][words]") {
+  const std::string body = "CUTTER/6.0,3.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\nGOTO/50,0,5\n";
+  // usnistgov/engineering-design-models, Creo's thread_mill.ncl line 7 (its comment included).
+  const Toolpath creo = parse_cl("LOADTL / 4,  OSETNO,  4 $$-> THREAD TOOL\n" + body, "c.ncl");
+  CHECK(creo.operations.front().tool.number == 4);
+  CHECK(creo.operations.front().tool.gauge_length_mm == 0.0);
+  // Fusion's APT post: LOADTL/tool, pocket, body length, length offset.
+  const Toolpath fusion = parse_cl("LOADTL/1, 0, 60., 1\n" + body, "f.apt");
+  CHECK(fusion.operations.front().tool.number == 1);
+  CHECK(fusion.operations.front().tool.gauge_length_mm == Approx(60.0));
+  // The length in the file's unit; the tool model's shank ends there (less the ball radius).
+  const Toolpath inch = parse_cl(
+      "UNITS/INCHES\nLOADTL/3, IN, 12, LENGTH, 2.5, OSETNO, 3\nCUTTER/0.25,0.125\nFEDRAT/IPM,20\n"
+      "GOTO/0,0,1\nGOTO/2,0,1\n",
+      "i.apt");
+  const Tool& tool = inch.operations.front().tool;
+  CHECK(tool.gauge_length_mm == Approx(63.5));
+  const ToolModel model = ToolModel::ball_end(tool);
+  CHECK(model.bodies.back().end_mm == Approx(63.5 - 3.175));
+  // An option's gauge length wins.
+  ToolOverrides o;
+  o.gauge_length_mm = 80.0;
+  CHECK(ToolModel::ball_end(tool, o).bodies.back().end_mm == Approx(80.0 - 3.175));
+  // A length shorter than the flutes names the options that give one.
+  Tool short_tool = tool;
+  short_tool.gauge_length_mm = 5.0;
+  CHECK_THAT(test::input_error_of([&] { ToolModel::ball_end(short_tool); }),
+             Catch::Contains("LOADTL LENGTH") && Catch::Contains("--gauge-length"));
+  check_refused_at_line_1({"LOADTL/5,OSETNO,7\n", "LOADTL/1, 0, 60., 2\n", "LOADTL/5,LENGTH,-3\n",
+                           "LOADTL/5,POCKET,3\n", "LOADTL/5,LENGTH\n", "LOADTL/5,0,60\n"},
+                          body);
 }
 
 TEST_CASE("cl reader: tool records beyond the tool options' bounds are refused naming the line",
@@ -446,12 +494,46 @@ TEST_CASE(
   CHECK(ev[0].line == 2);
   // Address words only are code the file means the controller to run: refused with the line;
   // so are control characters and text beyond a comment block's length.
-  for (const std::string& bad :
-       std::vector<std::string>{"INSERT/M00", "INSERT/G54 G90", "INSERT/X135. Y135.", "INSERT/",
-                                "INSERT/Stock\x01Size", "INSERT/" + std::string(201, 'a')}) {
+  // A program stop among other text too: written as prose or dropped, it would run on past the
+  // operator.
+  for (const std::string& bad : std::vector<std::string>{
+           "INSERT/G54 G90", "INSERT/X135. Y135.", "INSERT/", "INSERT/Stock\x01Size",
+           "INSERT/" + std::string(201, 'a'), "INSERT/M00 REMOVE CLAMP", "INSERT/G90 M01",
+           "INSERT/(END) M30", "INSERT/[CHANGE PALLET] M60", "INSERT/REMOVE THE M1 CLAMP"}) {
     INFO(bad);
     CHECK_THAT(taxopt::test::input_error_of([&] { parse_cl(tool + bad + "\n" + body, "s.apt"); }),
                Catch::StartsWith("s.apt:2: "));
+  }
+}
+
+TEST_CASE(
+    "cl reader: a program stop in an INSERT, alone or beside an operator's note, is the stop "
+    "STOP or OPSTOP writes, the note a comment before it -- never a comment or dropped",
+    "[io][cl][words]") {
+  const std::string tool = "TLDATA/MILL,6.0,3.0,50.0,0.0,0.0\nFEDRAT/MMPM,500\nGOTO/0,0,5\n";
+  struct Case {
+    std::string insert;
+    ProgramEvent::Kind kind;
+    std::string note;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"INSERT/M00 (REMOVE CLAMP)", ProgramEvent::Kind::Stop, "REMOVE CLAMP"},
+           {"INSERT/(REMOVE CLAMP) M00", ProgramEvent::Kind::Stop, "REMOVE CLAMP"},
+           {"INSERT/[CHECK PART] M01", ProgramEvent::Kind::OptionalStop, "CHECK PART"},
+           {"INSERT/m1", ProgramEvent::Kind::OptionalStop, ""},
+           {"INSERT/M00", ProgramEvent::Kind::Stop, ""},
+           {"INSERT/M0 (A) [B]", ProgramEvent::Kind::Stop, "A; B"}}) {
+    INFO(c.insert);
+    const Toolpath tp = parse_cl(tool + c.insert + "\nGOTO/50,0,5\n", "s.apt");
+    REQUIRE(tp.operations.size() == 1);
+    const auto& ev = tp.operations.front().events;
+    REQUIRE(ev.size() == (c.note.empty() ? 1u : 2u));
+    if (!c.note.empty()) {
+      CHECK(ev[0].kind == ProgramEvent::Kind::Comment);
+      CHECK(ev[0].text == c.note);
+    }
+    CHECK(ev.back().kind == c.kind);
+    CHECK(ev.back().before_point == 1);
   }
 }
 

@@ -119,7 +119,7 @@ TEST_CASE("cl words: unknown and misspelt words stop the reader -- --skip-record
   }
   // Refused by name: what the post would do with them is not what taxopt would write.
   for (const char* word : {"LOOP/START,15", "INVERSE/ON", "OP/THREAD,1", "CUTCOM/LEFT",
-                           "MACHIN/PPLATHE,TURN", "MODE/TURN", "TURRET/1", "INSERT/M00",
+                           "MACHIN/PPLATHE,TURN", "MODE/TURN", "TURRET/1", "INSERT/G54 M00",
                            "COOLNT/THRU", "SPINDL/1000,MAXRPM,3000", "DELAY/REV,2"}) {
     INFO(word);
     const std::string e = error_of_text(std::string("GOTO/0,0,0\n") + word + "\nGOTO/2,0,0\n");

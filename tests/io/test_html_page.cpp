@@ -182,6 +182,37 @@ TEST_CASE(
   CHECK(count_of(hostile, "&lt;/script&gt;") > 0);
 }
 
+TEST_CASE(
+    "html page: the summary shows each rotary axis's peaks, before and after, under the "
+    "machine's letters -- a tilt axis that rises is not hidden by a combined figure that falls",
+    "[html]") {
+  JobResult result;
+  result.tilt_letter = 'B';
+  result.operations.emplace_back();
+  OperationResult& op = result.operations.back();
+  op.name = "FILLET";
+  op.before.max_accel_deg_s2 = 500.0;
+  op.after.max_accel_deg_s2 = 200.0;
+  op.before.tilt.max_accel_deg_s2 = 11.25;
+  op.after.tilt.max_accel_deg_s2 = 52.5;
+  op.before.c.max_accel_deg_s2 = 499.0;
+  op.after.c.max_accel_deg_s2 = 190.0;
+  op.before.tilt.max_omega_deg_s = 1.5;
+  op.after.tilt.max_omega_deg_s = 2.25;
+  const std::string page =
+      html_page(result, Toolpath{}, Machine{}, JobOptions{}, RunInfo{}, nullptr, tiny_assets());
+  const std::size_t table = page.find("<table class=\"summary\">");
+  REQUIRE(table != std::string::npos);
+  const std::string t = page.substr(table, page.find("</table>", table) - table);
+  CHECK_THAT(t, Catch::Contains("peak &omega; B deg/s") && Catch::Contains("peak a B deg/s") &&
+                    Catch::Contains("peak a C deg/s"));
+  CHECK_THAT(t, Catch::Contains("11.2 &rarr; 52.5") || Catch::Contains("11.3 &rarr; 52.5"));
+  CHECK_THAT(t, Catch::Contains("499.0 &rarr; 190.0"));
+  CHECK_THAT(t, Catch::Contains("1.50 &rarr; 2.25"));
+  // No machine limits: the combined peak a, said as such.
+  CHECK_THAT(t, Catch::Contains("(combined a) 500.0 &rarr; 200.0"));
+}
+
 TEST_CASE("html page: over the budget the plots keep every stride's peaks and say how they thin",
           "[html]") {
   JobResult result;

@@ -97,6 +97,10 @@ struct TAXOPT_API Tool {
   double diameter_mm = 0.0;
   double corner_radius_mm = 0.0;
   double flute_length_mm = 0.0;
+  /// The tool's length below the holder as the CL file gives it (LOADTL's LENGTH), mm; 0 when
+  /// it gives none. The tool model's gauge length where neither ToolOverrides nor the machine
+  /// file's holder gives one.
+  double gauge_length_mm = 0.0;
   /// True when the file described this tool (TLDATA or CUTTER); false for the default.
   bool from_file = false;
   /// A tapered ball-end mill (APT CUTTER with r > d/2): the half angle of the cone tangent to

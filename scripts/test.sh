@@ -14,7 +14,9 @@ jobs=$(nproc)
 stage "release build and tests"
 cmake --preset release
 cmake --build --preset release -j "$jobs"
-ctest --preset release -j "$jobs"
+# LinuxCNC's motion controller (label controller: serial, about 5 minutes on one core) runs
+# beside the fuzzers at the end, which take one core; the rest of the suite here.
+ctest --preset release -j "$jobs" -LE controller
 
 stage "install and build the example consumer against it"
 prefix="$PWD/build/install"
@@ -96,6 +98,15 @@ cmake --preset tsan
 cmake --build --preset tsan -j "$jobs"
 TSAN_OPTIONS=halt_on_error=1 ctest --preset tsan -j "$jobs" -R "threads|pipeline:|cspace"
 
-stage "fuzzing (libFuzzer, bounded)"
+stage "fuzzing (libFuzzer, bounded), and LinuxCNC's motion controller beside it"
+ctest --preset release -L controller > build/controller.log 2>&1 &
+controller=$!
 bash scripts/fuzz.sh 30
+controller_rc=0
+wait "$controller" || controller_rc=$?
+cat build/controller.log
+if [ "$controller_rc" != 0 ]; then
+  echo "the controller tests failed (exit $controller_rc)" >&2
+  exit 1
+fi
 stage "done"

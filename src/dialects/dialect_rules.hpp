@@ -52,6 +52,21 @@ inline std::string comment_text(const std::string& text) {
   return s;
 }
 
+/// Comment text for a controller that reads its program as a tape, from one `%` to the next
+/// (Fanuc, Haas): comment_text with each `%` written "pct" -- a `%` inside a comment (an
+/// operation named FINISH_100%_STOCK) ends the program there.
+inline std::string tape_comment_text(const std::string& text) {
+  std::string s;
+  for (char c : comment_text(text)) {
+    if (c == '%') {
+      s += "pct";
+    } else {
+      s += c;
+    }
+  }
+  return s;
+}
+
 /// `n` with leading zeros to `width` digits (a Fanuc or Haas program number, O0001).
 inline std::string zero_padded(int n, int width) {
   char buf[16];
@@ -117,6 +132,9 @@ struct TemplateWords {
   std::vector<double> tool_change_g_codes;  ///< ... and gcode.tool_change besides
   std::vector<std::string> long_words;      ///< words of several letters (Sinumerik's FFWON)
   bool settable_frames = false;             ///< work offsets G505 ... G599 (Sinumerik)
+  /// Fanuc, Haas: the program is read as a tape from one `%` to the next, so no `%` in a
+  /// comment, and `;` is no comment there (it is LinuxCNC's, Sinumerik's and a TNC's).
+  bool tape = false;
 };
 
 /// One controller's dialect. Defaults are the ISO words LinuxCNC, Fanuc and Haas share; each

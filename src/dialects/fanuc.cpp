@@ -16,7 +16,11 @@ class Fanuc final : public DialectRules {
   int max_decimals() const override { return 4; }  // IS-C, 0.0001 mm
 
   std::vector<std::string> start(const ProgramName& p) const override {
-    return {"%", "O" + zero_padded(p.number, 4) + " (" + comment_text(p.name) + ")"};
+    return {"%", "O" + zero_padded(p.number, 4) + " (" + tape_comment_text(p.name) + ")"};
+  }
+  /// No `%` inside a comment: it ends the tape.
+  std::string comment(const std::string& text, int&) const override {
+    return "(" + tape_comment_text(text) + ")";
   }
   std::vector<std::string> retract(const std::string&) const override {
     return {"G91 G28 Z0.", "G90"};
@@ -52,7 +56,7 @@ class Fanuc final : public DialectRules {
 
   /// G5.1 (AI contour control) and G8 (look-ahead) besides the common codes.
   TemplateWords template_words() const override {
-    return {true, {4, 40, 80, 61, 61.1, 64, 5.1, 8}, {65}, {}, false};
+    return {true, {4, 40, 80, 61, 61.1, 64, 5.1, 8}, {65}, {}, false, true};
   }
 };
 

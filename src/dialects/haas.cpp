@@ -14,7 +14,11 @@ class Haas final : public DialectRules {
   int max_decimals() const override { return 4; }
 
   std::vector<std::string> start(const ProgramName& p) const override {
-    return {"%", "O" + zero_padded(p.number, 5) + " (" + comment_text(p.name) + ")"};
+    return {"%", "O" + zero_padded(p.number, 5) + " (" + tape_comment_text(p.name) + ")"};
+  }
+  /// No `%` inside a comment: it ends the tape.
+  std::string comment(const std::string& text, int&) const override {
+    return "(" + tape_comment_text(text) + ")";
   }
   std::vector<std::string> retract(const std::string& z) const override { return {"G53 G0 Z" + z}; }
   std::vector<std::string> park(const std::string& x, const std::string& y) const override {

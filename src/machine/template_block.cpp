@@ -70,8 +70,16 @@ std::string code_of(const std::string& block, const BlockRules& r) {
       --depth;
       continue;
     }
-    if (depth > 0) continue;
-    if (ch == ';') break;
+    if (depth > 0) {
+      if (ch == '%' && r.words.tape) {
+        refuse("holds '%' in a comment: the controller reads its program from one % to the next");
+      }
+      continue;
+    }
+    if (ch == ';') {
+      if (r.words.tape) refuse("holds ';': no comment on this controller (use parentheses)");
+      break;
+    }
     if (static_cast<unsigned char>(ch) < 0x20 || static_cast<unsigned char>(ch) > 0x7e) {
       refuse("holds a character outside printable ASCII");
     }

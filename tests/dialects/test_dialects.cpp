@@ -2,6 +2,7 @@
 // with the same rules (tool, length offset, TCP, the retract in machine coordinates, the
 // units), its template codes are taken and the others' refused, and its name is the machine
 // file's. A new dialect in all_dialects() is checked here without a line more.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <set>
 #include <string>
@@ -166,6 +167,41 @@ TEST_CASE("dialects: a template takes the dialect's own G codes and refuses the 
       CHECK(template_block_problem(w == "CYCLE832" ? "CYCLE832(0.01, 0, 1)" : w, "gcode.header",
                                    r->id(), false)
                 .empty());
+    }
+  }
+}
+
+TEST_CASE(
+    "dialects: Fanuc and Haas read a program as a tape from one % to the next -- no % in a "
+    "written comment or a template's, and ; is no comment there (it is elsewhere)",
+    "[dialects][hostile]") {
+  for (const DialectRules* r : gcode::all_dialects()) {
+    INFO(r->name());
+    const bool tape = r->template_words().tape;
+    CHECK(tape == (r->id() == GcodeDialect::Fanuc || r->id() == GcodeDialect::Haas));
+    int n = 0;
+    const std::string c = r->comment("operation FINISH_100%_STOCK", n);
+    CHECK((c.find('%') == std::string::npos) == tape);
+    if (tape) {
+      CHECK(c == "(operation FINISH_100pct_STOCK)");
+      const gcode::ProgramName name{"AT_50%", 7, false};
+      const std::vector<std::string> start = r->start(name);
+      // The program's own marks, and no other.
+      std::size_t marks = 0;
+      for (const std::string& s : start)
+        marks += static_cast<std::size_t>(std::count(s.begin(), s.end(), '%'));
+      CHECK(marks == 1);
+    }
+    const std::string percent =
+        template_block_problem("G40 (100% STOCK)", "gcode.header", r->id(), false);
+    const std::string semicolon =
+        template_block_problem("G40;G0 X-300 Z-50", "gcode.header", r->id(), false);
+    if (tape) {
+      CHECK_THAT(percent, Catch::Contains("'%' in a comment"));
+      CHECK_THAT(semicolon, Catch::Contains("';'"));
+    } else if (r->template_words().paren_comments) {
+      CHECK(percent.empty());
+      CHECK(semicolon.empty());
     }
   }
 }

@@ -173,7 +173,7 @@ TEST_CASE("dialects: a template takes the dialect's own G codes and refuses the 
 
 TEST_CASE(
     "dialects: Fanuc and Haas read a program as a tape from one % to the next -- no % in a "
-    "written comment or a template's, and ; is no comment there (it is elsewhere)",
+    "written comment or a template's, and a semicolon is no comment there (it is elsewhere)",
     "[dialects][hostile]") {
   for (const DialectRules* r : gcode::all_dialects()) {
     INFO(r->name());

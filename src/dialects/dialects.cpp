@@ -7,7 +7,8 @@ namespace taxopt::gcode {
 
 std::string DialectRules::comment(const std::string& text, int& number) const {
   (void)number;
-  return "(" + comment_text(text) + ")";
+  // A tape dialect (Fanuc, Haas) reads its program from one % to the next: none in a comment.
+  return "(" + (template_words().tape ? tape_comment_text(text) : comment_text(text)) + ")";
 }
 
 std::string DialectRules::setup(bool inch, bool inverse_time) const {

@@ -18,10 +18,6 @@ class Fanuc final : public DialectRules {
   std::vector<std::string> start(const ProgramName& p) const override {
     return {"%", "O" + zero_padded(p.number, 4) + " (" + tape_comment_text(p.name) + ")"};
   }
-  /// No `%` inside a comment: it ends the tape.
-  std::string comment(const std::string& text, int&) const override {
-    return "(" + tape_comment_text(text) + ")";
-  }
   std::vector<std::string> retract(const std::string&) const override {
     return {"G91 G28 Z0.", "G90"};
   }

@@ -16,10 +16,6 @@ class Haas final : public DialectRules {
   std::vector<std::string> start(const ProgramName& p) const override {
     return {"%", "O" + zero_padded(p.number, 5) + " (" + tape_comment_text(p.name) + ")"};
   }
-  /// No `%` inside a comment: it ends the tape.
-  std::string comment(const std::string& text, int&) const override {
-    return "(" + tape_comment_text(text) + ")";
-  }
   std::vector<std::string> retract(const std::string& z) const override { return {"G53 G0 Z" + z}; }
   std::vector<std::string> park(const std::string& x, const std::string& y) const override {
     return {"G53 G0 X" + x + " Y" + y};

@@ -10,6 +10,7 @@ says (the operation's before and after max_accel_deg_s2).
 
     python3 scripts/truth.py build/release/taxopt [--steps 0.25,0.5,1,2]
         [--surfaces sine,plane,bump,saddle] [--at-least paper=23,global=76] [--moved]
+        [--extra '--min-tilt 4.9']
 
 Exit 1 when a method's timed peak is worse than its input's (a reported gain that is a loss on
 the machine), when the report's percentage differs from the timed one by more than
@@ -167,7 +168,7 @@ def post_all(args, d, case, cls, stl, rows):
         ngc, rep = f"{d}/{method}.ngc", f"{d}/{method}.json"
         rc, err = run([args.taxopt, "--in", cls, "--part", stl, "--method", method,
                        "--gcode", ngc, "--report", rep, "-q"]
-                      + (["--force"] if method == "none" else []))
+                      + (["--force"] if method == "none" else args.extra.split()))
         if rc != 0 and not (method == "none" and rc == 1):
             rows.append(f"| {case} | {method} | exit {rc}: "
                         f"{err.strip().splitlines()[-1][:120] if err.strip() else ''} |")
@@ -205,6 +206,8 @@ def main():
     ap.add_argument("--moved", action="store_true",
                     help="also post every case turned, shifted, shuffled and as ASCII STL")
     ap.add_argument("--rs274", default="rs274")
+    ap.add_argument("--extra", default="",
+                    help="more taxopt options for the methods' runs (e.g. '--min-tilt 4.9')")
     args = ap.parse_args()
     args.need = {k: float(v) for k, v in
                  (kv.split("=") for kv in args.at_least.split(",") if kv)}

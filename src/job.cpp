@@ -239,6 +239,8 @@ void in_job_arena(const JobOptions& options, const F& f) {
 /// as LinuxCNC's head kinematics add the tool length offset to their pivot length.
 Machine run_machine(const Machine& machine, const JobOptions& options) {
   Machine m = machine;
+  // The tool's gauge length the writer puts below a retract (ProgramWriter::joints_).
+  if (options.tool.gauge_length_mm) m.holder_gauge_length_mm = options.tool.gauge_length_mm;
   if (m.rotary.layout != RotaryLayout::TableTable) {
     m.rotary.head_length_mm = m.head_pivot_length_mm + options.tool.gauge_length_mm.value_or(
                                                            m.holder_gauge_length_mm.value_or(0.0));

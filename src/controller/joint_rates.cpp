@@ -71,9 +71,11 @@ std::pair<double, Joint> joint_velocity_rate_per_s(const MachineKinematicsd& ac,
   // chord (the schedule's own model) is exact.
   const double turn_rad = std::hypot(to.tilt_rad - from.tilt_rad, to.c_rad - from.c_rad);
   if (turn_rad == 0.0) return {std::numeric_limits<double>::infinity(), Joint::X};
-  // Steps of at most 0.25 deg of turn (at most 64): the joints' rate of change varies by less
-  // than the step's turn (in rad) relative within a step, which the margin below covers.
-  const int steps = std::clamp(static_cast<int>(std::ceil(rad_to_deg(turn_rad) / 0.25)), 1, 64);
+  // Steps of at most 0.25 deg of turn: the joints' rate of change varies by less than the
+  // step's turn (in rad) relative within a step, which the margin below covers (an end's turn
+  // home unwinds C by up to the turns the program made: 5,161 deg on a real NX file).
+  const int steps =
+      std::clamp(static_cast<int>(std::ceil(rad_to_deg(turn_rad) / 0.25)), 1, 1 << 20);
   double rate = std::numeric_limits<double>::infinity();
   Joint by = Joint::X;
   const Vec3d d = to_tip_mm - from_tip_mm;

@@ -305,13 +305,7 @@ bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& wo
   return false;
 }
 
-void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
-                                     double rate_per_s) {
-  const CLPointd& p = op_->points[i];
-  const Posed& pose = op_->poses[i];
-  const double tip_mm = (p.tip_mm - prev_tip_).norm();
-  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
-                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
+std::string ProgramWriter::joint_safe_feed(double tip_mm, double rot_deg, double rate_per_s) const {
   const double per_min = 60.0 * rate_per_s;
   const controller::FeedDistance d = controller::feed_distance(tip_mm, rot_deg);
   const double feed =
@@ -319,7 +313,17 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
   const int digits = std::clamp(
       7 - static_cast<int>(std::floor(std::log10(std::max(feed, 1e-300)))), fd_, max_fd_);
   const double unit = std::pow(10.0, digits);
-  const std::string f = fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
+  return fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
+}
+
+void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
+                                     double rate_per_s) {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  const double tip_mm = (p.tip_mm - prev_tip_).norm();
+  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
+                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
+  const std::string f = joint_safe_feed(tip_mm, rot_deg, rate_per_s);
   PlannedMove block = move_to(PlannedMove::Type::Linear, xyz, pose);
   set_feed(block, f);
   // LinuxCNC blends two feed blocks, and the blend leaves the programmed A and C (0.12 deg

@@ -125,6 +125,22 @@ int ProgramWriter::motion(const PlannedMove& m, BlockKind kind, bool takes_prefi
     const Vec3d xyz = joints_of_written_mm(machine_, Vec3d(*at_[0], *at_[1], *at_[2]),
                                            Posed{deg_to_rad(*at_[3]), deg_to_rad(*at_[4])});
     b.joints = JointPosition{xyz.x(), xyz.y(), xyz.z(), *at_[3], *at_[4]};
+    joints_ = b.joints;
+  } else if (joints_ && !m.machine_frame) {
+    // A block of the rotary axes alone where the tip's place is not stated: with TCP the tip
+    // stays put in the table's frame, in machine mode the linear joints do.
+    const Vec3d tip = machine_.rotary.from_machine_mm(
+        Vec3d((*joints_)[0], (*joints_)[1], (*joints_)[2]),
+        Posed{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])});
+    if (m.given & 0x8u) (*joints_)[3] = round_to(m.tilt_deg, d_);
+    if (m.given & 0x10u) (*joints_)[4] = round_to(m.c_deg, d_);
+    if ((m.given & 0x7u) != 0) {
+      joints_.reset();
+    } else if (tcp_) {
+      const Vec3d q = machine_.rotary.to_machine_mm(
+          tip, Posed{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])});
+      (*joints_)[0] = q.x(), (*joints_)[1] = q.y(), (*joints_)[2] = q.z();
+    }
   }
   return at;
 }
@@ -147,6 +163,43 @@ void ProgramWriter::machine_frame_move(const std::vector<std::string>& blocks, P
   }
   // Where the tip stands in the program's frame is not known after a move in the machine's.
   at_[0] = at_[1] = at_[2] = std::nullopt;
+  // The joints are, for a retract of Z alone to a height in machine coordinates.
+  const bool z_only_retract =
+      kind == BlockKind::Retract && m.given == 0x4u && !dialect_.rules().retract_to_reference();
+  if (joints_ && z_only_retract) {
+    (*joints_)[2] = m.xyz_mm.z() - machine_.holder_gauge_length_mm.value_or(0.0);
+  } else if (joints_ && m.given == 0x3u && kind == BlockKind::End) {
+    (*joints_)[0] = m.xyz_mm.x(), (*joints_)[1] = m.xyz_mm.y();  // the end's park
+  } else {
+    joints_.reset();
+  }
+}
+
+void ProgramWriter::rotary_turn(const Posed& to, BlockKind kind) {
+  PlannedMove m = rapid_rotary(rad_to_deg(to.tilt_rad), rad_to_deg(to.c_rad));
+  // With a kinematics switch (tcp_on, M428) the turns between operations and at the end come
+  // with TCP off: the joints are the axes.
+  if (joint_safe_ && g_.program.tcp_on.empty() && joints_) {
+    const Posed from{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])};
+    const Vec3d tip =
+        machine_.rotary.from_machine_mm(Vec3d((*joints_)[0], (*joints_)[1], (*joints_)[2]), from);
+    const std::optional<double> rate =
+        joint_safe_rate_per_s(machine_.rotary, limits_, tip, from, tip, to);
+    if (rate) {
+      const double rot_deg =
+          std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
+      m.type = PlannedMove::Type::Linear;
+      set_feed(m, joint_safe_feed(0.0, rot_deg, *rate));
+      raw(dialect_.comment("joint-safe turn: the table turns round the tip at the joints' rate, "
+                           "a feed block the rapid override does not govern"),
+          kind);
+      const int at = motion(m, kind, false);
+      prog_.joint_safe_rapids.push_back(at);
+      last_feed_.clear();  // the next feed block names its F
+      return;
+    }
+  }
+  motion(m, kind, false);
 }
 
 void ProgramWriter::park(const std::array<double, 2>& xy_mm) {
@@ -214,7 +267,7 @@ void ProgramWriter::program_end() {
   retract();
   // The rotary axes home (a continuous C within one turn of it), with the tool up.
   if (g_.program.end_pose == EndPose::Home && retracts_ && !ops_.empty()) {
-    motion(rapid_rotary(0.0, 0.0), BlockKind::End, false);
+    rotary_turn(Posed{0.0, 0.0}, BlockKind::End);
   }
   if (g_.program.end_park_xy_mm && retracts_ && !ops_.empty()) park(*g_.program.end_park_xy_mm);
   verbatim(g_.program.footer, BlockKind::End);
@@ -370,8 +423,7 @@ void ProgramWriter::event(const ProgramEvent& e) {
 
 void ProgramWriter::turn_table(const Posed& pose) {
   if (!retracts_) return;
-  motion(rapid_rotary(rad_to_deg(pose.tilt_rad), rad_to_deg(pose.c_rad)), BlockKind::TableTurn,
-         false);
+  rotary_turn(pose, BlockKind::TableTurn);
 }
 
 void ProgramWriter::length_and_tcp_on() {

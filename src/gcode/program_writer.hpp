@@ -178,6 +178,16 @@ class ProgramWriter {
   /// block's inverse time; eight significant digits, rounded down: slower, never faster.
   void joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
                         double rate_per_s);
+  /// The F word of a joint-safe block: `rate_per_s` of the block a second as F (the tip's
+  /// distance, the rotary one when only A and C turn, per minute; under G93 the inverse time),
+  /// eight significant digits, rounded down.
+  std::string joint_safe_feed(double tip_mm, double rot_deg, double rate_per_s) const;
+  /// A turn of the rotary axes alone (an index's table turn, the end's turn home): with TCP
+  /// planned in the program's axes (LinuxCNC without a kinematics switch: TCP always on) the
+  /// tip stays put in the table's frame while the joints swing round it, so where the joints
+  /// are known (joints_) and a rapid would drive one past its velocity limit, a feed block at
+  /// the joints' rate.
+  void rotary_turn(const Posed& to, BlockKind kind);
   /// The block reaching point i, and the state after it.
   void finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
                     const PlannedMove& block, bool restore_inverse_time);
@@ -215,6 +225,11 @@ class ProgramWriter {
   /// Where the program stands in its own frame as written (X Y Z mm, the tilt axis and C deg,
   /// rounded as the words read); empty: not named since the last move in machine coordinates.
   std::array<std::optional<double>, 5> at_;
+  /// The machine's joints referred to the tip after the last block (JointPosition), where the
+  /// program has stated them: a retract to machine Z keeps X, Y and the rotary axes and puts
+  /// the tip the tool's gauge length below the retract height (the work offset taken as zero,
+  /// as the program's time model does).
+  std::optional<JointPosition> joints_;
   int line_no_ = 0;
   int current_tool_ = -1;
   std::string last_feed_;

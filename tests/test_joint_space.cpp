@@ -75,7 +75,7 @@ TEST_CASE(
   const std::string& turn = lines[lines.size() - 2];
   INFO(turn);
   CHECK(std::regex_match(turn, std::regex(R"(G1 A0\.0000 C0\.0000 F[0-9.]+)")));
-  CHECK(lines[lines.size() - 3].find("joint-safe turn") != std::string::npos);
+  CHECK(lines[lines.size() - 3].find("joint-safe rapid") != std::string::npos);
   const auto report = nlohmann::json::parse(read_file(t.path("r.json")));
   const auto& peaks = report["gcode"]["tcp_joint_peaks"];
   REQUIRE(peaks.is_object());

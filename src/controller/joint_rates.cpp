@@ -101,8 +101,7 @@ std::pair<double, Joint> joint_velocity_rate_per_s(const MachineKinematicsd& ac,
 
 std::optional<double> joint_safe_rate_per_s(const MachineKinematicsd& ac, const JointLimits& limits,
                                             const Vec3d& from_tip_mm, const Posed& from,
-                                            const Vec3d& to_tip_mm, const Posed& to,
-                                            bool held_pose) {
+                                            const Vec3d& to_tip_mm, const Posed& to) {
   const double da_deg = rad_to_deg(to.tilt_rad - from.tilt_rad);
   const double dc_deg = rad_to_deg(to.c_rad - from.c_rad);
   const Vec3d d = to_tip_mm - from_tip_mm;
@@ -117,10 +116,10 @@ std::optional<double> joint_safe_rate_per_s(const MachineKinematicsd& ac, const 
   if (!std::isfinite(axis_rate)) return std::nullopt;
   double joint_rate = joint_velocity_rate_per_s(ac, limits, from_tip_mm, from, to_tip_mm, to).first;
   if (da_deg == 0.0 && dc_deg == 0.0) {
-    if (!held_pose) return std::nullopt;  // the joints move as the axes (tcp_joint_peaks warns)
     // A and C held: the joints are the tip turned with the table, each a straight line, which
-    // the axes' limits do not bound where the table is tilted (a rapid along a tilted tool axis
-    // is the spindle's Z alone, up to 1/cos A faster than the program's Z).
+    // the axes' limits do not bound where the table is tilted or turned (a rapid along a tilted
+    // tool axis is the spindle's Z alone, up to 1/cos A faster than the program's Z; an XY
+    // rapid with C at -150 deg drove joint Y at 511 mm/s against 500).
     const Vec3d dq = ac.to_machine_mm(to_tip_mm, to) - ac.to_machine_mm(from_tip_mm, from);
     for (std::size_t j = 0; j < 3; ++j) {
       const double v = limits[j].max_velocity_per_s;

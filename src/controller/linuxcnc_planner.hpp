@@ -25,6 +25,9 @@ struct TcpBlock {
   bool start_rest = true, end_rest = true;
   int line = 0;
   double accel_share = 1.0;
+  /// Where the block starts is known: the program has stated every joint before it (else the
+  /// start is the model's guess of where the machine stands, and so are the peaks).
+  bool start_known = true;
 };
 
 /// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit

@@ -201,7 +201,6 @@ void ProgramWriter::point(std::size_t i) {
     return;
   }
   if (words == last_words_) return;  // nothing would move
-  along_axis_leg_ = false;
   if (p.motion == Motion::Rapid && have_prev_ && retracts_ && !op_->swept_moves_checked &&
       !approach_) {
     index_target_ = index_move_if_turning(i);
@@ -249,22 +248,23 @@ std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
 }
 
 void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz) {
-  if (descend_) motion(rapid_linear(0x4, Vec3d(0.0, 0.0, clearance_z_mm_)), BlockKind::Approach);
+  if (descend_) {
+    rapid_block(rapid_linear(0x4, Vec3d(0.0, 0.0, clearance_z_mm_)), BlockKind::Approach);
+  }
   const Vec3d above_tip =
       approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm_, g_.program.approach_clearance_mm);
   const Vec3d above = descend_ ? out_xyz(above_tip, pose) : xyz;
   // Fanuc: its length and TCP come on with the block below.
-  motion(rapid_linear(0x3, above), BlockKind::Approach, !dialect_.length_on_first_move());
+  rapid_block(rapid_linear(0x3, above), BlockKind::Approach, !dialect_.length_on_first_move());
   if (descend_ && std::abs(above.z() - clearance_z_mm_) * scale_ > 0.5 * std::pow(10.0, -d_)) {
     // A tool within 30 deg of the horizontal: straight down to the safe distance on its
     // axis, then along it.
-    motion(rapid_linear(0x4, above), BlockKind::Approach, false);
+    rapid_block(rapid_linear(0x4, above), BlockKind::Approach, false);
   }
   approach_ = false;
   // The tool comes from the retract: no move to schedule or split; under TCP a rapid to
   // the point comes from `above` along the axis (at a joint-safe feed on LinuxCNC).
   have_prev_ = descend_ && p.motion == Motion::Rapid;
-  along_axis_leg_ = have_prev_;
   if (have_prev_) advance_to(above, pose, above_tip);
 }
 
@@ -294,8 +294,8 @@ bool ProgramWriter::rapid(std::size_t i, const Vec3d& xyz, const std::string& wo
     }
   }
   if (joint_safe_ && have_prev_) {
-    const std::optional<double> rate = joint_safe_rate_per_s(
-        machine_.rotary, limits_, prev_tip_, prev_pose_, p.tip_mm, pose, along_axis_leg_);
+    const std::optional<double> rate =
+        joint_safe_rate_per_s(machine_.rotary, limits_, prev_tip_, prev_pose_, p.tip_mm, pose);
     if (rate) {
       joint_safe_rapid(i, xyz, words, *rate);
       return true;

@@ -127,22 +127,30 @@ int ProgramWriter::motion(const PlannedMove& m, BlockKind kind, bool takes_prefi
     b.joints = JointPosition{xyz.x(), xyz.y(), xyz.z(), *at_[3], *at_[4]};
     joints_ = b.joints;
   } else if (joints_ && !m.machine_frame) {
-    // A block of the rotary axes alone where the tip's place is not stated: with TCP the tip
-    // stays put in the table's frame, in machine mode the linear joints do.
-    const Vec3d tip = machine_.rotary.from_machine_mm(
-        Vec3d((*joints_)[0], (*joints_)[1], (*joints_)[2]),
-        Posed{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])});
-    if (m.given & 0x8u) (*joints_)[3] = round_to(m.tilt_deg, d_);
-    if (m.given & 0x10u) (*joints_)[4] = round_to(m.c_deg, d_);
-    if ((m.given & 0x7u) != 0) {
-      joints_.reset();
-    } else if (tcp_) {
-      const Vec3d q = machine_.rotary.to_machine_mm(
-          tip, Posed{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])});
-      (*joints_)[0] = q.x(), (*joints_)[1] = q.y(), (*joints_)[2] = q.z();
-    }
+    joints_ = joints_after(*joints_, m);
   }
   return at;
+}
+
+std::optional<JointPosition> ProgramWriter::joints_after(const JointPosition& q,
+                                                         const PlannedMove& m) const {
+  const Posed from{deg_to_rad(q[3]), deg_to_rad(q[4])};
+  JointPosition out = q;
+  if (m.given & 0x8u) out[3] = round_to(m.tilt_deg, d_);
+  if (m.given & 0x10u) out[4] = round_to(m.c_deg, d_);
+  const Posed to{deg_to_rad(out[3]), deg_to_rad(out[4])};
+  // TCP off: the linear joints stay where no word names them; the words' own frame is
+  // another question (the tool length), left unknown.
+  if (!tcp_in_force()) return (m.given & 0x7u) ? std::nullopt : std::optional(out);
+  // TCP on: the tip stays put in the table's frame where no word names it.
+  Vec3d tip = machine_.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from);
+  const Vec3d written = tip_of_written_mm(machine_, rounded_mm(m.xyz_mm), to);
+  for (int k = 0; k < 3; ++k) {
+    if (m.given & (1u << k)) tip[k] = written[k];
+  }
+  const Vec3d xyz = machine_.rotary.to_machine_mm(tip, to);
+  out[0] = xyz.x(), out[1] = xyz.y(), out[2] = xyz.z();
+  return out;
 }
 
 void ProgramWriter::retract() {
@@ -175,31 +183,55 @@ void ProgramWriter::machine_frame_move(const std::vector<std::string>& blocks, P
   }
 }
 
-void ProgramWriter::rotary_turn(const Posed& to, BlockKind kind) {
-  PlannedMove m = rapid_rotary(rad_to_deg(to.tilt_rad), rad_to_deg(to.c_rad));
-  // With a kinematics switch (tcp_on, M428) the turns between operations and at the end come
-  // with TCP off: the joints are the axes.
-  if (joint_safe_ && g_.program.tcp_on.empty() && joints_) {
-    const Posed from{deg_to_rad((*joints_)[3]), deg_to_rad((*joints_)[4])};
-    const Vec3d tip =
-        machine_.rotary.from_machine_mm(Vec3d((*joints_)[0], (*joints_)[1], (*joints_)[2]), from);
-    const std::optional<double> rate =
-        joint_safe_rate_per_s(machine_.rotary, limits_, tip, from, tip, to);
-    if (rate) {
-      const double rot_deg =
-          std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
-      m.type = PlannedMove::Type::Linear;
-      set_feed(m, joint_safe_feed(0.0, rot_deg, *rate));
-      raw(dialect_.comment("joint-safe turn: the table turns round the tip at the joints' rate, "
-                           "a feed block the rapid override does not govern"),
-          kind);
-      const int at = motion(m, kind, false);
-      prog_.joint_safe_rapids.push_back(at);
-      last_feed_.clear();  // the next feed block names its F
-      return;
-    }
+bool ProgramWriter::tcp_in_force() const {
+  // LinuxCNC without a kinematics switch: its TCP kinematics are always on. Else TCP is on
+  // between the dialect's (or the switch's, M428) on and off; the turns between operations
+  // and at the end come with it off: the joints are the axes.
+  return tcp_ && (tcp_switched_on_ || (joint_safe_ && g_.program.tcp_on.empty()));
+}
+
+bool ProgramWriter::tcp_planned_now() const { return joint_safe_ && tcp_in_force(); }
+
+std::optional<std::string> ProgramWriter::joint_safe_f(const PlannedMove& m) const {
+  if (!tcp_planned_now() || !joints_) return std::nullopt;
+  const JointPosition& q = *joints_;
+  const std::optional<JointPosition> end = joints_after(q, m);
+  if (!end) return std::nullopt;
+  const JointPosition& e = *end;
+  const Posed from{deg_to_rad(q[3]), deg_to_rad(q[4])}, to{deg_to_rad(e[3]), deg_to_rad(e[4])};
+  const Vec3d from_tip = machine_.rotary.from_machine_mm(Vec3d(q[0], q[1], q[2]), from);
+  const Vec3d to_tip = machine_.rotary.from_machine_mm(Vec3d(e[0], e[1], e[2]), to);
+  const std::optional<double> rate =
+      joint_safe_rate_per_s(machine_.rotary, limits_, from_tip, from, to_tip, to);
+  if (!rate) return std::nullopt;
+  const double rot_deg =
+      std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
+  return joint_safe_feed((to_tip - from_tip).norm(), rot_deg, *rate);
+}
+
+int ProgramWriter::rapid_block(PlannedMove m, BlockKind kind, bool takes_prefix) {
+  const std::optional<std::string> f = joint_safe_f(m);
+  if (!f) {
+    last_joint_safe_ = false;
+    return motion(m, kind, takes_prefix);
   }
-  motion(m, kind, false);
+  m.type = PlannedMove::Type::Linear;
+  set_feed(m, *f);
+  if (last_feed_block_) line("G4 P0", BlockKind::Dwell);  // no blend into the feed before
+  if (!last_joint_safe_) {
+    raw(dialect_.comment("joint-safe rapid: a feed block at the joints' rate, which the rapid "
+                         "override does not govern"),
+        kind);
+  }
+  const int at = motion(m, kind, takes_prefix);
+  prog_.joint_safe_rapids.push_back(at);
+  last_feed_block_ = false;
+  last_joint_safe_ = true;
+  return at;
+}
+
+void ProgramWriter::rotary_turn(const Posed& to, BlockKind kind) {
+  rapid_block(rapid_rotary(rad_to_deg(to.tilt_rad), rad_to_deg(to.c_rad)), kind, false);
 }
 
 void ProgramWriter::park(const std::array<double, 2>& xy_mm) {
@@ -210,6 +242,11 @@ void ProgramWriter::park(const std::array<double, 2>& xy_mm) {
 
 Vec3d ProgramWriter::rounded(const Vec3d& v) const {
   return Vec3d(round_to(v.x(), d_), round_to(v.y(), d_), round_to(v.z(), d_));
+}
+
+Vec3d ProgramWriter::rounded_mm(const Vec3d& v_mm) const {
+  return Vec3d(round_to(v_mm.x() * scale_, d_) / scale_, round_to(v_mm.y() * scale_, d_) / scale_,
+               round_to(v_mm.z() * scale_, d_) / scale_);
 }
 
 Vec3d ProgramWriter::out_xyz(const Vec3d& tip, const Posed& pose) const {
@@ -343,7 +380,6 @@ void ProgramWriter::operation_start() {
   have_prev_ = false;
   last_feed_block_ = false;
   last_joint_safe_ = false;
-  along_axis_leg_ = false;
 }
 
 void ProgramWriter::tool_change(int tool) {
@@ -428,6 +464,7 @@ void ProgramWriter::turn_table(const Posed& pose) {
 
 void ProgramWriter::length_and_tcp_on() {
   tcp_angles_.clear();
+  tcp_switched_on_ = tcp_;
   lines(dialect_.length_on(tcp_, current_tool_), BlockKind::LengthTcp);
   verbatim(tcp_ ? g_.program.tcp_on : std::vector<std::string>{}, BlockKind::LengthTcp);
   lines(dialect_.tcp_on(tcp_, current_tool_), BlockKind::LengthTcp);
@@ -435,6 +472,7 @@ void ProgramWriter::length_and_tcp_on() {
 }
 
 void ProgramWriter::length_and_tcp_off() {
+  tcp_switched_on_ = false;
   lines(dialect_.tcp_off(tcp_), BlockKind::LengthTcp);
   verbatim(tcp_ ? g_.program.tcp_off : std::vector<std::string>{}, BlockKind::LengthTcp);
 }

@@ -76,6 +76,8 @@ class ProgramWriter {
   void machine_frame_move(const std::vector<std::string>& blocks, PlannedMove m, BlockKind kind);
   // --- words -----------------------------------------------------------------------------
   Vec3d rounded(const Vec3d& v) const;
+  /// `v_mm` as its words read back in the program's unit, mm.
+  Vec3d rounded_mm(const Vec3d& v_mm) const;
   Vec3d out_xyz(const Vec3d& tip, const Posed& pose) const;
   std::string angle_words(const Posed& pose) const;
   std::string xyz_words(const Vec3d& xyz) const;
@@ -182,11 +184,25 @@ class ProgramWriter {
   /// distance, the rotary one when only A and C turn, per minute; under G93 the inverse time),
   /// eight significant digits, rounded down.
   std::string joint_safe_feed(double tip_mm, double rot_deg, double rate_per_s) const;
-  /// A turn of the rotary axes alone (an index's table turn, the end's turn home): with TCP
-  /// planned in the program's axes (LinuxCNC without a kinematics switch: TCP always on) the
-  /// tip stays put in the table's frame while the joints swing round it, so where the joints
-  /// are known (joints_) and a rapid would drive one past its velocity limit, a feed block at
-  /// the joints' rate.
+  /// The joints after the block `m` from `q` (joints_): the words it gives, the rest held (the
+  /// tip in the table's frame with TCP on, the linear joints without); empty where TCP is off
+  /// and the block names a linear axis.
+  std::optional<JointPosition> joints_after(const JointPosition& q, const PlannedMove& m) const;
+  /// Whether TCP is on now: between length_and_tcp_on and length_and_tcp_off, and always on
+  /// LinuxCNC without a kinematics switch.
+  bool tcp_in_force() const;
+  /// Whether the controller plans a block in the program's axes now (LinuxCNC with TCP on).
+  bool tcp_planned_now() const;
+  /// The F of a joint-safe feed block for the rapid `m` (joint_safe_feed): where the controller
+  /// plans it in the program's axes (tcp_planned_now), the joints are known (joints_) and at
+  /// the rapid's rate some joint would pass its velocity limit; empty otherwise. The tip moves
+  /// on its line in the table's frame, the rotary axes in proportion (a turn alone keeps the
+  /// tip put while the joints swing round it).
+  std::optional<std::string> joint_safe_f(const PlannedMove& m) const;
+  /// A rapid block (an approach's, a table turn), or the joint-safe feed block in its place
+  /// (joint_safe_f), with the comment that says what it is; its line.
+  int rapid_block(PlannedMove m, BlockKind kind, bool takes_prefix = true);
+  /// A turn of the rotary axes alone: an index's table turn, the end's turn home.
   void rotary_turn(const Posed& to, BlockKind kind);
   /// The block reaching point i, and the state after it.
   void finish_point(std::size_t i, const Vec3d& xyz, const std::string& words,
@@ -259,8 +275,8 @@ class ProgramWriter {
   bool have_prev_ = false;
   /// The last block written is a feed block (not a joint-safe rapid), or a joint-safe rapid.
   bool last_feed_block_ = false, last_joint_safe_ = false;
-  /// The block written next is an approach's last leg, along the tool axis.
-  bool along_axis_leg_ = false;
+  /// The dialect's or the switch's TCP is on (length_and_tcp_on to length_and_tcp_off).
+  bool tcp_switched_on_ = false;
 };
 
 }  // namespace taxopt::gcode

@@ -179,6 +179,7 @@ class ProgramClock {
     if (gives[3]) to[kA] = m.tilt_deg;
     if (gives[4]) to[kC] = m.c_deg;
     if (m.retract || !known_) flush_feed(true, nullptr);
+    start_known_ = std::all_of(set_.begin(), set_.end(), [](bool b) { return b; });
     if (gives[3]) set_[kA] = true;
     if (gives[4]) set_[kC] = true;
     if (m.retract) {
@@ -273,11 +274,13 @@ class ProgramClock {
       }
       rapid_s_ += rapid_time_s(a, b, capped);
       flush_feed(true, nullptr);
-      if (lcnc_) tcp_blocks_.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line});
+      if (lcnc_) {
+        tcp_blocks_.push_back(TcpBlock{a, b, capped, 0.0, true, true, m.line, 1.0, start_known_});
+      }
     } else if (lcnc_) {
       // A feed block: from rest after a rapid (or as the program's first), to rest before one
       // (known at the next block).
-      const TcpBlock feed_block{a, b, limits_, rate, !after_feed_, true, m.line};
+      const TcpBlock feed_block{a, b, limits_, rate, !after_feed_, true, m.line, 1.0, start_known_};
       flush_feed(false, &feed_block);
       pending_ = feed_block;
     }
@@ -337,7 +340,7 @@ class ProgramClock {
   std::optional<TcpBlock> pending_;
   bool after_feed_ = false;
   JointPosition q_{};
-  bool known_ = false;
+  bool known_ = false, start_known_ = false;
   int from_line_ = 0;
   double rapid_s_ = 0.0;
   // Which joints some block has set since the start (where the machine stands before is not
@@ -352,40 +355,89 @@ void program_time(const Run& run, Written& w, const JointLimits& limits, LengthU
   ProgramClock(run, w, limits, units, g, tcp_blocks).run(g);
 }
 
-/// A warning where a block with TCP on drives a joint past its limit as LinuxCNC moves it
-/// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding): velocities against the
-/// axes' limits (the feed schedule and the joint-safe rapids keep them), accelerations against
-/// the joints' own (joint_accel_limit). No F word helps an acceleration: LinuxCNC accelerates
-/// the program's axes at their [AXIS_*] limits whatever the F word (measured, measured on
-/// LinuxCNC's motion controller); the warning gives the share of those limits that keeps the joints
+/// Whether joint j's velocity limit holds the program (tcp_joint_findings): the limit the
+/// machine file gives, or with the feed schedule the effective one (as the verification holds
+/// the feed blocks); past a default limit, a warning.
+bool velocity_held(const Machine& machine, bool scheduled, std::size_t j) {
+  return scheduled || machine.limits[j].max_velocity_per_s > 0.0;
+}
+
+/// Whether a block whose start the program states drives a joint past a velocity limit held
+/// (tcp_joint_findings).
+bool known_start_over(const Machine& machine, const JointLimits& limits, bool scheduled,
+                      const std::vector<TcpBlock>& blocks) {
+  std::vector<TcpBlock> known;
+  for (const TcpBlock& b : blocks) {
+    if (b.start_known) known.push_back(b);
+  }
+  const std::vector<JointPeak> peaks = controller::tcp_joint_peaks(machine, known, 1.0);
+  for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
+    const double v_max = limits[j].max_velocity_per_s;
+    if (velocity_held(machine, scheduled, j) && v_max > 0.0 &&
+        peaks[j].velocity_per_s > 1.001 * v_max)
+      return true;
+  }
+  return false;
+}
+
+/// Where a block with TCP on drives a joint past its limit as LinuxCNC moves it
+/// (GcodeProgram::tcp_joint_peaks; 0.1 % for the filter's rounding). A velocity past the
+/// joint's limit is a problem: the feed schedule, the joint-safe rapids and turns keep them,
+/// and one left over is a block the writer did not make safe (past a default limit, where the
+/// machine file gives none and no schedule asked for them, a warning). An acceleration past
+/// the joint's own (joint_accel_limit) is a warning: no F word helps it, LinuxCNC accelerates
+/// the program's axes at their [AXIS_*] limits whatever the F word (measured on LinuxCNC's
+/// motion controller); the warning gives the share of those limits that keeps the joints
 /// within theirs (GcodeProgram::tcp_axis_accel_scale).
-void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
+void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool scheduled,
                         const std::vector<TcpBlock>& blocks, JobResult& res) {
   const std::vector<JointPeak>& peaks = res.gcode.tcp_joint_peaks;
   res.gcode.tcp_axis_accel_scale.reset();
-  std::ostringstream os;
-  os.precision(4);
-  int over = 0, first_line = 0;
-  bool accel_over = false, velocity_over = false;
+  std::ostringstream velocity, accel;
+  velocity.precision(4);
+  accel.precision(4);
+  int velocity_over = 0, warned = 0, velocity_line = 0, warned_line = 0;
+  bool accel_over = false, default_velocity_over = false;
   for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
     const std::string name = joint_name(static_cast<Joint>(j), machine.rotary.tilt_letter());
     const std::string unit = j < 3 ? "mm" : "deg";
     const double v_max = limits[j].max_velocity_per_s;
     const double a_max = joint_accel_limit(machine, limits, j);
+    const bool given = velocity_held(machine, scheduled, j);
     if (v_max > 0.0 && peaks[j].velocity_per_s > 1.001 * v_max) {
-      os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].velocity_per_s << " "
-         << unit << "/s against " << v_max << " (G-code line " << peaks[j].velocity_line << ")";
-      if (!first_line) first_line = peaks[j].velocity_line;
-      velocity_over = true;
+      std::ostringstream& os = given ? velocity : accel;
+      os << ((given ? velocity_over++ : warned++) ? "; " : "") << "joint " << name << " at "
+         << peaks[j].velocity_per_s << " " << unit << "/s against " << v_max
+         << (given ? "" : " (a default limit)") << " (G-code line " << peaks[j].velocity_line
+         << ")";
+      int& first = given ? velocity_line : warned_line;
+      if (!first) first = peaks[j].velocity_line;
+      default_velocity_over = default_velocity_over || !given;
     }
     if (a_max > 0.0 && peaks[j].accel_per_s2 > 1.001 * a_max) {
-      os << (over++ ? "; " : "") << "joint " << name << " at " << peaks[j].accel_per_s2 << " "
-         << unit << "/s^2 against " << a_max << " (G-code line " << peaks[j].accel_line << ")";
-      if (!first_line) first_line = peaks[j].accel_line;
+      accel << (warned++ ? "; " : "") << "joint " << name << " at " << peaks[j].accel_per_s2 << " "
+            << unit << "/s^2 against " << a_max << " (G-code line " << peaks[j].accel_line << ")";
+      if (!warned_line) warned_line = peaks[j].accel_line;
       accel_over = true;
     }
   }
-  if (!over) return;
+  const std::string velocity_remedy = "[AXIS_*] MAX_VELOCITY below the [JOINT_*] ones";
+  if (velocity_over && !known_start_over(machine, limits, scheduled, blocks)) {
+    // Only blocks from where the program has not yet stated the joints pass: those peaks
+    // are the model's guess of where the machine stands (blocks_not_checked), a warning.
+    velocity_over = 0;
+    accel << (warned++ ? "; " : "") << velocity.str() << " from a start the program does not state";
+    if (!warned_line) warned_line = velocity_line;
+    default_velocity_over = true;
+  }
+  if (velocity_over) {
+    add_finding(res, FindingCode::DynamicLimitExceeded, std::nullopt, 0,
+                "LinuxCNC with TCP on drives " + velocity.str() +
+                    " past the joint's velocity limit (gcode.tcp_joint_peaks); remedy: " +
+                    velocity_remedy + ", or machine mode",
+                velocity_line);
+  }
+  if (!warned) return;
   std::ostringstream remedy;
   remedy << std::fixed;
   if (accel_over) {
@@ -398,17 +450,15 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits,
       remedy << "no share of the [AXIS_*] accelerations down to 0.05 (their speed drives them)";
     }
   }
-  if (velocity_over) {
-    remedy << (accel_over ? "; " : "") << "[AXIS_*] MAX_VELOCITY below the [JOINT_*] ones";
-  }
+  if (default_velocity_over) remedy << (accel_over ? "; " : "") << velocity_remedy;
   // One line: what, where, the remedy's name; the report (gcode.tcp_joint_peaks,
   // gcode.tcp_axis_accel_scale) and docs/feed-schedule.md explain it.
   add_finding(res, FindingCode::TcpJointLimit, std::nullopt, 0,
               "LinuxCNC with TCP on accelerates the program's axes at their [AXIS_*] limits and "
               "drives " +
-                  os.str() + "; remedy: " + remedy.str() +
+                  accel.str() + "; remedy: " + remedy.str() +
                   " (gcode.tcp_axis_accel_scale; docs/feed-schedule.md), or machine mode",
-              first_line);
+              warned_line);
 }
 
 }  // namespace
@@ -584,7 +634,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
   }
   std::vector<TcpBlock> tcp_blocks;
   program_time(run, w, limits, res.gcode_units, res.gcode, tcp_blocks);
-  tcp_joint_findings(machine, limits, tcp_blocks, res);
+  tcp_joint_findings(machine, limits, run.options.feed_schedule, tcp_blocks, res);
   w.write_s = seconds_since(t0);
   return w;
 }

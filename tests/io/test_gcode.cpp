@@ -424,9 +424,19 @@ TEST_CASE(
     REQUIRE(rate);
     CHECK(peak_ratio(t0, p0, t1, p1, *rate) <= 1.0);
   }
-  SECTION("no turn: the joints move as the axes, the rapid stays") {
-    const Posed p{deg_to_rad(-30.0), deg_to_rad(40.0)};
+  SECTION("no turn, the table level: the joints move as the axes, the rapid stays") {
+    const Posed p{0.0, 0.0};
     CHECK_FALSE(joint_safe_rate_per_s(m.rotary, limits, Vec3d(0, 0, 5), p, Vec3d(30, 10, 50), p));
+  }
+  SECTION("no turn, the table tilted and turned: the joints' lines at their limits") {
+    // Z and X at their limits move joints Y and Z, turned with the table, past theirs.
+    const Posed p{deg_to_rad(-30.0), deg_to_rad(40.0)};
+    const Vec3d t0(0, 0, 5), t1(30, 10, 50);
+    CHECK(peak_ratio(t0, p, t1, p, axis_rate(t0, p, t1, p)) > 1.0);
+    const std::optional<double> rate = joint_safe_rate_per_s(m.rotary, limits, t0, p, t1, p);
+    REQUIRE(rate);
+    CHECK(peak_ratio(t0, p, t1, p, *rate) <= 1.0);
+    CHECK(peak_ratio(t0, p, t1, p, *rate) > 0.99);
   }
   SECTION("a turn about the tip on the pivot: slow enough already") {
     const Vec3d t(0.0, 0.0, 0.0);

@@ -226,17 +226,15 @@ TAXOPT_API std::vector<double> linearise_fractions(const MachineKinematicsd& mac
 /// faster than their limits where the table turns (measured on LinuxCNC's motion controller:
 /// joints at 42 mm/s against 20). The rate along the move (fraction of it per second) that
 /// keeps every joint's velocity within its limit, from the joints' largest rate of change
-/// along the move (sampled in steps of at most 0.25 deg of turn, up to 64, less 0.1 % and the
-/// step's turn in rad for what falls between them); nullopt when the axes' own limits keep
-/// them there already. Where A and C are held, nullopt (tcp_joint_peaks predicts and warns of
-/// what the tilted table does to the joints) unless `held_pose`: then the rate that keeps the
-/// joints' straight lines within their limits (an approach's last leg along a tilted tool
-/// axis, which is the spindle's Z alone).
+/// along the move (sampled in steps of at most 0.25 deg of turn, up to 2^20 of them, less 0.1 % and
+/// the step's turn in rad for what falls between them); nullopt when the axes' own limits keep them
+/// there already. Where A and C are held, the rate that keeps the joints' straight lines (the tip's
+/// line turned with the table) within their limits: an approach's leg along a tilted tool axis is
+/// the spindle's Z alone, an XY rapid with the table turned moves joints X and Y both.
 TAXOPT_API std::optional<double> joint_safe_rate_per_s(const MachineKinematicsd& ac,
                                                        const JointLimits& limits,
                                                        const Vec3d& from_tip_mm, const Posed& from,
-                                                       const Vec3d& to_tip_mm, const Posed& to,
-                                                       bool held_pose = false);
+                                                       const Vec3d& to_tip_mm, const Posed& to);
 
 /// The same bound for any tcp move, with the joint that sets it: the largest rate along the
 /// move (fraction per second, the tip on its line and A, C in proportion, as a tcp controller

@@ -129,6 +129,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::NoHolderModel: return "no_holder_model";
     case FindingCode::NoToolModel: return "no_tool_model";
     case FindingCode::NoCoolant: return "no_coolant";
+    case FindingCode::NoWorkOffset: return "no_work_offset";
     case FindingCode::NoSafeRetract: return "no_safe_retract";
     case FindingCode::NoLinearisation: return "no_linearisation";
     case FindingCode::NotABallMill: return "not_a_ball_mill";
@@ -241,6 +242,7 @@ Machine run_machine(const Machine& machine, const JobOptions& options) {
   Machine m = machine;
   // The tool's gauge length the writer puts below a retract (ProgramWriter::joints_).
   if (options.tool.gauge_length_mm) m.holder_gauge_length_mm = options.tool.gauge_length_mm;
+  if (options.work_offset_mm) m.work_offset_mm = options.work_offset_mm;
   if (m.rotary.layout != RotaryLayout::TableTable) {
     m.rotary.head_length_mm = m.head_pivot_length_mm + options.tool.gauge_length_mm.value_or(
                                                            m.holder_gauge_length_mm.value_or(0.0));

@@ -163,7 +163,8 @@ TEST_CASE("bad input: the machine's linear travel is checked, errors come first 
   write_file(t.path("a.cls"), kInchCl);
   write_file(t.path("m.toml"),
              "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\nmax_deg = 90\n"
-             "[axes.C]\ncontinuous = true\n[axes.X]\nmin_mm = -10\nmax_mm = 30\n");
+             "[axes.C]\ncontinuous = true\n[axes.X]\nmin_mm = -10\nmax_mm = 30\n"
+             "[setup]\nwork_offset_mm = [0, 0, 0]\n");
   const auto r =
       run_taxopt("--tool-number 1 --spindle-rpm 6000 --in " + t.path("a.cls") + " --machine " +
                  t.path("m.toml") + " --gcode " + t.path("o.nc") + " --method none");

@@ -3,6 +3,7 @@
 // a TCP block in the program's axes) would drive a joint past its velocity limit at the
 // rapid's rate, the writer turns the table at the joints' rate, and a joint velocity past its
 // limit that is left is a problem (exit 1), not a warning.
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <iomanip>
@@ -96,4 +97,138 @@ TEST_CASE(
   }
   CHECK(turn_peaks);
   for (const auto& f : report["findings"]) CHECK(f["code"] != "dynamic_limit_exceeded");
+}
+
+TEST_CASE(
+    "travel: the work offset places the program in machine coordinates, and without one the "
+    "program's span alone is held to the travel, and the run says so naming the option",
+    "[program][travel]") {
+  TempDir t;
+  const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/machines/";
+  // A real file on LinuxCNC's bridge-mill sample (Z travel [-500, 100] mm): its clearance
+  // plane stands over 200 mm above the program's zero.
+  const std::string f = "amorim-tilt-support1.apt";
+  const std::string base =
+      "--in " + real_path(f, t.dir()) + real_flags(f) +
+      " --spindle-rpm 1000 --tool-number 1 --machine " + d +
+      "linuxcnc-5axis-bridgemill.toml --method none --feed-schedule --report " + t.path("r.json") +
+      " --gcode " + t.path("o.ngc");
+  // No offset: the span fits, the program posts, and the run names what it did not check.
+  RunResult r = run_taxopt(base);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  auto report = nlohmann::json::parse(read_file(t.path("r.json")));
+  bool noted = false;
+  for (const auto& finding : report["findings"]) {
+    if (finding["code"] != "no_work_offset") continue;
+    noted = true;
+    CHECK(finding["severity"] == "safety");
+    CHECK_THAT(finding["message"].get<std::string>(), Catch::Contains("--work-offset"));
+  }
+  CHECK(noted);
+  CHECK(read_file(t.path("o.ngc")).find("NOT CHECKED: no work offset") != std::string::npos);
+  // The offset of LinuxCNC's simulation (G54 at zero): Z leaves the travel, exit 1 naming it.
+  r = run_taxopt(base + " --work-offset 0,0,0");
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("outside the machine's travel"));
+  CHECK_THAT(r.err, Catch::Contains("work offset Z 0 mm"));
+  // The part clamped 300 mm below the machine's zero: every block within the travel.
+  r = run_taxopt(base + " --work-offset 0,0,-300");
+  INFO(r.err);
+  CHECK(r.code == 0);
+  report = nlohmann::json::parse(read_file(t.path("r.json")));
+  for (const auto& finding : report["findings"]) CHECK(finding["code"] != "no_work_offset");
+  // The machine file's [setup] says the same as the option.
+  std::string toml = read_file(d + "linuxcnc-5axis-bridgemill.toml");
+  write_file(t.path("m.toml"), toml + "\n[setup]\nwork_offset_mm = [0.0, 0.0, -300.0]\n");
+  r = run_taxopt(replaced_once(base, d + "linuxcnc-5axis-bridgemill.toml", t.path("m.toml")));
+  INFO(r.err);
+  CHECK(r.code == 0);
+  write_file(t.path("bad.toml"), toml + "\n[setup]\nwork_offset_mm = [0.0, -300.0]\n");
+  r = run_taxopt(replaced_once(base, d + "linuxcnc-5axis-bridgemill.toml", t.path("bad.toml")));
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("setup.work_offset_mm must be [x, y, z]"));
+  // A program longer than the travel: no offset fits it, said without one.
+  const std::string big = t.path("big.cls");
+  REQUIRE(run_taxopt("generate --surface plane --width 2 --length 1200 --mesh-step 5 --out-cls " +
+                     big + " --out-mesh " + t.path("big.stl"))
+              .code == 0);
+  r = run_taxopt("--in " + big + " --machine " + d +
+                 "linuxcnc-5axis-bridgemill.toml --method none -q --gcode " + t.path("b.ngc"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("no work offset fits the program"));
+}
+
+namespace {
+
+/// An ASCII STL of axis-aligned boxes, each [x0, x1] x [y0, y1] x [z0, z1], faces outward.
+std::string boxes_stl(const std::vector<std::array<double, 6>>& boxes) {
+  std::ostringstream out;
+  out << "solid boxes\n";
+  for (const auto& b : boxes) {
+    const auto p = [&](int i, int j, int k) {
+      std::ostringstream v;
+      v << "vertex " << b[static_cast<std::size_t>(i)] << " " << b[static_cast<std::size_t>(2 + j)]
+        << " " << b[static_cast<std::size_t>(4 + k)] << "\n";
+      return v.str();
+    };
+    // Each face as four corners (i j k: 0 low, 1 high), counter-clockwise seen from outside.
+    const int quads[6][4][3] = {
+        {{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}}, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+        {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}, {{0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}},
+        {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}}, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}};
+    for (const auto& q : quads) {
+      for (const int t : {1, 2}) {
+        out << "facet normal 0 0 0\nouter loop\n"
+            << p(q[0][0], q[0][1], q[0][2]) << p(q[t][0], q[t][1], q[t][2])
+            << p(q[t + 1][0], q[t + 1][1], q[t + 1][2]) << "endloop\nendfacet\n";
+      }
+    }
+  }
+  out << "endsolid boxes\n";
+  return out.str();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "retracts: a retract in machine coordinates from a known pose is swept along machine Z "
+    "until the tool clears the part, and with the work offset and the gauge length the blocks "
+    "after it are swept too",
+    "[program][collision]") {
+  TempDir t;
+  // A pass along X on a plate at Z 0; 20 mm of tool; an overhang 30 mm up over its end.
+  write_file(t.path("p.cls"),
+             "TOOL PATH/T,TOOL,BALL\nTLDATA/MILL,6.0000,3.0000,20.0000,0.0000,0.0000\n"
+             "LOADTL/1\nSPINDL/RPM,8000,CLW\nFEDRAT/MMPM,500.0000\n"
+             "GOTO/0.0,0.0,5.0,0.0,0.0,1.0\nGOTO/0.0,0.0,0.0\nGOTO/10.0,0.0,0.0\n"
+             "GOTO/20.0,0.0,0.0\nGOTO/20.0,0.0,5.0\nEND-OF-PATH\n");
+  const std::array<double, 6> plate = {-10, 30, -10, 10, -10, 0};
+  write_file(t.path("over.stl"), boxes_stl({plate, {15, 30, -10, 10, 30, 40}}));
+  write_file(t.path("side.stl"), boxes_stl({plate, {15, 30, 20, 30, 30, 40}}));
+  const std::string args = "--in " + t.path("p.cls") +
+                           " --method none --gauge-length 20 -q --gcode " + t.path("o.ngc") +
+                           " --report " + t.path("r.json") + " --part ";
+  // The end's G53 retract goes up into the overhang: exit 1 naming it.
+  RunResult r = run_taxopt(args + t.path("over.stl"));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("(the retract, a rapid in machine coordinates)"));
+  // The overhang beside the pass: the retract is swept and clear.
+  r = run_taxopt(args + t.path("side.stl"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  auto report = nlohmann::json::parse(read_file(t.path("r.json")));
+  const auto& v = report["operations"][0]["verification"];
+  const long swept = v["blocks_swept"].get<long>(), unknown = v["blocks_not_checked"].get<long>();
+  CHECK(v["colliding_blocks"] == 0);
+  // Placed (the work offset and the gauge length given): only the blocks before the program
+  // first states the tool's X Y Z stay unknown.
+  r = run_taxopt(args + t.path("side.stl") + " --work-offset 0,0,-200");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  report = nlohmann::json::parse(read_file(t.path("r.json")));
+  const auto& placed = report["operations"][0]["verification"];
+  CHECK(placed["blocks_not_checked"].get<long>() < unknown);
+  CHECK(placed["blocks_swept"].get<long>() > swept);
+  CHECK(placed["blocks_not_checked"].get<long>() <= 2);
 }

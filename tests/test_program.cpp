@@ -440,9 +440,10 @@ TEST_CASE(
   const std::string cls = real_data("mech491-variable-axis-ballmill.cls");
   const std::string machine =
       std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml";
+  // The sample's simulation starts with G54 at zero: the work offset the controller ran with.
   const std::string args = "--in " + cls + " --machine " + machine +
                            " --spindle-rpm 1000 --tool-number 1 --method none --feed-schedule -q "
-                           "--gcode " +
+                           "--work-offset 0,0,0 --gcode " +
                            dir.path("o.ngc");
   // 50 mm in the file's inches.
   const RunResult r = run_taxopt(args + " --gauge-length 1.9685");

@@ -29,6 +29,7 @@ struct Args {
   std::string part, plots, html;
   std::optional<double> grid, max_deviation, min_tilt, shank_radius, flute_length, holder_radius,
       holder_length, gauge_length;
+  std::vector<double> work_offset;
 };
 
 /// Options of `taxopt generate` (lengths mm, angles deg), defaults = the paper's case.

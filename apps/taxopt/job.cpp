@@ -99,6 +99,7 @@ const OptionNames& cli_option_names() {
       {"JobOptions::part", "--part"},
       {"JobOptions::max_deviation_deg", "--max-deviation"},
       {"JobOptions::min_tilt_deg", "--min-tilt"},
+      {"JobOptions::work_offset_mm", "--work-offset"},
       {"JobOptions::paper.grid_deg", "--grid"},
       {"JobOptions::global.jerk_weight_s2", "--jerk-weight"},
       {"JobOptions::feed_mm_per_min", "--feed"},
@@ -208,6 +209,9 @@ JobOptions job_options_of(const Args& a) {
   if (a.grid) options.paper.grid_deg = *a.grid;
   options.max_deviation_deg = a.max_deviation;
   options.min_tilt_deg = a.min_tilt;
+  if (a.work_offset.size() == 3) {
+    options.work_offset_mm = Vec3d(a.work_offset[0], a.work_offset[1], a.work_offset[2]);
+  }
   options.shank_clearance_mm = a.shank_clearance_mm;
   options.holder_clearance_mm = a.holder_clearance_mm;
   options.part_tolerance_mm = a.part_tolerance;

@@ -149,6 +149,14 @@ void add_tool_options(CLI::App& app, Args& a) {
   app.add_option("--gauge-length", a.gauge_length,
                  "tip to holder face, CL file units (default: max(flute length, 10 diameters))")
       ->group("Tool");
+  app.add_option("--work-offset", a.work_offset,
+                 "where the program's zero sits in machine coordinates with the rotary axes at "
+                 "home (the work offset, G54's X,Y,Z), mm: the travel check holds every block to "
+                 "the machine's travel with it (default: the machine file's [setup], else only "
+                 "the program's span is checked)")
+      ->delimiter(',')
+      ->expected(3)
+      ->group("Tool");
 }
 
 void add_diagnostics_options(CLI::App& app, Args& a) {
@@ -229,6 +237,7 @@ void name_option_values(CLI::App& app) {
                                                     {"--grid", "DEG"},
                                                     {"--max-deviation", "DEG"},
                                                     {"--min-tilt", "DEG"},
+                                                    {"--work-offset", "X,Y,Z"},
                                                     {"--plots", "FOLDER"},
                                                     {"--html", "FILE"}};
   for (CLI::Option* o : app.get_options()) {

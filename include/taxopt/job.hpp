@@ -91,6 +91,9 @@ struct JobOptions {
   /// report (OperationResult::Cutting) still measures the written angles against the input's
   /// least, rounded down to 0.1 deg, and names the points below it.
   std::optional<double> min_tilt_deg;
+  /// Where the program's zero sits in machine coordinates, mm (--work-offset; Machine's
+  /// work_offset_mm, which this replaces).
+  std::optional<Vec3d> work_offset_mm;
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
   bool count_free_cells = false;
@@ -439,6 +442,7 @@ enum class FindingCode {
   NoLinearisation,  ///< machine mode without linearisation
   NoToolModel,      ///< with a part, an operation with no tool geometry: nothing of it checked
   NoCoolant,        ///< neither the CL file nor the machine file asks for coolant
+  NoWorkOffset,     ///< a machine with travel, no work offset: only the program's span checked
   // Warnings: the output is sound; something the user should know.
   NotABallMill,       ///< an operation's tool is no ball-end mill: its input axes are kept
   LocalGouge,         ///< a concave radius below the ball radius at contact points (eq. 19)

@@ -174,10 +174,13 @@ void ProgramWriter::machine_frame_move(const std::vector<std::string>& blocks, P
   // The joints are, for a retract of Z alone to a height in machine coordinates.
   const bool z_only_retract =
       kind == BlockKind::Retract && m.given == 0x4u && !dialect_.rules().retract_to_reference();
+  // Referred to the program's zero: less the work offset (taken as zero where not known).
+  const Vec3d offset = machine_.work_offset_mm.value_or(Vec3d::Zero());
   if (joints_ && z_only_retract) {
-    (*joints_)[2] = m.xyz_mm.z() - machine_.holder_gauge_length_mm.value_or(0.0);
+    (*joints_)[2] = m.xyz_mm.z() - machine_.holder_gauge_length_mm.value_or(0.0) - offset.z();
   } else if (joints_ && m.given == 0x3u && kind == BlockKind::End) {
-    (*joints_)[0] = m.xyz_mm.x(), (*joints_)[1] = m.xyz_mm.y();  // the end's park
+    (*joints_)[0] = m.xyz_mm.x() - offset.x();  // the end's park
+    (*joints_)[1] = m.xyz_mm.y() - offset.y();
   } else {
     joints_.reset();
   }

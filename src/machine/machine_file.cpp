@@ -33,8 +33,9 @@ class MachineParser {
                        "not valid TOML: " + std::string(e.description()));
     }
     Machine m = default_machine();
-    check_keys(root, "",
-               {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder", "defaults"});
+    check_keys(
+        root, "",
+        {"name", "kinematics", "axes", "pivot", "gcode", "checks", "holder", "defaults", "setup"});
     if (auto* n = root.get("name")) m.name = string_of(*n, "name");
     parse_kinematics_and_axes(root, m);
     parse_checks_holder_defaults(root, m);
@@ -110,7 +111,7 @@ class MachineParser {
     return v;
   }
 
-  /// [checks], [holder] and [defaults].
+  /// [checks], [holder], [setup] and [defaults].
   void parse_checks_holder_defaults(const toml::table& root, Machine& m) {
     if (const toml::table* c = table_of(root, "checks", false)) {
       check_keys(*c, "checks", {"shank_clearance_mm", "holder_clearance_mm"});
@@ -123,6 +124,23 @@ class MachineParser {
       m.holder_length_mm = positive(*h, "holder", "length_mm", false);
       m.holder_gauge_length_mm = positive(*h, "holder", "gauge_length_mm", false);
       if (!m.holder_radius_mm) fail(0, "[holder] needs radius_mm");
+    }
+    if (const toml::table* s = table_of(root, "setup", false)) {
+      check_keys(*s, "setup", {"work_offset_mm"});
+      if (const toml::node* n = s->get("work_offset_mm")) {
+        const auto* list = n->as_array();
+        if (!list || list->size() != 3) {
+          fail(line_of(*n),
+               "setup.work_offset_mm must be [x, y, z]: the program's zero in machine "
+               "coordinates, mm");
+        }
+        Vec3d offset;
+        for (std::size_t q = 0; q < 3; ++q) {
+          offset[static_cast<Eigen::Index>(q)] =
+              number_of(*list->get(q), std::string("setup.work_offset_mm's ") + "XYZ"[q]);
+        }
+        m.work_offset_mm = offset;
+      }
     }
     if (const toml::table* d = table_of(root, "defaults", false)) {
       // What an operation runs with where its CL file says nothing (a machinist's review,

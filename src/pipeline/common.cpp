@@ -19,7 +19,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::NoSafeRetract:
     case FindingCode::NoLinearisation:
     case FindingCode::NoToolModel:
-    case FindingCode::NoCoolant: return Severity::Safety;
+    case FindingCode::NoCoolant:
+    case FindingCode::NoWorkOffset: return Severity::Safety;
     case FindingCode::NotABallMill:
     case FindingCode::LocalGouge:
     case FindingCode::InputAxesKept:

@@ -74,6 +74,13 @@ void check_options(const JobOptions& o) {
   within("part_tolerance_mm", o.part_tolerance_mm, 0.0, 1.0, "[0, 1] mm");
   // Beyond 60 deg off the normal a ball-end mill cuts with its side.
   within("min_tilt_deg", o.min_tilt_deg, 0.0, 60.0, "[0, 60] deg");
+  if (o.work_offset_mm) {
+    // A work offset within a hundred metres of the machine's zero (a longer one is a typo).
+    for (int q = 0; q < 3; ++q) {
+      within("work_offset_mm", std::optional<double>((*o.work_offset_mm)[q]), -1e5, 1e5,
+             "[-1e5, 1e5] mm in each of X, Y, Z");
+    }
+  }
   within("shank_clearance_mm", o.shank_clearance_mm, 0.0, 50.0, "[0, 50] mm");
   within("holder_clearance_mm", o.holder_clearance_mm, 0.0, 50.0, "[0, 50] mm");
   // A tool is no larger than a metre: larger dimensions make the checks hang.
@@ -231,6 +238,15 @@ void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions
        << ") in the mesh file's coordinates: they cover no surface, so the part's shape is "
           "whole";
     add_finding(res, FindingCode::MeshSlivers, std::nullopt, 0, os.str());
+  }
+  const bool travel = std::any_of(machine.linear_range.begin(), machine.linear_range.end(),
+                                  [](const Machine::LinearRange& r) { return r.bounded(); });
+  if (travel && !machine.work_offset_mm) {
+    add_finding(res, FindingCode::NoWorkOffset, std::nullopt, 0,
+                "no work offset (" + given.name_of("work_offset_mm") +
+                    ", the machine file's [setup] work_offset_mm): where the program's zero "
+                    "sits in machine coordinates is not known, so only the program's span is "
+                    "held to the machine's travel");
   }
   if (machine.gcode.program.retract == SafeRetract::None) {
     add_finding(

@@ -138,9 +138,11 @@ void check_point_ranges(const Run& run, const OperationContext& o, const GcodeMo
     r.verification.within_axis_limits = false;
   }
   // The linear travel, in machine coordinates, where the machine file gives it: the
-  // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm).
+  // spindle's, the tool length above the tip (GcodeProgram::time_tool_length_mm), the work
+  // offset added. Without a work offset the program's span is checked (ProgramChecks::travel).
+  if (!machine.work_offset_mm) return;
   const Vec3d joints_mm = joints_of_written_mm(machine, last.xyz_mm, written) +
-                          Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm);
+                          Vec3d(0.0, 0.0, res.gcode.time_tool_length_mm) + *machine.work_offset_mm;
   for (int q = 0; q < 3; ++q) {
     const std::optional<std::string> outside = outside_travel(machine, q, joints_mm[q]);
     if (!outside) continue;
@@ -152,6 +154,8 @@ void check_point_ranges(const Run& run, const OperationContext& o, const GcodeMo
       if (q == 2 && res.gcode.time_tool_length_mm > 0.0) {
         os << " (the spindle, tool length " << res.gcode.time_tool_length_mm << " mm)";
       }
+      os << " with the work offset "
+         << "XYZ"[q] << " " << (*machine.work_offset_mm)[q] << " mm";
       os << *outside;
       add_finding(res, FindingCode::TravelExceeded, o.index, want.line,
                   format_location(run.tp.source, want.line, os.str()));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -120,18 +121,53 @@ class ProgramChecks {
     const std::vector<GcodeMove>& moves = w_.moves;
     std::set<const GcodeMove*> at_points;
     for (const auto& op_moves : w_.point_moves) at_points.insert(op_moves.begin(), op_moves.end());
+    const std::optional<Vec3d>& offset = machine_.work_offset_mm;
     for (std::size_t k = 0; k < moves.size() && k < w_.spindle_mm.size(); ++k) {
-      if (!w_.spindle_mm[k] || at_points.count(&moves[k])) continue;
-      for (int q = 0; q < 3; ++q) {
-        const double v = (*w_.spindle_mm[k])[q];
+      if (!w_.spindle_mm[k]) continue;
+      // Without a work offset only a retract's Z is in machine coordinates.
+      if (offset ? at_points.count(&moves[k]) > 0 : !moves[k].retract) continue;
+      for (int q = offset ? 0 : 2; q < 3; ++q) {
+        const double v = (*w_.spindle_mm[k])[q] + (offset ? (*offset)[q] : 0.0);
         const std::optional<std::string> outside = outside_travel(machine_, q, v);
         if (!outside) continue;
         std::ostringstream os;
         os << "takes the spindle to "
            << "XYZ"[q] << " " << v << " mm in machine coordinates (tool length "
-           << res_.gcode.time_tool_length_mm << " mm)" << *outside;
+           << res_.gcode.time_tool_length_mm << " mm";
+        if (offset)
+          os << ", work offset "
+             << "XYZ"[q] << " " << (*offset)[q] << " mm";
+        os << ")" << *outside;
         breach(FindingCode::TravelExceeded, moves[k], os.str());
       }
+    }
+    if (!offset) span();
+  }
+
+  /// Without a work offset: the program's span in each linear joint (every block in the
+  /// program's frame, the retracts aside) within the machine's travel's; where it is not, no
+  /// work offset fits the program.
+  void span() {
+    const std::vector<GcodeMove>& moves = w_.moves;
+    for (int q = 0; q < 3; ++q) {
+      const Machine::LinearRange& range = machine_.linear_range[static_cast<std::size_t>(q)];
+      if (!std::isfinite(range.min_mm) || !std::isfinite(range.max_mm)) continue;
+      std::optional<std::size_t> lo, hi;
+      for (std::size_t k = 0; k < moves.size() && k < w_.spindle_mm.size(); ++k) {
+        if (!w_.spindle_mm[k] || moves[k].retract) continue;
+        const double v = (*w_.spindle_mm[k])[q];
+        if (!lo || v < (*w_.spindle_mm[*lo])[q]) lo = k;
+        if (!hi || v > (*w_.spindle_mm[*hi])[q]) hi = k;
+      }
+      if (!lo) continue;
+      const double low = (*w_.spindle_mm[*lo])[q], high = (*w_.spindle_mm[*hi])[q];
+      if (high - low <= range.max_mm - range.min_mm + 1e-6) continue;
+      std::ostringstream os;
+      os << "and G-code line " << moves[*hi].line << " span the spindle's "
+         << "XYZ"[q] << " over " << high - low << " mm (" << low << " to " << high
+         << " mm from the program's zero), more than the machine's travel [" << range.min_mm << ", "
+         << range.max_mm << "] mm: no work offset fits the program";
+      breach(FindingCode::TravelExceeded, moves[*lo], os.str());
     }
   }
 
@@ -348,6 +384,50 @@ bool block_collides(const Run& run, const OperationContext& o, const Written& w,
   return false;
 }
 
+/// A retract in machine coordinates along Z alone (G53 Z, G28 Z, SUPA Z, M91) from a known
+/// pose: the tool goes straight along machine +Z; where it stops depends on the work offset and
+/// the tool length, but beyond the part's bounding box along that direction nothing is left to
+/// hit. Whether it hits the part on the way, sampled as block_collides samples.
+bool retract_collides(const Run& run, const OperationContext& o, const Written& w, std::size_t j,
+                      const Vec3d& box_lo, const Vec3d& box_hi) {
+  const Machine& machine = run.machine;
+  const JointPosition& q = *w.joints_after[j - 1];
+  const Posed pose{deg_to_rad(q[static_cast<std::size_t>(Joint::Tilt)]),
+                   deg_to_rad(q[static_cast<std::size_t>(Joint::C)])};
+  const Vec3d m0(q[0], q[1], q[2]);
+  const Vec3d t0 = machine.rotary.from_machine_mm(m0, pose);
+  const Vec3d up = (machine.rotary.from_machine_mm(m0 + Vec3d::UnitZ(), pose) - t0).normalized();
+  const Vec3d axis = machine.rotary.forward(pose);
+  const ToolModel& tool = *o.tool;
+  const double R = tool.ball_radius_mm;
+  double length = 2.0 * R, widest = R;
+  for (const ToolBody& b : tool.bodies) {
+    length = std::max(length, b.end_mm + R);
+    widest = std::max(widest, b.radius_mm);
+  }
+  // The farthest the part reaches along `up`, and the tool's lowest point along it.
+  double part_top = -std::numeric_limits<double>::infinity();
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d corner((c & 1) ? box_hi.x() : box_lo.x(), (c & 2) ? box_hi.y() : box_lo.y(),
+                       (c & 4) ? box_hi.z() : box_lo.z());
+    part_top = std::max(part_top, corner.dot(up));
+  }
+  const double tool_low = std::min(t0.dot(up), (t0 + length * axis).dot(up)) - widest;
+  const double rise = part_top - tool_low;
+  if (!(rise > 0.0)) return false;
+  double thinnest = R > 0.0 ? R : 1.0;
+  for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
+  const double step_mm = std::max(0.05, 0.5 * thinnest);
+  ToolModel air = tool;
+  air.ball_radius_mm = std::max(0.5 * R, R - margins_of(run.options, *o.op).flute_tolerance_mm);
+  const int steps = static_cast<int>(std::ceil(rise / step_mm));
+  for (int s = 1; s <= steps; ++s) {
+    const Vec3d tip = t0 + (rise * s / steps) * up;
+    if (run.collision->collides(air, tip + R * axis, axis, true)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
@@ -368,11 +448,24 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   std::vector<Hit> hits(posted.size());
   std::vector<std::size_t> candidates;
   std::vector<long> unknown(posted.size(), 0);
+  // The part's bounding box: a retract along machine Z is swept until the tool clears it.
+  Vec3d box_lo = Vec3d::Constant(std::numeric_limits<double>::infinity());
+  Vec3d box_hi = -box_lo;
+  if (run.options.part) {
+    for (const Vec3d& v : run.options.part->mesh().vertices) {
+      box_lo = box_lo.cwiseMin(v);
+      box_hi = box_hi.cwiseMax(v);
+    }
+  }
+  const auto up_from_known = [&](std::size_t j) {
+    return moves[j].retract && (moves[j].given & 0x7u) == 0x4u && w.joints_after[j - 1] &&
+           run.options.part;
+  };
   for (std::size_t j = 1; j < moves.size(); ++j) {
     if (points.swept[j]) continue;
     const OperationContext& o = ops[op_of(moves[j].line)];
     if (!o.judged_tool()) continue;
-    if (w.joints_after[j]) {
+    if (w.joints_after[j] || up_from_known(j)) {
       candidates.push_back(j);
     } else {
       ++unknown[op_of(moves[j].line)];
@@ -386,6 +479,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
         const std::size_t k = op_of(moves[j].line);
+        if (up_from_known(j)) return retract_collides(run, ops[k], w, j, box_lo, box_hi);
         return block_collides(run, ops[k], w, j, points.touching_end[j] != 0,
                               flute_tolerance_mm[k]);
       });

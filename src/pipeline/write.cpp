@@ -147,6 +147,7 @@ class ProgramClock {
         g_(g),
         tcp_blocks_(tcp_blocks),
         length_mm_(run.options.tool.gauge_length_mm.value_or(0.0)),
+        placed_(run.machine.work_offset_mm && run.options.tool.gauge_length_mm),
         lcnc_(gcode::rules_of(run.machine.gcode.dialect).tcp_planned_in_program_axes()) {
     tcp_blocks_.clear();
     w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
@@ -206,15 +207,22 @@ class ProgramClock {
   }
 
   /// Machine coordinates: the spindle's reference point to the retract height; X and Y (the
-  /// end's park) where the block gives them, the work offset taken as zero.
+  /// end's park) where the block gives them; the joints, referred to the program's zero, less
+  /// the work offset (Machine::work_offset_mm, else taken as zero).
   void retract(const GcodeMove& m, const Gives& gives, JointPosition& to) {
-    if (gives[2]) to[2] = t_.retract_z_mm - length_mm_;
+    const Vec3d offset = machine_.work_offset_mm.value_or(Vec3d::Zero());
+    if (gives[2]) to[2] = t_.retract_z_mm - length_mm_ - offset.z();
     for (int k = 0; k < 2; ++k) {
-      if (gives[k]) to[k] = m.machine_mm[k];
+      if (gives[k]) to[k] = m.machine_mm[k] - offset[k];
     }
     // In machine coordinates: where it leaves the tool relative to the part depends on the
-    // work offset and the tool length, which the program does not hold.
-    set_[0] = set_[1] = set_[2] = false;
+    // work offset and the tool length, which the program does not hold; known where both are
+    // given (the axes it names; those it does not name stay where they were).
+    if (placed_) {
+      for (std::size_t k = 0; k < 3; ++k) set_[k] = set_[k] || gives[k];
+    } else {
+      set_[0] = set_[1] = set_[2] = false;
+    }
     tip_set_.fill(false);
     if (known_ && m.rapid) rapid_s_ += rapid_time_s(q_, to, limits_);
     if (!known_) from_line_ = m.line;
@@ -334,6 +342,8 @@ class ProgramClock {
   const GcodeProgram& g_;
   std::vector<TcpBlock>& tcp_blocks_;
   const double length_mm_;
+  /// The work offset and the tool's gauge length are given: a retract's end is known.
+  const bool placed_;
   const bool lcnc_;
   // LinuxCNC with TCP on: a feed block waits for the next block to know whether it ends at
   // rest; after_feed_: the previous block was a tcp feed block (its chain goes on).

@@ -73,7 +73,8 @@ def remedy_case(exe, src, work, label, common, preset):
     with `common`: (name, arguments, kins, share), or a failure text."""
     report = os.path.join(work, "share.json")
     r = subprocess.run([exe] + common + ["--machine", preset, "--method", "paper", "-q",
-                                         "--feed-schedule", "--report", report],
+                                         "--feed-schedule", "--report", report,
+                                         "--work-offset", "0,0,0"],
                        capture_output=True, text=True)
     if r.returncode != 0:
         return "the share's run: taxopt exit %d: %s" % (r.returncode, r.stderr)
@@ -172,8 +173,11 @@ def main():
         # taxopt verifies at the machine's limits and refuses where they exceed them).
         schedule = [] if "--no-schedule" in args else ["--feed-schedule"]
         args = [a for a in args if a != "--no-schedule"]
+        # LinuxCNC's sample simulations start with G54 at zero: the work offset the travel
+        # check holds every block with.
         r = subprocess.run([exe] + args + ["--method", "paper", "-q", "--gcode", ngc,
-                                           "--report", report] + schedule,
+                                           "--report", report, "--work-offset", "0,0,0"]
+                           + schedule,
                            capture_output=True, text=True)
         if r.returncode != 0:
             failures.append("%s: taxopt exit %d: %s" % (name, r.returncode, r.stderr))

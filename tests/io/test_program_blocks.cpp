@@ -67,6 +67,9 @@ std::size_t check_case(const Case& c) {
   options.tool_number = 3;
   options.units_out = c.units;
   options.feed_schedule = c.schedule;
+  // The work offset LinuxCNC's sample simulations start with (G54 at zero): the travel check
+  // holds every block in machine coordinates.
+  options.work_offset_mm = Vec3d::Zero();
   const JobResult res = run_job(tp, machine, options);
   const GcodeProgram& prog = res.gcode;
   REQUIRE_FALSE(prog.text.empty());

@@ -173,6 +173,11 @@ struct Machine {
   /// none and where the command line gives none (--spindle-rpm, --tool-number).
   std::optional<double> default_spindle_rpm;
   std::optional<int> default_tool_number;
+  /// [setup] work_offset_mm, or JobOptions::work_offset_mm: where the program's zero sits in
+  /// machine coordinates with the rotary axes at home (the work offset a machinist sets, G54's
+  /// X Y Z), mm. The travel checks hold every block to the machine's travel with it; empty: not
+  /// known, and the program's span alone is held to the travel's.
+  std::optional<Vec3d> work_offset_mm;
   GcodeSettings gcode;
   /// A head machine ([pivot] head_pivot_length): from the tilt axis to the spindle's gauge
   /// line, mm. run_job adds the tool's gauge length (JobOptions::tool.gauge_length_mm, else

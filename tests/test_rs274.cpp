@@ -493,6 +493,30 @@ TEST_CASE("machine: the shipped LinuxCNC preset is LinuxCNC's sample xyzac-trt c
   CHECK(l.joint_max_accel_per_s2[1] == 300.0);
   CHECK(l.joint_max_accel_per_s2[0] == 0.0);
   CHECK(joint_accel_limit(l, effective_limits(l), 1) == 300.0);
+  // ANGULAR_UNITS (issue 63.9): the rotary axes' numbers in grad (by name, and as units per
+  // degree), converted; an unknown unit refused naming its line.
+  for (const std::string unit : {"grad", "1.111111"}) {
+    INFO(unit);
+    std::string text = read_file(ini);
+    text.replace(text.find("ANGULAR_UNITS = deg"), 19, "ANGULAR_UNITS = " + unit);
+    write_file(dir.path("low/xyzac-trt.ini"), text);
+    const RunResult g = run_taxopt("machine --from-linuxcnc-ini " + dir.path("low/xyzac-trt.ini") +
+                                   " --out " + dir.path("g.toml"));
+    INFO(g.err);
+    REQUIRE(g.code == 0);
+    const Machine m = read_machine_file(dir.path("g.toml"));
+    CHECK(rad_to_deg(m.rotary.tilt.min_rad) == Approx(-90.0));
+    CHECK(rad_to_deg(m.rotary.tilt.max_rad) == Approx(45.0));
+    CHECK(m.limits[static_cast<std::size_t>(Joint::Tilt)].max_velocity_per_s == Approx(27.0));
+  }
+  {
+    std::string text = read_file(ini);
+    text.replace(text.find("ANGULAR_UNITS = deg"), 19, "ANGULAR_UNITS = turns");
+    write_file(dir.path("low/xyzac-trt.ini"), text);
+    const RunResult g = run_taxopt("machine --from-linuxcnc-ini " + dir.path("low/xyzac-trt.ini"));
+    CHECK(g.code == 2);
+    CHECK_THAT(g.err, Catch::Contains("xyzac-trt.ini:85") && Catch::Contains("ANGULAR_UNITS"));
+  }
   // Another kinematics is refused by name and line.
   write_file(dir.path("other.ini"), "[KINS]\nKINEMATICS = genhexkins\n");
   const RunResult other = run_taxopt("machine --from-linuxcnc-ini " + dir.path("other.ini"));

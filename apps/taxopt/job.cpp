@@ -198,7 +198,14 @@ JobOptions job_options_of(const Args& a) {
   options.count_free_cells = !a.points_csv.empty();
   options.cspace_maps = !a.plots.empty();
   options.feed_schedule = a.feed_schedule;
-  if (a.contact_tolerance) options.contact.tolerance_mm = *a.contact_tolerance;
+  if (a.contact_tolerance) {
+    // The library's 0 means "the default"; on the command line that is leaving it out (a 0
+    // given silently meant the default, issue 63.12).
+    if (*a.contact_tolerance == 0.0) {
+      refuse("--contact-tolerance must be within (0, 1] mm, got 0 (leave it out for the default)");
+    }
+    options.contact.tolerance_mm = *a.contact_tolerance;
+  }
   options.method = a.method == "none"    ? Method::None
                    : a.method == "paper" ? Method::Paper
                                          : Method::Global;

@@ -1,5 +1,7 @@
 // taxopt's options, subcommands and help (cli.md is the contract: keep the names).
 #include <map>
+#include <regex>
+#include <set>
 
 #include "cli.hpp"
 #include "taxopt/core/version.hpp"
@@ -249,6 +251,28 @@ void name_option_values(CLI::App& app) {
 
 }  // namespace
 
+/// Every number an option takes written as a decimal (issue 63.12: CLI11 reads "--feed 0x100"
+/// as 256, "0b11" as 3): the options whose value is a length, an angle, a rate or a count.
+void decimal_numbers_only(CLI::App& app) {
+  static const std::set<std::string> kNumeric = {"MM",     "LENGTH", "DEG",   "N",
+                                                 "MM/MIN", "S^2",    "X,Y,Z", "RPM",
+                                                 "FLOAT",  "INT",    "UINT",  "NUMBER"};
+  // inf and nan pass to the bounds, which name the range the option takes.
+  static const std::regex kDecimal(
+      R"(\s*[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf|infinity|nan)\s*)", std::regex::icase);
+  const CLI::Validator decimal(
+      [](std::string& v) -> std::string {
+        return std::regex_match(v, kDecimal) ? std::string() : "a decimal number, got " + v;
+      },
+      "");
+  for (CLI::Option* o : app.get_options()) {
+    if (o->get_type_size() == 0) continue;  // a flag
+    if (kNumeric.count(o->get_option_text()) || kNumeric.count(o->get_type_name())) {
+      o->check(decimal);
+    }
+  }
+}
+
 void define_command_line(CLI::App& app, Args& a, Commands& c) {
   app.set_version_flag("--version", std::string("taxopt ") + kVersion);
   add_input_options(app, a);
@@ -259,6 +283,8 @@ void define_command_line(CLI::App& app, Args& a, Commands& c) {
   add_diagnostics_options(app, a);
   add_subcommands(app, c);
   name_option_values(app);
+  decimal_numbers_only(app);
+  decimal_numbers_only(*c.generate_cmd);
   // The global options may follow a subcommand too ("taxopt demo -q").
   c.generate_cmd->fallthrough();
   c.machine_cmd->fallthrough();

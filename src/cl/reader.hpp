@@ -334,6 +334,8 @@ class Reader {
   std::size_t curve_points_ = 0;
   double last_rpm_ = 0.0;
   std::optional<ClCoolant> coolant_;
+  /// The coolant COOLNT/ON turns on: the last FLOOD or MIST, else flood.
+  ClCoolant chosen_coolant_ = ClCoolant::Flood;
   int finished_line_ = 0;    // line of FINI / END
   int multax_off_line_ = 0;  // line of the MULTAX/OFF in force
 };

@@ -259,10 +259,12 @@ void Reader::coolnt(const ClRecordArgs& r) {
   if (args.size() != 1) fail(line, "COOLNT expects one of ON, FLOOD, MIST, OFF");
   const std::string a = upper(args[0]);
   ClCoolant c = ClCoolant::Off;
-  if (a == "ON" || a == "FLOOD") {
-    c = ClCoolant::Flood;
-  } else if (a == "MIST") {
-    c = ClCoolant::Mist;
+  if (a == "ON") {
+    // APT's ON resumes the coolant last chosen (FLOOD before any): after MIST and OFF it is
+    // mist again (issue 63.12: it was written M8).
+    c = chosen_coolant_;
+  } else if (a == "FLOOD" || a == "MIST") {
+    c = chosen_coolant_ = a == "MIST" ? ClCoolant::Mist : ClCoolant::Flood;
   } else if (a != "OFF") {
     fail(line, "COOLNT/" + args[0] +
                    ": a coolant taxopt does not write (ON, FLOOD, MIST and OFF are: M8, M7, "

@@ -166,6 +166,8 @@ class DialectRules {
   virtual std::vector<std::string> start(const ProgramName&) const { return {}; }
   /// A comment naming the program after the start ("program NAME").
   virtual bool names_program() const { return false; }
+  /// The largest program number its O word takes (gcode.program_number; Fanuc's O1 to O9999).
+  virtual int max_program_number() const { return 9999; }
   /// The modal set-up block: units, absolute, plane, no compensation, feed mode.
   virtual std::string setup(bool inch, bool inverse_time) const;
   /// The path control block after the set-up (LinuxCNC's G64 P<blend> Q0), in program units.

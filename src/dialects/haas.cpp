@@ -13,6 +13,8 @@ class Haas final : public DialectRules {
   const char* name() const override { return "haas"; }
   int max_decimals() const override { return 4; }
 
+  /// O00001 to O99999 (issue 63.12: 10000 was refused citing Fanuc's O9999).
+  int max_program_number() const override { return 99999; }
   std::vector<std::string> start(const ProgramName& p) const override {
     return {"%", "O" + zero_padded(p.number, 5) + " (" + tape_comment_text(p.name) + ")"};
   }

@@ -80,6 +80,15 @@ class Heidenhain final : public DialectRules {
 
   /// Dwell and radius compensation off only; G17 in the tool call.
   TemplateWords template_words() const override { return {false, {4, 40}, {17}, {}, false}; }
+  /// M128 / M129: tool centre point control is taxopt's, on per operation after the table turn
+  /// and the tool call (a header's M128 turned it on before both).
+  std::string template_refusal(char letter, double number) const override {
+    if (letter == 'M' && (number == 128 || number == 129)) {
+      return "tool centre point control (M128, M129) is switched by taxopt per operation, "
+             "after the table turn and the tool call";
+    }
+    return {};
+  }
 };
 
 }  // namespace

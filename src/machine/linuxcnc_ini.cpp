@@ -220,6 +220,7 @@ class Importer {
     tilt_ = module_.bc ? 'B' : 'A';
     joint_letters_ = joint_letters();
     read_units();
+    read_angular_units();
     read_hal();
   }
 
@@ -256,6 +257,36 @@ class Importer {
       unit_mm_ = kMmPerInch;
     } else if (!(v == "mm" || v == "metric" || (number && std::abs(per_mm - 1.0) < 1e-9))) {
       fail(u, "LINEAR_UNITS must be mm or inch (or 1, 0.03937: units per mm), got " + v);
+    }
+  }
+
+  /// [TRAJ] ANGULAR_UNITS: the unit of the rotary axes' limits, velocities and accelerations
+  /// (degree, radian or grad; older configurations: a number of units per degree).
+  void read_angular_units() {
+    const IniValue* u = first(ini_, "TRAJ", "ANGULAR_UNITS");
+    if (!u) {
+      out_.assumptions.push_back("[TRAJ] ANGULAR_UNITS not given: degrees");
+      return;
+    }
+    std::string v;
+    for (char ch : u->text) v += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    char* end = nullptr;
+    const double per_deg = std::strtod(v.c_str(), &end);
+    const bool number = end != v.c_str() && trim(end).empty();
+    const double rad_per_deg = deg_to_rad(1.0);
+    if (v == "deg" || v == "degree" || v == "degrees" ||
+        (number && std::abs(per_deg - 1.0) < 1e-9)) {
+      deg_per_unit_ = 1.0;
+    } else if (v == "rad" || v == "radian" || v == "radians" ||
+               (number && std::abs(per_deg - rad_per_deg) < 1e-6)) {
+      deg_per_unit_ = rad_to_deg(1.0);
+    } else if (v == "grad" || v == "gon" || (number && std::abs(per_deg - 10.0 / 9.0) < 1e-6)) {
+      deg_per_unit_ = 0.9;
+    } else {
+      fail(u,
+           "ANGULAR_UNITS must be degree, radian or grad (or 1, 0.0174533, 1.11111: units "
+           "per degree), got " +
+               u->text);
     }
   }
 
@@ -366,7 +397,7 @@ class Importer {
       fail(nullptr, "[AXIS_" + axis + "] and its joint leave no range: " + number_text(*lo) +
                         " to " + number_text(*hi));
     }
-    return {*lo, *hi};
+    return {*lo * deg_per_unit_, *hi * deg_per_unit_};
   }
 
   /// A joint's MAX_ACCELERATION where it differs from its axis's: with TCP on LinuxCNC plans
@@ -413,12 +444,12 @@ class Importer {
         << "\nmax_deg = " << number_text(hi)
         << "\nsense = " << (axis == "C" ? module_.c_sense : module_.tilt_sense) << "\n";
       if (const auto v = number(section, "MAX_VELOCITY", false)) {
-        t << "max_velocity_deg_s = " << number_text(*v) << "\n";
+        t << "max_velocity_deg_s = " << number_text(*v * deg_per_unit_) << "\n";
       }
       const auto a = number(section, "MAX_ACCELERATION", false);
-      if (a) t << "max_accel_deg_s2 = " << number_text(*a) << "\n";
+      if (a) t << "max_accel_deg_s2 = " << number_text(*a * deg_per_unit_) << "\n";
       if (const auto ja = joint_accel(axis, a)) {
-        t << "joint_max_accel_deg_s2 = " << number_text(*ja) << "\n";
+        t << "joint_max_accel_deg_s2 = " << number_text(*ja * deg_per_unit_) << "\n";
       }
     }
   }
@@ -499,6 +530,8 @@ class Importer {
   char tilt_ = 'A';
   std::string joint_letters_;  ///< joint_letters(), once the module is known
   double unit_mm_ = 1.0;
+  /// Degrees per ANGULAR_UNITS unit.
+  double deg_per_unit_ = 1.0;
   HalPins hal_;
   std::string name_;
 };

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "dialects/dialect_rules.hpp"
 #include "machine/template_block.hpp"
 #include "taxopt/core/error.hpp"
 #include "util/input_file.hpp"
@@ -162,10 +163,20 @@ class MachineParser {
   /// [pivot]: a head's pivot length, or where a table's rotary axes lie.
   void parse_pivot(const toml::table& root, Machine& m) {
     const bool head = m.rotary.layout != RotaryLayout::TableTable;
-    if (const toml::table* pivot = table_of(root, "pivot", false); pivot && head) {
+    const toml::table* given = table_of(root, "pivot", false);
+    const auto needs_length = [&](int line) {
+      // Never assumed (0 was taken silently, issue 63.12): the tool's joints depend on it.
+      fail(line,
+           "a head machine needs [pivot] head_pivot_length: from the tilt axis to the spindle's "
+           "gauge line, mm (0 where the controller's kinematics carry none, as LinuxCNC's max5 "
+           "sample)");
+    };
+    if (head && !given) needs_length(0);
+    if (const toml::table* pivot = given; pivot && head) {
       // A head: its pivot length (tilt axis to the spindle's gauge line), and for a head-table
       // machine where C turns the table.
       check_keys(*pivot, "pivot", {"head_pivot_length", "c_axis_x", "c_axis_y"});
+      if (!pivot->get("head_pivot_length")) needs_length(line_of(*pivot));
       m.head_pivot_length_mm = length_or(*pivot, "pivot", "head_pivot_length", 0.0);
       if (!(m.head_pivot_length_mm >= 0.0 && m.head_pivot_length_mm <= 5000.0)) {
         fail(line_of(*pivot->get("head_pivot_length")),
@@ -273,7 +284,11 @@ class MachineParser {
       }
     }
     if (auto* n = g->get("program_number")) {
-      t.number = whole(*n, "gcode.program_number", 1, 9999, " (Fanuc's O1 to O9999)");
+      const gcode::DialectRules& rules = gcode::rules_of(m.gcode.dialect);
+      const int most = rules.max_program_number();
+      t.number =
+          whole(*n, "gcode.program_number", 1, most,
+                std::string(" (") + rules.name() + "'s O1 to O" + std::to_string(most) + ")");
     }
     if (auto* n = g->get("work_offset")) {
       t.work_offset = string_of(*n, "gcode.work_offset");
@@ -340,6 +355,8 @@ class MachineParser {
       for (std::size_t q = 0; q < 2; ++q) {
         const std::string what = std::string("gcode.end_park_xy_mm's ") + "XY"[q];
         xy[q] = number_of(*list->get(q), what);
+        // Without a travel: within 100 m of the machine's zero (1e9 was taken, issue 63.12).
+        if (!(std::abs(xy[q]) <= 1e5)) fail(line_of(*n), what + " must be within [-1e5, 1e5] mm");
         if (!m.linear_range[q].contains(xy[q])) {
           fail(line_of(*n),
                what + " lies outside the machine's travel ([axes." + "XY"[q] + "] min_mm, max_mm)");
@@ -379,6 +396,36 @@ class MachineParser {
         const std::string b = string_of(e, what + " entries");
         check_block(e, b, what, m.gcode.dialect, std::string(key) == "footer");
         out->push_back(b);
+      }
+    }
+    check_no_tcp_switch(*g, t);
+  }
+
+  /// A header, footer or tool change that switches TCP on or off (a word of the tcp_on or
+  /// tcp_off blocks, as M428 on LinuxCNC's sample) would turn it on before the table turns and
+  /// the tool length comes on (the order LinuxCNC's controller refuses), or off mid-program:
+  /// taxopt switches it per operation itself.
+  void check_no_tcp_switch(const toml::table& g, const ProgramTemplate& t) const {
+    std::set<std::string> switch_words;
+    for (const auto* list : {&t.tcp_on, &t.tcp_off}) {
+      for (const std::string& b : *list) {
+        std::istringstream words(b);
+        for (std::string w; words >> w;) switch_words.insert(w);
+      }
+    }
+    for (const char* key : {"header", "footer", "tool_change"}) {
+      const toml::node* n = g.get(key);
+      if (!n || !n->is_array()) continue;
+      for (const toml::node& e : *n->as_array()) {
+        std::istringstream words(e.value<std::string>().value_or(""));
+        for (std::string w; words >> w;) {
+          if (switch_words.count(w)) {
+            fail(line_of(e), std::string("gcode.") + key + " holds " + w +
+                                 ", the machine's TCP switch (gcode.tcp_on / tcp_off): taxopt "
+                                 "turns TCP on per operation, after the table turn and the tool "
+                                 "length, and off before the next");
+          }
+        }
       }
     }
   }

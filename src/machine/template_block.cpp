@@ -53,9 +53,29 @@ bool has(const std::vector<Word>& words, const char* letter, double v) {
   return false;
 }
 
+/// LinuxCNC's active comments that act (issue 63.12: a header's "(ABORT, x)" stopped rs274
+/// there): ABORT ends the program, PROBEOPEN / LOGOPEN / LOGAPPEND open files on the machine.
+void check_active_comment(const std::string& comment, const BlockRules& r) {
+  if (r.dialect->id() != GcodeDialect::LinuxCNC) return;
+  std::string head;
+  for (char ch : comment) {
+    if (ch == ',') break;
+    if (!std::isspace(static_cast<unsigned char>(ch))) {
+      head += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    }
+  }
+  for (const char* word : {"ABORT", "PROBEOPEN", "LOGOPEN", "LOGAPPEND"}) {
+    if (head == word && comment.find(',') != std::string::npos) {
+      refuse(std::string("holds the comment (") + word +
+             ", ...), which LinuxCNC acts on (ABORT ends the program there; the others open "
+             "files on the machine)");
+    }
+  }
+}
+
 /// The code outside comments, upper case; "{tool}" kept as one token.
 std::string code_of(const std::string& block, const BlockRules& r) {
-  std::string code;
+  std::string code, comment;
   int depth = 0;
   for (std::size_t i = 0; i < block.size(); ++i) {
     const char ch = block[i];
@@ -68,9 +88,12 @@ std::string code_of(const std::string& block, const BlockRules& r) {
     if (r.words.paren_comments && ch == ')') {
       if (depth == 0) refuse("closes a comment it did not open");
       --depth;
+      check_active_comment(comment, r);
+      comment.clear();
       continue;
     }
     if (depth > 0) {
+      comment += ch;
       if (ch == '%' && r.words.tape) {
         refuse("holds '%' in a comment: the controller reads its program from one % to the next");
       }
@@ -181,22 +204,28 @@ std::vector<Word> words_of(const std::string& code, const BlockRules& r) {
   return words;
 }
 
-/// One work offset code: G54 ... G59, G59.1 ... G59.3 (LinuxCNC), G54.1 P1 ... P300 (Fanuc,
-/// Haas), G505 ... G599 (Sinumerik's settable frames).
-void check_work_offset(const std::vector<Word>& words, bool settable_frames) {
+/// One work offset code of the dialect: G54 ... G59, G59.1 ... G59.3 (LinuxCNC), G54.1 P1 ...
+/// P300 (Fanuc, Haas), G505 ... G599 (Sinumerik's settable frames). LinuxCNC has no G54.1 P
+/// (rs274: an unknown G code, issue 63.12), Fanuc and Haas no G59.1.
+void check_work_offset(const std::vector<Word>& words, const BlockRules& r) {
+  const bool lcnc = r.dialect->id() == GcodeDialect::LinuxCNC;
   bool ok = false;
   if (words.size() == 1 && words[0].letter == "G") {
-    for (double g : {54.0, 55.0, 56.0, 57.0, 58.0, 59.0, 59.1, 59.2, 59.3}) {
-      ok = ok || g_is(words[0].number, g);
-    }
+    for (double g : {54.0, 55.0, 56.0, 57.0, 58.0, 59.0}) ok = ok || g_is(words[0].number, g);
+    for (double g : {59.1, 59.2, 59.3}) ok = ok || (lcnc && g_is(words[0].number, g));
     const double x = std::strtod(words[0].number.c_str(), nullptr);
-    ok = ok || (settable_frames && x >= 505.0 && x <= 599.0 && x == std::floor(x));
-  } else if (words.size() == 2 && words[0].letter == "G" && g_is(words[0].number, 54.1) &&
-             words[1].letter == "P") {
+    ok = ok || (r.words.settable_frames && x >= 505.0 && x <= 599.0 && x == std::floor(x));
+  } else if (!lcnc && !r.words.settable_frames && words.size() == 2 && words[0].letter == "G" &&
+             g_is(words[0].number, 54.1) && words[1].letter == "P") {
     const double p = std::strtod(words[1].number.c_str(), nullptr);
     ok = p >= 1.0 && p <= 300.0 && p == std::floor(p);
   }
-  if (!ok) refuse("is no work offset code (G54 ... G59.3, G54.1 P1 ... P300, G505 ... G599)");
+  if (!ok) {
+    refuse(std::string("is no work offset code of ") + r.dialect->name() +
+           (lcnc                      ? " (G54 ... G59, G59.1 ... G59.3)"
+            : r.words.settable_frames ? " (G54 ... G59, G505 ... G599)"
+                                      : " (G54 ... G59, G54.1 P1 ... P300)"));
+  }
 }
 
 /// A footer's block that homes the rotaries (G28 with G91/G90 and rotary words of 0 only) or
@@ -326,7 +355,7 @@ std::string template_block_problem(const std::string& block, const std::string& 
   try {
     const std::vector<Word> words = words_of(code_of(block, r), r);
     if (r.work_offset) {
-      check_work_offset(words, r.words.settable_frames);
+      check_work_offset(words, r);
       return {};
     }
     if (r.footer && footer_homes(words)) return {};

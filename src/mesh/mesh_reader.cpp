@@ -31,15 +31,22 @@ struct Diagnosis {
   std::string why;
 };
 
-bool finite_numbers(std::istringstream& in, int count) {
+bool finite_numbers(std::istringstream& in, int count, double* out = nullptr) {
   for (int k = 0; k < count; ++k) {
     std::string tok;
     if (!(in >> tok)) return false;
     char* end = nullptr;
     const double v = std::strtod(tok.c_str(), &end);
     if (end == tok.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+    if (out) out[k] = v;
   }
   return true;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
 }
 
 /// OBJ: vertices, faces whose corners name them, the records OBJ knows.
@@ -134,8 +141,11 @@ Diagnosis diagnose_off(std::istream& in) {
   return {};
 }
 
-/// ASCII STL: solid { facet normal / outer loop / three vertices / endloop / endfacet } endsolid.
-Diagnosis diagnose_stl(std::istream& in) {
+/// ASCII STL: solid { facet normal / outer loop / three vertices / endloop / endfacet } endsolid,
+/// its keywords in any case (some exporters write SOLID, FACET NORMAL, VERTEX); with `points`
+/// and `polygons`, its triangles read into them (the ASCII STL reader).
+Diagnosis diagnose_stl(std::istream& in, std::vector<K::Point_3>* points = nullptr,
+                       std::vector<std::vector<std::size_t>>* polygons = nullptr) {
   std::string line;
   int n = 0;
   const auto fail = [&](const std::string& why) { return Diagnosis{n, why}; };
@@ -146,11 +156,12 @@ Diagnosis diagnose_stl(std::istream& in) {
     std::istringstream ls(line);
     std::string kw;
     if (!(ls >> kw)) continue;
+    kw = lower(kw);
     if (kw == "solid" && state == 0) {
       state = 1;
     } else if (kw == "facet" && state == 1) {
       std::string normal;
-      if (!(ls >> normal) || normal != "normal" || !finite_numbers(ls, 3)) {
+      if (!(ls >> normal) || lower(normal) != "normal" || !finite_numbers(ls, 3)) {
         return fail("'facet normal' needs three finite numbers");
       }
       state = 2;
@@ -158,10 +169,16 @@ Diagnosis diagnose_stl(std::istream& in) {
       state = 3;
       vertices = 0;
     } else if (kw == "vertex" && state == 3) {
-      if (!finite_numbers(ls, 3)) return fail("a vertex needs three finite numbers");
+      double xyz[3];
+      if (!finite_numbers(ls, 3, xyz)) return fail("a vertex needs three finite numbers");
+      if (points) points->emplace_back(xyz[0], xyz[1], xyz[2]);
       ++vertices;
     } else if (kw == "endloop" && state == 3) {
       if (vertices != 3) return fail("a facet of " + std::to_string(vertices) + " vertices");
+      if (polygons) {
+        const std::size_t last = points->size();
+        polygons->push_back({last - 3, last - 2, last - 1});
+      }
       state = 2;
     } else if (kw == "endfacet" && state == 2) {
       state = 1;
@@ -231,7 +248,7 @@ bool read_binary_stl(const std::string& path, std::vector<K::Point_3>& points,
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::size_t first = 0;
   while (first < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[first]))) ++first;
-  const bool says_solid = bytes.compare(first, 5, "solid") == 0;
+  const bool says_solid = lower(bytes.substr(first, 5)) == "solid";
   if (bytes.size() < 84) {
     if (says_solid) return false;
     throw InputError(path, 0,
@@ -346,9 +363,7 @@ TriangleMesh read_mesh_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "cannot open part mesh");
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lower(fs::path(path).extension().string());
   if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply") {
     throw InputError(path, 0, "part mesh must be .stl, .obj, .off or .ply, got '" + ext + "'");
   }
@@ -358,6 +373,12 @@ TriangleMesh read_mesh_file(const std::string& path) {
   bool ok = false;
   if (ext == ".stl" && read_binary_stl(path, points, polygons)) {
     ok = true;
+  } else if (ext == ".stl") {
+    // ASCII: its keywords in any case (CGAL's reader takes lower case only: an upper-case
+    // export was refused as a broken binary STL, issue 63.12).
+    std::ifstream text(path);
+    ok = diagnose_stl(text, &points, &polygons).why.empty();
+    if (!ok) points.clear(), polygons.clear();
   } else {
     try {
       ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "controller/block_time.hpp"
+#include "controller/linuxcnc_planner.hpp"
 #include "plan/stretch_guard.hpp"
 #include "taxopt/cspace/collision.hpp"
 #include "taxopt/cspace/cspace.hpp"
@@ -398,6 +399,12 @@ std::vector<std::size_t> colliding_moves(
 /// Joint positions as written: the words read back (in tcp mode mapped to the joints).
 std::vector<JointPosition> written_joints(const Machine& machine,
                                           const std::vector<const GcodeMove*>& at);
+/// The findings of LinuxCNC's TCP planner on the written program's `blocks`
+/// (GcodeProgram::tcp_joint_peaks, in `res.gcode`): a joint velocity past a limit held (the
+/// machine file's, or with `scheduled` the effective ones) from a stated start a problem, the
+/// rest a warning with its remedy (tcp_findings.cpp).
+void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool scheduled,
+                        const std::vector<controller::TcpBlock>& blocks, JobResult& res);
 /// The turn between two passes spread over the rapids of the chain in the air (plan.cpp).
 void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
                          double ball_radius_mm, const PartCheck* model, const ToolModel& tool,

@@ -312,7 +312,8 @@ void tool_and_spindle_fallbacks(const Run& run, JobResult& res) {
     if (!run.fallback_spindle_rpm) {
       throw InputError(tp.source, op.points[*first_feed].line,
                        "operation " + op.name +
-                           ": feed moves without a spindle speed (no SPINDL before them): give " +
+                           ": feed moves without a spindle speed (no SPINDL before them, or "
+                           "the spindle off: SPINDL/OFF or a speed of 0): give " +
                            run.options.name_of("spindle_rpm") +
                            ", or spindle_rpm in the machine file's [defaults]");
     }

@@ -428,6 +428,19 @@ bool retract_collides(const Run& run, const OperationContext& o, const Written& 
   return false;
 }
 
+/// The part's bounding box, mm (empty: lo above hi, without a part).
+std::pair<Vec3d, Vec3d> part_box(const Run& run) {
+  Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity());
+  Vec3d hi = -lo;
+  if (run.options.part) {
+    for (const Vec3d& v : run.options.part->mesh().vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+  }
+  return {lo, hi};
+}
+
 }  // namespace
 
 void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
@@ -449,14 +462,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
   std::vector<std::size_t> candidates;
   std::vector<long> unknown(posted.size(), 0);
   // The part's bounding box: a retract along machine Z is swept until the tool clears it.
-  Vec3d box_lo = Vec3d::Constant(std::numeric_limits<double>::infinity());
-  Vec3d box_hi = -box_lo;
-  if (run.options.part) {
-    for (const Vec3d& v : run.options.part->mesh().vertices) {
-      box_lo = box_lo.cwiseMin(v);
-      box_hi = box_hi.cwiseMax(v);
-    }
-  }
+  const std::pair<Vec3d, Vec3d> box = part_box(run);
   const auto up_from_known = [&](std::size_t j) {
     return moves[j].retract && (moves[j].given & 0x7u) == 0x4u && w.joints_after[j - 1] &&
            run.options.part;
@@ -479,7 +485,7 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
         const std::size_t k = op_of(moves[j].line);
-        if (up_from_known(j)) return retract_collides(run, ops[k], w, j, box_lo, box_hi);
+        if (up_from_known(j)) return retract_collides(run, ops[k], w, j, box.first, box.second);
         return block_collides(run, ops[k], w, j, points.touching_end[j] != 0,
                               flute_tolerance_mm[k]);
       });

@@ -274,6 +274,19 @@ TEST_CASE(
   REQUIRE(op.coolant);
   CHECK(*op.coolant == ClCoolant::Mist);
   CHECK(op.events.size() == 7);
+  // COOLNT/ON resumes the coolant last chosen, as APT's does (issue 63.12): mist after MIST and
+  // OFF, flood before any choice.
+  const auto coolant_on = [](const std::string& cl) {
+    const Toolpath t = parse_cl(cl + "COOLNT/ON\nGOTO/0,0,0\nGOTO/1,0,0\n", "c.apt");
+    const auto& events = t.operations.at(0).events;
+    for (auto e = events.rbegin(); e != events.rend(); ++e) {
+      if (e->kind == ProgramEvent::Kind::Coolant) return e->coolant;
+    }
+    return t.operations.at(0).coolant.value_or(ClCoolant::Off);
+  };
+  const std::string start = "UNITS/MM\nCUTTER/10,5\nLOADTL/2\nFEDRAT/600,MMPM\nGOTO/0,0,5\n";
+  CHECK(coolant_on(start + "COOLNT/MIST\nGOTO/0,0,4\nCOOLNT/OFF\nGOTO/0,0,3\n") == ClCoolant::Mist);
+  CHECK(coolant_on(start) == ClCoolant::Flood);
   REQUIRE(have_rs274());
   TempDir dir;
   write_file(dir.path("p.apt"), text);

@@ -298,7 +298,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   for (const std::string block :
        {"header = [\"M11 (C UNLOCK)\", \"G80\", \"G4 P0.5\", \"M70\"]", "tcp_on = [\"M428\"]",
         "tool_change = [\"T{tool} M6\", \"G65 P9001\", \"M98 P9002\"]",
-        "work_offset = \"G54.1 P3\"", "work_offset = \"G59.3\"",
+        "work_offset = \"G54.1 P3\"", "work_offset = \"G59\"",
         "footer = [\"G91 G28 A0. C0.\", \"G90\"]"}) {
     INFO(block);
     CHECK_NOTHROW(parse_machine_toml(head + block + "\n", "m.toml"));
@@ -325,6 +325,16 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(any + "dialect = \"linuxcnc\"\nfooter = [\"M72\"]\n", 9,
                "holds M72: LinuxCNC restores with M72 only a modal state M70 saved");
   expect_error(any + "dialect = \"linuxcnc\"\nheader = [\"M73\"]\n", 9, "holds M73");
+  // Each dialect's own work offsets; LinuxCNC's acting comments (issue 63.12).
+  CHECK_NOTHROW(parse_machine_toml(any + "dialect = \"linuxcnc\"\nwork_offset = \"G59.3\"\n", "m"));
+  expect_error(any + "dialect = \"linuxcnc\"\nwork_offset = \"G54.1 P5\"\n", 9,
+               "no work offset code of linuxcnc");
+  expect_error(any + "dialect = \"fanuc\"\nwork_offset = \"G59.3\"\n", 9,
+               "no work offset code of fanuc");
+  expect_error(any + "dialect = \"linuxcnc\"\nheader = [\"(ABORT, x)\"]\n", 9,
+               "holds the comment (ABORT, ...)");
+  CHECK_NOTHROW(
+      parse_machine_toml(any + "dialect = \"linuxcnc\"\nheader = [\"(MSG, start)\"]\n", "m"));
   CHECK_NOTHROW(
       parse_machine_toml(any + "dialect = \"siemens\"\nheader = [\"FFWON\", \"SOFT\", \"G642\", "
                                "\"CYCLE832(0.01,_ORI_FINISH,1)\", \"COMPCAD ; smooth\"]\n",
@@ -346,6 +356,12 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "work_offset = \"G43 H1\"\n", 9, "is no work offset code");
   expect_error(head + "header = \"M98\"\n", 9, "list of blocks");
   expect_error(head + "program_number = 10000\n", 9, "from 1 to 9999");
+  expect_error(head + "end_park_xy_mm = [1e9, 0]\n", 9, "within [-1e5, 1e5] mm");
+  // Haas's O words take five digits (issue 63.12: 10000 was refused citing Fanuc's O9999).
+  const Machine haas =
+      parse_machine_toml(any + "dialect = \"haas\"\nprogram_number = 10000\n", "m");
+  CHECK(haas.gcode.program.number == 10000);
+  expect_error(any + "dialect = \"haas\"\nprogram_number = 100000\n", 9, "(haas's O1 to O99999)");
   expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");
   expect_error(head + "coolant = \"through\"\n", 9, "\"none\", \"flood\" or \"mist\"");
   expect_error(head + "linearise_tolerance_mm = -1\n", 9, ">= 0");
@@ -425,4 +441,29 @@ TEST_CASE("machine file: machine mode needs an explicit [pivot] -- the Haas pres
       taxopt::test::read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/haas-umc750.toml");
   haas = replace(haas, "mode = \"tcp\"", "mode = \"machine\"");
   CHECK_THROWS_WITH(parse_machine_toml(haas, "haas.toml"), Catch::Contains("b_axis_x, b_axis_z"));
+}
+
+TEST_CASE("machine file: a header, footer or tool change that switches TCP is refused (issue 63.6)",
+          "[io][machine][bad-input]") {
+  const std::string dir = std::string(TAXOPT_SOURCE_DIR) + "/data/machines/";
+  // LinuxCNC's sample: its switch M428 in the header would turn TCP on before the table turns
+  // and G43 H1 comes on (the order LinuxCNC's controller refuses).
+  const std::string sample = taxopt::test::read_file(dir + "linuxcnc-xyzac-trt.toml");
+  REQUIRE(sample.find("[gcode]\n") != std::string::npos);
+  for (const char* key : {"header", "footer"}) {
+    INFO(key);
+    const std::string with =
+        replace(sample, "[gcode]\n", "[gcode]\n" + std::string(key) + " = [\"M428\"]\n");
+    CHECK_THROWS_WITH(
+        parse_machine_toml(with, "m.toml"),
+        Catch::Contains(std::string("gcode.") + key + " holds M428") && Catch::Contains("m.toml:"));
+  }
+  // A TNC's M128 likewise; other M codes stay a template's own.
+  const std::string tnc =
+      "kinematics = \"ac-table-table\"\n[axes.A]\nmin_deg = -90\n"
+      "max_deg = 90\n[axes.C]\ncontinuous = true\n[gcode]\n"
+      "dialect = \"heidenhain\"\n";
+  CHECK_THROWS_WITH(parse_machine_toml(tnc + "header = [\"M128\"]\n", "t.toml"),
+                    Catch::Contains("M128"));
+  CHECK_NOTHROW(parse_machine_toml(tnc + "header = [\"G40\"]\n", "t.toml"));
 }

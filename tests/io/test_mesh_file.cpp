@@ -57,7 +57,19 @@ TEST_CASE("mesh: every format reads to the same indexed mesh", "[io][mesh]") {
     m.vertices.push_back(v);
   m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   write_file(t.path("b.stl"), format_stl_binary(m));
-  for (const char* f : {"a.off", "a.obj", "a.ply", "a.stl", "b.stl"}) {
+  // Upper-case keywords, as some exporters write them (issue 63.12: read as a broken binary).
+  std::string upper = ascii;
+  for (const char* kw :
+       {"solid", "facet", "normal", "outer", "loop", "vertex", "endloop", "endfacet", "endsolid"}) {
+    std::string up = kw;
+    for (char& ch : up) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    for (std::size_t at = upper.find(kw); at != std::string::npos; at = upper.find(kw, at)) {
+      upper.replace(at, up.size(), up);
+    }
+  }
+  REQUIRE(upper.rfind("SOLID t\n", 0) == 0);
+  write_file(t.path("u.stl"), upper);
+  for (const char* f : {"a.off", "a.obj", "a.ply", "a.stl", "b.stl", "u.stl"}) {
     INFO(f);
     const TriangleMesh r = read_mesh_file(t.path(f));
     CHECK(r.faces.size() == 4);

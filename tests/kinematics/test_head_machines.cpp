@@ -138,6 +138,9 @@ TEST_CASE(
              Catch::Contains("pivot.head_pivot_length must be within [0, 5000] mm"));
   CHECK_THAT(error_of(edited("head_pivot_length = 250.0", "b_axis_x = 1.0")),
              Catch::Contains("b_axis_x"));
+  // No pivot length: never assumed 0 (issue 63.12).
+  CHECK_THAT(error_of(edited("head_pivot_length = 250.0", "c_axis_x = 0.0")),
+             Catch::Contains("a head machine needs [pivot] head_pivot_length"));
   CHECK_THAT(error_of(edited("\"bc-head-head\"", "\"bc-head-tail\"")),
              Catch::Contains("ac-head-head, bc-head-head"));
   // In code: the name must say the layout it holds, and a head has no machine mode.

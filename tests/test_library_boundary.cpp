@@ -77,7 +77,7 @@ TEST_CASE(
       {"a NaN axis", [](CLPointd& p) { p.axis.x() = kNaN; }, "expected a unit vector"},
       {"a zero axis", [](CLPointd& p) { p.axis.setZero(); }, "has length 0"},
       {"an axis off unit by 1e-6", [](CLPointd& p) { p.axis *= 1.000001; },
-       "expected a unit vector"},
+       "has length 1.000001, expected a unit vector"},
       {"an infinite tip", [](CLPointd& p) { p.tip_mm.x() = kInf; }, "not a finite point"},
       {"a NaN tip", [](CLPointd& p) { p.tip_mm.z() = kNaN; }, "not a finite point"},
       {"a tip 2 km away", [](CLPointd& p) { p.tip_mm.y() = 2e6; }, "within +-1e6 mm"},

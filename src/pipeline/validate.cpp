@@ -164,6 +164,8 @@ void check_points(const Toolpath& tp) {
       const double length = p.axis.norm();
       if (!std::isfinite(length) || std::abs(length - 1.0) > 1e-9) {
         std::ostringstream os;
+        // Digits enough to show how far off unit it is (issue 64.3: "has length 1" for 1+1e-7).
+        os.precision(12);
         os << "tool axis (" << p.axis.x() << ", " << p.axis.y() << ", " << p.axis.z()
            << ") has length " << length << ", expected a unit vector (normalise it)";
         refuse(os.str());

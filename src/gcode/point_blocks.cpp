@@ -316,16 +316,10 @@ std::string ProgramWriter::joint_safe_feed(double tip_mm, double rot_deg, double
   return fmt(std::max(std::floor(feed * unit), 1.0) / unit, digits);
 }
 
-void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
-                                     double rate_per_s) {
-  const CLPointd& p = op_->points[i];
-  const Posed& pose = op_->poses[i];
-  const double tip_mm = (p.tip_mm - prev_tip_).norm();
-  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
-                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
-  const std::string f = joint_safe_feed(tip_mm, rot_deg, rate_per_s);
-  PlannedMove block = move_to(PlannedMove::Type::Linear, xyz, pose);
-  set_feed(block, f);
+int ProgramWriter::joint_safe_block(PlannedMove m, const std::string& f, BlockKind kind,
+                                    bool takes_prefix) {
+  m.type = PlannedMove::Type::Linear;
+  set_feed(m, f);
   // LinuxCNC blends two feed blocks, and the blend leaves the programmed A and C (0.12 deg
   // measured at the end of a pass), so a dwell G4 P0 (the controller runs its queue to a
   // stop) stands between such a rapid and a feed block.
@@ -335,12 +329,25 @@ void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std:
   if (!last_joint_safe_) {
     raw(dialect_.comment("joint-safe rapid: a feed block at the joints' rate, which the rapid "
                          "override does not govern"),
-        BlockKind::JointSafeRapid);
+        kind);
   }
-  emitted_[i] = motion(block, BlockKind::JointSafeRapid);
+  const int at = motion(m, kind, takes_prefix);
   last_feed_block_ = false;
   last_joint_safe_ = true;
-  prog_.joint_safe_rapids.push_back(emitted_[i]);
+  prog_.joint_safe_rapids.push_back(at);
+  return at;
+}
+
+void ProgramWriter::joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
+                                     double rate_per_s) {
+  const CLPointd& p = op_->points[i];
+  const Posed& pose = op_->poses[i];
+  const double tip_mm = (p.tip_mm - prev_tip_).norm();
+  const double rot_deg = std::hypot(rad_to_deg(pose.tilt_rad - prev_pose_.tilt_rad),
+                                    rad_to_deg(pose.c_rad - prev_pose_.c_rad));
+  emitted_[i] = joint_safe_block(move_to(PlannedMove::Type::Linear, xyz, pose),
+                                 joint_safe_feed(tip_mm, rot_deg, rate_per_s),
+                                 BlockKind::JointSafeRapid, true);
   last_words_ = words;
   advance_to(xyz, pose, p.tip_mm);
 }

@@ -218,19 +218,7 @@ int ProgramWriter::rapid_block(PlannedMove m, BlockKind kind, bool takes_prefix)
     last_joint_safe_ = false;
     return motion(m, kind, takes_prefix);
   }
-  m.type = PlannedMove::Type::Linear;
-  set_feed(m, *f);
-  if (last_feed_block_) line("G4 P0", BlockKind::Dwell);  // no blend into the feed before
-  if (!last_joint_safe_) {
-    raw(dialect_.comment("joint-safe rapid: a feed block at the joints' rate, which the rapid "
-                         "override does not govern"),
-        kind);
-  }
-  const int at = motion(m, kind, takes_prefix);
-  prog_.joint_safe_rapids.push_back(at);
-  last_feed_block_ = false;
-  last_joint_safe_ = true;
-  return at;
+  return joint_safe_block(m, *f, kind, takes_prefix);
 }
 
 void ProgramWriter::rotary_turn(const Posed& to, BlockKind kind) {

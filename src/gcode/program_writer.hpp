@@ -180,6 +180,10 @@ class ProgramWriter {
   /// block's inverse time; eight significant digits, rounded down: slower, never faster.
   void joint_safe_rapid(std::size_t i, const Vec3d& xyz, const std::string& words,
                         double rate_per_s);
+  /// `m` as a feed block at `f` in place of a rapid: a dwell after a feed block (no blend into
+  /// it), the comment that says what it is where a run of them starts, the block, listed in
+  /// joint_safe_rapids; its line.
+  int joint_safe_block(PlannedMove m, const std::string& f, BlockKind kind, bool takes_prefix);
   /// The F word of a joint-safe block: `rate_per_s` of the block a second as F (the tip's
   /// distance, the rotary one when only A and C turn, per minute; under G93 the inverse time),
   /// eight significant digits, rounded down.

@@ -336,6 +336,24 @@ PointBlocks point_blocks(const std::vector<OperationContext>& ops,
   return out;
 }
 
+/// The tool in the air: the ball counts as a body too, within the flutes' tolerance of the part
+/// (a block that ends at a contact point touches it there by design).
+ToolModel air_tool(const ToolModel& tool, double flute_tolerance_mm) {
+  ToolModel air = tool;
+  air.ball_radius_mm =
+      std::max(0.5 * tool.ball_radius_mm, tool.ball_radius_mm - flute_tolerance_mm);
+  return air;
+}
+
+/// How far apart a sweep samples the tool along its path: no more than half the thinnest
+/// body's radius (a wall the body could pass between two samples is thinner than the body is
+/// wide), at least 0.05 mm.
+double sweep_step_mm(const ToolModel& tool) {
+  double thinnest = tool.ball_radius_mm > 0.0 ? tool.ball_radius_mm : 1.0;
+  for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
+  return std::max(0.05, 0.5 * thinnest);
+}
+
 /// Whether block j (its end known) hits the part as the machine moves it, sampled at most
 /// 0.5 deg of either rotary axis and half the thinnest body apart.
 bool block_collides(const Run& run, const OperationContext& o, const Written& w, std::size_t j,
@@ -345,10 +363,7 @@ bool block_collides(const Run& run, const OperationContext& o, const Written& w,
   constexpr std::size_t kC = static_cast<std::size_t>(Joint::C);
   const ToolModel& tool = *o.tool;
   const double R = tool.ball_radius_mm;
-  // In the air the ball counts as a body too, within the flutes' tolerance of the part
-  // (a block that ends at a contact point touches it there by design).
-  ToolModel air = tool;
-  air.ball_radius_mm = std::max(0.5 * R, R - flute_tolerance_mm);
+  const ToolModel air = air_tool(tool, flute_tolerance_mm);
   // A block whose start is not known (the first after a retract in machine
   // coordinates): its end, where the tool stands.
   const JointPosition& q1 = *w.joints_after[j];
@@ -359,12 +374,8 @@ bool block_collides(const Run& run, const OperationContext& o, const Written& w,
   const Vec3d t0 = machine.rotary.from_machine_mm(m0, p0),
               t1 = machine.rotary.from_machine_mm(m1, p1);
   const bool tip_linear = w.tip_linear[j] != 0;
-  // Steps: 0.5 deg of either rotary axis, and along the path no more than half the
-  // thinnest body's radius (a wall the body could pass between two samples is thinner
-  // than the body is wide).
-  double thinnest = R > 0.0 ? R : 1.0;
-  for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
-  const double step_mm = std::max(0.05, 0.5 * thinnest);
+  // Steps: 0.5 deg of either rotary axis, and along the path sweep_step_mm.
+  const double step_mm = sweep_step_mm(tool);
   const double travel = std::max((t1 - t0).norm(), (m1 - m0).norm());
   const int steps = static_cast<int>(std::ceil(std::max(
       {std::abs(q1[kA] - q0[kA]) / 0.5, std::abs(q1[kC] - q0[kC]) / 0.5, travel / step_mm, 1.0})));
@@ -389,7 +400,7 @@ bool block_collides(const Run& run, const OperationContext& o, const Written& w,
 /// the tool length, but beyond the part's bounding box along that direction nothing is left to
 /// hit. Whether it hits the part on the way, sampled as block_collides samples.
 bool retract_collides(const Run& run, const OperationContext& o, const Written& w, std::size_t j,
-                      const Vec3d& box_lo, const Vec3d& box_hi) {
+                      const Vec3d& box_lo, const Vec3d& box_hi, double flute_tolerance_mm) {
   const Machine& machine = run.machine;
   const JointPosition& q = *w.joints_after[j - 1];
   const Posed pose{deg_to_rad(q[static_cast<std::size_t>(Joint::Tilt)]),
@@ -415,12 +426,8 @@ bool retract_collides(const Run& run, const OperationContext& o, const Written& 
   const double tool_low = std::min(t0.dot(up), (t0 + length * axis).dot(up)) - widest;
   const double rise = part_top - tool_low;
   if (!(rise > 0.0)) return false;
-  double thinnest = R > 0.0 ? R : 1.0;
-  for (const ToolBody& b : tool.bodies) thinnest = std::min(thinnest, b.radius_mm);
-  const double step_mm = std::max(0.05, 0.5 * thinnest);
-  ToolModel air = tool;
-  air.ball_radius_mm = std::max(0.5 * R, R - margins_of(run.options, *o.op).flute_tolerance_mm);
-  const int steps = static_cast<int>(std::ceil(rise / step_mm));
+  const ToolModel air = air_tool(tool, flute_tolerance_mm);
+  const int steps = static_cast<int>(std::ceil(rise / sweep_step_mm(tool)));
   for (int s = 1; s <= steps; ++s) {
     const Vec3d tip = t0 + (rise * s / steps) * up;
     if (run.collision->collides(air, tip + R * axis, axis, true)) return true;
@@ -485,7 +492,9 @@ void check_every_block(const Run& run, const std::vector<OperationContext>& ops,
       detail::parallel_select(0, candidates.size(), [&](std::size_t c) {
         const std::size_t j = candidates[c];
         const std::size_t k = op_of(moves[j].line);
-        if (up_from_known(j)) return retract_collides(run, ops[k], w, j, box.first, box.second);
+        if (up_from_known(j)) {
+          return retract_collides(run, ops[k], w, j, box.first, box.second, flute_tolerance_mm[k]);
+        }
         return block_collides(run, ops[k], w, j, points.touching_end[j] != 0,
                               flute_tolerance_mm[k]);
       });

@@ -140,6 +140,7 @@ const char* to_string(FindingCode code) {
     case FindingCode::MeshSlivers: return "mesh_slivers";
     case FindingCode::PartTolerance: return "part_tolerance";
     case FindingCode::AxisRateRose: return "axis_rate_rose";
+    case FindingCode::LeastTiltNotKept: return "least_tilt_not_kept";
     case FindingCode::MissingFeed: return "missing_feed";
     case FindingCode::JerkLimitExceeded: return "jerk_limit_exceeded";
     case FindingCode::LongerCycle: return "longer_cycle";

@@ -156,8 +156,10 @@ void check_case(const Case& k) {
   write_file(dir.path("in.cls"), k.cl.text);
   const TriangleMesh mesh = heightfield_mesh(k.hf, 0.5, -10.0, 70.0, -10.0, 70.0);
   write_file(dir.path("part.stl"), format_stl_binary(mesh));
-  const std::string common =
-      "--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") + " " + k.tool_args;
+  // The paper's margins are those of its method without a least tilt (--min-tilt 0); with it
+  // held the cost is measured in tests/test_least_tilt.cpp.
+  const std::string common = "--in " + dir.path("in.cls") + " --part " + dir.path("part.stl") +
+                             " --min-tilt 0 " + k.tool_args;
   // Before: the input axes as posted (--force: an input that collides still gives its G-code).
   const RunResult before_run =
       run_taxopt(common + " --method none --force -q --gcode " + dir.path("before.ngc"));
@@ -393,6 +395,21 @@ TEST_CASE(
         CHECK(op["verification"]["collision_free"] == true);
         CHECK(op["verification"]["colliding_moves"] == 0);
       }
+    }
+    // A least tilt as large as the input's lean into the wall: every free axis leans away from
+    // it, and none within the cone does so by that much. The collision comes first: the points
+    // give the bound up, are named, and the program is written.
+    const RunResult r = run_taxopt(base + " --method paper --min-tilt 40");
+    INFO(r.err);
+    CHECK(r.code == 0);
+    const auto rep = nlohmann::json::parse(read_file(dir.path("w.json")));
+    bool named = false;
+    for (const auto& f : rep["findings"]) named = named || f["code"] == "least_tilt_not_kept";
+    CHECK(named);
+    for (const auto& op : rep["operations"]) {
+      CHECK(op["verification"]["collision_free"] == true);
+      CHECK(op["cutting"]["points_below_least_tilt"].get<int>() > 0);
+      CHECK(op["cutting"]["first_line_below"].is_number());
     }
   }
 }

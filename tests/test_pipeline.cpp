@@ -541,7 +541,8 @@ TEST_CASE(
 TEST_CASE(
     "pipeline: every method keeps its promise per rotary axis -- where the input is free no "
     "axis's peak omega or a rises above the input's, the kept counts are the axes written as "
-    "the input's, and an asked least tilt from the normal is held where the input keeps it",
+    "the input's, and the least tilt from the normal, asked or the input's own, is held where the "
+    "input keeps it",
     "[pipeline][promise]") {
   std::mt19937 rng(59);
   const std::vector<Heightfield> parts = random_heightfields(rng);
@@ -596,13 +597,15 @@ TEST_CASE(
           }
           CHECK(r.kept_input_points->total() == written_as_input);
           REQUIRE(r.cutting);
-          if (tilt) {
-            CHECK(r.cutting->least_tilt_given);
-            // Held wherever the input itself keeps it (none of these inputs comes nearer).
-            CHECK(r.cutting->least_tilt_before_deg >= 4.0);
-            CHECK(r.cutting->points_below == 0);
-            CHECK(r.cutting->least_tilt_after_deg >= 4.0 - pipeline::kTiltAllowanceDeg);
-          }
+          // Asked (4 deg) or by default (the input's own least, rounded down to 0.1 deg), the
+          // least tilt is held wherever the input itself keeps it.
+          CHECK(r.cutting->least_tilt_given == tilt);
+          const double bound_deg = tilt ? 4.0 : r.cutting->least_tilt_deg;
+          CHECK(bound_deg >= 1.0);
+          CHECK(r.cutting->least_tilt_held);
+          CHECK(r.cutting->least_tilt_before_deg >= bound_deg);
+          CHECK(r.cutting->points_below == 0);
+          CHECK(r.cutting->least_tilt_after_deg >= bound_deg - pipeline::kTiltAllowanceDeg);
         }
       }
     }

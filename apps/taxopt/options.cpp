@@ -120,8 +120,8 @@ void add_method_options(CLI::App& app, Args& a) {
       ->group("Method");
   app.add_option("--min-tilt", a.min_tilt,
                  "least angle between an output axis and the surface normal at a contact, held "
-                 "where the input's own angle there is not less, deg (default: none held; the "
-                 "report measures against the input's least)")
+                 "where the input's own angle there is not less, deg (default: the input's least "
+                 "over the operation, rounded down to 0.1, at most 10, held from 1; 0: none held)")
       ->group("Method");
 }
 

@@ -87,9 +87,12 @@ struct JobOptions {
   /// (--min-tilt), deg: at the ball's tip the cutting speed is zero, so a CAM system leads or
   /// tilts the tool off the normal. At each contact the bound is the lesser of this and the
   /// input's own angle there: no method brings the axis nearer the normal than the CAM did, and
-  /// none is refused for an input that comes nearer than asked. Empty: no bound is held; the
-  /// report (OperationResult::Cutting) still measures the written angles against the input's
-  /// least, rounded down to 0.1 deg, and names the points below it.
+  /// none is refused for an input that comes nearer than asked. Empty: the input's own least
+  /// over the operation's touching feed points, rounded down to 0.1 deg, 10 deg at most (a
+  /// larger tilt is the CAM's for reach or clearance), held where it is 1 deg at least (an
+  /// input nearer the normal holds no lead); 0: no bound. Where no free axis keeps
+  /// it a point gives it up (FindingCode::LeastTiltNotKept); the report
+  /// (OperationResult::Cutting) names the points and moves below it.
   std::optional<double> min_tilt_deg;
   /// Where the program's zero sits in machine coordinates, mm (--work-offset; Machine's
   /// work_offset_mm, which this replaces).
@@ -351,14 +354,22 @@ struct OperationResult {
   /// sets the effective cutting diameter 2 R sin(angle) and speed pi D n.
   struct Cutting {
     /// The least tilt measured against (JobOptions::min_tilt_deg, else the input's least
-    /// rounded down to 0.1 deg) and whether it was given (and so held by the methods).
+    /// rounded down to 0.1 deg, 10 deg at most), whether it was given, and whether the methods
+    /// hold it (given and not 0; by default where it is 1 deg at least).
     double least_tilt_deg = 0.0;
     bool least_tilt_given = false;
-    /// Touching feed points whose written axis is nearer the normal than the least tilt (less
-    /// kTiltAllowanceDeg): where the input itself was nearer (the methods keep the input's angle
-    /// there), the first one's CL line and the least angle written.
+    bool least_tilt_held = false;
+    /// Touching feed points whose written axis is nearer the normal than the bound asked there
+    /// (the least tilt, or the input's own angle where that is less; less kTiltAllowanceDeg):
+    /// the points where no free axis keeps it (FindingCode::LeastTiltNotKept), and the first
+    /// one's CL line.
     std::size_t points_below = 0;
     int first_line_below = 0;
+    /// Feed moves between two touching points whose ends keep that bound but whose axis, as the
+    /// machine turns it between them, passes nearer the normal (the axis goes from one side of
+    /// the normal to the other within the move), and the first one's CL line (its end's).
+    std::size_t moves_past_normal = 0;
+    int first_line_past = 0;
     /// Over the touching feed points: the least angle from the normal, deg, and the effective
     /// cutting diameter's least and mean, mm; before (input axes) and after (written).
     double least_tilt_before_deg = 0.0, least_tilt_after_deg = 0.0;
@@ -456,6 +467,7 @@ enum class FindingCode {
   MeshSlivers,        ///< zero-area faces of the part's file dropped (no surface lost)
   PartTolerance,      ///< the part tolerance is not the larger contact tolerance given
   AxisRateRose,       ///< a rotary axis's peak omega or a above the input's (and why)
+  LeastTiltNotKept,   ///< no free axis in the cone keeps the least tilt from the normal there
   // Problems: the output is not to be used (JobResult::ok() is false).
   NoFreeAxis,            ///< no acceptable axis within the deviation cone at a point
   UnreachablePose,       ///< no pose within the machine's axis ranges

@@ -32,7 +32,8 @@ Severity severity_of(FindingCode code) {
     case FindingCode::FeedInAir:
     case FindingCode::MeshSlivers:
     case FindingCode::PartTolerance:
-    case FindingCode::AxisRateRose: return Severity::Warning;
+    case FindingCode::AxisRateRose:
+    case FindingCode::LeastTiltNotKept: return Severity::Warning;
     default: return Severity::Problem;
   }
 }

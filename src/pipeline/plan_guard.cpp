@@ -68,15 +68,7 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
   return hit;
 }
 
-namespace {
-
-/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks per axis
-/// and the sums of squares of a over the interior points (metrics' accumulate).
-struct PassRates {
-  RotaryKinematics k;
-  RotarySummary summary;
-};
-
+// (plan_rooms.hpp)
 /// The largest share of its machine limit any rotary axis reaches: of the peaks of a (`rms`
 /// false) or of the RMS of a (true). The limits are the machine's effective ones (its own,
 /// else the defaults), so that a B far slower than its C weighs as the machine feels it.
@@ -87,6 +79,15 @@ double worst_accel_share(const RotarySummary& s, const JointLimits& limits, bool
   const double c = rms ? s.c.rms_accel_deg_s2 : s.c.max_accel_deg_s2;
   return std::max(tilt / tilt_limit, c / c_limit);
 }
+
+namespace {
+
+/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks per axis
+/// and the sums of squares of a over the interior points (metrics' accumulate).
+struct PassRates {
+  RotaryKinematics k;
+  RotarySummary summary;
+};
 
 /// A pass gains on its reference when its worst axis's peak a falls by more than this share,
 /// or the worst axis's RMS a by more than kRmsGain: below that the axes would turn for an
@@ -128,6 +129,12 @@ class PassGuard {
     }
     const std::vector<char> ref_hit =
         moves_hit(ref_axes_, ref_plan.poses, std::vector<char>(n_, 1));
+    // Where the input hits the part its rates promise nothing: a pass guarded against another
+    // method's safe axes is then held to those (the global method never turns an axis faster
+    // than the paper's plan of a pass whose input collides).
+    const std::vector<char> input_hit =
+        reference_is_input_ ? ref_hit
+                            : moves_hit(input_axes_, input_plan.poses, std::vector<char>(n_, 1));
     std::vector<char> guarded(passes_.size(), 0);
     before_.assign(passes_.size(), {});
     bound_.assign(passes_.size(), {});
@@ -138,8 +145,17 @@ class PassGuard {
       if (!ref_safe || pass.size() == 0) continue;
       guarded[q] = 1;
       before_[q] = rates(pass, ref_plan.poses).summary;
-      // The promise is the input's, per axis, whatever the reference.
+      // The promise is the input's, per axis, whatever the reference, where the input is safe;
+      // where it is not, each axis may turn as fast as the higher of the input and the
+      // reference do (the demo's input holds C still and hits the part; the paper's free plan
+      // turns C).
+      bool input_safe = true;
+      for (std::size_t i = pass.begin; i < pass.end; ++i) input_safe = input_safe && !input_hit[i];
       bound_[q] = reference_is_input_ ? before_[q] : rates(pass, input_plan.poses).summary;
+      if (!reference_is_input_ && !input_safe) {
+        raise_to(bound_[q].tilt, before_[q].tilt);
+        raise_to(bound_[q].c, before_[q].c);
+      }
     }
     opt_preferred_ = out.preferred;
     const StretchEvaluation evaluate =
@@ -165,6 +181,12 @@ class PassGuard {
   std::vector<char> moves_hit(const std::vector<Vec3d>& axes, const std::vector<Posed>& poses,
                               const std::vector<char>& check) const {
     return points_and_moves_hit(in_, axes, poses, check);
+  }
+
+  /// `bound`'s peaks raised to `other`'s where those are higher.
+  static void raise_to(AxisPeaks& bound, const AxisPeaks& other) {
+    bound.max_omega_deg_s = std::max(bound.max_omega_deg_s, other.max_omega_deg_s);
+    bound.max_accel_deg_s2 = std::max(bound.max_accel_deg_s2, other.max_accel_deg_s2);
   }
 
   PassRates rates(const IndexRange& pass, const std::vector<Posed>& poses) const {

@@ -110,6 +110,10 @@ struct TimeContext {
 
 IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRange& pass);
 
+/// The largest share of its machine limit any rotary axis reaches: of the peaks of a (`rms`
+/// false) or of the RMS of a (true), against the machine's effective limits.
+double worst_accel_share(const RotarySummary& s, const JointLimits& limits, bool rms);
+
 OptimisedOperation optimise_paper(const OperationPlanInputs& in,
                                   const std::vector<double>& metric_feed,
                                   const PaperOptions& options, detail::StageProgress& progress);

@@ -113,10 +113,12 @@ struct OperationContext {
   /// The least tilt from the designed surface's normal a method keeps (JobOptions::
   /// min_tilt_deg, else the input's least over its touching feed points rounded down to
   /// 0.1 deg), whether it was given, and per point the bound (the lesser of it and the input's
-  /// own angle there; 0 where the ball does not touch). Set by the plan stage.
+  /// own angle there; 0 where the ball does not touch, or where no free axis keeps it: those
+  /// points are least_tilt_relaxed). Set by the plan stage.
   double least_tilt_deg = 0.0;
-  bool least_tilt_given = false;
+  bool least_tilt_given = false, least_tilt_held = false;
   std::vector<double> least_tilt_rad;
+  std::vector<std::size_t> least_tilt_relaxed;
   // plan: the method's axes (none: empty).
   std::optional<OptimisedOperation> optimised;
   // post: the input axes as the machine would have run them (the "before"; empty where they

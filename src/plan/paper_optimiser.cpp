@@ -73,6 +73,18 @@ class PassPlanner {
     axes_.assign(p_.input_axes.begin(), p_.input_axes.end());
     for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
     plan.repairs = repair();
+    // PaperOptions::resettle_rounds: the keys set again with the repair keys among them.
+    for (int round = 0; round < opt_.resettle_rounds && plan.repairs > 0; ++round) {
+      const std::vector<Vec3d> before = key_axes_;
+      optimise_keys();
+      bool moved = false;
+      for (std::size_t j = 0; j < keys_.size(); ++j) {
+        moved = moved || angle_between(before[j], key_axes_[j]) > 1e-9;
+      }
+      if (!moved) break;
+      for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
+      plan.repairs += repair();
+    }
     if (opt_.joint_smoothing) smooth_joints(plan);
     plan.axes = axes_;
     plan.keys = keys_;

@@ -390,11 +390,14 @@ void cutting_json(const OperationResult& r, nlohmann::json& o) {
   };
   o["cutting"] = {{"least_tilt_deg", c.least_tilt_deg},
                   {"least_tilt_from", c.least_tilt_given ? "option" : "input"},
-                  {"least_tilt_held", c.least_tilt_given},
+                  {"least_tilt_held", c.least_tilt_held},
                   {"points", c.points},
                   {"points_below_least_tilt", c.points_below},
                   {"first_line_below",
                    c.points_below ? nlohmann::json(c.first_line_below) : nlohmann::json(nullptr)},
+                  {"moves_past_normal", c.moves_past_normal},
+                  {"first_line_past", c.moves_past_normal ? nlohmann::json(c.first_line_past)
+                                                          : nlohmann::json(nullptr)},
                   {"before",
                    {{"least_tilt_deg", c.least_tilt_before_deg},
                     {"least_diameter_mm", c.least_diameter_before_mm},

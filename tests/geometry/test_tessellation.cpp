@@ -333,50 +333,61 @@ TEST_CASE(
     "[geometry][contact][slow]") {
   // The rates are the written program's, each block timed as the controller takes it: they
   // must not follow the facets (measured: input 78.3, paper 6.5, global 2.3 deg/s^2 at both
-  // steps).
+  // steps without a least tilt; held at the input's own, paper 54.3, global 24.1: the block's
+  // best axes pass the normal, which the bound forbids at every point).
   std::vector<double> paper_after, global_after;
-  for (double step : {0.5, 2.0}) {
-    INFO("block at " << step << " mm");
-    const Meshed s = block_mesh(step);
-    const Part part(s.mesh);
-    Toolpath tp;
-    Operationd op;
-    op.name = "BLOCK";
-    op.tool = Tool::ball_end_mill(2.0 * kBallMm, 5.0 * kBallMm);
-    op.tool.number = 1;
-    op.spindle_rpm = 8000.0;
-    op.cam_tolerance_mm = RasterOptions{}.chord_error_mm;
-    for (const GeneratedPoint& p : s.points) {
-      CLPointd c;
-      c.tip_mm = p.tip_mm;
-      c.axis = p.axis;
-      c.motion = p.rapid ? taxopt::Motion::Rapid : taxopt::Motion::Feed;
-      c.feed_mm_per_min = p.rapid ? 0.0 : 250.0;
-      op.points.push_back(c);
+  for (const bool held : {false, true}) {
+    for (double step : {0.5, 2.0}) {
+      INFO("block at " << step << " mm, least tilt " << (held ? "held" : "not held"));
+      const Meshed s = block_mesh(step);
+      const Part part(s.mesh);
+      Toolpath tp;
+      Operationd op;
+      op.name = "BLOCK";
+      op.tool = Tool::ball_end_mill(2.0 * kBallMm, 5.0 * kBallMm);
+      op.tool.number = 1;
+      op.spindle_rpm = 8000.0;
+      op.cam_tolerance_mm = RasterOptions{}.chord_error_mm;
+      for (const GeneratedPoint& p : s.points) {
+        CLPointd c;
+        c.tip_mm = p.tip_mm;
+        c.axis = p.axis;
+        c.motion = p.rapid ? taxopt::Motion::Rapid : taxopt::Motion::Feed;
+        c.feed_mm_per_min = p.rapid ? 0.0 : 250.0;
+        op.points.push_back(c);
+      }
+      tp.operations.push_back(op);
+      double before = 0.0, after[2] = {0.0, 0.0};
+      int k = 0;
+      for (Method method : {Method::Paper, Method::Global}) {
+        JobOptions options;
+        options.part = &part;
+        options.method = method;
+        if (!held) options.min_tilt_deg = 0.0;
+        const JobResult r = run_job(tp, default_machine(), options);
+        for (const std::string& p : r.problems) UNSCOPED_INFO(p);
+        REQUIRE(r.ok());
+        // Held, no written axis comes nearer the normal than the bound at any touching point.
+        REQUIRE(r.operations.at(0).cutting);
+        CHECK(r.operations.at(0).cutting->points_below == 0);
+        CHECK(r.operations.at(0).cutting->least_tilt_held == held);
+        before = r.operations.at(0).before.max_accel_deg_s2;
+        after[k++] = r.operations.at(0).after.max_accel_deg_s2;
+      }
+      std::printf("block %4.2f mm | input %8.1f | paper %8.1f | global %8.1f\n", step, before,
+                  after[0], after[1]);
+      // At least what the paper and global methods did on the analytic sine before exact
+      // contacts (-23 %, -76 %), and global never above the paper's; held, what the bound
+      // leaves of it (measured paper -31 %, global -69 %).
+      CHECK(after[0] <= (held ? 0.75 : 0.77) * before);
+      CHECK(after[1] <= (held ? 0.4 : 0.24) * before);
+      CHECK(after[1] <= after[0] * 1.001);
+      paper_after.push_back(after[0]);
+      global_after.push_back(after[1]);
     }
-    tp.operations.push_back(op);
-    double before = 0.0, after[2] = {0.0, 0.0};
-    int k = 0;
-    for (Method method : {Method::Paper, Method::Global}) {
-      JobOptions options;
-      options.part = &part;
-      options.method = method;
-      const JobResult r = run_job(tp, default_machine(), options);
-      for (const std::string& p : r.problems) UNSCOPED_INFO(p);
-      REQUIRE(r.ok());
-      before = r.operations.at(0).before.max_accel_deg_s2;
-      after[k++] = r.operations.at(0).after.max_accel_deg_s2;
-    }
-    std::printf("block %4.2f mm | input %8.1f | paper %8.1f | global %8.1f\n", step, before,
-                after[0], after[1]);
-    // At least what the paper and global methods did on the analytic sine before exact
-    // contacts (-23 %, -76 %), and global never above the paper's.
-    CHECK(after[0] <= 0.77 * before);
-    CHECK(after[1] <= 0.24 * before);
-    CHECK(after[1] <= after[0] * 1.001);
-    paper_after.push_back(after[0]);
-    global_after.push_back(after[1]);
   }
-  CHECK(paper_after[1] == Approx(paper_after[0]).epsilon(0.05));
-  CHECK(global_after[1] == Approx(global_after[0]).epsilon(0.05));
+  for (std::size_t h = 0; h < 2; ++h) {
+    CHECK(paper_after[2 * h + 1] == Approx(paper_after[2 * h]).epsilon(0.05));
+    CHECK(global_after[2 * h + 1] == Approx(global_after[2 * h]).epsilon(0.05));
+  }
 }

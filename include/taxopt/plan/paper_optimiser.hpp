@@ -55,6 +55,11 @@ struct PaperOptions {
   int max_sweeps = 12;
   /// Smooth the joints between intervals (fig. 19).
   bool joint_smoothing = true;
+  /// After the repair, set the keys again with the repair keys among them, fill and repair
+  /// anew (at most this many rounds; 0: the paper's single repair). A repair key is placed
+  /// with its neighbours fixed: where the free set has a hole the interpolation must pass (the
+  /// cap round the normal that --min-tilt keeps clear), the keys around it then follow it.
+  int resettle_rounds = 0;
 };
 
 /// One pass as the optimiser sees it.

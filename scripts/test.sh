@@ -47,6 +47,9 @@ rm -rf "$shared" build/consumer-shared build/consumer-pc build/cli-shared
 cmake --preset shared
 cmake --build --preset shared -j "$jobs"
 python3 scripts/check_exports.py build/shared/libtaxopt.so include/taxopt
+# The soname is major.minor, as the package's compatibility (SameMinorVersion) is.
+readelf -d build/shared/libtaxopt.so | grep SONAME
+readelf -d build/shared/libtaxopt.so | grep "\[libtaxopt.so.$(sed -n 's/^project(taxopt VERSION \([0-9]*\.[0-9]*\).*/\1/p' CMakeLists.txt)\]" >/dev/null
 for v in release shared; do
   mkdir -p build/cli-shared/$v
   ./build/$v/taxopt --in data/demo/sine.cls --part data/demo/sine.stl --quiet \
@@ -79,6 +82,11 @@ g++ -O1 examples/consumer/main.cpp -o build/consumer-pc/shared \
 # shellcheck disable=SC2046
 g++ -O1 examples/consumer/main.cpp -o build/consumer-pc/static \
   $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --static --cflags --libs taxopt) -std=c++17
+# The static library's private dependencies, every one a consumer links (toml++ reads a machine
+# file).
+for dep in tbb fcl gmp mpfr tomlplusplus; do
+  PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --print-requires-private taxopt | grep -x "$dep" >/dev/null
+done
 for v in shared static; do
   ./build/consumer-pc/$v data/demo/sine.cls data/demo/sine.stl build/consumer-pc/demo-$v.ngc
   cmp build/consumer/demo.ngc build/consumer-pc/demo-$v.ngc

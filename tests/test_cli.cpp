@@ -216,7 +216,11 @@ TEST_CASE("cli: generate refuses impossible settings with exit 2", "[cli][genera
   TempDir t;
   for (const std::string& bad :
        {std::string("--scallop 0"), std::string("--tool-radius -1"), std::string("--surface torus"),
-        std::string("--height 1 --wavelength 4")}) {
+        std::string("--height 1 --wavelength 4"),
+        // A surface the ball cannot follow, refused before its raster is made (it asked for
+        // 5.7 GB of points, then std::bad_alloc).
+        std::string("--wavelength 0.0001"), std::string("--wavelength 0.001"),
+        std::string("--surface bump --wavelength 0.0001")}) {
     INFO(bad);
     const auto r = run_taxopt("generate --out-cls " + t.path("s.cls") + " " + bad);
     CHECK(r.code == 2);

@@ -266,6 +266,9 @@ TEST_CASE(
          m.gcode.program.end_park_xy_mm = std::array<double, 2>{200.0, 0.0};
        },
        "Machine::gcode.program.end_park_xy_mm[X]"},
+      {"a linearisation finer than the written words",
+       [](Machine& m) { m.gcode.program.linearise_tolerance_mm = 1e-6; },
+       "Machine::gcode.program.linearise_tolerance_mm"},
   };
   for (const Bad& b : bad) {
     INFO(b.what);

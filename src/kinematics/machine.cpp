@@ -48,6 +48,9 @@ namespace {
   throw InputError(os.str());
 }
 
+/// The least linearisation tolerance, mm: the resolution of the written words.
+constexpr double kLeastLinearisationMm = 1e-3;
+
 void check_range(const std::string& field, double v, double lo, double hi,
                  const std::string& expected) {
   if (!(v >= lo && v <= hi)) refuse(field, expected, v);
@@ -197,6 +200,12 @@ void validate_program_template(const Machine& m) {
   check_range("gcode.program.retract_z_mm", t.retract_z_mm, -1e5, 1e5, "finite");
   check_range("gcode.program.linearise_tolerance_mm", t.linearise_tolerance_mm, 0.0, 1e3,
               "finite and >= 0");
+  // Finer than the written words (0.001 mm) no program holds it; 1e-6 mm asked 4,096 blocks a
+  // move (5 GB for a 3,000-point file).
+  if (t.linearise_tolerance_mm > 0.0 && t.linearise_tolerance_mm < kLeastLinearisationMm) {
+    refuse("gcode.program.linearise_tolerance_mm",
+           "0 (off) or at least 0.001 mm, the written words' resolution", t.linearise_tolerance_mm);
+  }
   check_range("gcode.program.blend_tolerance_mm", t.blend_tolerance_mm, 0.0, 1.0, "within [0, 1]");
   check_range("gcode.program.approach_clearance_mm", t.approach_clearance_mm, 0.0, 1000.0,
               "within [0, 1000]");

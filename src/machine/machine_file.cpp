@@ -311,8 +311,11 @@ class MachineParser {
     t.retract_z_mm = length_or(*g, "gcode", "retract_z_mm", t.retract_z_mm);
     if (auto* n = g->get("linearise_tolerance_mm")) {
       t.linearise_tolerance_mm = number_of(*n, "gcode.linearise_tolerance_mm");
-      if (t.linearise_tolerance_mm < 0.0) {
-        fail(line_of(*n), "gcode.linearise_tolerance_mm must be >= 0 (0: off)");
+      if (t.linearise_tolerance_mm < 0.0 ||
+          (t.linearise_tolerance_mm > 0.0 && t.linearise_tolerance_mm < 1e-3)) {
+        fail(line_of(*n),
+             "gcode.linearise_tolerance_mm must be 0 (off) or at least 0.001 mm, the written "
+             "words' resolution (finer, each move is cut into thousands of blocks)");
       }
     }
     if (auto* n = g->get("blend_tolerance_mm")) {

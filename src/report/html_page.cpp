@@ -6,6 +6,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 
 #include "html_page_script.hpp"
 #include "taxopt/core/error.hpp"
+#include "util/input_file.hpp"
 
 namespace taxopt {
 
@@ -21,15 +23,19 @@ namespace {
 
 std::string read_asset(const std::string& dir, const std::string& rel, const char* package) {
   const std::string path = dir + "/" + rel;
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  if (in) bytes << in.rdbuf();
-  if (!in || bytes.str().empty()) {
-    throw InputError(path, 0,
-                     std::string("cannot read this file, which the HTML page embeds: install ") +
-                         package + " (scripts/setup.sh does)");
-  }
-  return bytes.str();
+  const std::string missing =
+      std::string("cannot read this file, which the HTML page embeds: install ") + package +
+      " (scripts/setup.sh does)";
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, missing);
+  // A regular file of a library's size: a FIFO there blocked --html forever, /dev/zero read
+  // until memory ran out (issue 63.11).
+  constexpr std::uintmax_t kMostAssetBytes = 64u << 20;
+  const std::string bytes = detail::read_input_file(
+      path, kMostAssetBytes, "a JavaScript library", "this file, which the HTML page embeds",
+      "larger than 64 MB: no JavaScript library the HTML page embeds is");
+  if (bytes.empty()) throw InputError(path, 0, missing);
+  return bytes;
 }
 
 /// Data placed inside a <script> element: every '<' as "\u003c" (only JSON strings hold one), so

@@ -1,7 +1,10 @@
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -276,4 +279,15 @@ TEST_CASE(
   CHECK_THAT(r.err, Catch::Contains("three/three.min.js"));
   CHECK_FALSE(file_exists(t.path("p.html")));
   CHECK_FALSE(file_exists(t.path("p.nc")));
+  // A FIFO where a library should be: refused at once, never waited on (it blocked --html
+  // forever; issue 63.11).
+  const std::string js = t.path("js");
+  std::filesystem::create_directories(js + "/three");
+  REQUIRE(::mkfifo((js + "/three/three.min.js").c_str(), 0600) == 0);
+  ::setenv("TAXOPT_JAVASCRIPT_DIR", js.c_str(), 1);
+  r = run_taxopt("--in " + in + " --html " + t.path("p.html") + " -q");
+  ::unsetenv("TAXOPT_JAVASCRIPT_DIR");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("not a regular file"));
+  CHECK_FALSE(file_exists(t.path("p.html")));
 }

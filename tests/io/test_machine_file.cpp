@@ -357,6 +357,9 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(head + "header = \"M98\"\n", 9, "list of blocks");
   expect_error(head + "program_number = 10000\n", 9, "from 1 to 9999");
   expect_error(head + "end_park_xy_mm = [1e9, 0]\n", 9, "within [-1e5, 1e5] mm");
+  // Finer than the written words: 1e-6 mm cut each move into 4,096 blocks (5 GB; issue 63.11).
+  expect_error(head + "linearise_tolerance_mm = 1e-6\n", 9, "at least 0.001 mm");
+  CHECK_NOTHROW(parse_machine_toml(head + "linearise_tolerance_mm = 0.001\n", "m"));
   // Haas's O words take five digits (issue 63.12: 10000 was refused citing Fanuc's O9999).
   const Machine haas =
       parse_machine_toml(any + "dialect = \"haas\"\nprogram_number = 10000\n", "m");
@@ -364,7 +367,7 @@ TEST_CASE("machine file: the program template and the safe retract", "[io][machi
   expect_error(any + "dialect = \"haas\"\nprogram_number = 100000\n", 9, "(haas's O1 to O99999)");
   expect_error(head + "program_name = \"a b\"\n", 9, "letters, digits");
   expect_error(head + "coolant = \"through\"\n", 9, "\"none\", \"flood\" or \"mist\"");
-  expect_error(head + "linearise_tolerance_mm = -1\n", 9, ">= 0");
+  expect_error(head + "linearise_tolerance_mm = -1\n", 9, "0 (off) or at least 0.001 mm");
 }
 
 TEST_CASE(

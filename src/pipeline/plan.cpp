@@ -193,9 +193,9 @@ class OperationPlanner {
       const std::vector<char> hit = hit_points(*o_.optimised);
       std::vector<std::size_t> in_hit_passes;
       for (const IndexRange& pass : feed_passes(op_)) {
-        if (std::find(hit.begin() + static_cast<long>(pass.begin),
-                      hit.begin() + static_cast<long>(pass.end),
-                      1) == hit.begin() + static_cast<long>(pass.end)) {
+        const auto first = hit.begin() + static_cast<long>(pass.begin);
+        if (std::find(first, first + static_cast<long>(pass.size()), 1) ==
+            first + static_cast<long>(pass.size())) {
           continue;
         }
         for (std::size_t i = pass.begin; i < pass.end; ++i) in_hit_passes.push_back(i);

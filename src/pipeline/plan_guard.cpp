@@ -80,14 +80,23 @@ double worst_accel_share(const RotarySummary& s, const JointLimits& limits, bool
   return std::max(tilt / tilt_limit, c / c_limit);
 }
 
-namespace {
+// (plan_rooms.hpp)
+PassRates pass_rates(const OperationPlanInputs& in, const IndexRange& pass,
+                     const std::vector<Posed>& poses) {
+  std::vector<double> a, c;
+  for (std::size_t i = pass.begin; i < pass.end; ++i) {
+    a.push_back(rad_to_deg(poses[i].tilt_rad));
+    c.push_back(rad_to_deg(poses[i].c_rad));
+  }
+  PassRates r{
+      rotary_kinematics_from_times(
+          a, c, move_times_s(in.op, in.ball_radius_mm, in.machine.rotary, poses, in.timing, pass)),
+      {}};
+  accumulate(r.summary, r.k, c);
+  return r;
+}
 
-/// The rates of a pass for poses of the whole operation (eq. 16-18), with their peaks per axis
-/// and the sums of squares of a over the interior points (metrics' accumulate).
-struct PassRates {
-  RotaryKinematics k;
-  RotarySummary summary;
-};
+namespace {
 
 /// A pass gains on its reference when its worst axis's peak a falls by more than this share,
 /// or the worst axis's RMS a by more than kRmsGain: below that the axes would turn for an
@@ -130,8 +139,7 @@ class PassGuard {
     const std::vector<char> ref_hit =
         moves_hit(ref_axes_, ref_plan.poses, std::vector<char>(n_, 1));
     // Where the input hits the part its rates promise nothing: a pass guarded against another
-    // method's safe axes is then held to those (the global method never turns an axis faster
-    // than the paper's plan of a pass whose input collides).
+    // method's safe axes may then turn each axis as fast as those do (below).
     const std::vector<char> input_hit =
         reference_is_input_ ? ref_hit
                             : moves_hit(input_axes_, input_plan.poses, std::vector<char>(n_, 1));
@@ -190,18 +198,7 @@ class PassGuard {
   }
 
   PassRates rates(const IndexRange& pass, const std::vector<Posed>& poses) const {
-    std::vector<double> a, c;
-    for (std::size_t i = pass.begin; i < pass.end; ++i) {
-      a.push_back(rad_to_deg(poses[i].tilt_rad));
-      c.push_back(rad_to_deg(poses[i].c_rad));
-    }
-    PassRates r{
-        rotary_kinematics_from_times(
-            a, c,
-            move_times_s(in_.op, in_.ball_radius_mm, in_.machine.rotary, poses, in_.timing, pass)),
-        {}};
-    accumulate(r.summary, r.k, c);
-    return r;
+    return pass_rates(in_, pass, poses);
   }
 
   /// The preferred poses of a candidate: the optimiser's where optimised, the reference's

@@ -42,16 +42,8 @@ double pass_worst_share(const OperationPlanInputs& in, const IndexRange& pass,
   if (!plan.ok()) return std::numeric_limits<double>::infinity();
   std::vector<Posed> poses(in.op.points.size());
   std::copy(plan.poses.begin(), plan.poses.end(), poses.begin() + static_cast<long>(pass.begin));
-  std::vector<double> a, c;
-  for (const Posed& p : plan.poses) {
-    a.push_back(rad_to_deg(p.tilt_rad));
-    c.push_back(rad_to_deg(p.c_rad));
-  }
-  const RotaryKinematics k = rotary_kinematics_from_times(
-      a, c, move_times_s(in.op, in.ball_radius_mm, in.machine.rotary, poses, in.timing, pass));
-  RotarySummary summary;
-  accumulate(summary, k, c);
-  return worst_accel_share(summary, effective_limits(in.machine), false);
+  return worst_accel_share(pass_rates(in, pass, poses).summary, effective_limits(in.machine),
+                           false);
 }
 
 /// The pass's stretches near the pole re-planned in machine space (pole_passage.hpp), each

@@ -110,6 +110,16 @@ struct TimeContext {
 
 IndexRange contact_span(const std::vector<ContactPoint>& contacts, const IndexRange& pass);
 
+/// The rates of a pass for poses of the whole operation (eq. 16-18) at the program's timing,
+/// with their peaks per axis and the sums of squares of a over the interior points (metrics'
+/// accumulate).
+struct PassRates {
+  RotaryKinematics k;
+  RotarySummary summary;
+};
+PassRates pass_rates(const OperationPlanInputs& in, const IndexRange& pass,
+                     const std::vector<Posed>& poses);
+
 /// The largest share of its machine limit any rotary axis reaches: of the peaks of a (`rms`
 /// false) or of the RMS of a (true), against the machine's effective limits.
 double worst_accel_share(const RotarySummary& s, const JointLimits& limits, bool rms);

@@ -75,13 +75,7 @@ class PassPlanner {
     plan.repairs = repair();
     // PaperOptions::resettle_rounds: the keys set again with the repair keys among them.
     for (int round = 0; round < opt_.resettle_rounds && plan.repairs > 0; ++round) {
-      const std::vector<Vec3d> before = key_axes_;
-      optimise_keys();
-      bool moved = false;
-      for (std::size_t j = 0; j < keys_.size(); ++j) {
-        moved = moved || angle_between(before[j], key_axes_[j]) > 1e-9;
-      }
-      if (!moved) break;
+      if (!optimise_keys()) break;
       for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
       plan.repairs += repair();
     }
@@ -213,7 +207,9 @@ class PassPlanner {
   }
 
   /// Sweeps over the keys until none moves.
-  void optimise_keys() {
+  /// Returns whether any key moved.
+  bool optimise_keys() {
+    bool any = false;
     for (int sweep = 0; sweep < opt_.max_sweeps; ++sweep) {
       bool moved = false;
       for (std::size_t j = 0; j < keys_.size(); ++j) {
@@ -222,8 +218,10 @@ class PassPlanner {
         if (angle_between(*v, key_axes_[j]) > 1e-9) moved = true;
         key_axes_[j] = *v;
       }
+      any = any || moved;
       if (!moved) break;
     }
+    return any;
   }
 
   /// Arc-length slerp over the interval from key k to key k + 1.

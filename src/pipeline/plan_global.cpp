@@ -17,80 +17,166 @@
 
 namespace taxopt::pipeline {
 
+namespace {
+
+/// One pass's global plan (plan_pass_global) over its cut from given start poses (the whole
+/// operation's), at the program's timing, within the cone, with --objective time's context.
+class PassSolver {
+ public:
+  PassSolver(const OperationPlanInputs& in, const GlobalOptions& options, const TimeContext* time,
+             const Acceptance& acceptable_at)
+      : in_(in), options_(options), time_(time), acceptable_at_(acceptable_at) {}
+
+  std::optional<GlobalPassPlan> solve(const IndexRange& pass, const std::vector<Posed>& start,
+                                      bool hold_tilt, bool hold_c,
+                                      GlobalPassProblem::Admissible admissible = {}) const {
+    const Operationd& op = in_.op;
+    GlobalPassProblem problem;
+    problem.hold_tilt = hold_tilt;
+    problem.hold_c = hold_c;
+    problem.keep_peaks = hold_tilt || hold_c;
+    problem.admissible = std::move(admissible);
+    for (std::size_t i = pass.begin; i < pass.end; ++i) {
+      problem.input_axes.push_back(op.points[i].axis);
+      problem.warm_start.push_back(start[i]);
+    }
+    // The program's own timing with the start's tips (move_times_s: the report's and the
+    // guard's); a move too short to time gets a floor (it would divide).
+    problem.segment_time_s =
+        move_times_s(op, in_.ball_radius_mm, in_.machine.rotary, start, in_.timing, pass);
+    for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
+    const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
+      return acceptable_at_.in_cone(pass.begin + j, axis);
+    };
+    if (time_) add_time_context(pass, acceptable, problem);
+    return plan_pass_global(in_.machine.rotary, problem, acceptable, options_);
+  }
+
+ private:
+  /// --objective time: the joints of a pose (the schedule's, whatever the G-code mode: the tip
+  /// under the fixed ball centre, carried by the table), the programmed times, the limits, and
+  /// the alternatives acceptable over the pass (holding what the problem holds).
+  void add_time_context(const IndexRange& pass, const AxisTest& acceptable,
+                        GlobalPassProblem& problem) const {
+    const Operationd& op = in_.op;
+    const Machine& machine = in_.machine;
+    problem.joints_at = [&op, &machine, r = in_.ball_radius_mm, b = pass.begin](std::size_t j,
+                                                                                const Posed& pose) {
+      const Vec3d tip = tip_for_axis(op.points[b + j], r, machine.rotary.forward(pose));
+      const Vec3d xyz = machine.rotary.to_machine_mm(tip, pose);
+      return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.tilt_rad),
+                           rad_to_deg(pose.c_rad)};
+    };
+    problem.programmed_time_s = slice(time_->programmed_s, pass.begin + 1, pass.end);
+    problem.limits = time_->limits;
+    for (const std::vector<Posed>& alt : time_->alternatives) {
+      std::vector<Posed> poses = slice(alt, pass.begin, pass.end);
+      bool ok = true;
+      for (std::size_t j = 0; ok && j < poses.size(); ++j) {
+        ok = machine.rotary.tilt.contains(poses[j].tilt_rad) &&
+             acceptable(j, machine.rotary.forward(poses[j])) &&
+             (!problem.hold_tilt || poses[j].tilt_rad == problem.warm_start[j].tilt_rad) &&
+             (!problem.hold_c || poses[j].c_rad == problem.warm_start[j].c_rad);
+      }
+      if (ok) problem.alternatives.push_back(std::move(poses));
+    }
+  }
+
+  const OperationPlanInputs& in_;
+  const GlobalOptions& options_;
+  const TimeContext* time_;
+  const Acceptance& acceptable_at_;
+};
+
+/// Whether the input's axes clear the part at every point of a pass (without a part: true).
+bool input_clear(const OperationPlanInputs& in, const IndexRange& pass) {
+  if (!in.input_clear) return true;
+  for (std::size_t i = pass.begin; i < pass.end && i < in.input_clear->size(); ++i) {
+    if (!(*in.input_clear)[i]) return false;
+  }
+  return true;
+}
+
+/// Whether a plan of a pass's cut (`cut`, its poses `plan`) keeps each rotary axis's peak
+/// omega and a over the whole pass within the input's (a still axis within kStillOmegaDegS and
+/// kStillAccelDegS2), as the guard holds it: the input's poses with the pass's replaced by the
+/// plan's, the points in the air before and after the cut on its end poses.
+bool within_input(const OperationPlanInputs& in, const IndexRange& whole, const IndexRange& cut,
+                  const RotarySummary& input, std::vector<Posed> poses,
+                  const std::vector<Posed>& plan) {
+  for (std::size_t i = whole.begin; i < whole.end; ++i) {
+    poses[i] = plan[std::clamp(i, cut.begin, cut.end - 1) - cut.begin];
+  }
+  const RotarySummary s = pass_rates(in, whole, poses).summary;
+  const auto under = [](double value, double bound, double still) {
+    return value <= std::max(bound * (1.0 + 1e-9), still);
+  };
+  return under(s.tilt.max_omega_deg_s, input.tilt.max_omega_deg_s, kStillOmegaDegS) &&
+         under(s.c.max_omega_deg_s, input.c.max_omega_deg_s, kStillOmegaDegS) &&
+         under(s.tilt.max_accel_deg_s2, input.tilt.max_accel_deg_s2, kStillAccelDegS2) &&
+         under(s.c.max_accel_deg_s2, input.c.max_accel_deg_s2, kStillAccelDegS2);
+}
+
+}  // namespace
+
 /// --method global (global_optimiser.hpp) on every feed pass of `op`, from the paper's axes in
-/// `out` (the warm start), in parallel over passes. The points between passes then follow the
-/// new pass ends; a guard gives a pass back the paper's axes (or `reference`'s) where its peak
-/// a would rise or its moves would hit the part. With `time` (--objective time) the passes get
-/// their joints, programmed times and alternatives from it.
+/// `out` (the warm start), in parallel over passes. Where the input holds a rotary axis still
+/// over a pass's cut (a 4-axis cut, a chamfer at a constant tilt), a second plan holds it at
+/// the input's values and moves the other alone (GlobalPassProblem::hold_tilt, hold_c), never
+/// above the input's peaks; the pass takes it where the free plan raises an axis above the
+/// input's peaks (the guard gives such a pass back: a chamfer round a block, its tilt still at
+/// 45 deg, kept its input's C a of 4,843 deg/s^2 whole; held, 215) or where it is better. The
+/// points between passes then follow the new pass ends; a guard gives a pass back the paper's axes
+/// (or `reference`'s) where its peak a would rise or its moves would hit the part. With `time`
+/// (--objective time) the passes get their joints, programmed times and alternatives from it.
 void refine_global(const OperationPlanInputs& in, const GlobalOptions& options,
                    OptimisedOperation& out, detail::StageProgress& progress,
                    const TimeContext* time, const GuardReference* reference) {
   const Operationd& op = in.op;
-  const std::vector<ContactPoint>& contacts = in.contacts;
-  const double ball_radius_mm = in.ball_radius_mm;
-  const Machine& machine = in.machine;
-  const std::size_t n = op.points.size();
   const std::vector<IndexRange> passes = feed_passes(op);
   const PosePlan warm =
-      plan_poses(machine.rotary, out.axes, rapid_into_of(op), {}, in.pose_options);
+      plan_poses(in.machine.rotary, out.axes, rapid_into_of(op), {}, in.pose_options);
   if (!warm.ok()) {
     for (std::size_t q = 0; q < passes.size(); ++q) progress.advance();
     return;
   }
   const GuardReference paper{out.axes, {}};
   const Acceptance acceptable_at{in, deg_to_rad(options.max_deviation_deg)};
+  std::vector<Vec3d> input_axes;
+  for (const CLPointd& p : op.points) input_axes.push_back(p.axis);
+  const PosePlan input_plan =
+      plan_poses(in.machine.rotary, input_axes, rapid_into_of(op), {}, in.pose_options);
+  const PassSolver solver(in, options, time, acceptable_at);
   // Each pass's cut: from the first to the last contact of the pass (all of it without a part).
   // The points in the air before and after keep the axis of the nearest contact, as with the
   // paper method: the tool comes down and leaves along the axis it cuts with.
   const auto plan_pass = [&](std::size_t, const IndexRange& whole) -> std::optional<PassAxes> {
-    const IndexRange pass = contact_span(contacts, whole);
+    const IndexRange pass = contact_span(in.contacts, whole);
     if (pass.size() < 3) return std::nullopt;
-    GlobalPassProblem problem;
-    std::vector<double> tilt_deg, c_deg;
-    for (std::size_t i = pass.begin; i < pass.end; ++i) {
-      problem.input_axes.push_back(op.points[i].axis);
-      problem.warm_start.push_back(warm.poses[i]);
-      tilt_deg.push_back(rad_to_deg(warm.poses[i].tilt_rad));
-      c_deg.push_back(rad_to_deg(warm.poses[i].c_rad));
-    }
-    // The program's own timing with the warm start's tips (move_times_s: the report's and the
-    // guard's); a move too short to time gets a floor (it would divide).
-    problem.segment_time_s =
-        move_times_s(op, ball_radius_mm, machine.rotary, warm.poses, in.timing, pass);
-    for (double& t : problem.segment_time_s) t = std::max(t, 1e-6);
-    const AxisTest acceptable = [&](std::size_t j, const Vec3d& axis) {
-      return acceptable_at.in_cone(pass.begin + j, axis);
-    };
-    if (time) {
-      // The machine's joints of a pose (the schedule's, whatever the G-code mode): the tip
-      // under the fixed ball centre, carried by the table.
-      problem.joints_at = [&op, &machine, ball_radius_mm, b = pass.begin](std::size_t j,
-                                                                          const Posed& pose) {
-        const Vec3d tip =
-            tip_for_axis(op.points[b + j], ball_radius_mm, machine.rotary.forward(pose));
-        const Vec3d xyz = machine.rotary.to_machine_mm(tip, pose);
-        return JointPosition{xyz.x(), xyz.y(), xyz.z(), rad_to_deg(pose.tilt_rad),
-                             rad_to_deg(pose.c_rad)};
-      };
-      problem.programmed_time_s = slice(time->programmed_s, pass.begin + 1, pass.end);
-      problem.limits = time->limits;
-      for (const std::vector<Posed>& alt : time->alternatives) {
-        std::vector<Posed> poses = slice(alt, pass.begin, pass.end);
-        bool ok = true;
-        for (std::size_t j = 0; ok && j < poses.size(); ++j) {
-          ok = machine.rotary.tilt.contains(poses[j].tilt_rad) &&
-               acceptable(j, machine.rotary.forward(poses[j]));
+    std::optional<GlobalPassPlan> plan = solver.solve(pass, warm.poses, false, false);
+    if (input_plan.ok() && input_clear(in, whole)) {
+      // Still over the whole pass, as the guard bounds it (where the input hits the part the
+      // guard's bounds are the reference's too: the free plan is held to no still axis).
+      const RotarySummary input = pass_rates(in, whole, input_plan.poses).summary;
+      const bool still_tilt = input.tilt.max_omega_deg_s < kStillOmegaDegS;
+      const bool still_c = input.c.max_omega_deg_s < kStillOmegaDegS;
+      if (still_tilt != still_c) {
+        const auto within_pass = [&](const std::vector<Posed>& poses) {
+          return within_input(in, whole, pass, input, input_plan.poses, poses);
+        };
+        std::optional<GlobalPassPlan> held =
+            solver.solve(pass, input_plan.poses, still_tilt, still_c, within_pass);
+        if (held && within_pass(held->poses) &&
+            (!plan || !within_pass(plan->poses) || held->objective < plan->objective)) {
+          plan = std::move(held);
         }
-        if (ok) problem.alternatives.push_back(std::move(poses));
       }
     }
-    std::optional<GlobalPassPlan> plan =
-        plan_pass_global(machine.rotary, problem, acceptable, options);
     if (!plan) return std::nullopt;
     return PassAxes{pass, std::move(plan->axes), std::move(plan->poses)};
   };
-  out.preferred.assign(n, std::nullopt);
-  plan_passes(op, contacts, acceptable_at, out, progress, plan_pass,
+  out.preferred.assign(op.points.size(), std::nullopt);
+  plan_passes(op, in.contacts, acceptable_at, out, progress, plan_pass,
               [&](std::size_t, const PassAxes&) { ++out.global_passes; });
   out.global_guard = guard_passes(in, out, reference ? reference : &paper);
 }

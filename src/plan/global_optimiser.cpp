@@ -8,9 +8,11 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "plan/candidate_paths.hpp"
+#include "plan/held_axis.hpp"
 #include "taxopt/kinematics/metrics.hpp"
 
 namespace taxopt {
@@ -284,11 +286,22 @@ class GlobalPassPlanner {
     if (n_ < 3) return finish();
     const std::vector<Posed> dp = programme();
     if (!timed_) {
-      const Value current = value_of(plan_.poses, problem_.segment_time_s, options_.jerk_weight_s2);
-      const Value dp_full = value_of(dp, problem_.segment_time_s, options_.jerk_weight_s2);
-      if (less(dp_full, current, options_.objective)) plan_.poses = dp;
-      plan_.iterations =
-          refine(problem_.segment_time_s, options_.objective, options_.max_iterations, {});
+      const std::vector<double>& t = problem_.segment_time_s;
+      const Value current = value_of(plan_.poses, t, options_.jerk_weight_s2);
+      const Value dp_full = value_of(dp, t, options_.jerk_weight_s2);
+      const Peaks bound = peaks_of(plan_.poses, t);
+      const auto within = [&](const std::vector<Posed>& poses) {
+        return allowed_plan(poses, t, bound);
+      };
+      if (less(dp_full, current, options_.objective) && within(dp)) plan_.poses = dp;
+      if (const auto low = low_passed_plan(t, bound)) {
+        if (less(value_of(*low, t, options_.jerk_weight_s2),
+                 value_of(plan_.poses, t, options_.jerk_weight_s2), options_.objective)) {
+          plan_.poses = *low;
+        }
+      }
+      plan_.iterations = refine(t, options_.objective, options_.max_iterations,
+                                problem_.keep_peaks || problem_.admissible ? within : Admissible{});
       return finish();
     }
     fastest(dp);
@@ -334,6 +347,7 @@ class GlobalPassPlanner {
                                      options_.jerk_weight_s2);
   }
   GlobalPassPlan finish() {
+    snap_to_warm();
     plan_.axes.clear();
     for (const Posed& p : plan_.poses) plan_.axes.push_back(machine_.forward(p));
     plan_.objective = objective_of(plan_.poses);
@@ -361,8 +375,9 @@ class GlobalPassPlanner {
       if (timed_) {
         for (const auto& alt : problem_.alternatives) extra.push_back(alt[i]);
       }
-      cand_[i] =
-          candidates_at(machine_, i, problem_.warm_start[i], extra, grid, near_pole, acceptable_);
+      cand_[i] = held() ? held_candidates(i, problem_.warm_start[i], radius, step / 2.0, extra)
+                        : candidates_at(machine_, i, problem_.warm_start[i], extra, grid, near_pole,
+                                        acceptable_);
       plan_.max_candidates = std::max(plan_.max_candidates, cand_[i].size());
     }
     std::vector<std::size_t> seq;
@@ -385,8 +400,12 @@ class GlobalPassPlanner {
       const double fine = deg_to_rad(std::max(options_.fine_step_deg, 0.25));
       for (double s = step / 2.0; s >= fine * (1.0 - 1e-9); s /= 2.0) {
         for (std::size_t i = 0; i < n; ++i) {
-          const std::vector<Vec3d> grid = cap_grid(machine_.forward(dp[i]), 2.0 * s, s);
-          cand_[i] = candidates_at(machine_, i, dp[i], {}, grid, false, acceptable_);
+          if (held()) {
+            cand_[i] = held_candidates(i, dp[i], 2.0 * s, s, {});
+          } else {
+            const std::vector<Vec3d> grid = cap_grid(machine_.forward(dp[i]), 2.0 * s, s);
+            cand_[i] = candidates_at(machine_, i, dp[i], {}, grid, false, acceptable_);
+          }
           plan_.max_candidates = std::max(plan_.max_candidates, cand_[i].size());
         }
         std::vector<Posed> finer = poses_of(best_candidate_sequence(
@@ -417,6 +436,61 @@ class GlobalPassPlanner {
     return out;
   }
 
+  bool held() const { return problem_.hold_tilt || problem_.hold_c; }
+
+  using Admissible = GlobalPassProblem::Admissible;
+  using Peaks = detail::RatePeaks;
+  static Peaks peaks_of(const std::vector<Posed>& poses, const std::vector<double>& t) {
+    return detail::rate_peaks(poses, t);
+  }
+
+  /// The pass with its held axis (held() and not both).
+  detail::HeldAxis held_axis() const {
+    return detail::HeldAxis(problem_.hold_tilt, problem_.warm_start,
+                            [this](std::size_t i, const Posed& p) { return feasible(i, p); });
+  }
+
+  /// The candidates of point i with an axis held (HeldAxis::candidates; only `centre` when both
+  /// are).
+  std::vector<Posed> held_candidates(std::size_t i, const Posed& centre, double radius, double step,
+                                     const std::vector<Posed>& extra) const {
+    if (problem_.hold_tilt && problem_.hold_c) return {centre};
+    return held_axis().candidates(i, centre, radius, step, extra);
+  }
+
+  /// With an axis held, the plan's turns too small to write taken back (HeldAxis::snapped)
+  /// where it stays allowed.
+  void snap_to_warm() {
+    if (!held() || plan_.poses.size() != n_) return;
+    const std::vector<Posed> snapped = held_axis().snapped(plan_.poses);
+    const std::vector<double>& t = problem_.segment_time_s;
+    if (allowed_plan(snapped, t, peaks_of(problem_.warm_start, t))) plan_.poses = snapped;
+  }
+
+  /// A plan the problem allows: within the warm start's peaks (`bound`, at times t) where it
+  /// keeps them, and passing the caller's test where it gives one.
+  bool allowed_plan(const std::vector<Posed>& poses, const std::vector<double>& t,
+                    const Peaks& bound) const {
+    return (!problem_.keep_peaks || peaks_of(poses, t).within(bound)) &&
+           (!problem_.admissible || problem_.admissible(poses));
+  }
+
+  /// With one axis held: of the other's low-passed plans (HeldAxis::low_passed_plans: its rate
+  /// never above the warm start's peak), the allowed one of the lowest objective; empty when
+  /// none is.
+  std::optional<std::vector<Posed>> low_passed_plan(const std::vector<double>& t,
+                                                    const Peaks& bound) const {
+    if (!held() || (problem_.hold_tilt && problem_.hold_c)) return std::nullopt;
+    std::optional<std::vector<Posed>> best;
+    double best_value = 0.0;
+    for (std::vector<Posed>& poses : held_axis().low_passed_plans(t)) {
+      if (!allowed_plan(poses, t, bound)) continue;
+      const double value = objective_of(poses);
+      if (!best || value < best_value) best = std::move(poses), best_value = value;
+    }
+    return best;
+  }
+
   bool feasible(std::size_t i, const Posed& p) const {
     if (!machine_.tilt.contains(p.tilt_rad)) return false;
     if (!machine_.c.continuous && !machine_.c.contains(p.c_rad)) return false;
@@ -426,7 +500,7 @@ class GlobalPassPlanner {
   /// (2) Continuous refinement from `plan_.poses`, minimising `obj` at segment times `tt`; a
   /// step is taken only where `admissible` (if given) accepts it. Returns the steps taken.
   int refine(const std::vector<double>& tt, GlobalObjective obj, int budget,
-             const std::function<bool(const std::vector<Posed>&)>& admissible) {
+             const Admissible& admissible) {
     const std::size_t n = n_;
     const double wj = options_.jerk_weight_s2;
     const GlobalOptions& options = options_;
@@ -465,7 +539,8 @@ class GlobalPassPlanner {
       if (!da.allFinite() || !dc.allFinite()) break;
       std::vector<Posed> trial = plan.poses;
       for (std::size_t i = 0; i < n; ++i) {
-        const double sa = da[static_cast<long>(i)], sc = dc[static_cast<long>(i)];
+        const double sa = problem_.hold_tilt ? 0.0 : da[static_cast<long>(i)];
+        const double sc = problem_.hold_c ? 0.0 : dc[static_cast<long>(i)];
         if (std::abs(sa) + std::abs(sc) < 1e-12) continue;
         double f = 1.0;
         for (int b = 0; b <= options.bisection_steps; ++b, f *= 0.5) {
@@ -497,13 +572,24 @@ class GlobalPassPlanner {
   /// first, so ties keep it), then the sum of squares lowered at the scheduled times, a step
   /// taken only where the schedule does not get slower; the times follow the poses (rounds).
   void fastest(const std::vector<Posed>& dp) {
+    const std::vector<double>& t = problem_.segment_time_s;
+    const Peaks warm_peaks = peaks_of(problem_.warm_start, t);
+    const auto allowed = [&](const std::vector<Posed>& poses) {
+      return allowed_plan(poses, t, warm_peaks);
+    };
     double best_s = plan_.objective_warm;
     for (const auto& alt : problem_.alternatives) {
       const double alt_s = time_of(alt);
-      if (alt_s < best_s * (1.0 - 1e-9)) plan_.poses = alt, best_s = alt_s;
+      if (alt_s < best_s * (1.0 - 1e-9) && allowed(alt)) plan_.poses = alt, best_s = alt_s;
     }
     plan_.objective_dp = time_of(dp);
-    if (plan_.objective_dp < best_s * (1.0 - 1e-9)) plan_.poses = dp, best_s = plan_.objective_dp;
+    if (plan_.objective_dp < best_s * (1.0 - 1e-9) && allowed(dp)) {
+      plan_.poses = dp, best_s = plan_.objective_dp;
+    }
+    if (const auto low = low_passed_plan(t, warm_peaks)) {
+      const double low_s = time_of(*low);
+      if (low_s < best_s * (1.0 - 1e-9)) plan_.poses = *low, best_s = low_s;
+    }
     for (int round = 0; round < 3 && plan_.iterations < options_.max_iterations; ++round) {
       FeedSchedule schedule =
           pass_schedule(joints_of(plan_.poses), problem_.programmed_time_s, problem_.limits);
@@ -511,6 +597,7 @@ class GlobalPassPlanner {
       const int taken =
           refine(schedule.time_s, GlobalObjective::SumSquares,
                  options_.max_iterations - plan_.iterations, [&](const std::vector<Posed>& trial) {
+                   if (!allowed(trial)) return false;
                    const double trial_s = time_of(trial);
                    if (trial_s > best_s * (1.0 + 1e-12)) return false;
                    best_s = trial_s;

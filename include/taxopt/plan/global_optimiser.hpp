@@ -94,6 +94,24 @@ struct GlobalPassProblem {
   std::vector<double> programmed_time_s;
   JointLimits limits{};
   std::vector<std::vector<Posed>> alternatives;
+  /// Rotary axes held at the warm start's values, each pose's own: the programme's candidates
+  /// and the refinement move only the other axis. For an axis the input holds still over the
+  /// pass (a 4-axis cut, a chamfer at a constant tilt): the promise that no axis runs faster
+  /// than the input's keeps it still, so a plan that moves it is never written, and the other
+  /// axis alone can still be smoothed (a chamfer's C round its corners). Alternatives must hold
+  /// them too.
+  bool hold_tilt = false, hold_c = false;
+  /// No axis's peak omega or a above the warm start's (each axis on its own, at
+  /// segment_time_s): the programme's answer and every refinement step that would raise one are
+  /// refused. With the warm start the input's, the plan keeps the promise the guard holds it to
+  /// (a sum of squares can fall while one axis's peak rate rises: a chamfer's C smoothed round
+  /// a corner turned faster into it).
+  bool keep_peaks = false;
+  /// The caller's own test of a plan (n poses), where it judges more than the pass's cut (the
+  /// rates into and out of it): when given, the programme's answer, every low-passed plan of a
+  /// held axis and every refinement step must pass it. The warm start should.
+  using Admissible = std::function<bool(const std::vector<Posed>&)>;
+  Admissible admissible;
 };
 
 /// The poses of a pass and how they came about.

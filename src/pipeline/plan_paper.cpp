@@ -7,6 +7,7 @@
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
 #include "plan/air_turn.hpp"
+#include "plan/paper_single.hpp"
 #include "plan/pole_passage.hpp"
 #include "plan/stretch_guard.hpp"
 #include "taxopt/core/error.hpp"
@@ -119,19 +120,17 @@ OptimisedOperation optimise_paper(const OperationPlanInputs& in,
       return replan_pole_passages(acceptable_at, pass, problem.segment_mm,
                                   pass_feeds(metric_feed, pass), plan);
     };
-    PassPlan plan = plan_pass_paper(problem, acceptable, options);
+    std::optional<PassPlan> single;
+    PassPlan plan = detail::plan_pass_paper(problem, acceptable, options, single);
     pole_stretches[q] = pole_passages(plan);
-    if (options.resettle_rounds > 0 && plan.repairs > 0) {
+    if (single) {
       // The keys resettled round a held least tilt's cap, or the paper's single repair where
       // that turns the axes less (the repairs round a collision settle either way: the Haas
       // job's curve fillet, resettled, raised B 740 -> 987 deg/s^2).
-      PaperOptions single = options;
-      single.resettle_rounds = 0;
-      PassPlan other = plan_pass_paper(problem, acceptable, single);
-      const std::size_t other_poles = pole_passages(other);
-      if (pass_worst_share(in, pass, other.axes) <= pass_worst_share(in, pass, plan.axes)) {
-        plan = std::move(other);
-        pole_stretches[q] = other_poles;
+      const std::size_t single_poles = pole_passages(*single);
+      if (pass_worst_share(in, pass, single->axes) <= pass_worst_share(in, pass, plan.axes)) {
+        plan = std::move(*single);
+        pole_stretches[q] = single_poles;
       }
     }
     PassAxes axes{pass, plan.axes, {}};

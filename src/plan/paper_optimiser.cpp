@@ -7,6 +7,7 @@
 #include <numeric>
 #include <optional>
 
+#include "plan/paper_single.hpp"
 #include "plan/slerp.hpp"
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
@@ -57,7 +58,10 @@ class PassPlanner {
     step_rad_ = deg_to_rad(opt_.grid_deg);
   }
 
-  PassPlan run() {
+  /// `single` (when given and a resettle round would run) receives the plan as it stands
+  /// before the resettle rounds: the paper's single repair, what plan_pass_paper with no
+  /// resettle rounds returns.
+  PassPlan run(std::optional<PassPlan>* single = nullptr) {
     PassPlan plan;
     if (n_ == 0) return plan;
     const CurveShape<double> shape = segment_curve(p_.curve_mm, p_.up, opt_.segmenter);
@@ -73,12 +77,23 @@ class PassPlanner {
     axes_.assign(p_.input_axes.begin(), p_.input_axes.end());
     for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
     plan.repairs = repair();
+    if (single && opt_.resettle_rounds > 0 && plan.repairs > 0) {
+      const std::vector<Vec3d> axes = axes_;
+      *single = finished(plan);
+      axes_ = axes;
+    }
     // PaperOptions::resettle_rounds: the keys set again with the repair keys among them.
     for (int round = 0; round < opt_.resettle_rounds && plan.repairs > 0; ++round) {
       if (!optimise_keys()) break;
       for (std::size_t k = 0; k + 1 < keys_.size(); ++k) fill(k);
       plan.repairs += repair();
     }
+    return finished(plan);
+  }
+
+ private:
+  /// The plan with its joints smoothed (which writes axes_), its axes, keys and no-free points.
+  PassPlan finished(PassPlan plan) {
     if (opt_.joint_smoothing) smooth_joints(plan);
     plan.axes = axes_;
     plan.keys = keys_;
@@ -136,21 +151,58 @@ class PassPlanner {
   }
 
   /// Bending energy terms of the key polygon that involve key j at axis v.
-  double bending(std::size_t j, const Vec3d& v) const {
-    const std::size_t m = keys_.size();
-    const auto axis = [&](std::size_t t) { return t == j ? v : key_axes_[t]; };
-    const auto rate = [&](std::size_t t) {  // from key t to key t + 1
-      const double len = std::max(arc_[keys_[t + 1]] - arc_[keys_[t]], 1e-9);
-      return Vec3d((axis(t + 1) - axis(t)) / len);
-    };
-    double e = 0.0;
-    for (std::size_t t = (j > 0 ? j - 1 : 0); t <= j + 1 && t + 1 < m; ++t) {
-      if (t == 0) continue;
-      const double span = std::max(0.5 * (arc_[keys_[t + 1]] - arc_[keys_[t - 1]]), 1e-9);
-      e += (rate(t) - rate(t - 1)).squaredNorm() / span;
+  double bending(std::size_t j, const Vec3d& v) const { return Bending(*this, j)(v); }
+
+  /// bending(j, v) with what does not depend on v worked out once (the keys' lengths and spans,
+  /// the rates that do not touch key j), the same operations in the same order per v: a key's
+  /// whole cap of candidates is priced with it (it was a third of a run).
+  class Bending {
+   public:
+    Bending(const PassPlanner& planner, std::size_t j) : key_axes_(planner.key_axes_), j_(j) {
+      const std::vector<std::size_t>& keys = planner.keys_;
+      const std::vector<double>& arc = planner.arc_;
+      const std::size_t m = keys.size();
+      const auto len = [&](std::size_t t) {
+        return std::max(arc[keys[t + 1]] - arc[keys[t]], 1e-9);
+      };
+      for (std::size_t t = (j > 0 ? j - 1 : 0); t <= j + 1 && t + 1 < m; ++t) {
+        if (t == 0) continue;
+        terms_[count_] = {t, std::max(0.5 * (arc[keys[t + 1]] - arc[keys[t - 1]]), 1e-9)};
+        ++count_;
+      }
+      // rate(t) for t = j - 2 .. j + 1 where it exists: fixed unless t is j - 1 or j.
+      for (std::size_t t = (j >= 2 ? j - 2 : 0); t <= j + 1 && t + 1 < m; ++t) {
+        len_[t + 2 - j] = len(t);
+        if (t + 1 != j && t != j)
+          rate_[t + 2 - j] = Vec3d((key_axes_[t + 1] - key_axes_[t]) / len(t));
+      }
     }
-    return e;
-  }
+    double operator()(const Vec3d& v) const {
+      Vec3d rate[4];
+      for (int s = 0; s < 4; ++s) rate[s] = rate_[s];
+      if (j_ >= 1) rate[1] = Vec3d((v - key_axes_[j_ - 1]) / len_[1]);
+      if (j_ + 1 < key_axes_.size()) rate[2] = Vec3d((key_axes_[j_ + 1] - v) / len_[2]);
+      double e = 0.0;
+      for (int k = 0; k < count_; ++k) {
+        const std::size_t t = terms_[k].t;
+        e += (rate[t + 2 - j_] - rate[t + 1 - j_]).squaredNorm() / terms_[k].span;
+      }
+      return e;
+    }
+
+   private:
+    struct Term {
+      std::size_t t = 0;
+      double span = 0.0;
+    };
+    const std::vector<Vec3d>& key_axes_;
+    std::size_t j_;
+    Term terms_[3];
+    int count_ = 0;
+    // Index s holds rate(j - 2 + s), s = 0 .. 3.
+    Vec3d rate_[4] = {Vec3d::Zero(), Vec3d::Zero(), Vec3d::Zero(), Vec3d::Zero()};
+    double len_[4] = {1.0, 1.0, 1.0, 1.0};
+  };
 
   /// The best acceptable axis for key j with the others fixed: the cap grid by cost, then a
   /// pattern search down to grid / 8. Empty when no candidate is acceptable.
@@ -162,8 +214,9 @@ class PassPlanner {
     // the search (usually among the first few).
     std::vector<std::pair<double, std::size_t>> order;
     order.reserve(cands.size());
+    const Bending bending_at(*this, j);
     for (std::size_t c = 0; c < cands.size(); ++c) {
-      order.emplace_back(bending(j, cands[c]) + cap.pull[c], c);
+      order.emplace_back(bending_at(cands[c]) + cap.pull[c], c);
     }
     const auto later = std::greater<std::pair<double, std::size_t>>();
     std::make_heap(order.begin(), order.end(), later);
@@ -210,18 +263,30 @@ class PassPlanner {
   /// Returns whether any key moved.
   bool optimise_keys() {
     bool any = false;
+    dirty_.resize(keys_.size(), 1);
     for (int sweep = 0; sweep < opt_.max_sweeps; ++sweep) {
       bool moved = false;
+      std::vector<char> next(keys_.size(), 0);
       for (std::size_t j = 0; j < keys_.size(); ++j) {
+        if (!dirty_[j]) continue;
         const std::optional<Vec3d> v = best_key_axis(j);
         if (!v) continue;
-        if (angle_between(*v, key_axes_[j]) > 1e-9) moved = true;
+        if (angle_between(*v, key_axes_[j]) > 1e-9) {
+          moved = true;
+          mark(next, j);
+        }
         key_axes_[j] = *v;
       }
+      dirty_ = std::move(next);
       any = any || moved;
       if (!moved) break;
     }
     return any;
+  }
+
+  /// Keys whose cost a move of key j changes (bending reaches two keys either side), marked.
+  static void mark(std::vector<char>& dirty, std::size_t j) {
+    for (std::size_t t = j >= 2 ? j - 2 : 0; t <= j + 2 && t < dirty.size(); ++t) dirty[t] = 1;
   }
 
   /// Arc-length slerp over the interval from key k to key k + 1.
@@ -269,6 +334,8 @@ class PassPlanner {
       }
       keys_.insert(keys_.begin() + static_cast<long>(k + 1), worst);
       key_axes_.insert(key_axes_.begin() + static_cast<long>(k + 1), axes_[worst]);
+      dirty_.insert(dirty_.begin() + static_cast<long>(k + 1), 1);
+      mark(dirty_, k + 1);
       const std::optional<Vec3d> v = best_key_axis(k + 1);
       if (!v) {
         no_free_.push_back(worst);
@@ -335,6 +402,9 @@ class PassPlanner {
   std::vector<double> arc_;
   double pull_ = 0.0, max_dev_rad_ = 0.0, step_rad_ = 0.0;
   std::vector<std::size_t> keys_;
+  /// Keys optimise_keys must look at again: every key at first, then those next to a key that
+  /// moved or was added (a key whose neighbours stand still would find its own axis again).
+  std::vector<char> dirty_;
   std::vector<Vec3d> key_axes_;
   std::vector<Vec3d> axes_;
   std::vector<std::size_t> no_free_;
@@ -343,8 +413,9 @@ class PassPlanner {
 
 }  // namespace
 
-PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
-                         const PaperOptions& options) {
+namespace {
+
+void check_problem(const PassProblem& problem, const PaperOptions& options) {
   const std::size_t n = problem.input_axes.size();
   if (problem.curve_mm.size() != n || (n > 0 && problem.segment_mm.size() != n - 1)) {
     throw std::invalid_argument("plan_pass_paper: curve, axes and segments do not match");
@@ -352,7 +423,25 @@ PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
   if (!(options.grid_deg > 0.0) || !(options.max_deviation_deg >= 0.0)) {
     throw std::invalid_argument("plan_pass_paper: grid must be positive, deviation not negative");
   }
+}
+
+}  // namespace
+
+PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
+                         const PaperOptions& options) {
+  check_problem(problem, options);
   return PassPlanner(problem, is_free, options).run();
 }
+
+namespace detail {
+
+PassPlan plan_pass_paper(const PassProblem& problem, const AxisTest& is_free,
+                         const PaperOptions& options, std::optional<PassPlan>& single) {
+  check_problem(problem, options);
+  single.reset();
+  return PassPlanner(problem, is_free, options).run(&single);
+}
+
+}  // namespace detail
 
 }  // namespace taxopt

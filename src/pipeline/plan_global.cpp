@@ -107,14 +107,8 @@ bool within_input(const OperationPlanInputs& in, const IndexRange& whole, const 
   for (std::size_t i = whole.begin; i < whole.end; ++i) {
     poses[i] = plan[std::clamp(i, cut.begin, cut.end - 1) - cut.begin];
   }
-  const RotarySummary s = pass_rates(in, whole, poses).summary;
-  const auto under = [](double value, double bound, double still) {
-    return value <= std::max(bound * (1.0 + 1e-9), still);
-  };
-  return under(s.tilt.max_omega_deg_s, input.tilt.max_omega_deg_s, kStillOmegaDegS) &&
-         under(s.c.max_omega_deg_s, input.c.max_omega_deg_s, kStillOmegaDegS) &&
-         under(s.tilt.max_accel_deg_s2, input.tilt.max_accel_deg_s2, kStillAccelDegS2) &&
-         under(s.c.max_accel_deg_s2, input.c.max_accel_deg_s2, kStillAccelDegS2);
+  return peaks_within(pass_rates(in, whole, poses).summary, input, kStillOmegaDegS,
+                      kStillAccelDegS2);
 }
 
 }  // namespace

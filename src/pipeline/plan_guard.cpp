@@ -253,19 +253,15 @@ class PassGuard {
           verdict[pass.begin + j] = PointVerdict::RaisesRate;
       }
     };
-    constexpr double kRel = 1.0 + 1e-9;
     const AxisPeaks& tilt = bound_[q].tilt;
     const AxisPeaks& c = bound_[q].c;
-    const auto above = [&](double value, double bound, double still) {
-      return std::abs(value) > std::max(bound * kRel, still);
-    };
     for (std::size_t j = 0; j < pass.size(); ++j) {
-      if (above(k.omega_tilt_deg_s[j], tilt.max_omega_deg_s, kStillOmegaDegS) ||
-          above(k.omega_c_deg_s[j], c.max_omega_deg_s, kStillOmegaDegS)) {
+      if (rate_above(k.omega_tilt_deg_s[j], tilt.max_omega_deg_s, kStillOmegaDegS) ||
+          rate_above(k.omega_c_deg_s[j], c.max_omega_deg_s, kStillOmegaDegS)) {
         raises(j, j + 1);
       }
-      if (above(k.accel_tilt_deg_s2[j], tilt.max_accel_deg_s2, kStillAccelDegS2) ||
-          above(k.accel_c_deg_s2[j], c.max_accel_deg_s2, kStillAccelDegS2)) {
+      if (rate_above(k.accel_tilt_deg_s2[j], tilt.max_accel_deg_s2, kStillAccelDegS2) ||
+          rate_above(k.accel_c_deg_s2[j], c.max_accel_deg_s2, kStillAccelDegS2)) {
         raises(j ? j - 1 : 0, j + 1);
       }
     }

@@ -439,9 +439,9 @@ class GlobalPassPlanner {
   bool held() const { return problem_.hold_tilt || problem_.hold_c; }
 
   using Admissible = GlobalPassProblem::Admissible;
-  using Peaks = detail::RatePeaks;
+  using Peaks = RotarySummary;
   static Peaks peaks_of(const std::vector<Posed>& poses, const std::vector<double>& t) {
-    return detail::rate_peaks(poses, t);
+    return detail::rate_summary(poses, t);
   }
 
   /// The pass with its held axis (held() and not both).
@@ -471,7 +471,8 @@ class GlobalPassPlanner {
   /// keeps them, and passing the caller's test where it gives one.
   bool allowed_plan(const std::vector<Posed>& poses, const std::vector<double>& t,
                     const Peaks& bound) const {
-    return (!problem_.keep_peaks || peaks_of(poses, t).within(bound)) &&
+    // 1e-12: a still axis's round-off, no more
+    return (!problem_.keep_peaks || peaks_within(peaks_of(poses, t), bound, 1e-12, 1e-12)) &&
            (!problem_.admissible || problem_.admissible(poses));
   }
 

@@ -50,30 +50,14 @@ std::vector<double> low_passed(const std::vector<double>& x, const std::vector<d
 
 namespace detail {
 
-bool RatePeaks::within(const RatePeaks& bound) const {
-  for (int ax = 0; ax < 2; ++ax) {
-    if (omega[ax] > bound.omega[ax] * (1.0 + 1e-9) + 1e-12 ||
-        accel[ax] > bound.accel[ax] * (1.0 + 1e-9) + 1e-12) {
-      return false;
-    }
-  }
-  return true;
-}
-
-RatePeaks rate_peaks(const std::vector<Posed>& poses, const std::vector<double>& t) {
+RotarySummary rate_summary(const std::vector<Posed>& poses, const std::vector<double>& t) {
   std::vector<double> tilt_deg, c_deg;
   for (const Posed& p : poses) {
     tilt_deg.push_back(rad_to_deg(p.tilt_rad));
     c_deg.push_back(rad_to_deg(p.c_rad));
   }
-  const RotaryKinematics k = rotary_kinematics_from_times(tilt_deg, c_deg, t);
-  RatePeaks out;
-  const std::vector<double>* series[2][2] = {{&k.omega_tilt_deg_s, &k.accel_tilt_deg_s2},
-                                             {&k.omega_c_deg_s, &k.accel_c_deg_s2}};
-  for (int ax = 0; ax < 2; ++ax) {
-    for (double w : *series[ax][0]) out.omega[ax] = std::max(out.omega[ax], std::abs(w));
-    for (double a : *series[ax][1]) out.accel[ax] = std::max(out.accel[ax], std::abs(a));
-  }
+  RotarySummary out;
+  accumulate(out, rotary_kinematics_from_times(tilt_deg, c_deg, t), c_deg);
   return out;
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "taxopt/kinematics/machine_kinematics.hpp"
+#include "taxopt/kinematics/metrics.hpp"
 
 namespace taxopt {
 
@@ -30,14 +31,9 @@ std::vector<double> low_passed(const std::vector<double>& x, const std::vector<d
 
 namespace detail {
 
-/// Each rotary axis's peak omega (deg/s) and a (deg/s^2) of poses over segment times: the tilt
-/// axis [0], C [1].
-struct RatePeaks {
-  double omega[2] = {0.0, 0.0}, accel[2] = {0.0, 0.0};
-  /// No peak above `bound`'s (to the round-off).
-  bool within(const RatePeaks& bound) const;
-};
-RatePeaks rate_peaks(const std::vector<Posed>& poses, const std::vector<double>& t);
+/// The rotary rates of poses (radians) over segment times `t` (s), summarised per axis
+/// (accumulate).
+RotarySummary rate_summary(const std::vector<Posed>& poses, const std::vector<double>& t);
 
 /// One pass with one axis held at the warm start's values and the other free.
 class HeldAxis {

@@ -87,6 +87,22 @@ TAXOPT_API PeakRates peak_rates(const std::vector<Posed>& poses,
                                 const std::vector<double>& length_mm,
                                 const std::vector<double>& feed_mm_per_min);
 
+/// Whether a rate rises above its bound: its magnitude more than a relative 1e-9 above
+/// `bound` and above `still`, the rate under which an axis counts as still (0: none).
+inline bool rate_above(double value, double bound, double still = 0.0) noexcept {
+  return std::abs(value) > std::max(bound * (1.0 + 1e-9), still);
+}
+
+/// Whether no rotary axis's peak omega or a in `s` rises above `bound`'s (rate_above, with the
+/// still rates of omega in deg/s and a in deg/s^2).
+inline bool peaks_within(const RotarySummary& s, const RotarySummary& bound,
+                         double still_omega_deg_s = 0.0, double still_accel_deg_s2 = 0.0) noexcept {
+  return !rate_above(s.tilt.max_omega_deg_s, bound.tilt.max_omega_deg_s, still_omega_deg_s) &&
+         !rate_above(s.c.max_omega_deg_s, bound.c.max_omega_deg_s, still_omega_deg_s) &&
+         !rate_above(s.tilt.max_accel_deg_s2, bound.tilt.max_accel_deg_s2, still_accel_deg_s2) &&
+         !rate_above(s.c.max_accel_deg_s2, bound.c.max_accel_deg_s2, still_accel_deg_s2);
+}
+
 /// Adds one pass to a summary (maxima, RMS of a over interior points, C jumps).
 TAXOPT_API void accumulate(RotarySummary& summary, const RotaryKinematics& k,
                            const std::vector<double>& c_deg);

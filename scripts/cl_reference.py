@@ -211,7 +211,8 @@ def reference(path):
                 if norm(move) < 1e-9 or norm(mp) < 0.5 * norm(move) or norm(t) < 1e-9:
                     return 0
                 cosine = dot(mp, t) / (norm(mp) * norm(t))
-                return 0 if abs(cosine) < 0.9 else (1 if cosine > 0 else -1)
+                # a corner (more than 5 deg off the tangent) says nothing of the sense
+                return 0 if abs(cosine) < 0.99619 else (1 if cosine > 0 else -1)
 
             votes = []
             if i >= 3 and items[i - 2][0] == "p" and items[i - 3][0] == "p":

@@ -13,13 +13,19 @@ namespace {
 /// counter-clockwise tangent (about n, at radius vector r), -1 against it, 0 undecided.
 /// `strong` is cleared when the vote is less than clear-cut.
 int tangent_vote(const Vec3d& move, const Vec3d& radius, const Vec3d& n, bool& strong) {
+  // A CAM system writes a straight move into an arc along its tangent: the real files' votes
+  // lie within 0.01 deg (SOLIDWORKS CAM, Creo, Fusion) or 3.6 deg (NX's long moves) of it. A
+  // corner says nothing of the sense, even a shallow one: SOLIDWORKS CAM's boss outline meets
+  // its straight moves at 12.6 deg, and counting those refused the file (issue 62).
+  constexpr double kTangentCos = 0.99619;  // cos 5 deg
+  constexpr double kClearCos = 0.99985;    // cos 1 deg
   const Vec3d in_plane = move - move.dot(n) * n;
   const Vec3d tangent = n.cross(radius - radius.dot(n) * n);
   const double m = move.norm(), p = in_plane.norm(), t = tangent.norm();
   if (m < 1e-9 || t < 1e-9 || p < 0.5 * m) return 0;  // a plunge or no move: says nothing
   const double c = in_plane.dot(tangent) / (p * t);
-  if (std::abs(c) < 0.9) return 0;  // a corner: says nothing
-  if (std::abs(c) < 0.99) strong = false;
+  if (std::abs(c) < kTangentCos) return 0;  // a corner: says nothing
+  if (std::abs(c) < kClearCos) strong = false;
   return c > 0.0 ? 1 : -1;
 }
 
@@ -108,6 +114,7 @@ Reader::ArcVotes Reader::vote_arcs() {
     }
     a.evidence = (in != 0 && out != 0 && in != out) ? 0 : (in != 0 ? in : out);
     a.strong = strong && a.evidence != 0;
+    a.tangent_both_ends = in != 0 && in == out;
     if (a.movarc) continue;  // its sense is written: it does not vote on the CIRCLEs'
     ++v.circles;
     if (a.evidence > 0) ++v.ccw;
@@ -201,13 +208,7 @@ void Reader::apply_arc_convention(ArcDirection convention, const ArcVotes& v) {
              "right, give " +
              options_.name_of("arc_direction") + " cw|ccw");
   }
-  if (contra > agree && rd.arc_convention_source == "option") {
-    notice(arcs_.front().line,
-           "CIRCLE: " + options_.name_of("arc_direction") + " " +
-               std::string(to_string(convention)) + " is against the tangents of " +
-               std::to_string(contra) + " of " + std::to_string(contra + agree) +
-               " decidable arcs (lines " + arc_lines(-convention_sign) + "); applied as asked");
-  }
+  if (rd.arc_convention_source == "option") option_against_tangents(convention, agree, contra);
   for (auto& a : arcs_) {
     if (a.movarc) continue;
     a.clockwise = convention == ArcDirection::Clockwise;
@@ -237,6 +238,30 @@ void Reader::apply_arc_convention(ArcDirection convention, const ArcVotes& v) {
                "(" +
                options_.name_of("arc_direction") + " cw|ccw applies one sense to every arc)");
   }
+}
+
+void Reader::option_against_tangents(ArcDirection convention, int agree, int contra) {
+  const int sign = convention == ArcDirection::Clockwise ? -1 : 1;
+  // Arcs the moves on both sides meet along their tangent the other way: the option turns each
+  // into the long way round (a 45 deg lead-in arc a 315 deg loop), so each is named.
+  std::vector<int> both;
+  for (const auto& a : arcs_) {
+    if (!a.movarc && a.tangent_both_ends && a.evidence == -sign) both.push_back(a.line);
+  }
+  if (contra <= agree && both.empty()) return;
+  std::string text = "CIRCLE: " + options_.name_of("arc_direction") + " " +
+                     std::string(to_string(convention)) + " is against the tangents of " +
+                     std::to_string(contra) + " of " + std::to_string(contra + agree) +
+                     " decidable arcs (lines " + arc_lines(-sign) + ")";
+  if (!both.empty()) {
+    text += "; " + std::to_string(both.size()) + " of them are tangent at both ends only " +
+            (sign > 0 ? "clockwise" : "counter-clockwise") + " and run the long way round, lines";
+    for (std::size_t k = 0; k < both.size() && k < 100; ++k) {
+      text += (k ? ", " : " ") + std::to_string(both[k]);
+    }
+    if (both.size() > 100) text += ", ...";
+  }
+  notice(arcs_.front().line, text + "; applied as asked");
 }
 
 void Reader::expand_arcs() {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstdlib>
 #include <set>
 
 #include "taxopt/core/error.hpp"
@@ -65,6 +66,19 @@ bool parse_number(const std::string& token, double& out) {
 bool is_number_like(const std::string& token) {
   double v;
   return parse_number(token, v);
+}
+
+bool is_point_line(const std::string& code) {
+  const std::vector<std::string> fields = split_args(code);
+  if (fields.size() != 3 && fields.size() != 6) return false;
+  for (const std::string& f : fields) {
+    const std::string t = trim(f);
+    if (t.empty()) return false;
+    char* end = nullptr;
+    std::strtod(t.c_str(), &end);
+    if (end != t.c_str() + t.size()) return false;
+  }
+  return true;
 }
 
 std::vector<std::string> split_args(const std::string& args) {
@@ -274,6 +288,28 @@ bool is_listing_line(const std::string& code) {
   const std::size_t digits = i;
   while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) ++i;
   return i > digits && (t.substr(i) == " lines." || t.substr(i) == " lines");
+}
+
+std::pair<int, std::string> turning_record(const std::vector<LogicalLine>& lines) {
+  for (const auto& ll : lines) {
+    if (ll.kind != RecordKind::Record) continue;
+    std::string args;
+    const std::string major = major_word(ll.code, args);
+    const std::vector<std::string> fields = split_args(args);
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      const std::string u = upper(fields[k]);
+      if (major == "TURRET" ||
+          ((major == "MACHIN" || major == "MODE") &&
+           (u == "TURN" || u == "LATHE" || u == "MILLTURN")) ||
+          (major == "TOOLNO" && u == "TURN")) {
+        // The record up to the word that says so ("TOOLNO/1,TURN,...").
+        std::string shown = major + "/";
+        for (std::size_t j = 0; j <= k; ++j) shown += (j ? "," : "") + fields[j];
+        return {ll.line, shown + (k + 1 < fields.size() ? ",..." : "")};
+      }
+    }
+  }
+  return {0, ""};
 }
 
 DialectEvidence detect_dialect(const std::vector<LogicalLine>& lines) {

@@ -3,6 +3,7 @@
 /// NX's listing lines, record words and their fields, APT numbers, the CAM system's dialect.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "taxopt/io/cl_file.hpp"
@@ -19,6 +20,8 @@ bool parse_number(const std::string& token, double& out);
 bool is_number_like(const std::string& token);
 /// The fields of a record after its slash, split at commas, trimmed.
 std::vector<std::string> split_args(const std::string& args);
+/// A line of 3 or 6 numbers and nothing else ("7.4675, 5.8717, 1.8000").
+bool is_point_line(const std::string& code);
 
 /// A logical line: physical lines joined over `$` continuations.
 struct LogicalLine {
@@ -47,6 +50,9 @@ struct DialectEvidence {
   };
   std::vector<Seen> seen;
 };
+/// The first record that makes the file a turning file (MACHIN/...,TURN or LATHE, CATIA's
+/// TOOLNO/n,TURN, a TURRET, MODE/TURN): its line and text; line 0 where there is none.
+std::pair<int, std::string> turning_record(const std::vector<LogicalLine>& lines);
 /// Recognises the CAM system from the records and header comments it writes in its own
 /// structure, never from free text (docs/cl-files.md).
 DialectEvidence detect_dialect(const std::vector<LogicalLine>& lines);

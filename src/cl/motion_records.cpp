@@ -169,8 +169,10 @@ void Reader::goto_record(const ClRecordArgs& r) {
   if (v.size() == 6) axis_ = to_mcs_vector(parse_axis(v, 3, major, line));
   const Vec3d tip = to_mcs_point(Vec3d(v[0], v[1], v[2]));
   ++tp_.reading.motion_records;
+  last_arc_circle_.reset();
   if (pending_circle_) {
     const CircleRecord c = *pending_circle_;
+    last_arc_circle_ = c;
     pending_circle_.reset();
     PendingArc a;
     last_point("CIRCLE", c.line);  // the arc starts at the point before its end GOTO

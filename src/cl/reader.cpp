@@ -40,6 +40,11 @@ Toolpath Reader::run(const std::string& input) {
     tp_.reading.dialect_evidence = ev.evidence;
     dialects_seen_ = std::move(ev.seen);
   }
+  // A turning file is named as one wherever its first turning record stands: an unknown
+  // record before it (CATIA's PPFUN) or a tool it describes (TOOLNO/1,TURN,...) is no reason.
+  if (const auto [line, record] = turning_record(lines); line > 0) {
+    fail(line, record + ": a turning file; taxopt posts milling only");
+  }
   determine_units(lines);
   scale_ = mm_per_unit(tp_.units);
   for (const auto& ll : lines) handle(ll);
@@ -268,6 +273,25 @@ void Reader::handle(const LogicalLine& ll) {
   std::string args;
   if (ll.kind == RecordKind::Record) {
     rec.major = major_word(ll.code, args);
+    if (rec.major.empty() && after_goto_ && is_point_line(ll.code)) {
+      // Pro/CLfile writes a GOTO of several points a point a line, no `$` (its CIRCLE's
+      // GOTO: Creo gg.ncl, a full circle as three arcs); after a CIRCLE, each is an arc on
+      // it from the point before, the points after it written in the record before's.
+      rec.major = "GOTO";
+      args = ll.code;
+      if (last_arc_circle_) {
+        pending_circle_ = last_arc_circle_;
+        pending_circle_->record = last_point("GOTO", ll.line).record;
+      }
+      if (!goto_continued_) {
+        goto_continued_ = true;
+        tp_.warnings.push_back(format_location(
+            source_, ll.line,
+            "a GOTO's further points on lines of their own, no '$' (Pro/CLfile's form): each "
+            "read as a GOTO" +
+                std::string(last_arc_circle_ ? ", an arc on the CIRCLE before" : "")));
+      }
+    }
     if (rec.major.empty()) {
       // Only the lines NX's listing window adds around a CLSF are no records; anything
       // else that cannot be read is an error, never a skipped line (it may be UNITS).
@@ -284,6 +308,7 @@ void Reader::handle(const LogicalLine& ll) {
   if (rec.kind != RecordKind::Record) return;
   const int index = static_cast<int>(tp_.records.size()) - 1;
   interpret(rec.major, args, index, ll.line);
+  after_goto_ = rec.major == "GOTO" && !spline_ && !cycle_;
 }
 
 void Reader::interpret(const std::string& major, const std::string& args_text, int index,

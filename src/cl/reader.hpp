@@ -36,6 +36,8 @@ struct PendingArc {
   /// -1 clockwise, 0 undecided; and whether every deciding side is unambiguous.
   int evidence = 0;
   bool strong = false;
+  /// Both sides vote, the same way: the arc is tangent at both ends in that sense only.
+  bool tangent_both_ends = false;
   bool clockwise = false;
   /// MOVARC (Fusion / HSM): counter-clockwise about `axis` through `declared_sweep_rad`, as
   /// written; it takes no part in deciding the CIRCLE sense.
@@ -151,6 +153,9 @@ class Reader {
   /// Each CIRCLE's sense: the convention, reversed where its neighbours all clearly contradict
   /// it (not against an option); a documented convention most arcs contradict is refused.
   void apply_arc_convention(ArcDirection convention, const ArcVotes& votes);
+  /// With the sense given by option: a notice where it runs against the decidable arcs
+  /// (`agree`, `contra`), naming each arc tangent at both ends only the other way.
+  void option_against_tangents(ArcDirection convention, int agree, int contra);
   /// MOVARC's sense and sweep are written: the GOTO must end the arc ANGLE deg on, and the
   /// moves beside it must not clearly run the other way.
   void check_movarcs();
@@ -322,6 +327,10 @@ class Reader {
   double inside_tolerance_ = 0.0, outside_tolerance_ = 0.0;
   bool tolerance_given_ = false;
   std::optional<CircleRecord> pending_circle_;
+  /// The circle the last GOTO ended an arc on, and whether the last record was a GOTO: a
+  /// Pro/CLfile GOTO continues with a point a line and no `$`, each on that circle.
+  std::optional<CircleRecord> last_arc_circle_;
+  bool after_goto_ = false, goto_continued_ = false;
   std::vector<PendingArc> arcs_;
   std::optional<PendingSpline> spline_;
   std::optional<DrillCycle> cycle_;

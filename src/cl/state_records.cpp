@@ -189,6 +189,12 @@ void Reader::load_tool(const ClRecordArgs& r) {
   if (words.length && !(*words.length > 0.0 && *words.length * scale_ <= 1000.0)) {
     fail(line, major + "/" + args_text + ": the tool length must be in (0, 1000] mm");
   }
+  if (words.register_ && v[0] == 0.0) {
+    fail(line, major + "/" + args_text + ": tool 0 is no tool number (T0 loads none), so the " +
+                   "length offset register " + args_text_number(*words.register_) +
+                   " belongs to no tool: number the tool in the CAM system (1 to 99999; " +
+                   "taxopt writes its own register, T1 H1)");
+  }
   if (words.register_ && *words.register_ != v[0]) {
     fail(line, major + "/" + args_text + ": the length offset register " +
                    args_text_number(*words.register_) +
@@ -336,14 +342,8 @@ void Reader::mode(const ClRecordArgs& r) {
 }
 
 void Reader::machin(const ClRecordArgs& r) {
-  [[maybe_unused]] const auto& [major, args, args_text, index, line] = r;
-  for (const auto& a : args) {
-    const std::string u = upper(a);
-    if (u == "TURN" || u == "LATHE" || u == "MILLTURN") {
-      fail(line, "MACHIN/" + args_text + ": a turning file; taxopt posts milling only");
-    }
-  }
-  skipped(major);
+  // A turning machine (MACHIN/...,TURN) was refused before the file was read (turning_record).
+  skipped(r.major);
 }
 
 void Reader::spindle(const std::vector<std::string>& args, int line) {

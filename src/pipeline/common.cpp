@@ -577,4 +577,17 @@ std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed) {
   return points;
 }
 
+std::string msys_remedy(const Run& run, const CLPointd& p) {
+  const ClFrame* frame = nullptr;
+  for (const ClFrame& f : run.tp.declared_frames) {
+    if (f.line <= p.line) frame = &f;
+  }
+  if (!frame || !run.machine.rotary.reachable(Vec3d(frame->rotation.transpose() * p.axis)))
+    return "";
+  return "; the file's MSYS (line " + std::to_string(frame->line) +
+         ") turns its axes: its coordinates taken into that frame (" +
+         option_name(run.options.option_names, "ClReadOptions::apply_msys") +
+         ") give an axis the machine reaches";
+}
+
 }  // namespace taxopt::pipeline

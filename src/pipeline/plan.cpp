@@ -312,7 +312,8 @@ class OperationPlanner {
                           "operation " + op_.name + ": no tool axis within " +
                               std::to_string(options_.paper.max_deviation_deg) +
                               " deg of the input axis is reachable and collision-free here" +
-                              out_of_reach(run_.machine.rotary, op_.points[i].axis)));
+                              out_of_reach(run_.machine.rotary, op_.points[i].axis) +
+                              msys_remedy(run_, op_.points[i])));
     }
   }
 

@@ -110,7 +110,8 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       failed = true;
       add_finding(res, FindingCode::UnreachablePose, k, op.points[plan.failed_index].line,
                   format_location(run.tp.source, op.points[plan.failed_index].line,
-                                  "operation " + op.name + ": " + plan.message));
+                                  "operation " + op.name + ": " + plan.message +
+                                      msys_remedy(run, op.points[plan.failed_index])));
       continue;
     }
     po.poses = plan.poses;

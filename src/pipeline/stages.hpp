@@ -281,6 +281,10 @@ void add_finding(JobResult& res, FindingCode code, std::optional<std::size_t> op
 double ball_radius_mm(const Operationd& op, const JobOptions& options);
 /// Why an operation with no ball radius is left alone.
 std::string not_a_ball(const Operationd& op, const JobOptions& options);
+/// Where the file names an MSYS frame that was posted as written (the default) and point p's
+/// axis no pose reaches: the option that takes the coordinates into that frame, when the axis
+/// moved into it is one the machine reaches (NX's MSYS with its Z pointing down); else empty.
+std::string msys_remedy(const Run& run, const CLPointd& p);
 /// The margins the collision checks judge the tool's bodies by (ToolMargins).
 /// How far nearer the normal than the least tilt a written axis may come and still count as
 /// keeping it, deg: the round-off of the written words' angles (a 4-decimal A/C and the

@@ -20,9 +20,21 @@ namespace {
 /// exported in the same MCS fits them as it is; one exported in absolute coordinates must be
 /// moved into the MCS. The evidence is where the ball touches the mesh: the share of sampled
 /// feed points whose ball centre lies one radius from the mesh, in either frame.
-TriangleMesh mesh_in_declared_frame(const Toolpath& toolpath, TriangleMesh mesh, std::string* note,
-                                    std::optional<double> ball_radius_mm) {
+TriangleMesh mesh_in_declared_frame(const Toolpath& toolpath, TriangleMesh mesh, MeshFrame frame,
+                                    std::string* note, std::optional<double> ball_radius_mm) {
   const ClFrame& f = toolpath.declared_frames.front();
+  if (frame != MeshFrame::Auto) {
+    if (note) {
+      *note = std::string("the part mesh is taken ") +
+              (frame == MeshFrame::Mcs ? "as it is, in the MCS"
+                                       : "as absolute and moved into the MCS") +
+              " of the MSYS at line " + std::to_string(f.line) + ", as asked";
+    }
+    if (frame == MeshFrame::Absolute) {
+      for (Vec3d& v : mesh.vertices) v = f.rotation.transpose() * (v - f.origin_mm);
+    }
+    return mesh;
+  }
   bool one_frame = true;
   for (const ClFrame& g : toolpath.declared_frames) {
     one_frame = one_frame && (g.rotation - f.rotation).cwiseAbs().maxCoeff() <= 1e-9 &&
@@ -71,6 +83,13 @@ TriangleMesh mesh_in_declared_frame(const Toolpath& toolpath, TriangleMesh mesh,
                      ": the mesh fits the CL points in neither frame (is it the part of this "
                      "file, in its units?)");
   }
+  // A tie is no evidence: a floor under the points fits both frames and the boss the tool
+  // hits stands in one of them only (issue 63: the run took "as it is" and missed it).
+  if (std::abs(as_is - in_mcs) < 0.1) {
+    throw InputError(toolpath.source + ": " + os.str() +
+                     ": the mesh fits both frames alike, so where it is is not known; say which "
+                     "(MeshFrame::Mcs or MeshFrame::Absolute; taxopt --part-frame mcs|absolute)");
+  }
   if (note) {
     *note = os.str() + (in_mcs > as_is ? ": the mesh is taken as absolute and moved into the MCS"
                                        : ": the mesh is taken as it is, in the MCS");
@@ -82,6 +101,13 @@ TriangleMesh mesh_in_declared_frame(const Toolpath& toolpath, TriangleMesh mesh,
 
 TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units,
                            std::string* note, std::optional<double> ball_radius_mm) {
+  return part_mesh_for(toolpath, std::move(mesh), mesh_units, MeshFrame::Auto, note,
+                       ball_radius_mm);
+}
+
+TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUnit mesh_units,
+                           MeshFrame frame, std::string* note,
+                           std::optional<double> ball_radius_mm) {
   const double scale = mm_per_unit(mesh_units);
   for (Vec3d& v : mesh.vertices) {
     if (!v.allFinite()) throw InputError("the part mesh has a vertex that is not a number");
@@ -90,7 +116,7 @@ TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh, LengthUn
   if (toolpath.frames.empty()) {
     return toolpath.declared_frames.empty()
                ? mesh
-               : mesh_in_declared_frame(toolpath, std::move(mesh), note, ball_radius_mm);
+               : mesh_in_declared_frame(toolpath, std::move(mesh), frame, note, ball_radius_mm);
   }
   const ClFrame& f = toolpath.frames.front();
   for (const ClFrame& g : toolpath.frames) {

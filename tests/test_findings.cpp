@@ -3,12 +3,14 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <sstream>
 
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/machine_file.hpp"
+#include "taxopt/io/mesh_file.hpp"
 #include "taxopt/job.hpp"
 
 using namespace taxopt;
@@ -149,4 +151,65 @@ TEST_CASE(
   options.option_names = {{"JobOptions::tool.gauge_length_mm", "--gauge-length"}};
   CHECK_THROWS_WITH(check_options(options),
                     "--gauge-length must be within (0, 1000] mm, got -25.4");
+}
+
+TEST_CASE("units: a part mesh in the other unit is refused naming --part-units, which posts it",
+          "[units][bad-input][cli]") {
+  TempDir t;
+  REQUIRE(run_taxopt("generate --surface plane --width 20 --length 40 --out-cls " +
+                     t.path("p.cls") + " --out-mesh " + t.path("p.stl"))
+              .code == 0);
+  // The same part written in inches: the run reading it in the CL file's mm finds a part a
+  // 25th of its size, a few points near its origin touching it.
+  const TriangleMesh mm = read_mesh_file(t.path("p.stl"));
+  std::ostringstream stl;
+  stl << "solid inches\n";
+  for (const auto& f : mm.faces) {
+    stl << "facet normal 0 0 0\nouter loop\n";
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d v = mm.vertices[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])] / 25.4;
+      stl << "vertex " << v.x() << " " << v.y() << " " << v.z() << "\n";
+    }
+    stl << "endloop\nendfacet\n";
+  }
+  stl << "endsolid inches\n";
+  write_file(t.path("in.stl"), stl.str());
+  const std::string args = "--in " + t.path("p.cls") + " --part " + t.path("in.stl") + " --gcode " +
+                           t.path("o.nc") + " -q";
+  const auto wrong = run_taxopt(args);
+  CHECK(wrong.code == 2);
+  CHECK_THAT(wrong.err, Catch::Contains("feed points touch the part") &&
+                            Catch::Contains("the part in inches read as mm? (--part-units in"));
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  const auto right = run_taxopt(args + " --part-units in");
+  INFO(right.err);
+  CHECK(right.code == 0);
+}
+
+TEST_CASE(
+    "units: a mesh that fits both of an MSYS's frames alike is refused, the frame given "
+    "takes it",
+    "[units][msys][io]") {
+  // NX's MCS 30 mm along X of absolute, the points posted in it; a floor wide enough to lie
+  // under them either way: the ball touches it at every sample in both frames.
+  std::ostringstream cl;
+  cl << "TOOL PATH/FLOOR,TOOL,BALL6\nTLDATA/MILL,6.0000,3.0000,40.0000,0.0000,0.0000\n"
+        "MSYS/30.0,0.0,0.0,1.0,0.0,0.0,0.0,1.0,0.0\nFEDRAT/MMPM,500\n";
+  for (int k = 0; k <= 20; ++k) cl << "GOTO/" << k << ".0,5.0,0.0,0.0,0.0,1.0\n";
+  cl << "END-OF-PATH\n";
+  const Toolpath tp = parse_cl(cl.str(), "f.cls");
+  REQUIRE(tp.declared_frames.size() == 1);
+  TriangleMesh floor;
+  floor.vertices = {Vec3d(-100, -100, 0), Vec3d(100, -100, 0), Vec3d(100, 100, 0),
+                    Vec3d(-100, 100, 0)};
+  floor.faces = {{0, 1, 2}, {0, 2, 3}};
+  CHECK_THAT(input_error_of([&] { part_mesh_for(tp, floor, LengthUnit::Millimetre); }),
+             Catch::Contains("fits both frames alike") && Catch::Contains("--part-frame"));
+  std::string note;
+  const TriangleMesh mcs = part_mesh_for(tp, floor, LengthUnit::Millimetre, MeshFrame::Mcs, &note);
+  CHECK((mcs.vertices[0] - floor.vertices[0]).norm() < 1e-12);
+  CHECK_THAT(note, Catch::Contains("as asked"));
+  const TriangleMesh moved =
+      part_mesh_for(tp, floor, LengthUnit::Millimetre, MeshFrame::Absolute, &note);
+  CHECK((moved.vertices[0] - Vec3d(-130, -100, 0)).norm() < 1e-12);
 }

@@ -17,7 +17,8 @@ namespace taxopt::cli {
 struct Args {
   std::string objective = "sum-squares";
   std::optional<double> jerk_weight;
-  std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out;
+  std::string in, gcode, machine, method = "paper", report, points_csv, out_cls, units, units_out,
+                                  part_units, part_frame = "auto";
   std::string arc_direction = "auto", msys = "ignore", dialect;
   std::vector<std::string> skip_records;
   std::optional<double> feed_mm_per_min, tool_radius, contact_tolerance, spindle_rpm;

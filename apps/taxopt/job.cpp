@@ -121,6 +121,7 @@ const OptionNames& cli_option_names() {
       {"ClReadOptions::arc_direction", "--arc-direction"},
       {"ClReadOptions::units", "--units"},
       {"ClReadOptions::apply_msys", "--msys apply"},
+      {"part_mesh_for::mesh_units", "--part-units"},
   };
   return names;
 }
@@ -181,8 +182,12 @@ std::optional<Part> part_of(const Args& a, const Toolpath& toolpath) {
     std::string frame_note;
     std::optional<double> radius_mm;
     if (a.tool_radius) radius_mm = *a.tool_radius * mm_per_unit(toolpath.units);
-    part.emplace(
-        part_mesh_for(toolpath, read_mesh_file(a.part), toolpath.units, &frame_note, radius_mm));
+    const MeshFrame frame = a.part_frame == "mcs"        ? MeshFrame::Mcs
+                            : a.part_frame == "absolute" ? MeshFrame::Absolute
+                                                         : MeshFrame::Auto;
+    part.emplace(part_mesh_for(toolpath, read_mesh_file(a.part),
+                               parse_unit(a.part_units, "--part-units").value_or(toolpath.units),
+                               frame, &frame_note, radius_mm));
     if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
   }
   return part;

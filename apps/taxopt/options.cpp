@@ -36,6 +36,14 @@ void add_input_options(CLI::App& app, Args& a) {
   app.add_option("--part", a.part, "part mesh (STL, OBJ, OFF, PLY) in the CL file's coordinates")
       ->check(CLI::ExistingFile)
       ->group("Input");
+  app.add_option("--part-units", a.part_units,
+                 "units of the part mesh: in | mm (default: the CL file's)")
+      ->group("Input");
+  app.add_option("--part-frame", a.part_frame,
+                 "where the CL file names an NX MSYS: the part mesh is in that MCS (mcs) or in "
+                 "absolute coordinates (absolute); default auto: where the ball touches it")
+      ->check(CLI::IsMember({"auto", "mcs", "absolute"}))
+      ->group("Input");
   app.add_option(
          "--contact-tolerance", a.contact_tolerance,
          "largest | |C - Pc| - R | of a contact point, mm (default max(0.05, the mesh's chordal "
@@ -226,6 +234,8 @@ void name_option_values(CLI::App& app) {
                                                     {"--skip-record", "WORD"},
                                                     {"--tool-radius", "LENGTH"},
                                                     {"--part", "FILE"},
+                                                    {"--part-units", "in|mm"},
+                                                    {"--part-frame", "auto|mcs|absolute"},
                                                     {"--contact-tolerance", "MM"},
                                                     {"--threads", "N"},
                                                     {"--shank-radius", "LENGTH"},

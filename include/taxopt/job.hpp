@@ -543,9 +543,22 @@ struct TAXOPT_API JobResult {
 /// ball (of `ball_radius_mm`, else the file's ball-end tool) touches the mesh at more of the
 /// sampled feed points is taken, and `note` says which and why. @throws InputError when the
 /// file's applied MSYS records name different frames (one mesh cannot be in all of them), when
-/// the mesh fits the points in neither frame, or when a vertex is not finite.
+/// the mesh fits the points in neither frame or in both alike (MeshFrame below says which),
+/// or when a vertex is not finite.
 TAXOPT_API TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh,
                                       LengthUnit mesh_units, std::string* note = nullptr,
+                                      std::optional<double> ball_radius_mm = std::nullopt);
+
+/// Which frame a part mesh is in where the CL points are posted in the MCS an MSYS names
+/// (part_mesh_for): judged from where the ball touches it (Auto; refused where both frames
+/// fit the sampled points alike: a tie is no evidence), that MCS, or absolute coordinates
+/// (moved into the MCS).
+enum class MeshFrame { Auto, Mcs, Absolute };
+
+/// part_mesh_for with the mesh's frame given (`frame`) rather than judged.
+TAXOPT_API TriangleMesh part_mesh_for(const Toolpath& toolpath, TriangleMesh mesh,
+                                      LengthUnit mesh_units, MeshFrame frame,
+                                      std::string* note = nullptr,
                                       std::optional<double> ball_radius_mm = std::nullopt);
 
 /// Tool dimensions as a user gives them, in one length unit (the CLI: the CL file's).

@@ -32,9 +32,18 @@ struct PendingSlot {
 std::array<PendingSlot, kSlots> g_pending;
 std::mutex g_pending_mutex;
 
+// While a transaction renames its files into place (or back), a signal is held until the set
+// is whole, new or old: the handler records it and returns, and the commit raises it after.
+std::atomic<bool> g_committing{false};
+std::atomic<int> g_deferred_signal{0};
+
 // Internal linkage: a handler of this file's, not a symbol of the library.
 extern "C" {
 static void remove_pending_and_reraise(int sig) {
+  if (g_committing.load()) {
+    g_deferred_signal.store(sig);
+    return;
+  }
   for (auto& s : g_pending) {
     if (s.used.load()) ::unlink(s.path);
   }
@@ -147,18 +156,78 @@ void OutputTransaction::stage(const std::string& path, const std::string& conten
   }
 }
 
-void OutputTransaction::commit() {
-  for (std::size_t k = 0; k < staged_.size(); ++k) {
-    if (std::rename(staged_[k].temp.c_str(), staged_[k].target.c_str()) != 0) {
-      const int err = errno;
-      for (std::size_t j = 0; j < k; ++j) withdraw_pending(staged_[j].slot);
-      staged_.erase(staged_.begin(), staged_.begin() + static_cast<long>(k));
-      throw InputError(staged_.front().target, 0,
-                       std::string("cannot write: ") + std::strerror(err));
-    }
-    withdraw_pending(staged_[k].slot);
+namespace {
+
+/// A hard link to `target` beside it (its old content, for a rollback); "" when there is no
+/// target. @throws InputError when the old file can be neither linked nor copied.
+std::string keep_old(const std::string& target) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(target, ec))) return "";
+  const fs::path t(target);
+  const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  std::random_device random;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const std::string old =
+        (dir / ("." + t.filename().string() + ".taxopt-old-" + std::to_string(random()))).string();
+    if (::link(target.c_str(), old.c_str()) == 0) return old;
+    if (errno == EEXIST) continue;
+    // No hard links here (a FAT or network share): a copy keeps the content as well.
+    if (fs::copy_file(target, old, fs::copy_options::none, ec)) return old;
+    break;
   }
-  staged_.clear();
+  throw InputError(target, 0,
+                   "cannot keep the old file for the outputs' rollback (every output of the run "
+                   "left as it was)");
+}
+
+}  // namespace
+
+void OutputTransaction::commit() {
+  // Every output is new or every one is as it was: the old files are kept as links, the new
+  // ones renamed in, and on a failure the ones already renamed are put back. Signals wait.
+  std::vector<std::string> old;
+  try {
+    for (const Staged& s : staged_) old.push_back(keep_old(s.target));
+  } catch (...) {
+    for (const std::string& o : old) {
+      if (!o.empty()) ::unlink(o.c_str());
+    }
+    throw;
+  }
+  g_committing.store(true);
+  std::size_t done = 0;
+  int err = 0;
+  for (; done < staged_.size(); ++done) {
+    if (std::rename(staged_[done].temp.c_str(), staged_[done].target.c_str()) != 0) {
+      err = errno;
+      break;
+    }
+  }
+  if (err != 0) {
+    for (std::size_t j = 0; j < done; ++j) {
+      // The new file back out: the old one over it, or none where there was none.
+      if (old[j].empty()) {
+        ::unlink(staged_[j].target.c_str());
+      } else {
+        std::rename(old[j].c_str(), staged_[j].target.c_str());
+        old[j].clear();
+      }
+    }
+  }
+  for (const std::string& o : old) {
+    if (!o.empty()) ::unlink(o.c_str());
+  }
+  for (std::size_t j = 0; j < done; ++j) withdraw_pending(staged_[j].slot);
+  const std::string failed = err != 0 ? staged_[done].target : std::string();
+  staged_.erase(staged_.begin(), staged_.begin() + static_cast<long>(done));
+  g_committing.store(false);
+  if (const int sig = g_deferred_signal.exchange(0)) std::raise(sig);
+  if (err != 0) {
+    throw InputError(failed, 0,
+                     std::string("cannot write: ") + std::strerror(err) +
+                         " (every output of the run left as it was)");
+  }
 }
 
 void OutputTransaction::abort() noexcept {
@@ -173,6 +242,13 @@ bool same_file(const std::string& a, const std::string& b) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  // One folder under two names (a bind mount, a linked folder): the same name in it is one
+  // file ("a/x.nc" and "b/x.nc" with b a bind mount of a: the report replaced the program).
+  const fs::path pa = fs::absolute(a, ec), pb = fs::absolute(b, ec);
+  if (pa.filename() == pb.filename() && fs::exists(pa.parent_path(), ec) &&
+      fs::exists(pb.parent_path(), ec) && fs::equivalent(pa.parent_path(), pb.parent_path(), ec)) {
+    return true;
+  }
   // Not both there yet: compare absolute paths with links and "." and ".." resolved as far as
   // the folders exist ("same.out" and "./same.out" are one file).
   const auto resolved = [](const std::string& p) {

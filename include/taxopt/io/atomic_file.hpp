@@ -1,8 +1,8 @@
 #pragma once
 /// @file Atomic output: every file of a run is first written to a temporary file beside its
-/// target, and only when all are written are they renamed into place. A failed run leaves no
-/// partial file and never overwrites a good one. After remove_pending_on_signals (the CLI calls
-/// it; a library never touches a process's signals on its own), a SIGINT, SIGTERM or SIGHUP
+/// target, and only when all are written are they renamed into place, as one (commit). A failed run
+/// leaves no partial file and never overwrites a good one. After remove_pending_on_signals (the CLI
+/// calls it; a library never touches a process's signals on its own), a SIGINT, SIGTERM or SIGHUP
 /// (whose handler is the default one) removes the pending temporary files before the process
 /// ends by it.
 
@@ -26,7 +26,12 @@ class TAXOPT_API OutputTransaction {
   /// @throws InputError naming `path` when it cannot be written.
   void stage(const std::string& path, const std::string& content);
 
-  /// Renames every staged file onto its target. @throws InputError on failure.
+  /// Renames every staged file onto its target, as one: the old files are kept (hard links,
+  /// else copies) until every rename is done, and a failed rename puts the ones before it back
+  /// (the old file, or none where there was none), so the targets are all new or all as they
+  /// were. A signal remove_pending_on_signals handles waits until then (SIGKILL or a power
+  /// cut cannot: a `.name.taxopt-old-*` link may then remain beside a target).
+  /// @throws InputError on failure, every target as it was.
   void commit();
 
   /// Removes every staged temporary file.
@@ -47,8 +52,9 @@ class TAXOPT_API OutputTransaction {
   std::vector<Staged> staged_;
 };
 
-/// True when `a` and `b` name the same existing file, or the same path once made absolute and
-/// resolved (links, ".", "..") as far as it exists.
+/// True when `a` and `b` name the same existing file, the same name in one folder reached by
+/// two paths (a bind mount, a linked folder), or the same path once made absolute and resolved
+/// (links, ".", "..") as far as it exists.
 TAXOPT_API bool same_file(const std::string& a, const std::string& b);
 
 /// Why an output file cannot be written at `path` ("" when it can): a folder, a missing

@@ -3,9 +3,11 @@
 // a TCP block in the program's axes) would drive a joint past its velocity limit at the
 // rapid's rate, the writer turns the table at the joints' rate, and a joint velocity past its
 // limit that is left is a problem (exit 1), not a warning.
+#include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -13,6 +15,7 @@
 
 #include "support.hpp"
 
+using namespace taxopt;
 using namespace taxopt::test;
 
 namespace {
@@ -231,4 +234,41 @@ TEST_CASE(
   CHECK(placed["blocks_not_checked"].get<long>() < unknown);
   CHECK(placed["blocks_swept"].get<long>() > swept);
   CHECK(placed["blocks_not_checked"].get<long>() <= 2);
+}
+
+TEST_CASE(
+    "joints: a continuous C wound by the cut turns home to the nearest whole turn, not back "
+    "through every turn it made",
+    "[program][joints]") {
+  // A ring cut five and a third times round with the tool leaning 10 deg outward: C follows the
+  // angle round, 1,920 deg by the last point.
+  std::ostringstream cl;
+  cl << "TOOL PATH/RING,TOOL,BALL6\nTLDATA/MILL,6.0000,3.0000,40.0000,0.0000,0.0000\n"
+        "LOAD/TOOL,1\nSPINDL/RPM,8000,CLW\nRAPID\nGOTO/20.0,0.0,10.0,0.1736482,0.0,0.9848078\n"
+        "FEDRAT/MMPM,1000\n";
+  const double d = M_PI / 180.0;
+  for (int k = 0; k <= 1920; k += 4) {
+    const double a = k * d, s = std::sin(10 * d), c = std::cos(10 * d);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,0.0,%.7f,%.7f,%.7f\n", 20 * std::cos(a),
+                  20 * std::sin(a), s * std::cos(a), s * std::sin(a), c);
+    cl << buf;
+  }
+  cl << "END-OF-PATH\n";
+  TempDir t;
+  write_file(t.path("ring.cls"), cl.str());
+  const RunResult r =
+      run_taxopt("--in " + t.path("ring.cls") + " --method none -q --gcode " + t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto moves = read_gcode_moves(read_file(t.path("o.ngc")), "o.ngc");
+  REQUIRE(moves.size() > 2);
+  double wound = 0.0;
+  for (const GcodeMove& m : moves) wound = std::max(wound, std::abs(m.c_deg));
+  CHECK(wound > 1800.0);
+  // The last block is home: A0 and a whole turn of C, at most half a turn from where C was.
+  const GcodeMove& last = moves.back();
+  CHECK(last.tilt_deg == 0.0);
+  CHECK(std::fmod(last.c_deg, 360.0) == 0.0);
+  CHECK(std::abs(last.c_deg - moves[moves.size() - 2].c_deg) <= 180.0);
 }

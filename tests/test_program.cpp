@@ -83,7 +83,8 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
     }
     prev = &m;
   }
-  b.home_at_end = !moves.empty() && moves.back().tilt_deg == 0.0 && moves.back().c_deg == 0.0;
+  b.home_at_end = !moves.empty() && moves.back().tilt_deg == 0.0 &&
+                  std::fmod(moves.back().c_deg, 360.0) == 0.0;  // a continuous C: any whole turn
   return b;
 }
 
@@ -334,8 +335,10 @@ TEST_CASE("program: check_program finds each breach a machinist looks for in a p
             }
           }
         }) == V{FindingCode::DiagonalApproach});
-  CHECK(findings_of([&](pipeline::Written& w) { w.moves.back().c_deg = 360.0; }) ==
+  CHECK(findings_of([&](pipeline::Written& w) { w.moves.back().c_deg = 5.0; }) ==
         V{FindingCode::EndPoseNotHome});
+  // A continuous C is home at any whole turn.
+  CHECK(findings_of([&](pipeline::Written& w) { w.moves.back().c_deg = 720.0; }).empty());
 }
 
 TEST_CASE(
@@ -698,7 +701,7 @@ TEST_CASE(
       CHECK(moves.back().retract);
       CHECK(moves.back().given == 3u);  // X and Y
       CHECK(moves[moves.size() - 2].tilt_deg == 0.0);
-      CHECK(moves[moves.size() - 2].c_deg == 0.0);
+      CHECK(std::fmod(moves[moves.size() - 2].c_deg, 360.0) == 0.0);  // C home at a whole turn
       if (std::string(dialect) == "linuxcnc" && have_rs274()) {
         std::vector<CanonMove> pts, all;
         const RunResult rs = run_rs274(dir.path("o.nc"), pts, {}, &all);

@@ -293,9 +293,17 @@ void ProgramWriter::program_end() {
   op_index_.reset();
   point_.reset();
   retract();
-  // The rotary axes home (a continuous C within one turn of it), with the tool up.
+  // The rotary axes home, with the tool up; a continuous C to the turn of home nearest it (a
+  // raster whose air turns wound C to -21,330 deg went back 59 turns to C0), a tie toward C0.
   if (g_.program.end_pose == EndPose::Home && retracts_ && !ops_.empty()) {
-    rotary_turn(Posed{0.0, 0.0}, BlockKind::End);
+    Posed home{0.0, 0.0};
+    if (machine_.rotary.c.continuous) {
+      const double turns = prev_pose_.c_rad / Constants<double>::two_pi();
+      double k = std::round(turns);
+      if (std::abs(turns - k) > 0.5 - 1e-9) k = std::trunc(turns);
+      home.c_rad = k * Constants<double>::two_pi();
+    }
+    rotary_turn(home, BlockKind::End);
   }
   if (g_.program.end_park_xy_mm && retracts_ && !ops_.empty()) park(*g_.program.end_park_xy_mm);
   verbatim(g_.program.footer, BlockKind::End);

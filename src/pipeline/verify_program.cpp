@@ -275,8 +275,11 @@ class ProgramChecks {
 
   void end_pose() {
     const GcodeMove& last = w_.moves.back();
+    // A continuous C is home at any whole turn (the writer takes the nearest).
+    const bool c_home =
+        machine_.rotary.c.continuous ? std::fmod(last.c_deg, 360.0) == 0.0 : last.c_deg == 0.0;
     if (t_.end_pose == EndPose::Home && t_.retract != SafeRetract::None &&
-        (last.tilt_deg != 0.0 || last.c_deg != 0.0)) {
+        (last.tilt_deg != 0.0 || !c_home)) {
       breach(FindingCode::EndPoseNotHome, last,
              "ends with the rotary axes at " + shown(last.tilt_deg) + " / " + shown(last.c_deg) +
                  " deg, not at their home (gcode.end_pose)");

@@ -277,10 +277,41 @@ Machine run_machine(const Machine& machine, const JobOptions& options) {
   return m;
 }
 
+/// How far a tool axis built in code may be off unit length and still be the caller's
+/// direction: a float normalisation (about 1e-7 off, issue 64.3 was refused against 1e-9).
+constexpr double kFloatAxisLength = 1e-6;
+/// What check_points takes as unit: such an axis is used as given, bit for bit.
+constexpr double kUnitAxisTolerance = 1e-9;
+
+/// The toolpath with every axis within kFloatAxisLength of unit length normalised, as the CL
+/// reader normalises what it reads (the direction is the caller's, the length round-off);
+/// empty where every axis is unit already or is refused anyway (check_points).
+std::optional<Toolpath> with_unit_axes(const Toolpath& tp) {
+  const auto rounded_off = [](const Vec3d& axis) {
+    const double d = std::abs(axis.norm() - 1.0);
+    return d > kUnitAxisTolerance && d <= kFloatAxisLength;
+  };
+  bool any = false;
+  for (const Operationd& op : tp.operations) {
+    for (const CLPointd& p : op.points) any = any || rounded_off(p.axis);
+  }
+  if (!any) return std::nullopt;
+  Toolpath out = tp;
+  for (Operationd& op : out.operations) {
+    for (CLPointd& p : op.points) {
+      if (rounded_off(p.axis)) p.axis.normalize();
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
-AxisPlan plan_axes(const Toolpath& tp, const Machine& given_machine, const JobOptions& options) {
+AxisPlan plan_axes(const Toolpath& given_tp, const Machine& given_machine,
+                   const JobOptions& options) {
   const Machine machine = run_machine(given_machine, options);
+  const std::optional<Toolpath> unit = with_unit_axes(given_tp);
+  const Toolpath& tp = unit ? *unit : given_tp;
   AxisPlan out;
   in_job_arena(options, [&] {
     JobResult res;
@@ -347,8 +378,9 @@ JobResult run_with_fallback(const Toolpath& tp, const Machine& machine, const Jo
 
 JobResult run_job(const Toolpath& tp, const Machine& given_machine, const JobOptions& options) {
   const Machine machine = run_machine(given_machine, options);
+  const std::optional<Toolpath> unit = with_unit_axes(tp);
   JobResult res;
-  in_job_arena(options, [&] { res = run_with_fallback(tp, machine, options); });
+  in_job_arena(options, [&] { res = run_with_fallback(unit ? *unit : tp, machine, options); });
   return res;
 }
 

@@ -1,6 +1,7 @@
 // Hostile input, round 5 (issue 63.12): numbers as the option parser would take them, a zero
 // that silently meant "the default", a spindle switched off read as no SPINDL at all.
 #include <catch2/catch.hpp>
+#include <filesystem>
 #include <string>
 
 #include "support.hpp"
@@ -44,4 +45,37 @@ TEST_CASE("hostile options: a spindle set to 0 rpm is said as the spindle off, n
       run_taxopt("--in " + t.path("s.apt") + " --method none -q --gcode " + t.path("o.ngc"));
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("s.apt:6") && Catch::Contains("SPINDL/OFF or a speed of 0"));
+}
+
+TEST_CASE("hostile outputs: a full disk leaves no --plots folder behind, a link in it is refused",
+          "[cli][bad-input][atomic]") {
+  TempDir t;
+  // Three points: a program of 0.7 KB, each plot about 3 KB.
+  write_file(t.path("s.apt"),
+             "UNITS/MM\nCUTTER/10,5\nLOADTL/2\nSPINDL/RPM,5000\nFEDRAT/600,MMPM\nGOTO/0,0,5\n"
+             "GOTO/10,0,5\nGOTO/20,0,5\n");
+  const std::string in =
+      "--in " + t.path("s.apt") + " --method none -q --gcode " + t.path("o.nc") + " ";
+  // A file size limit of 1 KB (SIGXFSZ ignored: writes fail with EFBIG) stands in for a disk
+  // that fills while the plots are written.
+  const RunResult full = run("sh -c 'trap \"\" XFSZ; ulimit -f 2; " + std::string(TAXOPT_EXE) +
+                             " " + in + "--plots " + t.path("new/plots") + "'");
+  INFO(full.err);
+  CHECK(full.code == 2);
+  CHECK_THAT(full.err, Catch::Contains("cannot write"));
+  CHECK_FALSE(file_exists(t.path("new")));  // the folders the run made, gone
+  CHECK_FALSE(file_exists(t.path("o.nc")));
+  // A link where a plot goes: renaming over it would replace the link, not write its target.
+  std::filesystem::create_directories(t.path("p"));
+  write_file(t.path("target.svg"), "mine\n");
+  const RunResult first = run_taxopt(in + "--plots " + t.path("p"));
+  REQUIRE(first.code == 0);
+  const std::string plot = std::filesystem::directory_iterator(t.path("p"))->path().string();
+  std::filesystem::remove(plot);
+  std::filesystem::create_symlink(t.path("target.svg"), plot);
+  const RunResult linked = run_taxopt(in + "--plots " + t.path("p"));
+  CHECK(linked.code == 2);
+  CHECK_THAT(linked.err, Catch::Contains("is a symbolic link"));
+  CHECK(std::filesystem::is_symlink(plot));
+  CHECK(read_file(t.path("target.svg")) == "mine\n");
 }

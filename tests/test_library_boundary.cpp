@@ -76,8 +76,8 @@ TEST_CASE(
       {"an axis of length 2", [](CLPointd& p) { p.axis *= 2.0; }, "has length 2"},
       {"a NaN axis", [](CLPointd& p) { p.axis.x() = kNaN; }, "expected a unit vector"},
       {"a zero axis", [](CLPointd& p) { p.axis.setZero(); }, "has length 0"},
-      {"an axis off unit by 1e-6", [](CLPointd& p) { p.axis *= 1.000001; },
-       "has length 1.000001, expected a unit vector"},
+      {"an axis off unit by 1e-5", [](CLPointd& p) { p.axis *= 1.00001; },
+       "has length 1.00001, expected a unit vector"},
       {"an infinite tip", [](CLPointd& p) { p.tip_mm.x() = kInf; }, "not a finite point"},
       {"a NaN tip", [](CLPointd& p) { p.tip_mm.z() = kNaN; }, "not a finite point"},
       {"a tip 2 km away", [](CLPointd& p) { p.tip_mm.y() = 2e6; }, "within +-1e6 mm"},
@@ -91,6 +91,84 @@ TEST_CASE(
     const std::string e = input_error_of([&] { (void)run_job(tp, default_machine(), options); });
     CHECK_THAT(e, Catch::Contains("operation POST, point 7: "));
     CHECK_THAT(e, Catch::Contains(b.said));
+    // A program reads where: the operation and point, and the field.
+    try {
+      (void)run_job(tp, default_machine(), options);
+    } catch (const InputError& err) {
+      CHECK(err.place().operation == std::optional<std::size_t>(0));
+      CHECK(err.place().point == std::optional<std::size_t>(7));
+      CHECK_THAT(err.place().field, Catch::StartsWith("CLPoint::"));
+    }
+  }
+}
+
+TEST_CASE(
+    "library boundary: a flipped axis is said as one, with the operation and point a "
+    "program reads, and a bad option names its field",
+    "[library][bad-input]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::Paper;
+  Toolpath tp = pass_in_code();
+  tp.operations[0].points[9].axis *= -1.0;
+  try {
+    (void)run_job(tp, default_machine(), options);
+    FAIL("a flipped axis ran");
+  } catch (const InputError& e) {
+    CHECK_THAT(e.message(), Catch::Contains("operation POST, point 9: the tool axis") &&
+                                Catch::Contains("points into the part") &&
+                                Catch::Contains("flipped axis"));
+    CHECK(e.line() == 0);
+    CHECK(e.place().operation == std::optional<std::size_t>(0));
+    CHECK(e.place().point == std::optional<std::size_t>(9));
+    CHECK(e.place().field == "CLPoint::axis");
+  }
+  JobOptions bad = options;
+  bad.feed_mm_per_min = -1.0;
+  try {
+    check_options(bad);
+    FAIL("a negative feed was taken");
+  } catch (const InputError& e) {
+    CHECK(e.place().field == "JobOptions::feed_mm_per_min");
+    CHECK_FALSE(e.place().operation);
+  }
+  Toolpath no_size = pass_in_code();
+  no_size.operations[0].tool.diameter_mm = -6.0;
+  try {
+    (void)run_job(no_size, default_machine(), options);
+    FAIL("a tool of diameter -6 ran");
+  } catch (const InputError& e) {
+    CHECK(e.place().operation == std::optional<std::size_t>(0));
+    CHECK(e.place().field == "Operation::tool.diameter_mm");
+  }
+}
+
+TEST_CASE(
+    "library boundary: axes normalised in float (1 +- 1e-7) are the caller's directions: the "
+    "job runs as on the same axes normalised in double",
+    "[library]") {
+  const Part part(square());
+  JobOptions options;
+  options.part = &part;
+  options.method = Method::Paper;
+  const Toolpath exact = pass_in_code();
+  Toolpath floats = exact;
+  for (CLPointd& p : floats.operations[0].points) {
+    const Eigen::Vector3f f = p.axis.cast<float>().normalized();
+    p.axis = f.cast<double>();
+  }
+  floats.operations[0].points[3].axis *= 1.0 + 3e-7;
+  const JobResult a = run_job(exact, default_machine(), options);
+  const JobResult b = run_job(floats, default_machine(), options);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  const auto& ra = a.operations.at(0).rows;
+  const auto& rb = b.operations.at(0).rows;
+  REQUIRE(ra.size() == rb.size());
+  for (std::size_t i = 0; i < ra.size(); ++i) {
+    CHECK(ra[i].tilt_axis_deg == Approx(rb[i].tilt_axis_deg).margin(1e-4));
+    CHECK(ra[i].c_deg == Approx(rb[i].c_deg).margin(1e-4));
   }
 }
 
@@ -238,9 +316,9 @@ TEST_CASE(
       {"a NaN holder radius", [](Machine& m) { m.holder_radius_mm = kNaN; },
        "Machine::holder_radius_mm must be within (0, 1000]"},
       {"a NaN velocity limit", [](Machine& m) { m.limits[3].max_velocity_per_s = kNaN; },
-       "Machine::limits[A].max_velocity_per_s"},
+       "Machine::limits[3].max_velocity_per_s must be finite and >= 0 (the A joint)"},
       {"a negative acceleration", [](Machine& m) { m.limits[0].max_accel_per_s2 = -1.0; },
-       "Machine::limits[X].max_accel_per_s2"},
+       "Machine::limits[0].max_accel_per_s2"},
       {"Fanuc with 9 decimals",
        [](Machine& m) {
          m.gcode.dialect = GcodeDialect::Fanuc;
@@ -265,7 +343,7 @@ TEST_CASE(
          m.linear_range[0].max_mm = 100.0;
          m.gcode.program.end_park_xy_mm = std::array<double, 2>{200.0, 0.0};
        },
-       "Machine::gcode.program.end_park_xy_mm[X]"},
+       "Machine::gcode.program.end_park_xy_mm[0]"},
       {"a linearisation finer than the written words",
        [](Machine& m) { m.gcode.program.linearise_tolerance_mm = 1e-6; },
        "Machine::gcode.program.linearise_tolerance_mm"},

@@ -122,6 +122,14 @@ const OptionNames& cli_option_names() {
       {"ClReadOptions::units", "--units"},
       {"ClReadOptions::apply_msys", "--msys apply"},
       {"part_mesh_for::mesh_units", "--part-units"},
+      // The machine's fields as its file names them.
+      {"Machine::default_tool_number", "tool_number in the machine file's [defaults]"},
+      {"Machine::default_spindle_rpm", "spindle_rpm in the machine file's [defaults]"},
+      {"Machine::work_offset_mm", "the machine file's [setup] work_offset_mm"},
+      {"Machine::gcode.program.retract", "the machine file's gcode.safe_retract"},
+      {"Machine::gcode.program.coolant", "the machine file's gcode.coolant"},
+      {"Machine::gcode.program.linearise_tolerance_mm",
+       "the machine file's gcode.linearise_tolerance_mm"},
   };
   return names;
 }
@@ -256,6 +264,60 @@ RunInfo run_info(const Args& a, const Invocation& how, bool digest) {
   return run;
 }
 
+/// The folders `dir` needs made, deepest first (none when it exists).
+std::vector<std::string> folders_to_make(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (fs::path p = fs::absolute(dir, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+       p = p.parent_path()) {
+    if (p.has_filename()) out.push_back(p.string());
+    if (p == p.parent_path()) break;
+  }
+  return out;
+}
+
+/// Removes the folders a failed run made, deepest first, each only if empty.
+void remove_made_folders(const std::vector<std::string>& made) {
+  std::error_code ec;
+  for (const std::string& d : made) std::filesystem::remove(d, ec);
+}
+
+/// Stages the plots in the --plots folder (made here), after checking each plot's path as an
+/// output's: never an input, a link (renaming over it would replace the link), a folder or a
+/// read-only file. Returns the folders it made.
+std::vector<std::string> stage_plots(const Args& a, const JobResult& result,
+                                     OutputTransaction& tx) {
+  if (a.plots.empty()) return {};
+  const std::vector<std::pair<std::string, std::string>> plots = job_plots(result);
+  for (const auto& [name, svg] : plots) {
+    // A plot's name may be an input's that lies in the folder: never written over it.
+    const std::string path = a.plots + "/" + name;
+    if (const auto in = input_at(a, path)) {
+      refuse("--plots " + a.plots + ": its plot " + name + " would replace the " + in->first +
+             " file " + in->second + "; give the plots a folder of their own");
+    }
+    std::error_code ec;
+    if (std::filesystem::exists(std::filesystem::symlink_status(path, ec))) {
+      if (const std::string why = writable_output_problem(path); !why.empty()) {
+        refuse("--plots " + a.plots + ": its plot " + path + " " + why);
+      }
+    }
+  }
+  std::vector<std::string> made = folders_to_make(a.plots);
+  std::error_code ec;
+  std::filesystem::create_directories(a.plots, ec);
+  if (ec) refuse(a.plots + ": cannot create folder: " + ec.message());
+  try {
+    for (const auto& [name, svg] : plots) tx.stage(a.plots + "/" + name, svg);
+  } catch (...) {
+    tx.abort();
+    remove_made_folders(made);
+    throw;
+  }
+  return made;
+}
+
 /// Every output of the run in one transaction (all or none), then the summary.
 void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpath,
                    const Machine& machine, const JobOptions& options, const JobResult& result,
@@ -271,21 +333,16 @@ void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpat
     tx.stage(a.html, html_page(result, toolpath, machine, options, run_info(a, how, false),
                                part ? &part->mesh() : nullptr, *html_assets));
   }
-  if (!a.plots.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(a.plots, ec);
-    if (ec) refuse(a.plots + ": cannot create folder: " + ec.message());
-    for (const auto& [name, svg] : job_plots(result)) {
-      // A plot's name may be an input's that lies in the folder: never written over it.
-      const std::string path = a.plots + "/" + name;
-      if (const auto in = input_at(a, path)) {
-        refuse("--plots " + a.plots + ": its plot " + name + " would replace the " + in->first +
-               " file " + in->second + "; give the plots a folder of their own");
-      }
-      tx.stage(path, svg);
-    }
+  const std::vector<std::string> made = stage_plots(a, result, tx);
+  try {
+    tx.commit();
+  } catch (...) {
+    // Every output as it was: the plots' folders this run made go too (a full disk left an
+    // empty --plots folder behind).
+    tx.abort();
+    remove_made_folders(made);
+    throw;
   }
-  tx.commit();
   if (!a.quiet) print_summary(result);
   if (how.demo && !a.quiet) {
     // What it wrote, and what to look at first.

@@ -44,47 +44,46 @@ constexpr double kNoPartMaxDeviationDeg = 1.0;
 /// Options of run_job, with the CLI's defaults.
 struct JobOptions {
   Method method = Method::Paper;
-  /// Feed for the metrics: overrides the file's feeds when given (--feed). When the file
+  /// Feed for the metrics: overrides the file's feeds when given. When the file
   /// has no feed at all, it (or `default_feed_mm_per_min`) is also the feed written.
   std::optional<double> feed_mm_per_min;
   double default_feed_mm_per_min = 1000.0;
   /// The spindle speed (rpm) and tool number of an operation whose CL file gives none
-  /// (--spindle-rpm, --tool-number); before the machine file's [defaults]. With none of the
-  /// three, run_job refuses such an operation (InputError): a program must call its tool and
+  /// here; else the machine's (Machine::default_spindle_rpm, default_tool_number). With none
+  /// of the three, run_job refuses such an operation (InputError): a program must call its tool and
   /// turn its spindle before it cuts.
   std::optional<double> spindle_rpm;
   std::optional<int> tool_number;
   /// Units of the G-code; empty: the CL file's.
   std::optional<LengthUnit> units_out;
   PosePlanOptions pose_options;
-  /// The paper's optimiser (--method paper): deviation cone (--max-deviation), candidate
-  /// grid (--grid), segmenter and joint smoothing.
+  /// The paper's optimiser (Method::Paper): deviation cone, candidate grid, segmenter and joint
+  /// smoothing.
   PaperOptions paper;
-  /// --method global (global_optimiser.hpp): its objective (--objective) and jerk weight
-  /// (--jerk-weight). Its cone is the run's (max_deviation_deg, else paper.max_deviation_deg):
+  /// Method::Global (global_optimiser.hpp): its objective and jerk weight. Its cone is the run's (max_deviation_deg, else paper.max_deviation_deg):
   /// run_job refuses a global.max_deviation_deg of its own. It starts from the paper's axes.
   GlobalOptions global;
   /// The part (not owned); without it there is no contact recovery and no collision check,
   /// and the deviation cone shrinks to kNoPartMaxDeviationDeg unless `max_deviation_deg` is
   /// given (JobResult::safety_warnings says so).
   const Part* part = nullptr;
-  /// The deviation cone (--max-deviation), deg; overrides paper.max_deviation_deg. Empty: that
+  /// The deviation cone, deg; overrides paper.max_deviation_deg. Empty: that
   /// one with a part, at most kNoPartMaxDeviationDeg without.
   std::optional<double> max_deviation_deg;
   ContactOptions contact;
   /// Tool dimensions overriding the CL file's (mm), for contact recovery and collision checks.
   ToolOverrides tool;
   /// Clearances the shank (past the flutes) and the holder keep from the part in every check
-  /// (--shank-clearance, --holder-clearance), mm: the optimisers accept, and the verification
+  /// in mm: the optimisers accept, and the verification
   /// passes, only axes where the grown bodies are free (docs/cli.md).
-  /// Empty: the machine file's [checks], else kDefaultShankClearanceMm / ...HolderClearanceMm.
+  /// Empty: the machine's (Machine::shank_clearance_mm, holder_clearance_mm), else kDefaultShankClearanceMm / ...HolderClearanceMm.
   std::optional<double> shank_clearance_mm, holder_clearance_mm;
   /// How far the flutes may reach into the part mesh without a collision: its chordal error
-  /// (--part-tolerance), mm; empty: the contact tolerance (contact_tolerance_mm: max(0.05, the
+  /// in mm; empty: the contact tolerance (contact_tolerance_mm: max(0.05, the
   /// mesh's chordal error + the CL file's tolerance band)).
   std::optional<double> part_tolerance_mm;
   /// The least angle a method's axis keeps from the designed surface's normal at a contact
-  /// (--min-tilt), deg: at the ball's tip the cutting speed is zero, so a CAM system leads or
+  /// in deg: at the ball's tip the cutting speed is zero, so a CAM system leads or
   /// tilts the tool off the normal. At each contact the bound is the lesser of this and the
   /// input's own angle there: no method brings the axis nearer the normal than the CAM did, and
   /// none is refused for an input that comes nearer than asked. Empty: the input's own least
@@ -94,8 +93,8 @@ struct JobOptions {
   /// it a point gives it up (FindingCode::LeastTiltNotKept); the report
   /// (OperationResult::Cutting) names the points and moves below it.
   std::optional<double> min_tilt_deg;
-  /// Where the program's zero sits in machine coordinates, mm (--work-offset; Machine's
-  /// work_offset_mm, which this replaces).
+  /// Where the program's zero sits in machine coordinates, mm; replaces
+  /// Machine::work_offset_mm.
   std::optional<Vec3d> work_offset_mm;
   /// Rasterise the C-space of every contact point (cspace.hpp) and fill PointRow::free_cells
   /// (with a part only; costs about 10 ms a point at 2 deg, docs/benchmarks.md).
@@ -103,10 +102,10 @@ struct JobOptions {
   /// C-space maps per operation (with a part): the contact with the fewest free cells and
   /// the one whose axis changed most (0: none). Implies count_free_cells.
   bool cspace_maps = false;
-  /// Write the scheduled feed of every feed move (--feed-schedule): the fastest the machine's
+  /// Write the scheduled feed of every feed move: the fastest the machine's
   /// limits allow, never above the programmed feed (feed_schedule.hpp). The dynamic limits
-  /// are then checked at those feeds with the machine's effective limits (its file's, else
-  /// the defaults); otherwise at the programmed feeds, with the limits its file gives.
+  /// are then checked at those feeds with the machine's effective limits (its own, else the
+  /// defaults); otherwise at the programmed feeds, with the limits its file gives.
   bool feed_schedule = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
@@ -174,7 +173,7 @@ struct Verification {
   bool tool_length_active = true;
   /// Joint velocities and accelerations within the limits at the written feeds, as the
   /// controller moves (linear in the joints, from rest at each chain of feed moves): the
-  /// machine file's limits, or with --feed-schedule the effective ones (true when none).
+  /// machine's limits, or with JobOptions::feed_schedule the effective ones (true when none).
   bool within_dynamic_limits = true;
 };
 
@@ -248,8 +247,8 @@ struct PointRow {
   /// programmed feed x programmed time / scheduled time), after and before; empty for rapids
   /// and the first point.
   std::optional<double> feed_mm_min, feed_before_mm_min;
-  /// Free cells of the C-space grid at this contact (cell size --grid, within --max-deviation
-  /// of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
+  /// Free cells of the C-space grid at this contact (cell size PaperOptions::grid_deg, within
+  /// the deviation cone of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
   std::optional<std::size_t> free_cells;
 };
 
@@ -344,7 +343,7 @@ struct OperationResult {
   double feed_mm_min = 0.0;
   /// The rotary rates of the input axes and of the program as the machine runs them: each
   /// feed move at the time the controller takes from the words written (tip path / F, the
-  /// block's kept time, or with --feed-schedule the scheduled one), the input's likewise.
+  /// block's kept time, or with JobOptions::feed_schedule the scheduled one), the input's likewise.
   RotarySummary before, after;
   /// The axis whose peak rate comes nearest the machine's limit for it (worst_axis_share);
   /// empty where the machine gives no rotary limit.
@@ -394,7 +393,7 @@ struct OperationResult {
   ContactSummary contact;
   Verification verification;
   /// Each stage's own wall time for this operation, s: contact recovery, the C-space raster
-  /// (--points-csv free_cells, C-space maps), the optimiser with its guards, posting and
+  /// (JobOptions::count_free_cells, cspace_maps), the optimiser with its guards, posting and
   /// writing (the write shared evenly), the verification without the raster.
   double time_contacts_s = 0.0, time_cspace_s = 0.0, time_optimise_s = 0.0, time_post_s = 0.0,
          time_verify_s = 0.0;
@@ -414,7 +413,7 @@ struct OperationResult {
     }
   };
   std::optional<KeptInputPoints> kept_input_points;
-  /// --objective time: the plan kept (paper, sum-squares, sum-squares-fine, time, input), its
+  /// GlobalObjective::Time: the plan kept (paper, sum-squares, sum-squares-fine, time, input), its
   /// scheduled cycle and peak a, and the shortest plan's: within the tie band of the shortest
   /// cycle the smoothest plan wins (GlobalOptions::time_tie_band).
   struct TimeChoice {
@@ -528,8 +527,9 @@ struct TAXOPT_API JobResult {
   GcodeProgram gcode;
   std::string out_cls;
   LengthUnit gcode_units = LengthUnit::Millimetre;
-  /// The machine's tilt axis letter, 'A' (A/C) or 'B' (B/C): the plots' titles name it (the rows
-  /// keep its value in tilt_deg, the CSV in A_deg: docs/kinematics.md).
+  /// The machine's tilt axis letter, 'A' (A/C) or 'B' (B/C): the plots' titles name it. The
+  /// axis's value is PointRow::tilt_axis_deg (PointRow::tilt_deg is the tool's tilt against the
+  /// surface normal, another angle); the CSV's column keeps the name A_deg (docs/cli.md).
   char tilt_letter = 'A';
   bool ok() const { return problems.empty(); }
 };

@@ -14,11 +14,12 @@ std::string format_location(const std::string& file, int line, const std::string
   return out + what;
 }
 
-InputError::InputError(std::string file, int line, const std::string& what)
+InputError::InputError(std::string file, int line, const std::string& what, ErrorPlace place)
     : std::runtime_error(format_location(file, line, what)),
       file_(std::move(file)),
       line_(line),
-      message_(what) {}
+      message_(what),
+      place_(std::move(place)) {}
 
 std::string option_name(const OptionNames& names, const std::string& field) {
   const auto it = names.find(field);

@@ -47,7 +47,7 @@ struct Cap {
 }  // namespace
 
 const char* to_string(Joint joint) {
-  static const char* const names[kJointCount] = {"X", "Y", "Z", "A", "C"};
+  static const char* const names[kJointCount] = {"X", "Y", "Z", "tilt", "C"};
   return names[static_cast<std::size_t>(joint)];
 }
 

@@ -7,6 +7,7 @@
 #include "dialects/dialect_rules.hpp"
 #include "machine/template_block.hpp"
 #include "taxopt/core/error.hpp"
+#include "taxopt/kinematics/feed_schedule.hpp"
 
 namespace taxopt {
 
@@ -45,7 +46,7 @@ namespace {
 [[noreturn]] void refuse(const std::string& field, const std::string& expected, double got) {
   std::ostringstream os;
   os << "Machine::" << field << " must be " << expected << ", got " << got;
-  throw InputError(os.str());
+  throw InputError(os.str(), ErrorPlace{std::nullopt, std::nullopt, "Machine::" + field});
 }
 
 /// The least linearisation tolerance, mm: the resolution of the written words.
@@ -71,8 +72,12 @@ void check_rotary(const char* name, const RotaryAxis<double>& axis) {
 
 namespace {
 
-/// The joints' letters as the messages name them.
-constexpr const char* kJointLetters = "XYZAC";
+/// Joint j's field index and its letter on `m` ("[3]" and "the B joint"): the field is the
+/// array's index, the letter the machine's (Joint::Tilt is A or B).
+std::string joint_field(std::size_t j) { return "[" + std::to_string(j) + "]"; }
+std::string joint_said(const Machine& m, std::size_t j) {
+  return " (the " + joint_name(static_cast<Joint>(j), m.rotary.tilt_letter()) + " joint)";
+}
 
 /// The kinematics' name agrees with the rotary model; a head's pivot, and no machine mode.
 void validate_kinematics(const Machine& m) {
@@ -111,19 +116,20 @@ void validate_axes(const Machine& m) {
     if (!p.allFinite()) refuse(f, "finite", p.norm());
   }
   for (std::size_t j = 0; j < kJointCount; ++j) {
-    const std::string f = std::string("limits[") + kJointLetters[j] + "].";
+    const std::string f = "limits" + joint_field(j) + ".";
+    const std::string finite = "finite and >= 0" + joint_said(m, j);
     const JointLimit& l = m.limits[j];
-    check_range(f + "max_velocity_per_s", l.max_velocity_per_s, 0.0, 1e9, "finite and >= 0");
-    check_range(f + "max_accel_per_s2", l.max_accel_per_s2, 0.0, 1e12, "finite and >= 0");
-    check_range(f + "max_jerk_per_s3", l.max_jerk_per_s3, 0.0, 1e15, "finite and >= 0");
-    check_range(std::string("joint_max_accel_per_s2[") + kJointLetters[j] + "]",
-                m.joint_max_accel_per_s2[j], 0.0, 1e12, "finite and >= 0");
+    check_range(f + "max_velocity_per_s", l.max_velocity_per_s, 0.0, 1e9, finite);
+    check_range(f + "max_accel_per_s2", l.max_accel_per_s2, 0.0, 1e12, finite);
+    check_range(f + "max_jerk_per_s3", l.max_jerk_per_s3, 0.0, 1e15, finite);
+    check_range("joint_max_accel_per_s2" + joint_field(j), m.joint_max_accel_per_s2[j], 0.0, 1e12,
+                finite);
   }
   for (std::size_t q = 0; q < 3; ++q) {
     const auto& r = m.linear_range[q];
-    const std::string f = std::string("linear_range[") + kJointLetters[q] + "]";
+    const std::string f = "linear_range" + joint_field(q);
     if (std::isnan(r.min_mm) || std::isnan(r.max_mm) || r.min_mm > r.max_mm) {
-      refuse(f + ".min_mm", "a number <= max_mm", r.min_mm);
+      refuse(f + ".min_mm", "a number <= max_mm" + joint_said(m, q), r.min_mm);
     }
   }
 }
@@ -219,8 +225,10 @@ void validate_program_template(const Machine& m) {
     for (std::size_t q = 0; q < 2; ++q) {
       const double v = (*t.end_park_xy_mm)[q];
       if (!std::isfinite(v) || !m.linear_range[q].contains(v)) {
-        refuse(std::string("gcode.program.end_park_xy_mm[") + kJointLetters[q] + "]",
-               "finite and within the travel (linear_range)", v);
+        refuse(
+            "gcode.program.end_park_xy_mm" + joint_field(q),
+            "finite and within the travel (linear_range" + joint_field(q) + ")" + joint_said(m, q),
+            v);
       }
     }
   }

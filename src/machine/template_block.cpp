@@ -263,8 +263,9 @@ void check_m(const Word& w, bool tool_change, const gcode::DialectRules& dialect
                      m == 30 || (m == 6 && !tool_change);
   if (state) {
     refuse("holds " + word +
-           ": the spindle, coolant, tool and program end are written by taxopt (the CL "
-           "file, the job's options, [defaults], gcode.coolant)");
+           ": the spindle, coolant, tool and program end are written by taxopt (from the CL "
+           "file, the job's options and the machine's defaults and coolant: "
+           "Machine::default_tool_number, default_spindle_rpm, gcode.program.coolant)");
   }
   if (const std::string why = dialect.template_refusal('M', x); !why.empty()) {
     refuse("holds " + word + ": " + why);
@@ -290,7 +291,8 @@ void check_g(const Word& w, const BlockRules& r) {
     refuse("holds " + w.letter + w.number +
            ", a motion, mode or frame code taxopt writes itself or does not know "
            "(a template may hold G4 P, G40, G61, G61.1, G64, G80; Fanuc/Haas G5.1, G8; "
-           "Haas G187; Sinumerik G60, G641, G642; use the [gcode] keys)");
+           "Haas G187; Sinumerik G60, G641, G642; the others are the machine's G-code settings, "
+           "Machine::gcode, a machine file's [gcode])");
   }
 }
 

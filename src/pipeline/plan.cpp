@@ -306,14 +306,14 @@ class OperationPlanner {
                   format_location(run_.tp.source, op_.points[i].line, os.str()));
     }
     for (std::size_t i : out.no_free_axis) {
-      add_finding(
-          res_, FindingCode::NoFreeAxis, k_, op_.points[i].line,
-          format_location(run_.tp.source, op_.points[i].line,
-                          "operation " + op_.name + ": no tool axis within " +
-                              std::to_string(options_.paper.max_deviation_deg) +
-                              " deg of the input axis is reachable and collision-free here" +
-                              out_of_reach(run_.machine.rotary, op_.points[i].axis) +
-                              msys_remedy(run_, op_.points[i])));
+      add_finding(res_, FindingCode::NoFreeAxis, k_, op_.points[i].line,
+                  format_location(run_.tp.source, op_.points[i].line,
+                                  "operation " + op_.name + ", point " + std::to_string(i) +
+                                      ": no tool axis within " +
+                                      std::to_string(options_.paper.max_deviation_deg) +
+                                      " deg of the input axis is reachable and collision-free" +
+                                      out_of_reach(run_.machine.rotary, op_.points[i].axis) +
+                                      msys_remedy(run_, op_.points[i])));
     }
   }
 

@@ -36,7 +36,8 @@ JobOptions resolved_options(const JobOptions& given, const Machine& machine) {
 
 void check_options(const JobOptions& o) {
   const auto refuse = [&o](const std::string& field, const std::string& expected, double v) {
-    throw InputError(o.name_of(field) + " must be " + expected + ", got " + pipeline::shown(v));
+    throw InputError(o.name_of(field) + " must be " + expected + ", got " + pipeline::shown(v),
+                     ErrorPlace{std::nullopt, std::nullopt, "JobOptions::" + field});
   };
   // `range` is the interval as the docs write it: "[0.01, 1e6] mm/min" (open below with "(").
   const auto within = [&](const std::string& field, const std::optional<double>& v, double lo,
@@ -111,31 +112,33 @@ namespace {
 /// size finite, none negative, within the tool options' bound (1000 mm), the corner radius at
 /// most half the diameter, and a tool said to be described (from_file) with a diameter. A
 /// negative diameter was taken as "no tool geometry" and the job ran unchecked.
-void check_tool(const Toolpath& tp, const Operationd& op) {
+void check_tool(const Toolpath& tp, std::size_t k) {
+  const Operationd& op = tp.operations[k];
   const Tool& t = op.tool;
-  const auto refuse = [&](const std::string& what) {
+  const auto refuse = [&](const std::string& field, const std::string& what) {
     throw InputError(tp.source, op.points.empty() ? 0 : op.points.front().line,
-                     "operation " + op.name + ": " + what);
+                     "operation " + op.name + ": " + field + " " + what,
+                     ErrorPlace{k, std::nullopt, field});
   };
   for (const auto& [field, v] : {std::make_pair("diameter_mm", t.diameter_mm),
                                  std::make_pair("corner_radius_mm", t.corner_radius_mm),
                                  std::make_pair("flute_length_mm", t.flute_length_mm),
                                  std::make_pair("gauge_length_mm", t.gauge_length_mm)}) {
     if (!(v >= 0.0 && v <= 1000.0)) {
-      refuse(std::string("Operation::tool.") + field + " " + shown(v) +
-             ", expected within [0, 1000] mm");
+      refuse(std::string("Operation::tool.") + field, shown(v) + ", expected within [0, 1000] mm");
     }
   }
   if (!(t.taper_rad >= 0.0 && t.taper_rad < deg_to_rad(90.0))) {
-    refuse("Operation::tool.taper_rad " + shown(t.taper_rad) + ", expected within [0, pi/2)");
+    refuse("Operation::tool.taper_rad", shown(t.taper_rad) + ", expected within [0, pi/2)");
   }
   if (t.from_file && !(t.diameter_mm > 0.0)) {
-    refuse("Operation::tool.from_file says the tool is described, and its diameter_mm is " +
-           shown(t.diameter_mm) + " (set the diameter, or from_file false for no geometry)");
+    refuse("Operation::tool.from_file",
+           "says the tool is described, and its diameter_mm is " + shown(t.diameter_mm) +
+               " (set the diameter, or from_file false for no geometry)");
   }
   if (t.corner_radius_mm > 0.5 * t.diameter_mm * (1.0 + 1e-6)) {
-    refuse("Operation::tool.corner_radius_mm " + shown(t.corner_radius_mm) +
-           " exceeds half the diameter " + shown(t.diameter_mm));
+    refuse("Operation::tool.corner_radius_mm",
+           shown(t.corner_radius_mm) + " exceeds half the diameter " + shown(t.diameter_mm));
   }
 }
 
@@ -146,14 +149,16 @@ void check_points(const Toolpath& tp) {
   if (point_count(tp) == 0) {
     throw InputError(tp.source, 0, "no CL point in any operation: there is nothing to post");
   }
-  for (const Operationd& op : tp.operations) {
-    check_tool(tp, op);
+  for (std::size_t k = 0; k < tp.operations.size(); ++k) {
+    const Operationd& op = tp.operations[k];
+    check_tool(tp, k);
     for (std::size_t i = 0; i < op.points.size(); ++i) {
       const CLPointd& p = op.points[i];
+      std::string field = "CLPoint::tip_mm";
       const auto refuse = [&](const std::string& what) {
         std::ostringstream os;
         os << "operation " << op.name << ", point " << i << ": " << what;
-        throw InputError(tp.source, p.line, os.str());
+        throw InputError(tp.source, p.line, os.str(), ErrorPlace{k, i, field});
       };
       if (!p.tip_mm.allFinite() || p.tip_mm.cwiseAbs().maxCoeff() > kMaxCoordinateMm) {
         std::ostringstream os;
@@ -162,14 +167,18 @@ void check_points(const Toolpath& tp) {
         refuse(os.str());
       }
       const double length = p.axis.norm();
+      field = "CLPoint::axis";
       if (!std::isfinite(length) || std::abs(length - 1.0) > 1e-9) {
         std::ostringstream os;
         // Digits enough to show how far off unit it is (issue 64.3: "has length 1" for 1+1e-7).
         os.precision(12);
         os << "tool axis (" << p.axis.x() << ", " << p.axis.y() << ", " << p.axis.z()
-           << ") has length " << length << ", expected a unit vector (normalise it)";
+           << ") has length " << length
+           << ", expected a unit vector (normalise it; within 1e-6 of unit, float round-off, it "
+              "is normalised)";
         refuse(os.str());
       }
+      field = "CLPoint::feed_mm_per_min";
       if (!(p.feed_mm_per_min >= 0.0 && p.feed_mm_per_min <= 1e6)) {
         refuse("feed " + shown(p.feed_mm_per_min) +
                " mm/min, expected within [0, 1e6] (0: none given)");
@@ -245,16 +254,17 @@ void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions
                                   [](const Machine::LinearRange& r) { return r.bounded(); });
   if (travel && !machine.work_offset_mm) {
     add_finding(res, FindingCode::NoWorkOffset, std::nullopt, 0,
-                "no work offset (" + given.name_of("work_offset_mm") +
-                    ", the machine file's [setup] work_offset_mm): where the program's zero "
+                "no work offset (" + given.name_of("work_offset_mm") + ", " +
+                    option_name(given.option_names, "Machine::work_offset_mm") +
+                    "): where the program's zero "
                     "sits in machine coordinates is not known, so only the program's span is "
                     "held to the machine's travel");
   }
   if (machine.gcode.program.retract == SafeRetract::None) {
-    add_finding(
-        res, FindingCode::NoSafeRetract, std::nullopt, 0,
-        "the machine file's gcode.safe_retract is \"none\": no retract before an operation's "
-        "first move nor after the last, and the table turns where the tool stands");
+    add_finding(res, FindingCode::NoSafeRetract, std::nullopt, 0,
+                option_name(given.option_names, "Machine::gcode.program.retract") +
+                    " is none: no retract before an operation's "
+                    "first move nor after the last, and the table turns where the tool stands");
   }
   {
     // Coolant: where neither the CL file (COOLNT) nor the machine file (gcode.coolant) asks for
@@ -269,16 +279,18 @@ void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions
     }
     if (!asked && !tp.operations.empty()) {
       add_finding(res, FindingCode::NoCoolant, std::nullopt, 0,
-                  "no coolant: neither the CL file (COOLNT) nor the machine file "
-                  "(gcode.coolant) asks for any, so the program turns none on");
+                  "no coolant: neither the CL file (COOLNT) nor " +
+                      option_name(given.option_names, "Machine::gcode.program.coolant") +
+                      " asks for any, so the program turns none on");
     }
   }
   if (machine.gcode.mode == GcodeMode::Machine &&
       !(machine.gcode.program.linearise_tolerance_mm > 0.0)) {
     add_finding(
         res, FindingCode::NoLinearisation, std::nullopt, 0,
-        "the machine file's gcode.linearise_tolerance_mm is 0: the tip leaves the straight line "
-        "between points where the table turns (the moves are checked as the joints run)");
+        option_name(given.option_names, "Machine::gcode.program.linearise_tolerance_mm") +
+            " is 0: the tip leaves the straight line "
+            "between points where the table turns (the moves are checked as the joints run)");
   }
   for (const std::string& w : tp.warnings) {
     add_finding(res, FindingCode::ClFileNote, std::nullopt, 0, w);
@@ -290,8 +302,11 @@ void setup_findings(const Toolpath& tp, const Machine& machine, const JobOptions
 /// off). An operation that needs one and has none is refused, naming the option.
 void tool_and_spindle_fallbacks(const Run& run, JobResult& res) {
   const Toolpath& tp = run.tp;
-  const auto source_of = [&](bool option) {
-    return std::string(option ? "the command line" : "the machine file's [defaults]");
+  // Each named as the caller names it (JobOptions::option_names): the CLI's "--tool-number"
+  // and "the machine file's [defaults] tool_number", a library's own field otherwise.
+  const auto source_of = [&](bool option, const char* field) {
+    return option ? run.options.name_of(field)
+                  : option_name(run.options.option_names, std::string("Machine::default_") + field);
   };
   for (std::size_t k = 0; k < tp.operations.size(); ++k) {
     const Operationd& op = tp.operations[k];
@@ -301,13 +316,13 @@ void tool_and_spindle_fallbacks(const Run& run, JobResult& res) {
         throw InputError(tp.source, line,
                          "operation " + op.name +
                              ": the CL file calls no tool (no LOADTL or TOOL number): give " +
-                             run.options.name_of("tool_number") +
-                             ", or tool_number in the machine file's [defaults]");
+                             run.options.name_of("tool_number") + ", or " +
+                             source_of(false, "tool_number"));
       }
       add_finding(res, FindingCode::ClFileNote, k, line,
                   "operation " + op.name + ": no tool number in the CL file: T" +
                       std::to_string(*run.fallback_tool) + " from " +
-                      source_of(run.options.tool_number.has_value()));
+                      source_of(run.options.tool_number.has_value(), "tool_number"));
     }
     const std::optional<std::size_t> first_feed = needs_spindle_speed(op);
     if (!first_feed) continue;
@@ -316,13 +331,13 @@ void tool_and_spindle_fallbacks(const Run& run, JobResult& res) {
                        "operation " + op.name +
                            ": feed moves without a spindle speed (no SPINDL before them, or "
                            "the spindle off: SPINDL/OFF or a speed of 0): give " +
-                           run.options.name_of("spindle_rpm") +
-                           ", or spindle_rpm in the machine file's [defaults]");
+                           run.options.name_of("spindle_rpm") + ", or " +
+                           source_of(false, "spindle_rpm"));
     }
     add_finding(res, FindingCode::ClFileNote, k, op.points[*first_feed].line,
                 "operation " + op.name + ": no spindle speed in the CL file: S" +
                     shown(*run.fallback_spindle_rpm) + " from " +
-                    source_of(run.options.spindle_rpm.has_value()));
+                    source_of(run.options.spindle_rpm.has_value(), "spindle_rpm"));
   }
 }
 
@@ -455,25 +470,57 @@ void off_part_check(const Run& run, const OperationContext& o) {
                        shown(path.diagonal().norm()) + " mm" + units);
 }
 
+/// A ball cutting into the part at point i beyond the tolerance: refused, naming the point; as
+/// a flipped axis where the ball on the axis turned round touches the part (an axis from tip
+/// into the part, the ball then inside it, was reported as 0.051 mm of cut).
+[[noreturn]] void gouge_error(const Run& run, const OperationContext& o, std::size_t i,
+                              double tolerance_mm) {
+  const Operationd& op = *o.op;
+  const Part& part = *run.options.part;
+  const CLPointd& p = op.points[i];
+  const ContactPoint& c = o.contacts[i];
+  // A flipped axis: the ball's centre lies inside the part (behind its nearest face) and the
+  // ball on the axis turned round touches it from outside.
+  const auto outside = [&](const Vec3d& centre, double* gap_mm) {
+    const Part::Closest q = part.closest(centre);
+    const auto& f = part.mesh().faces[static_cast<std::size_t>(q.face)];
+    const auto& v = part.mesh().vertices;
+    const Vec3d n = (v[f[1]] - v[f[0]]).cross(v[f[2]] - v[f[0]]);
+    if (gap_mm) *gap_mm = q.distance_mm - o.ball_radius_mm;
+    return (centre - q.point).dot(n) > 0.0;
+  };
+  double flipped_gap_mm = 0.0;
+  const bool flipped = !outside(Vec3d(p.tip_mm + o.ball_radius_mm * p.axis), nullptr) &&
+                       outside(Vec3d(p.tip_mm - o.ball_radius_mm * p.axis), &flipped_gap_mm) &&
+                       std::abs(flipped_gap_mm) <= tolerance_mm;
+  const std::string at = "operation " + op.name + ", point " + std::to_string(i) + ": ";
+  if (flipped) {
+    std::ostringstream os;
+    os << at << "the tool axis (" << p.axis.x() << ", " << p.axis.y() << ", " << p.axis.z()
+       << ") points into the part: the ball on it cuts " << shown(-c.gap_mm)
+       << " mm in, on the axis turned round it touches (a flipped axis: the axis runs from the "
+          "tip to the spindle)";
+    throw InputError(run.tp.source, p.line, os.str(), ErrorPlace{o.index, i, "CLPoint::axis"});
+  }
+  throw InputError(
+      run.tp.source, p.line,
+      at + "the ball cuts " + shown(-c.gap_mm) +
+          " mm into the part, more than the contact tolerance " + shown(tolerance_mm) + " mm (" +
+          contact_tolerance_source(part, run.options.contact, op.cam_tolerance_mm) + "; " +
+          run.options.name_of("contact.tolerance_mm") + "); wrong part, wrong tool or wrong units?",
+      ErrorPlace{o.index, i, "CLPoint::tip_mm"});
+}
+
 /// The contacts' summary; a ball cutting into the part beyond the contact tolerance, or an
 /// operation that feeds and touches it nowhere, is refused (wrong part, tool or units).
 void summarise_contacts(const Run& run, OperationContext& o) {
   const Operationd& op = *o.op;
-  const Part& part = *run.options.part;
   ContactSummary& cs = o.contact;
   bool any_feed = false;
   for (std::size_t i = 0; i < op.points.size(); ++i) {
     const ContactPoint& c = o.contacts[i];
     any_feed = any_feed || op.points[i].motion == Motion::Feed;
-    if (c.state == ContactState::Gouging) {
-      throw InputError(
-          run.tp.source, op.points[i].line,
-          "operation " + op.name + ": the ball cuts " + shown(-c.gap_mm) +
-              " mm into the part here, more than the contact tolerance " + shown(cs.tolerance_mm) +
-              " mm (" + contact_tolerance_source(part, run.options.contact, op.cam_tolerance_mm) +
-              "; " + run.options.name_of("contact.tolerance_mm") +
-              "); wrong part, wrong tool or wrong units?");
-    }
+    if (c.state == ContactState::Gouging) gouge_error(run, o, i, cs.tolerance_mm);
     if (c.state == ContactState::Touching) {
       ++cs.touching;
       cs.max_abs_gap_mm = std::max(cs.max_abs_gap_mm, std::abs(c.gap_mm));

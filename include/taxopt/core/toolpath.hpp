@@ -211,7 +211,7 @@ enum class RecordKind {
   Blank,      ///< an empty line
 };
 
-/// A record of the source file, kept for the round trip (`--out-cls`).
+/// A record of the source file, kept for the round trip (JobResult::out_cls).
 struct ClRecord {
   RecordKind kind = RecordKind::Record;
   /// Major word, upper case, inner blanks folded ("GOTO", "TOOL PATH"); empty unless Record.

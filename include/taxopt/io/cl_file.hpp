@@ -21,12 +21,12 @@ struct ClReadOptions {
   double arc_tolerance_mm = 0.001;
   /// Largest accepted | |(i,j,k)| - 1 | of a tool axis; the axis is then normalised.
   double axis_length_tolerance = 1e-3;
-  /// Sense of CIRCLE arcs (--arc-direction). Auto: the dialect's documented sense; an arc
+  /// Sense of CIRCLE arcs. Auto: the dialect's documented sense; an arc
   /// whose neighbouring moves contradict it on every side they decide is run in their sense
   /// (a notice says which); when most decidable arcs contradict it, reading stops (exit 2).
   /// An explicit sense is applied to every arc as given.
   ArcDirection arc_direction = ArcDirection::Auto;
-  /// Apply NX MSYS frames (--msys apply|ignore). Off by default: NX writes CLSF coordinates
+  /// Apply NX MSYS frames. Off by default: NX writes CLSF coordinates
   /// in the MCS already and MSYS only says where that MCS lies (the production NX post for
   /// the Haas UMC-750 writes them unchanged: tests/data/real-post). On: the coordinates after
   /// an MSYS record are taken as absolute and moved into its MCS, in which the G-code is posted.
@@ -35,7 +35,7 @@ struct ClReadOptions {
   /// reached, then feeds on, mm. 0.254 mm (0.010 in) is LinuxCNC 2.9's G83 (rs274ngc's
   /// G83_RAPID_DELTA, "how far above hole bottom for rapid return").
   double peck_clearance_mm = 0.254;
-  /// Record words to skip (--skip-record WORD, upper case): words the reader does not know, or
+  /// Record words to skip (upper case): words the reader does not know, or
   /// knows as information, a program event or a refused word that leaves the motion as it is
   /// (cl_words.hpp, ClWord::skippable). Skipping a motion, state or frame word is refused.
   std::set<std::string> skip_records;

@@ -2,7 +2,7 @@
 /// @file The record words the CL reader knows: one entry per word, with its meaning, the CAM
 /// systems that write it and where that meaning comes from (docs/cl-files.md shows this table;
 /// a test keeps the two equal). A word that is not here stops the reader (exit 2) unless the
-/// user skips it by name (ClReadOptions::skip_records, `--skip-record WORD`).
+/// user skips it by name (ClReadOptions::skip_records).
 
 #include <string>
 #include <vector>
@@ -18,7 +18,7 @@ enum class ClWordMeaning {
   Frame,        ///< names the frame the coordinates are in
   Program,      ///< reaches the program where it stands (stop, dwell)
   Structure,    ///< opens or closes operations or the file
-  Information,  ///< bears no motion and changes nothing the program needs (kept for --out-cls)
+  Information,  ///< bears no motion and changes nothing the program needs (kept for the CL file written back, JobResult::out_cls)
   Refused,      ///< known, not interpreted: the reader stops naming it
 };
 
@@ -29,7 +29,7 @@ struct ClWord {
   const char* what;      ///< what taxopt does with it, in one line
   const char* writers;   ///< the CAM systems known to write it
   const char* evidence;  ///< where its meaning comes from
-  /// A user may skip it (`--skip-record`): true for information, program and refused words
+  /// A user may skip it (ClReadOptions::skip_records): true for information, program and refused words
   /// whose skipping leaves the motion as it is; never for motion, state or frame words.
   bool skippable;
 };

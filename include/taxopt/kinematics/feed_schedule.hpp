@@ -52,7 +52,8 @@ namespace taxopt {
 /// A/C machine, B on a B/C one) and C.
 enum class Joint : std::uint8_t { X, Y, Z, Tilt, C };
 inline constexpr std::size_t kJointCount = 5;
-/// "X", "Y", "Z", "A", "C" (joint_name names the tilt by its letter).
+/// "X", "Y", "Z", "tilt", "C": the tilt joint is A or B by the machine (joint_name gives the
+/// letter).
 TAXOPT_API const char* to_string(Joint joint);
 /// The joint's letter on a machine whose tilt axis is `tilt_letter` (A, or B on a B/C machine:
 /// Joint::Tilt is the tilt axis whatever its letter).

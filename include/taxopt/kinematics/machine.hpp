@@ -170,7 +170,7 @@ struct Machine {
   /// radius_mm, length_mm and the tool's gauge_length_mm (tip to holder face).
   std::optional<double> holder_radius_mm, holder_length_mm, holder_gauge_length_mm;
   /// [defaults]: the spindle speed (rpm) and tool number of an operation whose CL file gives
-  /// none and where the command line gives none (--spindle-rpm, --tool-number).
+  /// none and where JobOptions gives none (JobOptions::spindle_rpm, tool_number).
   std::optional<double> default_spindle_rpm;
   std::optional<int> default_tool_number;
   /// [setup] work_offset_mm, or JobOptions::work_offset_mm: where the program's zero sits in

@@ -50,7 +50,7 @@ struct PosePlan {
 /// @param start      pose before the first point (previous operation), if any
 /// @param preferred  empty, or per point a pose the caller has chosen (its branch, and its C
 ///                   on the pole; a continuous C still takes the turn nearest the previous
-///                   point's): `--method global` decides these by its own objective
+///                   point's): Method::Global decides these by its own objective
 TAXOPT_API PosePlan plan_poses(const MachineKinematicsd& machine, const std::vector<Vec3d>& axes,
                                const std::vector<bool>& rapid_into,
                                const std::optional<Posed>& start = {},

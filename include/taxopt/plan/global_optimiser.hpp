@@ -1,5 +1,5 @@
 #pragma once
-/// @file `--method global`: the tool axes of one pass chosen in the machine's own coordinates,
+/// @file Method::Global: the tool axes of one pass chosen in the machine's own coordinates,
 /// minimising the rotary-axis acceleration of eq. 16-18 itself (docs/global-method.md).
 ///
 /// Problem. A pass of n points with segment times t_i = L_i / v_i (n - 1). The decision
@@ -44,7 +44,7 @@
 namespace taxopt {
 
 /// Time: the pass's scheduled feed time at the machine's joint limits (feed_schedule.hpp),
-/// with the sum of squares as the tie-breaker (docs/global-method.md, "--objective time").
+/// with the sum of squares as the tie-breaker (docs/global-method.md, the time objective).
 enum class GlobalObjective { SumSquares, Peak, Time };
 /// "sum-squares", "peak", "time".
 TAXOPT_API const char* to_string(GlobalObjective objective);
@@ -63,10 +63,10 @@ struct GlobalOptions {
   /// The pyramid (sum-squares and peak objectives): the programme runs again over caps around
   /// its own answer at half the spacing each time (a cap of radius twice the spacing, so it
   /// covers the gap between the coarser candidates), down to this spacing, deg (run_job: the
-  /// C-space cell size, --grid); 0: the coarse programme alone. Each level keeps the previous
+  /// C-space cell size, PaperOptions::grid_deg); 0: the coarse programme alone. Each level keeps the previous
   /// answer when it finds nothing better, so it never makes the pass worse.
   double fine_step_deg = 2.0;
-  /// --objective time: a plan whose scheduled cycle is within this fraction of the shortest
+  /// GlobalObjective::Time: a plan whose scheduled cycle is within this fraction of the shortest
   /// wins on smoothness (the lowest peak a of the rotary axes): a millisecond is not worth a
   /// tripled peak acceleration (tests/test_paper_method.cpp). 0.001 = 0.1 %, below the 0.1 % within
   /// which the scheduled feed moves agree with LinuxCNC's own controller (the measurement in

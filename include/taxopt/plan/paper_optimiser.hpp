@@ -46,7 +46,7 @@ using AxisTest = std::function<bool(std::size_t index, const Vec3d& axis)>;
 struct PaperOptions {
   /// Largest angle between an output axis and its input axis, deg (the cone of candidates).
   double max_deviation_deg = 30.0;
-  /// Spacing of the key-axis candidates, deg (the C-space cell size, --grid).
+  /// Spacing of the key-axis candidates, deg (the C-space cell size).
   double grid_deg = 2.0;
   SegmenterOptions segmenter;
   /// Weight of the pull of a key towards its input axis (see the file comment).
@@ -58,7 +58,7 @@ struct PaperOptions {
   /// After the repair, set the keys again with the repair keys among them, fill and repair
   /// anew (at most this many rounds; 0: the paper's single repair). A repair key is placed
   /// with its neighbours fixed: where the free set has a hole the interpolation must pass (the
-  /// cap round the normal that --min-tilt keeps clear), the keys around it then follow it.
+  /// cap round the normal that JobOptions::min_tilt_deg keeps clear), the keys around it then follow it.
   int resettle_rounds = 0;
 };
 

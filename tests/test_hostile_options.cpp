@@ -79,3 +79,25 @@ TEST_CASE("hostile outputs: a full disk leaves no --plots folder behind, a link 
   CHECK(std::filesystem::is_symlink(plot));
   CHECK(read_file(t.path("target.svg")) == "mine\n");
 }
+
+TEST_CASE(
+    "hostile options: generate refuses a mesh too coarse for its surface (its own post "
+    "refused the pair) naming --mesh-step, and writes a fine one's pair that posts",
+    "[cli][bad-input]") {
+  TempDir t;
+  const std::string out = " --out-cls " + t.path("g.cls") + " --out-mesh " + t.path("g.stl");
+  for (const char* step : {"50", "5"}) {
+    const RunResult coarse = run_taxopt("generate --mesh-step " + std::string(step) + out);
+    INFO(step);
+    CHECK(coarse.code == 2);
+    CHECK_THAT(coarse.err,
+               Catch::Contains("off the surface") && Catch::Contains("a finer --mesh-step"));
+    CHECK_FALSE(file_exists(t.path("g.cls")));
+  }
+  // The finest refused step's neighbour below posts: the check is the post's own.
+  REQUIRE(run_taxopt("generate --mesh-step 2" + out).code == 0);
+  const RunResult posted = run_taxopt("--in " + t.path("g.cls") + " --part " + t.path("g.stl") +
+                                      " -q --gcode " + t.path("g.nc"));
+  INFO(posted.err);
+  CHECK(posted.code == 0);
+}

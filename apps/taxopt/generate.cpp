@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "taxopt/geometry/contact.hpp"
+#include "taxopt/geometry/part.hpp"
 #include "taxopt/geometry/surface.hpp"
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
@@ -126,9 +128,36 @@ int generate_refusal(const GenerateArgs& g) {
   return 0;
 }
 
+/// How far the mesh lies off `surface`, mm: the largest |facet - surface| along the surface's
+/// normal at points of every facet (its corners, edges' and inner points at quarters), for a
+/// surface over x, y (z = f(x, y)). A ball resting on the surface cuts a facet above it by up
+/// to this, or floats over one below it.
+template <class Surface>
+double mesh_deviation_mm(const Surface& surface, const TriangleMesh& mesh) {
+  constexpr int kSteps = 4;
+  double rise = 0.0;
+  for (const auto& f : mesh.faces) {
+    const Vec3d& a = mesh.vertices[static_cast<std::size_t>(f[0])];
+    const Vec3d& b = mesh.vertices[static_cast<std::size_t>(f[1])];
+    const Vec3d& c = mesh.vertices[static_cast<std::size_t>(f[2])];
+    for (int i = 0; i <= kSteps; ++i) {
+      for (int k = 0; i + k <= kSteps; ++k) {
+        const Vec3d p = a + (b - a) * (double(i) / kSteps) + (c - a) * (double(k) / kSteps);
+        const auto j = surface.jet(p.x(), p.y());
+        Vec3d n = j.su.cross(j.sv).normalized();
+        if (n.z() < 0.0) n = -n;
+        rise = std::max(rise, std::abs((p - j.p).dot(n)));
+      }
+    }
+  }
+  return rise;
+}
+
 /// The raster of CL points over the chosen surface, and the surface's mesh over the domain grown
 /// by the tool's reach (so that a tool at the path's edge still sees the part around it).
-void raster_and_mesh(const GenerateArgs& g, std::vector<GeneratedPoint>& pts, TriangleMesh& mesh) {
+void raster_and_mesh(const GenerateArgs& g, std::vector<GeneratedPoint>& pts, TriangleMesh& mesh,
+                     double& deviation_mm) {
+  deviation_mm = 0.0;  // a plane's mesh is the plane
   const double margin = 4.0 * g.raster.tool_radius_mm;
   const auto cells = [&](double size) {
     return std::max(1, static_cast<int>(std::ceil(size / g.mesh_step_mm)));
@@ -139,6 +168,7 @@ void raster_and_mesh(const GenerateArgs& g, std::vector<GeneratedPoint>& pts, Tr
     auto big = surface;
     big.x0_mm -= margin, big.x1_mm += margin, big.y0_mm -= margin, big.y1_mm += margin;
     mesh = tessellate(big, cells(big.x1_mm - big.x0_mm), cells(big.y1_mm - big.y0_mm));
+    deviation_mm = mesh_deviation_mm(big, mesh);
   };
   if (g.surface == "sine") {
     SineSurfaced sine;
@@ -194,14 +224,46 @@ Operationd generated_operation(const GenerateArgs& g, const std::vector<Generate
   return op;
 }
 
+/// Why the mesh cannot stand for the surface the points were made on ("" when it can): where
+/// it lies farther off the surface than the post's least contact tolerance, the post's own
+/// contact check on the pair -- a ball cutting the mesh beyond the tolerance the post takes
+/// for it, or most balls off it (a --mesh-step of 50 mm wrote a pair the post refused).
+std::string coarse_mesh_refusal(const GenerateArgs& g, const std::vector<GeneratedPoint>& pts,
+                                const TriangleMesh& mesh, double deviation_mm) {
+  if (deviation_mm <= kContactToleranceFloorMm) return "";
+  const Part part(mesh);
+  const double tolerance_mm = contact_tolerance_mm(part, ContactOptions{});
+  const double r = g.raster.tool_radius_mm;
+  double deepest_mm = 0.0;
+  std::size_t feed = 0, touching = 0;
+  for (const GeneratedPoint& p : pts) {
+    if (p.rapid) continue;
+    const double gap_mm = part.closest(Vec3d(p.tip_mm + r * p.axis)).distance_mm - r;
+    ++feed;
+    touching += std::abs(gap_mm) <= tolerance_mm;
+    deepest_mm = std::max(deepest_mm, -gap_mm);
+  }
+  if (deepest_mm <= tolerance_mm && 10 * touching >= 9 * feed) return "";
+  std::ostringstream os;
+  os << "generate: the mesh at --mesh-step " << g.mesh_step_mm << " mm lies up to " << deviation_mm
+     << " mm off the surface: a ball on the surface cuts it " << deepest_mm << " mm, "
+     << feed - touching << " of " << feed
+     << " feed points are off it, against the post's contact tolerance " << tolerance_mm
+     << " mm for this mesh; a finer --mesh-step (the deviation falls with its square: about "
+     << g.mesh_step_mm * std::sqrt(kContactToleranceFloorMm / deviation_mm)
+     << " mm keeps it within " << kContactToleranceFloorMm << " mm)";
+  return os.str();
+}
+
 }  // namespace
 
 int run_generate(const GenerateArgs& g) {
   if (const int code = generate_refusal(g)) return code;
   std::vector<GeneratedPoint> pts;
   TriangleMesh mesh;
+  double deviation_mm = 0.0;
   try {
-    raster_and_mesh(g, pts, mesh);
+    raster_and_mesh(g, pts, mesh, deviation_mm);
   } catch (const std::invalid_argument& e) {
     return error(std::string("generate: ") + e.what(), 2);
   }
@@ -213,6 +275,9 @@ int run_generate(const GenerateArgs& g) {
             " contact points have a concave radius below the tool radius: the ball "
             "would gouge (eq. 19); use a longer wavelength, a lower height or a smaller tool",
         2);
+  }
+  if (const std::string why = coarse_mesh_refusal(g, pts, mesh, deviation_mm); !why.empty()) {
+    return error(why, 2);
   }
   const Operationd op = generated_operation(g, pts);
   OutputTransaction tx;

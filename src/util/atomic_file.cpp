@@ -186,6 +186,8 @@ std::string keep_old(const std::string& target) {
 void OutputTransaction::commit() {
   // Every output is new or every one is as it was: the old files are kept as links, the new
   // ones renamed in, and on a failure the ones already renamed are put back. Signals wait.
+  // From the first kept link on: a signal in between would leave the links behind.
+  g_committing.store(true);
   std::vector<std::string> old;
   try {
     for (const Staged& s : staged_) old.push_back(keep_old(s.target));
@@ -193,9 +195,10 @@ void OutputTransaction::commit() {
     for (const std::string& o : old) {
       if (!o.empty()) ::unlink(o.c_str());
     }
+    g_committing.store(false);
+    if (const int sig = g_deferred_signal.exchange(0)) std::raise(sig);
     throw;
   }
-  g_committing.store(true);
   std::size_t done = 0;
   int err = 0;
   for (; done < staged_.size(); ++done) {

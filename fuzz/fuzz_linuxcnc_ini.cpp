@@ -8,7 +8,7 @@
 #include <string>
 
 #include "taxopt/core/error.hpp"
-#include "taxopt/io/linuxcnc_ini.hpp"
+#include "support/linuxcnc_ini.hpp"
 #include "taxopt/io/machine_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

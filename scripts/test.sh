@@ -22,6 +22,7 @@ stage "install and build the example consumer against it"
 prefix="$PWD/build/install"
 rm -rf "$prefix" build/consumer
 cmake --install build/release --prefix "$prefix"
+python3 scripts/check_doc_snippets.py docs/library.md "$prefix"
 cmake -S examples/consumer -B build/consumer -G Ninja -DCMAKE_PREFIX_PATH="$prefix"
 cmake --build build/consumer
 ./build/consumer/taxopt_consumer tests/data/real/mech491-variable-axis-ballmill.cls build/consumer/out.ngc

@@ -271,8 +271,9 @@ Machine run_machine(const Machine& machine, const JobOptions& options) {
   if (options.tool.gauge_length_mm) m.holder_gauge_length_mm = options.tool.gauge_length_mm;
   if (options.work_offset_mm) m.work_offset_mm = options.work_offset_mm;
   if (m.rotary.layout != RotaryLayout::TableTable) {
-    m.rotary.head_length_mm = m.head_pivot_length_mm + options.tool.gauge_length_mm.value_or(
-                                                           m.holder_gauge_length_mm.value_or(0.0));
+    m.rotary.head_length_mm =
+        m.head_pivot_length_mm.value_or(0.0) +
+        options.tool.gauge_length_mm.value_or(m.holder_gauge_length_mm.value_or(0.0));
   }
   return m;
 }

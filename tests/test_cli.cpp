@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "support.hpp"
-#include "taxopt/core/digest.hpp"
+#include "support/digest.hpp"
 #include "taxopt/core/types.hpp"
 #include "taxopt/io/cl_file.hpp"
 #include "taxopt/io/mesh_file.hpp"

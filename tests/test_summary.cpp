@@ -4,9 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include "support.hpp"
+#include "support/html_page.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/cl_file.hpp"
-#include "taxopt/io/html_page.hpp"
 #include "taxopt/io/mesh_file.hpp"
 #include "taxopt/job.hpp"
 

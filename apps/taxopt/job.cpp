@@ -14,15 +14,15 @@
 #include <tuple>
 
 #include "cli.hpp"
-#include "taxopt/core/digest.hpp"
+#include "support/digest.hpp"
+#include "support/html_page.hpp"
+#include "support/plots.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/geometry/part.hpp"
 #include "taxopt/io/atomic_file.hpp"
 #include "taxopt/io/cl_file.hpp"
-#include "taxopt/io/html_page.hpp"
 #include "taxopt/io/machine_file.hpp"
 #include "taxopt/io/mesh_file.hpp"
-#include "taxopt/io/plots.hpp"
 
 namespace taxopt::cli {
 namespace {

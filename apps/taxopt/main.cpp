@@ -6,9 +6,9 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "support/linuxcnc_ini.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/atomic_file.hpp"
-#include "taxopt/io/linuxcnc_ini.hpp"
 
 using namespace taxopt::cli;
 

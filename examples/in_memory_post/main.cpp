@@ -102,18 +102,14 @@ taxopt::TriangleMesh part_in_code() {
 // A B/C head-head bridge mill made in code: LinuxCNC's 5axiskins sample (B sense -1, C +1, a
 // 250 mm pivot), whose kinematics start as the bridge mill's (TCP): no switch written.
 taxopt::Machine bridge_mill() {
-  taxopt::Machine m = taxopt::default_machine();
+  taxopt::Machine m = taxopt::make_machine("bc-head-head", 250.0);
   m.name = "bridge-mill-in-code";
-  m.kinematics = "bc-head-head";
-  m.rotary.tilt_about = taxopt::TiltAxis::Y;
-  m.rotary.layout = taxopt::RotaryLayout::HeadHead;
   const double deg = std::acos(-1.0) / 180.0;
   m.rotary.tilt.min_rad = -120.0 * deg;
   m.rotary.tilt.max_rad = 120.0 * deg;
   m.rotary.tilt.sense = -1;
   m.rotary.c.continuous = true;
   m.rotary.c.sense = 1;
-  m.head_pivot_length_mm = 250.0;
   return m;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/error.hpp"
 #include "taxopt/core/export.hpp"
 #include "taxopt/core/option_names.hpp"
 #include "taxopt/core/stop.hpp"
@@ -60,8 +61,9 @@ struct JobOptions {
   /// The paper's optimiser (Method::Paper): deviation cone, candidate grid, segmenter and joint
   /// smoothing.
   PaperOptions paper;
-  /// Method::Global (global_optimiser.hpp): its objective and jerk weight. Its cone is the run's (max_deviation_deg, else paper.max_deviation_deg):
-  /// run_job refuses a global.max_deviation_deg of its own. It starts from the paper's axes.
+  /// Method::Global (global_optimiser.hpp): its objective and jerk weight. Its cone is the run's
+  /// (max_deviation_deg, else paper.max_deviation_deg): run_job refuses a global.max_deviation_deg
+  /// of its own. It starts from the paper's axes.
   GlobalOptions global;
   /// The part (not owned); without it there is no contact recovery and no collision check,
   /// and the deviation cone shrinks to kNoPartMaxDeviationDeg unless `max_deviation_deg` is
@@ -76,7 +78,8 @@ struct JobOptions {
   /// Clearances the shank (past the flutes) and the holder keep from the part in every check
   /// in mm: the optimisers accept, and the verification
   /// passes, only axes where the grown bodies are free (docs/cli.md).
-  /// Empty: the machine's (Machine::shank_clearance_mm, holder_clearance_mm), else kDefaultShankClearanceMm / ...HolderClearanceMm.
+  /// Empty: the machine's (Machine::shank_clearance_mm, holder_clearance_mm), else
+  /// kDefaultShankClearanceMm / ...HolderClearanceMm.
   std::optional<double> shank_clearance_mm, holder_clearance_mm;
   /// How far the flutes may reach into the part mesh without a collision: its chordal error
   /// in mm; empty: the contact tolerance (contact_tolerance_mm: max(0.05, the
@@ -248,7 +251,8 @@ struct PointRow {
   /// and the first point.
   std::optional<double> feed_mm_min, feed_before_mm_min;
   /// Free cells of the C-space grid at this contact (cell size PaperOptions::grid_deg, within
-  /// the deviation cone of the input axis; each axis once), when JobOptions::count_free_cells asked for them.
+  /// the deviation cone of the input axis; each axis once), when JobOptions::count_free_cells asked
+  /// for them.
   std::optional<std::size_t> free_cells;
 };
 
@@ -571,10 +575,12 @@ struct ToolDimensions {
 /// within (0, 1000] mm).
 TAXOPT_API ToolOverrides tool_overrides(const ToolDimensions& given);
 
-/// Runs the job. @throws InputError for options that cannot apply (a method this build
-/// lacks) and for a part that does not fit the CL file (no point touches it, or a ball cuts
-/// into it: the CL line is named). Outcomes (out of limits, failed verification) are in
-/// JobResult::problems.
+/// Runs the job. @throws InputError (taxopt/core/error.hpp; InputError::place() says the
+/// operation, point and field) for input the boundary refuses (check_options, validate(const
+/// Machine&), every point, tool and part), options that cannot apply (a method this build
+/// lacks) and a part that does not fit the CL file (no point touches it, or a ball cuts into
+/// it: the CL line is named); Cancelled (taxopt/core/stop.hpp) when JobOptions::stop was
+/// requested. Outcomes (out of limits, failed verification) are in JobResult::problems.
 TAXOPT_API JobResult run_job(const Toolpath& toolpath, const Machine& machine,
                              const JobOptions& options);
 

@@ -1,6 +1,6 @@
-// The CL reader's word table (include/taxopt/io/cl_words.hpp). Each entry names the CAM systems
+// The CL reader's word table (cl_words.hpp). Each entry names the CAM systems
 // that write the word and the evidence for what taxopt does with it; docs/cl-files.md shows it.
-#include "taxopt/io/cl_words.hpp"
+#include "cl/cl_words.hpp"
 
 #include <algorithm>
 #include <iterator>

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <set>
 
+#include "cl/cl_words.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/io/cl_words.hpp"
 
 namespace taxopt::cl {
 namespace {

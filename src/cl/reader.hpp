@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "cl/cl_words.hpp"
 #include "cl/lexer.hpp"
 #include "taxopt/io/cl_file.hpp"
-#include "taxopt/io/cl_words.hpp"
 
 namespace taxopt::cl {
 /// How far an arc's end may lie off its circle, in the CL file's unit (mm or inch): the

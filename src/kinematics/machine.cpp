@@ -23,6 +23,20 @@ bool has_inverse_time(GcodeDialect dialect) { return gcode::rules_of(dialect).in
 
 Machine default_machine() { return Machine{}; }
 
+Machine make_machine(const std::string& kinematics, std::optional<double> head_pivot_length_mm) {
+  Machine m;
+  if (!kinematics_layout(kinematics, m.rotary.tilt_about, m.rotary.layout)) {
+    throw InputError(
+        "make_machine: '" + kinematics + "' is no kinematics (" + kKinematicsNames + ")",
+        ErrorPlace{std::nullopt, std::nullopt, "Machine::kinematics"});
+  }
+  m.kinematics = kinematics;
+  m.name = "generic-" + kinematics;
+  m.head_pivot_length_mm = head_pivot_length_mm;
+  validate(m);
+  return m;
+}
+
 bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout) {
   static const std::pair<const char*, RotaryLayout> kLayouts[] = {
       {"-table-table", RotaryLayout::TableTable},
@@ -93,8 +107,21 @@ void validate_kinematics(const Machine& m) {
                      (bc ? "bc" : "ac") + where + "\" for a tilt about " + (bc ? "Y" : "X") +
                      " (rotary.tilt_about) and its rotary.layout (" + kKinematicsNames + ")");
   }
+  if (m.rotary.layout == RotaryLayout::TableTable && m.head_pivot_length_mm) {
+    refuse("head_pivot_length_mm",
+           "empty on a " + m.kinematics + " machine (its tilt axis turns the table, no head)",
+           *m.head_pivot_length_mm);
+  }
   if (m.rotary.layout != RotaryLayout::TableTable) {
-    check_range("head_pivot_length_mm", m.head_pivot_length_mm, 0.0, 5000.0, "within [0, 5000]");
+    if (!m.head_pivot_length_mm) {
+      throw InputError(
+          "Machine::head_pivot_length_mm: a " + m.kinematics +
+              " machine needs its head's pivot length, mm (from the tilt axis to the spindle's "
+              "gauge line; 0 where the axis crosses it): without it the travel, the rapids' "
+              "and the controller's times would run with no pivot",
+          ErrorPlace{std::nullopt, std::nullopt, "Machine::head_pivot_length_mm"});
+    }
+    check_range("head_pivot_length_mm", *m.head_pivot_length_mm, 0.0, 5000.0, "within [0, 5000]");
     check_range("rotary.head_length_mm", m.rotary.head_length_mm, 0.0, 10000.0,
                 "within [0, 10000]");
     if (m.gcode.mode == GcodeMode::Machine) {

@@ -177,12 +177,13 @@ class MachineParser {
       // machine where C turns the table.
       check_keys(*pivot, "pivot", {"head_pivot_length", "c_axis_x", "c_axis_y"});
       if (!pivot->get("head_pivot_length")) needs_length(line_of(*pivot));
-      m.head_pivot_length_mm = length_or(*pivot, "pivot", "head_pivot_length", 0.0);
-      if (!(m.head_pivot_length_mm >= 0.0 && m.head_pivot_length_mm <= 5000.0)) {
+      const double pivot_mm = length_or(*pivot, "pivot", "head_pivot_length", 0.0);
+      m.head_pivot_length_mm = pivot_mm;
+      if (!(pivot_mm >= 0.0 && pivot_mm <= 5000.0)) {
         fail(line_of(*pivot->get("head_pivot_length")),
              "pivot.head_pivot_length must be within [0, 5000] mm");
       }
-      m.rotary.head_length_mm = m.head_pivot_length_mm;
+      m.rotary.head_length_mm = pivot_mm;
       m.rotary.c_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "c_axis_x", 0.0),
                                        length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     } else if (pivot) {

@@ -7,11 +7,11 @@
 #include <functional>
 #include <sstream>
 
+#include "cl/cl_words.hpp"
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/io/cl_file.hpp"
-#include "taxopt/io/cl_words.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/job.hpp"
 

@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "support.hpp"
+#include "support/html_page.hpp"
 #include "taxopt/core/error.hpp"
-#include "taxopt/io/html_page.hpp"
 #include "taxopt/io/mesh_file.hpp"
 
 using namespace taxopt;

@@ -2,8 +2,8 @@
 #include <sstream>
 
 #include "support.hpp"
+#include "support/plots.hpp"
 #include "taxopt/io/mesh_file.hpp"
-#include "taxopt/io/plots.hpp"
 
 using namespace taxopt;
 using namespace taxopt::test;

@@ -307,3 +307,47 @@ TEST_CASE(
   check_same_machine(read_machine_file(t.path("bridge.toml")),
                      read_machine_file(machines + "linuxcnc-5axis-bridgemill.toml"));
 }
+
+TEST_CASE(
+    "head machines: make_machine builds each kinematics from its one name, a head with its "
+    "pivot, and no machine is taken with a head and no pivot or a table and one",
+    "[kinematics][head][library]") {
+  const struct {
+    const char* name;
+    TiltAxis tilt;
+    RotaryLayout layout;
+  } kinds[] = {{"ac-table-table", TiltAxis::X, RotaryLayout::TableTable},
+               {"bc-table-table", TiltAxis::Y, RotaryLayout::TableTable},
+               {"ac-head-table", TiltAxis::X, RotaryLayout::HeadTable},
+               {"bc-head-table", TiltAxis::Y, RotaryLayout::HeadTable},
+               {"ac-head-head", TiltAxis::X, RotaryLayout::HeadHead},
+               {"bc-head-head", TiltAxis::Y, RotaryLayout::HeadHead}};
+  for (const auto& k : kinds) {
+    INFO(k.name);
+    const bool head = k.layout != RotaryLayout::TableTable;
+    const Machine m = head ? make_machine(k.name, 250.0) : make_machine(k.name);
+    CHECK(m.kinematics == k.name);
+    CHECK(m.rotary.tilt_about == k.tilt);
+    CHECK(m.rotary.layout == k.layout);
+    CHECK(m.rotary.tilt_letter() == (k.tilt == TiltAxis::X ? 'A' : 'B'));
+    CHECK_NOTHROW(validate(m));
+    if (head) {
+      CHECK(m.head_pivot_length_mm == 250.0);
+      CHECK_THAT(input_error_of([&] { (void)make_machine(k.name); }),
+                 Catch::Contains("Machine::head_pivot_length_mm: a " + std::string(k.name) +
+                                 " machine needs its head's pivot length"));
+      CHECK_NOTHROW(make_machine(k.name, 0.0));  // LinuxCNC's max5: stated, so taken
+    } else {
+      CHECK_THAT(input_error_of([&] { (void)make_machine(k.name, 250.0); }),
+                 Catch::Contains("Machine::head_pivot_length_mm must be empty"));
+    }
+  }
+  CHECK_THAT(input_error_of([&] { (void)make_machine("bc-trunnion"); }),
+             Catch::Contains("'bc-trunnion' is no kinematics"));
+  // A head machine made by hand without its pivot: refused by validate, as by run_job.
+  Machine by_hand = default_machine();
+  by_hand.kinematics = "ac-head-head";
+  by_hand.rotary.layout = RotaryLayout::HeadHead;
+  CHECK_THAT(input_error_of([&] { validate(by_hand); }),
+             Catch::Contains("needs its head's pivot length"));
+}

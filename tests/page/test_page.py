@@ -14,7 +14,7 @@ usage: test_page.py TAXOPT SOURCE_DIR [--set pages|big] [--update-screenshot]
   big    the page of a 102,084-point run: its size and its load time are bounded, and it says
          that it is decimated.
 
-The page reports what it drew in its console line "taxopt-page-ready {json}" (src/report/html_page.js).
+The page reports what it drew in its console line "taxopt-page-ready {json}" (apps/taxopt/support/html_page.js).
 """
 import json
 import os

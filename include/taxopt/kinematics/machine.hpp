@@ -179,11 +179,12 @@ struct Machine {
   /// known, and the program's span alone is held to the travel's.
   std::optional<Vec3d> work_offset_mm;
   GcodeSettings gcode;
-  /// A head machine ([pivot] head_pivot_length): from the tilt axis to the spindle's gauge
-  /// line, mm. run_job adds the tool's gauge length (JobOptions::tool.gauge_length_mm, else
-  /// the machine's holder_gauge_length_mm, else none) into rotary.head_length_mm for its joint
-  /// model: the travel, the rapids' and the controller's times.
-  double head_pivot_length_mm = 0.0;
+  /// A head machine's pivot ([pivot] head_pivot_length): from the tilt axis to the spindle's
+  /// gauge line, mm (0 where the tilt axis crosses it, as LinuxCNC's max5); a head machine
+  /// must give it, a table-table machine has none (validate). run_job adds the tool's gauge length
+  /// (JobOptions::tool.gauge_length_mm, else the machine's holder_gauge_length_mm, else none) into
+  /// rotary.head_length_mm for its joint model: the travel, the rapids' and the controller's times.
+  std::optional<double> head_pivot_length_mm;
 };
 
 /// X Y Z as the G-code writes the tip `tip_mm` at `pose`: the tip itself (tcp mode) or the
@@ -221,6 +222,17 @@ inline double joint_accel_limit(const Machine& machine, const JointLimits& effec
 
 /// The built-in machine of CLI.md: A in [-120, 120] deg, C continuous, LinuxCNC, TCP.
 TAXOPT_API Machine default_machine();
+
+/// The built-in machine with the kinematics `kinematics` (kKinematicsNames: "bc-table-table",
+/// "ac-head-head", ...): its name, tilt axis (rotary.tilt_about) and layout (rotary.layout)
+/// set from that one name, the tilt axis's range [-120, 120] deg, C continuous, LinuxCNC, TCP;
+/// a head machine's pivot length, mm, given (none for a table-table machine). Change what
+/// differs on your machine (senses, ranges, limits, dialect) after:
+/// `Machine m = make_machine("bc-head-head", 250.0); m.rotary.tilt.sense = -1;`
+/// @throws InputError for a name not in kKinematicsNames, a head machine without its pivot
+/// length or a table-table machine with one.
+TAXOPT_API Machine make_machine(const std::string& kinematics,
+                                std::optional<double> head_pivot_length_mm = std::nullopt);
 
 /// Checks a machine made in code as the machine file's reader checks a file: the kinematics
 /// name against its tilt axis, the rotary ranges (min <= max, no NaN) and senses, the limits

@@ -1,4 +1,4 @@
-#include "taxopt/io/linuxcnc_ini.hpp"
+#include "support/linuxcnc_ini.hpp"
 
 #include <algorithm>
 #include <cctype>

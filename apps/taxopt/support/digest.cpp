@@ -1,4 +1,4 @@
-#include "taxopt/core/digest.hpp"
+#include "support/digest.hpp"
 
 #include <array>
 #include <cstdint>

@@ -8,7 +8,6 @@
 #include <utility>
 #include <vector>
 
-#include "taxopt/core/export.hpp"
 #include "taxopt/job.hpp"
 
 namespace taxopt {
@@ -34,16 +33,16 @@ struct LinePlot {
 
 /// The plot as an SVG document (960 x 360 px). Long series are reduced to the minimum and
 /// maximum per pixel column, so the file stays small and every peak stays visible.
-TAXOPT_API std::string svg_line_plot(const LinePlot& plot);
+std::string svg_line_plot(const LinePlot& plot);
 
 /// A C-space map as an SVG document: the hemisphere of axes seen down the contact normal
 /// (radius = tilt, angle = yaw from the feed direction T towards K), free and blocked cells
 /// inside the deviation cone, the input and output axes marked.
-TAXOPT_API std::string svg_cspace_map(const CSpaceMap& map, const std::string& title);
+std::string svg_cspace_map(const CSpaceMap& map, const std::string& title);
 
 /// Every plot of a run: file name and SVG text. Per operation (numbered in order):
 /// `opN-angles-a.svg`, `opN-angles-c.svg`, `opN-omega.svg`, `opN-accel.svg`, and
 /// `opN-cspace-I.svg` for each C-space map (I the CL point's index in the operation).
-TAXOPT_API std::vector<std::pair<std::string, std::string>> job_plots(const JobResult& result);
+std::vector<std::pair<std::string, std::string>> job_plots(const JobResult& result);
 
 }  // namespace taxopt

@@ -7,8 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "taxopt/core/export.hpp"
-
 namespace taxopt {
 
 /// What a record word does to the program taxopt writes.
@@ -18,7 +16,8 @@ enum class ClWordMeaning {
   Frame,        ///< names the frame the coordinates are in
   Program,      ///< reaches the program where it stands (stop, dwell)
   Structure,    ///< opens or closes operations or the file
-  Information,  ///< bears no motion and changes nothing the program needs (kept for the CL file written back, JobResult::out_cls)
+  Information,  ///< bears no motion and changes nothing the program needs (kept for the CL file
+                ///< written back, JobResult::out_cls)
   Refused,      ///< known, not interpreted: the reader stops naming it
 };
 
@@ -29,20 +28,20 @@ struct ClWord {
   const char* what;      ///< what taxopt does with it, in one line
   const char* writers;   ///< the CAM systems known to write it
   const char* evidence;  ///< where its meaning comes from
-  /// A user may skip it (ClReadOptions::skip_records): true for information, program and refused words
-  /// whose skipping leaves the motion as it is; never for motion, state or frame words.
+  /// A user may skip it (ClReadOptions::skip_records): true for information, program and refused
+  /// words whose skipping leaves the motion as it is; never for motion, state or frame words.
   bool skippable;
 };
 
 /// Every word the reader knows, in the order docs/cl-files.md lists them.
-TAXOPT_API const std::vector<ClWord>& cl_words();
+const std::vector<ClWord>& cl_words();
 
 /// The entry of `major` (upper case, blanks folded), or nullptr.
-TAXOPT_API const ClWord* find_cl_word(const std::string& major);
+const ClWord* find_cl_word(const std::string& major);
 
-TAXOPT_API const char* to_string(ClWordMeaning meaning);
+const char* to_string(ClWordMeaning meaning);
 
 /// The table as docs/cl-files.md shows it (Markdown, one row per word).
-TAXOPT_API std::string cl_words_markdown();
+std::string cl_words_markdown();
 
 }  // namespace taxopt

@@ -9,7 +9,6 @@
 #include <cstddef>
 #include <string>
 
-#include "taxopt/core/export.hpp"
 #include "taxopt/core/toolpath.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 #include "taxopt/job.hpp"
@@ -28,7 +27,7 @@ struct HtmlAssets {
 /// dygraphs/dygraph.min.js and dygraphs/dygraph.min.css under `javascript_dir`.
 /// @throws InputError naming the first file that is missing or empty (and the package that
 /// installs it).
-TAXOPT_API HtmlAssets load_html_assets(const std::string& javascript_dir = kDefaultJavascriptDir);
+HtmlAssets load_html_assets(const std::string& javascript_dir = kDefaultJavascriptDir);
 
 /// What a page may hold; beyond it the page is decimated and says so.
 struct HtmlBudget {
@@ -46,15 +45,14 @@ struct HtmlBudget {
 /// A part mesh within `max_triangles` by vertex clustering on a cubic grid (cells' vertices
 /// merged to their mean, collapsed triangles dropped); the mesh itself when within it.
 /// `cell_mm` receives the grid's cell (0 when not decimated).
-TAXOPT_API TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles,
-                                      double* cell_mm = nullptr);
+TriangleMesh decimate_mesh(const TriangleMesh& mesh, std::size_t max_triangles,
+                           double* cell_mm = nullptr);
 
 /// The page. `part_mm`: the part as run_job checked it (mm, the CL file's frame), or null. Its
 /// data come from `result` (rows, marks, findings, summaries), `toolpath` (the input axes and
 /// the passes) and `machine` (ranges and limits); `options` and `run` fill the header.
-TAXOPT_API std::string html_page(const JobResult& result, const Toolpath& toolpath,
-                                 const Machine& machine, const JobOptions& options,
-                                 const RunInfo& run, const TriangleMesh* part_mm,
-                                 const HtmlAssets& assets, const HtmlBudget& budget = {});
+std::string html_page(const JobResult& result, const Toolpath& toolpath, const Machine& machine,
+                      const JobOptions& options, const RunInfo& run, const TriangleMesh* part_mm,
+                      const HtmlAssets& assets, const HtmlBudget& budget = {});
 
 }  // namespace taxopt

@@ -1,6 +1,6 @@
 // The HTML page of a run (html_page.hpp): the data as JSON in the page, the libraries embedded,
 // the page's own style, body and script in html_page.css, html_page_body.html and html_page.js.
-#include "taxopt/io/html_page.hpp"
+#include "support/html_page.hpp"
 
 #include <algorithm>
 #include <array>

@@ -4,11 +4,9 @@
 
 #include <string>
 
-#include "taxopt/core/export.hpp"
-
 namespace taxopt {
 
 /// Lower-case hexadecimal SHA-256 of `bytes`.
-TAXOPT_API std::string sha256_hex(const std::string& bytes);
+std::string sha256_hex(const std::string& bytes);
 
 }  // namespace taxopt

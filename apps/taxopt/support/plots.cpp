@@ -1,4 +1,4 @@
-#include "taxopt/io/plots.hpp"
+#include "support/plots.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,8 +5,6 @@
 #include <string>
 #include <vector>
 
-#include "taxopt/core/export.hpp"
-
 namespace taxopt {
 
 /// A machine file made from a LinuxCNC configuration, and what was assumed on the way.
@@ -28,6 +26,6 @@ struct ImportedMachine {
 /// in the [HAL] HALCMD lines and the HALFILEs beside the INI ([SECTION]KEY substituted). The
 /// retract goes to Z's MAX_LIMIT. @throws InputError naming the file and line (another
 /// kinematics, a missing axis, a value that is no number, a head's pivot length not set).
-TAXOPT_API ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path);
+ImportedMachine machine_from_linuxcnc_ini(const std::string& ini_path);
 
 }  // namespace taxopt

@@ -2,6 +2,7 @@
 // ends run_job with Cancelled and no result; a progress callback that throws stops the job with
 // its own exception (it used to end the process: the callback ran in destructors inside TBB
 // tasks); JobOptions::threads is the job's own arena, and the result does not depend on it.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <thread>
 
@@ -120,4 +121,25 @@ TEST_CASE(
   JobOptions o = demo.options();
   o.threads = 5000;
   CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), InputError);
+}
+
+TEST_CASE(
+    "cancel: contact recovery's progress moves per point -- a one-operation job reports every "
+    "whole percent, not 0 then 1",
+    "[library][cancel]") {
+  const Demo demo;
+  REQUIRE(demo.tp.operations.size() == 1);
+  JobOptions o = demo.options();
+  std::vector<std::size_t> done_seen;
+  std::size_t total_seen = 0;
+  o.progress = [&](const std::string& s, std::size_t done, std::size_t total) {
+    if (s != "contact recovery") return;
+    done_seen.push_back(done);
+    total_seen = total;
+  };
+  (void)plan_axes(demo.tp, default_machine(), o);
+  CHECK(total_seen == demo.tp.operations[0].points.size());
+  CHECK(done_seen.size() == 101);  // 0, each whole percent, the end
+  CHECK(std::is_sorted(done_seen.begin(), done_seen.end()));
+  CHECK(done_seen.back() == total_seen);
 }

@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+#include "geometry/contact_progress.hpp"
 #include "util/parallel.hpp"
 
 namespace taxopt {
@@ -212,6 +213,13 @@ void contact_frames(const Operationd& op, std::vector<ContactPoint>& out) {
 
 std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& op,
                                            double ball_radius_mm, const ContactOptions& options) {
+  return detail::recover_contacts(part, op, ball_radius_mm, options, nullptr);
+}
+
+std::vector<ContactPoint> detail::recover_contacts(const Part& part, const Operationd& op,
+                                                   double ball_radius_mm,
+                                                   const ContactOptions& options,
+                                                   StageProgress* progress) {
   const double tol = contact_tolerance_mm(part, options, op.cam_tolerance_mm);
   const double agree_cos = std::cos(deg_to_rad(options.fit_normal_agreement_deg));
   const std::size_t n = op.points.size();
@@ -219,6 +227,7 @@ std::vector<ContactPoint> recover_contacts(const Part& part, const Operationd& o
   // Contact point, normal and curvature per point: independent, so in parallel.
   detail::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     out[i] = contact_of(part, op.points[i], ball_radius_mm, tol, agree_cos, options);
+    if (progress) progress->advance();
   });
   contact_frames(op, out);
   return out;

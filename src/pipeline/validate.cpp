@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "geometry/contact_progress.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/error.hpp"
 #include "util/parallel.hpp"
@@ -575,16 +576,18 @@ void feed_in_air_finding(const OperationContext& o, JobResult& res) {
 }
 
 /// The contacts of one ball-end operation and their summary.
-void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
+void recover_operation(const Run& run, OperationContext& o, JobResult& res,
+                       detail::StageProgress& progress) {
   const Operationd& op = *o.op;
   const std::size_t k = o.index;
   const auto t0 = Clock::now();
   if (!(o.ball_radius_mm > 0.0)) {
     not_a_ball_findings(run, o, res);
+    progress.advance(op.points.size());  // nothing to recover: its points are done
     return;
   }
   const Part& part = *run.options.part;
-  o.contacts = recover_contacts(part, op, o.ball_radius_mm, run.options.contact);
+  o.contacts = detail::recover_contacts(part, op, o.ball_radius_mm, run.options.contact, &progress);
   ContactSummary& cs = o.contact;
   cs.recovered = true;
   cs.tolerance_mm = contact_tolerance_mm(part, run.options.contact, op.cam_tolerance_mm);
@@ -604,12 +607,12 @@ void recover_operation(const Run& run, OperationContext& o, JobResult& res) {
 void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& res) {
   if (!run.options.part) return;
   const auto recover_all = [&] {
-    detail::StageProgress progress(run.options.progress, "contact recovery", ops.size(),
+    // Counted in points, each as it is done: a one-operation job's bar went from 0 to 1.
+    std::size_t points = 0;
+    for (const OperationContext& o : ops) points += o.op->points.size();
+    detail::StageProgress progress(run.options.progress, "contact recovery", points,
                                    run.options.stop);
-    for (OperationContext& o : ops) {
-      recover_operation(run, o, res);
-      progress.advance();
-    }
+    for (OperationContext& o : ops) recover_operation(run, o, res, progress);
   };
   // FCL's model takes ~2 s at 800k triangles on one thread: built beside the contacts.
   detail::parallel_invoke(recover_all, [&] {

@@ -135,7 +135,7 @@ int generate_refusal(const GenerateArgs& g) {
 template <class Surface>
 double mesh_deviation_mm(const Surface& surface, const TriangleMesh& mesh) {
   constexpr int kSteps = 4;
-  double rise = 0.0;
+  double deviation = 0.0;
   for (const auto& f : mesh.faces) {
     const Vec3d& a = mesh.vertices[static_cast<std::size_t>(f[0])];
     const Vec3d& b = mesh.vertices[static_cast<std::size_t>(f[1])];
@@ -146,11 +146,11 @@ double mesh_deviation_mm(const Surface& surface, const TriangleMesh& mesh) {
         const auto j = surface.jet(p.x(), p.y());
         Vec3d n = j.su.cross(j.sv).normalized();
         if (n.z() < 0.0) n = -n;
-        rise = std::max(rise, std::abs((p - j.p).dot(n)));
+        deviation = std::max(deviation, std::abs((p - j.p).dot(n)));
       }
     }
   }
-  return rise;
+  return deviation;
 }
 
 /// The raster of CL points over the chosen surface, and the surface's mesh over the domain grown

@@ -283,12 +283,12 @@ void remove_made_folders(const std::vector<std::string>& made) {
   for (const std::string& d : made) std::filesystem::remove(d, ec);
 }
 
-/// Stages the plots in the --plots folder (made here), after checking each plot's path as an
-/// output's: never an input, a link (renaming over it would replace the link), a folder or a
-/// read-only file. Returns the folders it made.
-std::vector<std::string> stage_plots(const Args& a, const JobResult& result,
-                                     OutputTransaction& tx) {
-  if (a.plots.empty()) return {};
+/// Stages the plots in the --plots folder (made here, the folders it made in `made`), after
+/// checking each plot's path as an output's: never an input, a link (renaming over it would
+/// replace the link), a folder or a read-only file.
+void stage_plots(const Args& a, const JobResult& result, OutputTransaction& tx,
+                 std::vector<std::string>& made) {
+  if (a.plots.empty()) return;
   const std::vector<std::pair<std::string, std::string>> plots = job_plots(result);
   for (const auto& [name, svg] : plots) {
     // A plot's name may be an input's that lies in the folder: never written over it.
@@ -304,18 +304,11 @@ std::vector<std::string> stage_plots(const Args& a, const JobResult& result,
       }
     }
   }
-  std::vector<std::string> made = folders_to_make(a.plots);
+  made = folders_to_make(a.plots);
   std::error_code ec;
   std::filesystem::create_directories(a.plots, ec);
   if (ec) refuse(a.plots + ": cannot create folder: " + ec.message());
-  try {
-    for (const auto& [name, svg] : plots) tx.stage(a.plots + "/" + name, svg);
-  } catch (...) {
-    tx.abort();
-    remove_made_folders(made);
-    throw;
-  }
-  return made;
+  for (const auto& [name, svg] : plots) tx.stage(a.plots + "/" + name, svg);
 }
 
 /// Every output of the run in one transaction (all or none), then the summary.
@@ -333,12 +326,13 @@ void write_outputs(const Args& a, const Invocation& how, const Toolpath& toolpat
     tx.stage(a.html, html_page(result, toolpath, machine, options, run_info(a, how, false),
                                part ? &part->mesh() : nullptr, *html_assets));
   }
-  const std::vector<std::string> made = stage_plots(a, result, tx);
+  std::vector<std::string> made;
   try {
+    stage_plots(a, result, tx, made);
     tx.commit();
   } catch (...) {
     // Every output as it was: the plots' folders this run made go too (a full disk left an
-    // empty --plots folder behind).
+    // empty --plots folder behind), whether a plot's write or the commit failed.
     tx.abort();
     remove_made_folders(made);
     throw;

@@ -5,6 +5,7 @@
 /// folder with the manual it follows; `rules_of` finds it (dialects.cpp holds the list).
 /// Internal to the library: the writer's Dialect (gcode/dialect.hpp) formats with these words.
 
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
@@ -15,12 +16,10 @@
 
 namespace taxopt::gcode {
 
-/// `v` with `decimals` decimals, as every dialect writes a number.
-inline std::string fmt(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  std::string s = buf;
-  // No "-0.0000": a negative zero after rounding is written as zero.
+/// `text` (a number as "%.*f" writes it) without the sign of a negative zero: no "-0.0000",
+/// a negative number that rounds to zero is written as zero.
+inline std::string fmt_signless_zero(const char* text) {
+  std::string s = text;
   bool all_zero = true;
   for (char c : s) {
     if (c != '-' && c != '0' && c != '.') all_zero = false;
@@ -29,9 +28,29 @@ inline std::string fmt(double v, int decimals) {
   return s;
 }
 
-/// The value a reader gets back from fmt(v, decimals).
+/// `v` with `decimals` decimals, as every dialect writes a number.
+/// std::to_chars with a precision writes what printf's "%.*f" writes (C++17 [charconv]), at a
+/// fraction of its cost (a program of 143,840 points formats over a million numbers).
+inline std::string fmt(double v, int decimals) {
+  char buf[400];  // the longest double in %f, 309 digits, and the decimals a dialect writes
+  const std::to_chars_result r =
+      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  if (r.ec != std::errc()) {
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    return fmt_signless_zero(buf);
+  }
+  *r.ptr = '\0';
+  return fmt_signless_zero(buf);
+}
+
+/// The value a reader gets back from fmt(v, decimals) (from_chars: strtod's value, correctly
+/// rounded, in the C locale).
 inline double round_to(double v, int decimals) {
-  return std::strtod(fmt(v, decimals).c_str(), nullptr);
+  const std::string s = fmt(v, decimals);
+  double out = 0.0;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), out);
+  if (r.ec != std::errc()) return std::strtod(s.c_str(), nullptr);
+  return out;
 }
 
 /// Comment text for a controller: no parentheses (they close a LinuxCNC or Fanuc comment),

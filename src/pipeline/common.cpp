@@ -487,58 +487,6 @@ std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolMode
   });
 }
 
-/// Index i of every move from point i-1 to point i during which the tool hits the part, with
-/// the machine moving linearly in its joints between the values written (`xyz_w` as written,
-/// `tilt_deg`/`c_deg`). Samples at most 0.5 deg and 0.1 mm apart. Between two contact points
-/// only the bodies above the ball are checked (the ball's path between contacts is the CAM
-/// system's chord tolerance); where either end is in the air, the ball too.
-
-std::vector<std::size_t> colliding_moves(const PartCheck& model, const ToolModel& tool,
-                                         const Machine& machine, const std::vector<Vec3d>& xyz_w,
-                                         const std::vector<double>& tilt_deg,
-                                         const std::vector<double>& c_deg,
-                                         const std::vector<ContactPoint>& contacts,
-                                         detail::StageProgress* progress,
-                                         const std::vector<std::vector<WayPoint>>* between,
-                                         const std::vector<char>* only) {
-  const double R = tool.ball_radius_mm;
-  return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
-    if (only && !(*only)[i]) return false;
-    struct Advance {  // on every return of this move's check
-      detail::StageProgress* p;
-      ~Advance() {
-        if (p) p->advance();
-      }
-    } advance{progress};
-    const bool in_air = contacts[i - 1].state != ContactState::Touching ||
-                        contacts[i].state != ContactState::Touching;
-    // The move as the machine runs it: joint-linear between the written blocks.
-    std::vector<WayPoint> chain = {{xyz_w[i - 1], tilt_deg[i - 1], c_deg[i - 1]}};
-    if (between && i < between->size()) {
-      chain.insert(chain.end(), (*between)[i].begin(), (*between)[i].end());
-    }
-    chain.push_back({xyz_w[i], tilt_deg[i], c_deg[i]});
-    for (std::size_t k = 1; k < chain.size(); ++k) {
-      const WayPoint &p0 = chain[k - 1], &p1 = chain[k];
-      const double da = p1.tilt_deg - p0.tilt_deg, dc = p1.c_deg - p0.c_deg;
-      const double dx = (p1.xyz - p0.xyz).norm();
-      const int steps = static_cast<int>(
-          std::ceil(std::max({std::abs(da) / 0.5, std::abs(dc) / 0.5, dx / 0.1, 1.0})));
-      for (int s = (k == 1 ? 1 : 0); s < steps; ++s) {
-        const double t = static_cast<double>(s) / steps;
-        const Posed pose{deg_to_rad(p0.tilt_deg + t * da), deg_to_rad(p0.c_deg + t * dc)};
-        const Vec3d xyz = p0.xyz + t * (p1.xyz - p0.xyz);
-        const Vec3d tip = tip_of_written_mm(machine, xyz, pose);
-        const Vec3d axis = machine.rotary.forward(pose);
-        if (model.collides(tool, tip + R * axis, axis, in_air)) {
-          return true;
-        }
-      }
-    }
-    return false;
-  });
-}
-
 std::optional<std::string> outside_travel(const Machine& machine, int q, double v_mm) {
   const auto& range = machine.linear_range[static_cast<std::size_t>(q)];
   if (range.contains(v_mm) ||

@@ -246,8 +246,8 @@ class OperationPlanner {
                                    options_.pose_options, plan.preferred);
     // Unposable axes are the verification's to report.
     if (!pp.ok()) return std::vector<char>(op_.points.size(), 0);
-    return points_and_moves_hit(in_.judged_by(&*run_.collision), plan.axes, pp.poses,
-                                std::vector<char>(op_.points.size(), 1));
+    return points_and_moves_hit(in_.judged_by(&*run_.collision, run_.clearance_bounds()), plan.axes,
+                                pp.poses, std::vector<char>(op_.points.size(), 1));
   }
   std::size_t hits(const OptimisedOperation& plan) const {
     const std::vector<char> hit = hit_points(plan);
@@ -271,7 +271,8 @@ class OperationPlanner {
       out = std::move(alt);
       how = other + " plan is used for this operation";
     } else {
-      const StretchGuardResult g = guard_passes(in_.judged_by(&*run_.collision), out);
+      const StretchGuardResult g =
+          guard_passes(in_.judged_by(&*run_.collision, run_.clearance_bounds()), out);
       out.guard.points_hit += g.points_hit;
       out.guard.stretches += g.stretches;
       out.guard.whole_passes += g.whole_passes;

@@ -45,7 +45,7 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
   std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
   for (std::size_t i :
        colliding_moves(model, tool, machine, xyz, a, c, contacts.empty() ? air : contacts, nullptr,
-                       nullptr, &check)) {
+                       nullptr, &check, in.bounds)) {
     hit[i] = 1;
   }
   for (std::size_t i : colliding_points(model, tool, op, axes, contacts, nullptr, &check)) {

@@ -36,10 +36,14 @@ struct OperationPlanInputs {
   /// Per point the least angle a new axis keeps from the designed surface's normal, rad
   /// (least_tilt_of; empty or 0: no bound).
   const std::vector<double>* least_tilt_rad = nullptr;
-  /// The same, judged by another model (the verification's FCL model).
-  OperationPlanInputs judged_by(const PartCheck* other) const {
-    return {op,     contacts,     ball_radius_mm, other,       tool,          machine,
-            timing, pose_options, strict_tool,    input_clear, least_tilt_rad};
+  /// The part's clearance bounds for the sweeps of moves (colliding_moves), or none: worth
+  /// their cost where the model is FCL's, not where it is the rasteriser's own tree.
+  const CSpaceRasteriser* bounds = nullptr;
+  /// The same, judged by another model (the verification's FCL model) with `other_bounds`.
+  OperationPlanInputs judged_by(const PartCheck* other,
+                                const CSpaceRasteriser* other_bounds) const {
+    return {op,     contacts,     ball_radius_mm, other,       tool,           machine,
+            timing, pose_options, strict_tool,    input_clear, least_tilt_rad, other_bounds};
   }
   /// Whether `axis` keeps point i's least tilt from the surface normal.
   bool keeps_tilt(std::size_t i, const Vec3d& axis) const {

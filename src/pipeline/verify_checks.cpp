@@ -438,8 +438,9 @@ void check_collisions(const Run& run, const OperationContext& o, const PostedOpe
   } else {
     r.verification.flute_gouge_points = 0;
   }
-  const auto moves_hit = colliding_moves(*run.collision, tool, machine, xyz_w, a_w, c_w, o.contacts,
-                                         &checking, &w.way_points[k]);
+  const auto moves_hit =
+      colliding_moves(*run.collision, tool, machine, xyz_w, a_w, c_w, o.contacts, &checking,
+                      &w.way_points[k], nullptr, run.clearance_bounds());
   r.verification.colliding_moves = static_cast<long>(moves_hit.size());
   for (std::size_t i : moves_hit) r.rows[i].mark(PointMark::MoveCollision);
   if (const auto least = clearance_bound(*run.collision, real_tool, op, out_axes, &checking)) {
@@ -486,8 +487,9 @@ void check_shank_and_holder(const Run& run, const OperationContext& o, const Pos
   for (const CLPointd& p : po.points) axes.push_back(p.axis);
   const std::vector<std::size_t> hits =
       colliding_points(*run.collision, tool, op, axes, above, nullptr);
-  const std::vector<std::size_t> moves = colliding_moves(
-      *run.collision, tool, run.machine, xyz_w, a_w, c_w, above, nullptr, &w.way_points[k]);
+  const std::vector<std::size_t> moves =
+      colliding_moves(*run.collision, tool, run.machine, xyz_w, a_w, c_w, above, nullptr,
+                      &w.way_points[k], nullptr, run.clearance_bounds());
   r.colliding_before = r.colliding_after = static_cast<long>(hits.size());
   r.verification.colliding_moves = static_cast<long>(moves.size());
   r.verification.collision_free = hits.empty() && moves.empty();

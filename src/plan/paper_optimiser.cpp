@@ -7,6 +7,7 @@
 #include <numeric>
 #include <optional>
 
+#include "plan/cap_order.hpp"
 #include "plan/paper_single.hpp"
 #include "plan/slerp.hpp"
 #include "util/parallel.hpp"
@@ -23,24 +24,7 @@ Vec3d tangent_towards(const Vec3d& centre, const Vec3d& along) {
 
 std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_rad,
                             const Vec3d& along) {
-  // An orthonormal pair across the centre, the first along the axes' own turn: a grid in
-  // the world's frame gave the sine's paper plan 14.2 deg/s^2 in place and 24.3 turned 30 deg
-  // about Z (its keys off the path's great circle, through the pole).
-  const Vec3d e1 = tangent_towards(centre, along);
-  const Vec3d e2 = centre.cross(e1);
-  std::vector<Vec3d> out = {centre};
-  const int rings = static_cast<int>(std::floor(radius_rad / step_rad + 1e-9));
-  for (int r = 1; r <= rings; ++r) {
-    const double rho = r * step_rad;
-    const int m = std::max(
-        1, static_cast<int>(std::ceil(Constants<double>::two_pi() * std::sin(rho) / step_rad)));
-    for (int t = 0; t < m; ++t) {
-      const double phi = Constants<double>::two_pi() * t / m;
-      out.push_back(std::cos(rho) * centre +
-                    std::sin(rho) * (std::cos(phi) * e1 + std::sin(phi) * e2));
-    }
-  }
-  return out;
+  return detail::CapPattern(radius_rad, step_rad).axes(centre, along);
 }
 
 namespace {
@@ -49,7 +33,11 @@ namespace {
 class PassPlanner {
  public:
   PassPlanner(const PassProblem& problem, const AxisTest& is_free, const PaperOptions& options)
-      : p_(problem), is_free_(is_free), opt_(options), n_(problem.input_axes.size()) {
+      : p_(problem),
+        is_free_(is_free),
+        opt_(options),
+        n_(problem.input_axes.size()),
+        pattern_(deg_to_rad(options.max_deviation_deg), deg_to_rad(options.grid_deg)) {
     arc_.assign(n_, 0.0);
     for (std::size_t i = 1; i < n_; ++i) arc_[i] = arc_[i - 1] + p_.segment_mm[i - 1];
     const double length = n_ ? arc_.back() : 0.0;
@@ -108,19 +96,14 @@ class PassPlanner {
     return angle_between(v, p_.input_axes[i]) <= max_dev_rad_ + 1e-12 && is_free_(i, v);
   }
 
-  /// The cap grid of a key point and each candidate's pull term, made once per point (keys
-  /// are asked again on every sweep).
+  /// The cap grid of a key point, made once per point (keys are asked again on every sweep).
   struct Cap {
     std::vector<Vec3d> axes;
-    std::vector<double> pull;
   };
   const Cap& cap_at(std::size_t i) const {
     auto it = caps_.find(i);
     if (it == caps_.end()) {
-      Cap c;
-      c.axes = cap_grid(p_.input_axes[i], max_dev_rad_, step_rad_, input_turn(i));
-      for (const Vec3d& v : c.axes) c.pull.push_back(pull_term(i, v));
-      it = caps_.emplace(i, std::move(c)).first;
+      it = caps_.emplace(i, Cap{pattern_.axes(p_.input_axes[i], input_turn(i))}).first;
     }
     return it->second;
   }
@@ -145,15 +128,8 @@ class PassPlanner {
     return std::nullopt;
   }
 
-  /// Bending energy terms of the key polygon that involve key j, plus j's pull.
-  double local_cost(std::size_t j, const Vec3d& v) const {
-    return bending(j, v) + pull_term(keys_[j], v);
-  }
-
-  /// Bending energy terms of the key polygon that involve key j at axis v.
-  double bending(std::size_t j, const Vec3d& v) const { return Bending(*this, j)(v); }
-
-  /// bending(j, v) with what does not depend on v worked out once (the keys' lengths and spans,
+  /// The bending energy terms of the key polygon that involve key j at axis v, with what does
+  /// not depend on v worked out once (the keys' lengths and spans,
   /// the rates that do not touch key j), the same operations in the same order per v: a key's
   /// whole cap of candidates is priced with it (it was a third of a run).
   class Bending {
@@ -190,6 +166,31 @@ class PassPlanner {
       return e;
     }
 
+    /// operator()(v) for unit v as constant + gradient.v (each term's square expanded with
+    /// |v|^2 = 1), and the size of the expanded terms, which bounds the rounding of both forms.
+    struct Linear {
+      double constant = 0.0, scale = 0.0;
+      Vec3d gradient = Vec3d::Zero();
+    };
+    Linear linear() const {
+      // rate(j - 2 + s) = a[s] v + b[s].
+      double a[4] = {0.0, 0.0, 0.0, 0.0};
+      Vec3d b[4] = {rate_[0], rate_[1], rate_[2], rate_[3]};
+      if (j_ >= 1) a[1] = 1.0 / len_[1], b[1] = -key_axes_[j_ - 1] / len_[1];
+      if (j_ + 1 < key_axes_.size()) a[2] = -1.0 / len_[2], b[2] = key_axes_[j_ + 1] / len_[2];
+      Linear out;
+      for (int k = 0; k < count_; ++k) {
+        const std::size_t s = terms_[k].t + 2 - j_;
+        const double da = a[s] - a[s - 1];
+        const Vec3d db = b[s] - b[s - 1];
+        const double span = terms_[k].span;
+        out.constant += (da * da + db.squaredNorm()) / span;
+        out.gradient += (2.0 * da / span) * db;
+        out.scale += (std::abs(da) + db.norm()) * (std::abs(da) + db.norm()) / span;
+      }
+      return out;
+    }
+
    private:
     struct Term {
       std::size_t t = 0;
@@ -210,24 +211,28 @@ class PassPlanner {
     const std::size_t i = keys_[j];
     const Cap& cap = cap_at(i);
     const std::vector<Vec3d>& cands = cap.axes;
-    // Candidates by (cost, index), cheapest first: a heap, as the first acceptable one ends
-    // the search (usually among the first few).
-    std::vector<std::pair<double, std::size_t>> order;
-    order.reserve(cands.size());
     const Bending bending_at(*this, j);
+    // Candidates by (cost, index), cheapest first, as the first acceptable one ends the search
+    // (usually among the first few): priced by bending's linear form and the ring's angle, the
+    // exact cost worked out only where it decides (1e-9 of the terms' size: rounding is 1e-14).
+    const Bending::Linear linear = bending_at.linear();
+    std::vector<double> approx(cands.size());
     for (std::size_t c = 0; c < cands.size(); ++c) {
-      order.emplace_back(bending_at(cands[c]) + cap.pull[c], c);
+      approx[c] = linear.constant + linear.gradient.dot(cands[c]) +
+                  pull_ * pattern_.rho(c) * pattern_.rho(c);
     }
-    const auto later = std::greater<std::pair<double, std::size_t>>();
-    std::make_heap(order.begin(), order.end(), later);
+    const double tolerance =
+        1e-9 * (linear.scale + std::abs(linear.constant) + pull_ * max_dev_rad_ * max_dev_rad_);
+    detail::CandidateOrder order(std::move(approx), tolerance, [&](std::size_t c) {
+      return bending_at(cands[c]) + pull_term(i, cands[c]);
+    });
     std::optional<Vec3d> best;
     double best_cost = 0.0;
     // The current axis competes too: a sweep never makes a key worse.
-    const double current_cost = local_cost(j, key_axes_[j]);
+    const double current_cost = bending_at(key_axes_[j]) + pull_term(i, key_axes_[j]);
     const bool current_ok = acceptable(i, key_axes_[j]);
-    for (auto end = order.end(); end != order.begin(); --end) {
-      std::pop_heap(order.begin(), end, later);
-      const auto [cost, c] = *(end - 1);
+    while (const auto next = order.next()) {
+      const auto [cost, c] = *next;
       if (current_ok && cost >= current_cost) break;
       if (acceptable(i, cands[c])) {
         best = cands[c];
@@ -246,7 +251,7 @@ class PassPlanner {
         for (int d = 0; d < 8; ++d) {
           const double phi = Constants<double>::two_pi() * d / 8;
           const Vec3d v = sphere_exp(b, Vec3d(step * (std::cos(phi) * e1 + std::sin(phi) * e2)));
-          const double cost = local_cost(j, v);
+          const double cost = bending_at(v) + pull_term(i, v);
           if (cost < best_cost - 1e-15 && acceptable(i, v)) {
             best = v;
             best_cost = cost;
@@ -408,6 +413,7 @@ class PassPlanner {
   std::vector<Vec3d> key_axes_;
   std::vector<Vec3d> axes_;
   std::vector<std::size_t> no_free_;
+  detail::CapPattern pattern_;
   mutable std::map<std::size_t, Cap> caps_;
 };
 

@@ -4,6 +4,9 @@
 // file's. A new dialect in all_dialects() is checked here without a line more.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -203,5 +206,26 @@ TEST_CASE(
       CHECK(percent.empty());
       CHECK(semicolon.empty());
     }
+  }
+}
+
+TEST_CASE("dialects: a number is written as printf's %.*f writes it, and read back as strtod",
+          "[dialects][gcode]") {
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-12, 6), decimals(0, 6);
+  std::vector<double> values = {0.0,    -0.0,     0.5,       1.5,        2.5,
+                                -0.5,   0.125,    -0.00004,  0.00005,    1e300,
+                                -1e300, 4.9e-324, 359.99995, -179.99995, 1e-7};
+  for (int k = 0; k < 20000; ++k) values.push_back(unit(rng) * std::pow(10.0, exponent(rng)));
+  for (double v : values) {
+    const int d = decimals(rng);
+    char buf[400];
+    std::snprintf(buf, sizeof buf, "%.*f", d, v);
+    std::string want = buf;
+    if (want.find_first_not_of("-0.") == std::string::npos && want[0] == '-') want.erase(0, 1);
+    INFO(v << " with " << d << " decimals");
+    REQUIRE(gcode::fmt(v, d) == want);
+    REQUIRE(gcode::round_to(v, d) == std::strtod(want.c_str(), nullptr));
   }
 }

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -183,8 +184,18 @@ ClReadOptions read_options_of(const Args& a) {
   return read_options;
 }
 
+/// The part mesh file read (`--part`), on a thread of its own beside the CL file's reading
+/// unless the run has one thread: its error, if any, comes where it always did, after the CL
+/// file's (get()).
+std::future<TriangleMesh> mesh_file_of(const Args& a) {
+  const auto how = a.threads == 1 ? std::launch::deferred : std::launch::async;
+  return std::async(
+      how, [path = a.part] { return path.empty() ? TriangleMesh{} : read_mesh_file(path); });
+}
+
 /// The part mesh in the CL file's units and coordinates, with its frame note.
-std::optional<Part> part_of(const Args& a, const Toolpath& toolpath) {
+std::optional<Part> part_of(const Args& a, const Toolpath& toolpath,
+                            std::future<TriangleMesh>& mesh_file) {
   std::optional<Part> part;
   if (!a.part.empty()) {
     std::string frame_note;
@@ -193,7 +204,7 @@ std::optional<Part> part_of(const Args& a, const Toolpath& toolpath) {
     const MeshFrame frame = a.part_frame == "mcs"        ? MeshFrame::Mcs
                             : a.part_frame == "absolute" ? MeshFrame::Absolute
                                                          : MeshFrame::Auto;
-    part.emplace(part_mesh_for(toolpath, read_mesh_file(a.part),
+    part.emplace(part_mesh_for(toolpath, mesh_file.get(),
                                parse_unit(a.part_units, "--part-units").value_or(toolpath.units),
                                frame, &frame_note, radius_mm));
     if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
@@ -371,6 +382,7 @@ int run_main_job(Args& a, const Invocation& how) {
       const char* dir = std::getenv("TAXOPT_JAVASCRIPT_DIR");
       html_assets = load_html_assets(dir && *dir ? dir : kDefaultJavascriptDir);
     }
+    std::future<TriangleMesh> mesh_file = mesh_file_of(a);
     const Toolpath toolpath = read_cl_file(a.in, read_options);
     // Plots: five SVG files an operation (and C-space maps); 20,000 operations wrote 100,000
     // files, 468 MB. A page of plots beyond a few hundred operations helps no one.
@@ -381,7 +393,7 @@ int run_main_job(Args& a, const Invocation& how) {
              std::to_string(kMostPlottedOperations) +
              " (about 5 SVG files each): split the file, or leave out --plots");
     }
-    const std::optional<Part> part = part_of(a, toolpath);
+    const std::optional<Part> part = part_of(a, toolpath, mesh_file);
     // The tool's dimensions, known now in the CL file's units: run_job checks them first.
     options.tool = tool_dimensions_of(a, toolpath);
     if (part) options.part = &*part;

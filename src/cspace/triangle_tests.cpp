@@ -106,57 +106,6 @@ double squared_distance_to_triangle(const Vec3d& p, const Vec3d& a, const Vec3d&
   return (ap - (vb * denom) * ab - (vc * denom) * ac).squaredNorm();
 }
 
-/// Squared distance between segments p1q1 and p2q2 (Ericson, Real-Time Collision Detection
-/// 5.1.9, with its degenerate cases).
-double squared_distance_between_segments(const Vec3d& p1, const Vec3d& q1, const Vec3d& p2,
-                                         const Vec3d& q2) {
-  constexpr double kEps = 1e-18;
-  const Vec3d d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0.0, t = 0.0;
-  if (a <= kEps && e <= kEps) return r.squaredNorm();
-  if (a <= kEps) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= kEps) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denom = a * e - b * b;
-      s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0.0) {
-        t = 0.0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1.0) {
-        t = 1.0;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
-}
-
-/// Where the segment and the triangle do not meet, their closest pair has an end of the segment
-/// or a point of an edge of the triangle (a segment parallel to the face above its inside
-/// crosses an edge's height too): the least of those five distances.
-double distance_segment_to_triangle(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b,
-                                    const Vec3d& c) {
-  const Vec3d n = (b - a).cross(c - a);
-  const double dp = n.dot(p - a), dq = n.dot(q - a);
-  if (n.squaredNorm() > 0.0 && dp * dq <= 0.0 && dp != dq) {
-    const Vec3d x = p + (dp / (dp - dq)) * (q - p);
-    const double u = n.dot((b - a).cross(x - a)), v = n.dot((c - b).cross(x - b)),
-                 w = n.dot((a - c).cross(x - c));
-    if (u >= 0.0 && v >= 0.0 && w >= 0.0) return 0.0;
-  }
-  const double d2 = std::min(
-      {squared_distance_to_triangle(p, a, b, c), squared_distance_to_triangle(q, a, b, c),
-       squared_distance_between_segments(p, q, a, b), squared_distance_between_segments(p, q, b, c),
-       squared_distance_between_segments(p, q, c, a)});
-  return std::sqrt(d2);
-}
-
 }  // namespace detail
 
 }  // namespace taxopt

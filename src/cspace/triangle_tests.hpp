@@ -17,12 +17,4 @@ bool meets_in_frame(const std::array<Vec3d, 3>& rel, const Vec3d& dir, const Vec
 /// The squared distance from p to the triangle abc.
 double squared_distance_to_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 
-/// The squared distance between the segments p1q1 and p2q2.
-double squared_distance_between_segments(const Vec3d& p1, const Vec3d& q1, const Vec3d& p2,
-                                         const Vec3d& q2);
-
-/// The distance from the segment pq to the triangle abc, 0 where they meet.
-double distance_segment_to_triangle(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b,
-                                    const Vec3d& c);
-
 }  // namespace taxopt::detail

@@ -9,13 +9,6 @@
 namespace taxopt::pipeline {
 namespace {
 
-/// A body's clearance bound counts only this much beyond what the move needs of it (the
-/// FCL model's own tolerance is far below it).
-constexpr double kClearMarginMm = 1e-3;
-/// The largest clearance a bound looks for: the walk of the part grows with it, and a move
-/// that needs more is bounded again further on.
-constexpr double kMaxReachMm = 2.0;
-
 /// One sample of a move: the ball centre and the tool axis.
 struct Sample {
   Vec3d centre = Vec3d::Zero();
@@ -44,13 +37,15 @@ std::vector<Sample> samples_of(const Machine& machine, const std::vector<WayPoin
   return out;
 }
 
-/// Judges the samples of a move in order, skipping those that a clearance bound clears: a
-/// body of radius r from `start` to `end` along the axis, moved from one sample's pose to
-/// another's, has no point that moved farther than |centre change| + |axis change| times
-/// sqrt(r^2 + max(start^2, end^2)) (a rotation by angle phi about the ball centre moves a
-/// point at distance d by 2 d sin(phi / 2) = d |axis change|; the ball turns into itself).
-/// Where every body stays within its bound from the last sample that was bounded, the sample
-/// is as clear as that one was.
+/// Judges the samples of a move, clearing runs of them at once where it can: a body of radius r
+/// from `start` to `end` along the axis, moved from one sample's pose to another's, has no point
+/// that moved farther than |centre change| + |axis change| times sqrt(r^2 + max(start^2,
+/// end^2)) (a rotation by angle phi about the ball centre moves a point at distance d by
+/// 2 d sin(phi / 2) = d |axis change|; the ball turns into itself). So where each body, grown
+/// by the most it moves over a run (radius and both ends: the grown cylinder holds every point
+/// within that distance of it), misses the part at the run's middle sample, every sample of the
+/// run misses it. A run the grown bodies hit is halved, down to a few samples, which `model`
+/// judges one by one: the verdict is the samples' own, one query for most moves.
 class MoveSweep {
  public:
   MoveSweep(const PartCheck& model, const CSpaceRasteriser* bounds, const ToolModel& tool,
@@ -59,67 +54,51 @@ class MoveSweep {
     for (const ToolBody& b : tool.bodies) {
       reach_.push_back(std::hypot(b.radius_mm, std::max(std::abs(b.start_mm), std::abs(b.end_mm))));
     }
-    reach_.push_back(0.0);  // the ball
   }
 
-  bool hits(const std::vector<Sample>& samples) {
-    std::size_t wait = 0, backoff = 1;
-    for (std::size_t s = 0; s < samples.size();) {
-      if (!bounds_ || wait > 0) {
-        if (wait > 0) --wait;
-        if (collides(samples[s])) return true;
-        ++s;
-        continue;
+  /// Whether the tool hits the part at any of samples [lo, hi).
+  bool hits(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi) const {
+    if (!bounds_ || hi - lo <= kFewSamples) {
+      for (std::size_t s = lo; s < hi; ++s) {
+        if (model_.collides(tool_, samples[s].centre, samples[s].axis, with_ball_)) return true;
       }
-      const std::size_t next = bounded(samples, s);
-      if (next == s) {  // no clearance to speak of: query this sample and a few more plainly
-        if (collides(samples[s])) return true;
-        ++s;
-        wait = backoff;
-        backoff = std::min<std::size_t>(2 * backoff, 16);
-        continue;
-      }
-      backoff = 1;
-      s = next;
+      return false;
     }
-    return false;
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (!grown_hits(samples, lo, hi, mid)) return false;
+    return hits(samples, lo, mid) || hits(samples, mid, hi);
   }
 
  private:
-  bool collides(const Sample& p) const {
-    return model_.collides(tool_, p.centre, p.axis, with_ball_);
-  }
+  /// Runs this short are judged sample by sample.
+  static constexpr std::size_t kFewSamples = 2;
+  /// The bodies are grown this much more than the run needs (the models' own tolerances are
+  /// far below it).
+  static constexpr double kMarginMm = 1e-3;
 
-  /// How far body k (the ball after the bodies) of sample t lies from where it was at sample a.
-  double moved(const Sample& a, const Sample& t, std::size_t k) const {
-    return (t.centre - a.centre).norm() + (t.axis - a.axis).norm() * reach_[k];
-  }
-
-  /// The first sample after `a` that sample a's clearances do not clear, or `a` itself when
-  /// they do not clear sample a.
-  std::size_t bounded(const std::vector<Sample>& samples, std::size_t a) const {
-    double need = 0.0;
-    for (std::size_t t = a + 1; t < samples.size() && need < kMaxReachMm; ++t) {
-      for (std::size_t k = 0; k < reach_.size(); ++k) {
-        need = std::max(need, moved(samples[a], samples[t], k));
+  /// Whether the bodies at sample `at`, each grown by the most it moves from there over samples
+  /// [lo, hi), meet the part.
+  bool grown_hits(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi,
+                  std::size_t at) const {
+    const Sample& a = samples[at];
+    ToolModel grown = tool_;
+    double centre_moves = 0.0;
+    for (std::size_t t = lo; t < hi; ++t) {
+      centre_moves = std::max(centre_moves, (samples[t].centre - a.centre).norm());
+    }
+    for (std::size_t k = 0; k < grown.bodies.size(); ++k) {
+      double need = 0.0;
+      for (std::size_t t = lo; t < hi; ++t) {
+        need = std::max(need, (samples[t].centre - a.centre).norm() +
+                                  (samples[t].axis - a.axis).norm() * reach_[k]);
       }
+      ToolBody& b = grown.bodies[k];
+      b.radius_mm += need + kMarginMm;
+      b.start_mm -= need + kMarginMm;
+      b.end_mm += need + kMarginMm;
     }
-    need = std::min(need, kMaxReachMm);
-    const std::vector<double> clear =
-        bounds_->clearances_mm(tool_, samples[a].centre, samples[a].axis, with_ball_,
-                               need + 2.0 * kClearMarginMm, kClearMarginMm);
-    if (std::any_of(clear.begin(), clear.end(), [](double c) { return !(c > kClearMarginMm); })) {
-      return a;
-    }
-    std::size_t t = a + 1;
-    for (; t < samples.size(); ++t) {
-      bool inside = true;
-      for (std::size_t k = 0; k < reach_.size() && inside; ++k) {
-        inside = moved(samples[a], samples[t], k) + kClearMarginMm < clear[k];
-      }
-      if (!inside) break;
-    }
-    return t;
+    grown.ball_radius_mm += centre_moves + kMarginMm;
+    return bounds_->collides(grown, a.centre, a.axis, with_ball_);
   }
 
   const PartCheck& model_;
@@ -152,8 +131,8 @@ std::vector<std::size_t> colliding_moves(
       chain.insert(chain.end(), (*between)[i].begin(), (*between)[i].end());
     }
     chain.push_back({xyz_w[i], tilt_deg[i], c_deg[i]});
-    return MoveSweep(model, bounds, tool, in_air)
-        .hits(samples_of(machine, chain, tool.ball_radius_mm));
+    const std::vector<Sample> samples = samples_of(machine, chain, tool.ball_radius_mm);
+    return MoveSweep(model, bounds, tool, in_air).hits(samples, 0, samples.size());
   });
 }
 

@@ -116,7 +116,8 @@ class OperationPlanner {
             options_.pose_options,
             o.strict_tool ? &*o.strict_tool : nullptr,
             &input_clear_,
-            &o.least_tilt_rad} {}
+            &o.least_tilt_rad,
+            run.clearance_bounds()} {}
 
   void run() {
     const auto t0 = Clock::now();

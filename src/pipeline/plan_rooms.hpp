@@ -36,8 +36,8 @@ struct OperationPlanInputs {
   /// Per point the least angle a new axis keeps from the designed surface's normal, rad
   /// (least_tilt_of; empty or 0: no bound).
   const std::vector<double>* least_tilt_rad = nullptr;
-  /// The part's clearance bounds for the sweeps of moves (colliding_moves), or none: worth
-  /// their cost where the model is FCL's, not where it is the rasteriser's own tree.
+  /// The part's tree for the sweeps of moves to clear runs of samples at once (colliding_moves),
+  /// or none.
   const CSpaceRasteriser* bounds = nullptr;
   /// The same, judged by another model (the verification's FCL model) with `other_bounds`.
   OperationPlanInputs judged_by(const PartCheck* other,

@@ -57,7 +57,7 @@ struct Run {
   std::optional<CollisionModel> collision;
   std::optional<CSpaceRasteriser> checker;
   const PartCheck* planner_check() const { return checker ? &*checker : nullptr; }
-  /// The same tree as the clearance bounds colliding_moves skips samples by.
+  /// The same tree, for colliding_moves to clear runs of a move's samples at once.
   const CSpaceRasteriser* clearance_bounds() const { return checker ? &*checker : nullptr; }
   /// Operations whose plan the verification refused (a point or move hit the part) in a first
   /// run; run_job plans them again, falling back to the other method's plan (the global
@@ -401,9 +401,9 @@ std::vector<std::size_t> colliding_points(const PartCheck& model, const ToolMode
 /// `tilt_deg`/`c_deg`, through the blocks `between` where given). Samples at most 0.5 deg and
 /// 0.1 mm apart, each judged by `model`. Between two contact points only the bodies above the
 /// ball are checked (the ball's path between contacts is the CAM system's chord tolerance);
-/// where either end is in the air, the ball too. With `bounds` (the same part), a sample whose
-/// bodies all lie within the clearances bounds found at an earlier sample of the move is clear
-/// without a query: the same verdicts, a fraction of the queries (move_sweep.cpp).
+/// where either end is in the air, the ball too. With `bounds` (a tree of the same part), runs
+/// of samples whose bodies, grown by the most they move over the run, miss the part are clear
+/// without a query each: the same verdicts, about one query a move (move_sweep.cpp).
 std::vector<std::size_t> colliding_moves(
     const PartCheck& model, const ToolModel& tool, const Machine& machine,
     const std::vector<Vec3d>& xyz_w, const std::vector<double>& tilt_deg,

@@ -83,15 +83,6 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
   bool collides(const ToolModel& tool, const Vec3d& ball_centre, const Vec3d& axis,
                 bool with_ball = false) const override;
 
-  /// Per body of `tool`, then the ball, a lower bound on its distance from the part at one
-  /// pose, mm, each at most `cap_mm` (the ball's is infinity without `with_ball`): a body moved
-  /// by less than its bound stays clear of the part. Bodies are bounded as capsules (a cylinder
-  /// lies within its capsule). Every bound is 0 as soon as one body comes within `floor_mm` (a
-  /// pose so close that no move from it can be cleared).
-  std::vector<double> clearances_mm(const ToolModel& tool, const Vec3d& ball_centre,
-                                    const Vec3d& axis, bool with_ball, double cap_mm,
-                                    double floor_mm = 0.0) const;
-
   /// Number of faces of the part.
   std::size_t faces() const { return tri_.size(); }
 

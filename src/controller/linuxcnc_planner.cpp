@@ -133,8 +133,7 @@ std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector
 /// it; only the blocks past a limit at the full share are followed.
 double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
                             const std::vector<TcpBlock>& blocks) {
-  const auto worst = [&](const std::vector<TcpBlock>& of, double scale) {
-    const std::vector<JointPeak> peaks = tcp_joint_peaks(machine, of, scale);
+  const auto worst_of = [&](const std::vector<JointPeak>& peaks) {
     double r = 0.0;
     for (std::size_t j = 0; j < peaks.size(); ++j) {
       const double a_max = joint_accel_limit(machine, limits, j);
@@ -142,12 +141,20 @@ double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
     }
     return r;
   };
+  const auto worst = [&](const std::vector<TcpBlock>& of, double scale) {
+    return worst_of(tcp_joint_peaks(machine, of, scale));
+  };
   // A joint at its limit to the last bits (a rotary axis, which is its own joint, ramping at
   // its limit) is within it.
   const auto past = [](double ratio) { return ratio > 1.0 + 1e-9; };
   std::vector<TcpBlock> over;
-  const std::vector<std::size_t> past_alone = detail::parallel_select(
-      0, blocks.size(), [&](std::size_t i) { return past(worst({blocks[i]}, 1.0)); });
+  // Each block alone, the blocks in parallel (one block's peaks need no reduction of their own).
+  const std::vector<std::size_t> past_alone =
+      detail::parallel_select(0, blocks.size(), [&](std::size_t i) {
+        std::vector<JointPeak> peaks;
+        tcp_block_peaks(machine, blocks[i], 1.0, peaks);
+        return past(worst_of(peaks));
+      });
   for (std::size_t i : past_alone) over.push_back(blocks[i]);
   if (over.empty()) return 1.0;
   constexpr double kLeast = 0.05;

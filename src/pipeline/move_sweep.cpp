@@ -81,21 +81,23 @@ class MoveSweep {
   bool grown_hits(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi,
                   std::size_t at) const {
     const Sample& a = samples[at];
-    ToolModel grown = tool_;
+    // One pass over the run: how far the centre moves, and each body (centre plus turn).
     double centre_moves = 0.0;
+    std::vector<double> need(reach_.size(), 0.0);
     for (std::size_t t = lo; t < hi; ++t) {
-      centre_moves = std::max(centre_moves, (samples[t].centre - a.centre).norm());
-    }
-    for (std::size_t k = 0; k < grown.bodies.size(); ++k) {
-      double need = 0.0;
-      for (std::size_t t = lo; t < hi; ++t) {
-        need = std::max(need, (samples[t].centre - a.centre).norm() +
-                                  (samples[t].axis - a.axis).norm() * reach_[k]);
+      const double shift = (samples[t].centre - a.centre).norm();
+      const double turn = (samples[t].axis - a.axis).norm();
+      centre_moves = std::max(centre_moves, shift);
+      for (std::size_t k = 0; k < need.size(); ++k) {
+        need[k] = std::max(need[k], shift + turn * reach_[k]);
       }
+    }
+    ToolModel grown = tool_;
+    for (std::size_t k = 0; k < grown.bodies.size(); ++k) {
       ToolBody& b = grown.bodies[k];
-      b.radius_mm += need + kMarginMm;
-      b.start_mm -= need + kMarginMm;
-      b.end_mm += need + kMarginMm;
+      b.radius_mm += need[k] + kMarginMm;
+      b.start_mm -= need[k] + kMarginMm;
+      b.end_mm += need[k] + kMarginMm;
     }
     grown.ball_radius_mm += centre_moves + kMarginMm;
     return bounds_->collides(grown, a.centre, a.axis, with_ball_);

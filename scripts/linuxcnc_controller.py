@@ -8,8 +8,13 @@ or Tk tool-change dialog, and a tool table with tools 1-99 of one length. A HAL 
 servo thread records every joint's and axis's commanded position and the program line each
 servo period; halsampler writes them to a file.
 
-    linuxcnc_controller.py --ngc PROGRAM [--kins xyzac|xyzbc] [--tool-length MM]
-                           [--axis-accel-scale S] [--samples FILE] [--json FILE]
+    linuxcnc_controller.py --ngc PROGRAM [--kins xyzac|xyzbc|bridgemill] [--tool-length MM]
+                           [--axis-accel-scale S] [--work-offset X,Y,Z] [--samples FILE]
+                           [--json FILE]
+
+`--work-offset X,Y,Z` (mm) sets G54 before the run (MDI `G10 L2 P1`), as a shop sets the
+workpiece zero at the machine: the program's zero sits there in machine coordinates with the
+rotary axes at home (taxopt's `--work-offset`). The points are measured with it.
 
 `--axis-accel-scale S` multiplies every [AXIS_*] MAX_ACCELERATION of the copy by S (the
 [JOINT_*] ones stay): the remedy taxopt's `tcp_joint_limit` warning gives.
@@ -185,6 +190,10 @@ def run(args):
                   "set home -1"):
             sh.cmd(c)
         time.sleep(1.0)
+        if any(args.offset):
+            sh.cmd("set mode mdi")
+            sh.cmd("set mdi G10 L2 P1 X%.6f Y%.6f Z%.6f" % tuple(args.offset))
+            time.sleep(0.5)
         sh.cmd("set mode auto")
         reply = sh.cmd("set open " + ngc)
         if "ACK" not in reply:
@@ -342,35 +351,57 @@ def analyse(path, args, summary):
     if args.points:
         pts = points_of(args.ngc)
         # Each point against the whole axis path (x y z, the tool length offset taken off Z):
-        # the nearest commanded position, and the rotaries there.
+        # the nearest commanded position, and the rotaries there; the distance to the path
+        # between that sample and its neighbours (a rapid at 200 mm/s moves 0.2 mm a servo
+        # period, so a sample can lie 0.1 mm from a point the path passes through).
         import numpy as np
         path = np.array([[r[5], r[6], r[7] - args.tool_length, r[8], r[9]]
                          for r in rows[first:last + 1]])
         worst_mm = worst_deg = 0.0
         for p in pts:
-            d = np.linalg.norm(path[:, 0:3] - np.array(p[0:3]), axis=1)
+            q = np.array(p[0:3]) + np.array(args.offset)
+            d = np.linalg.norm(path[:, 0:3] - q, axis=1)
             i = int(np.argmin(d))
-            worst_mm = max(worst_mm, float(d[i]))
-            worst_deg = max(worst_deg, abs(path[i, 3] - p[3]), abs(path[i, 4] - p[4]))
+            near = float(d[i])
+            for j in (i - 1, i + 1):
+                if 0 <= j < len(path):
+                    a, b = path[i, 0:3], path[j, 0:3]
+                    ab = b - a
+                    t = float(np.clip(np.dot(q - a, ab) / max(float(np.dot(ab, ab)), 1e-30),
+                                      0.0, 1.0))
+                    near = min(near, float(np.linalg.norm(a + t * ab - q)))
+            worst_mm = max(worst_mm, near)
+            # The rotaries where the path passes the point: of the samples as near (within
+            # 0.05 mm), the one turned likest it (a table that turns by 90 deg with the tip
+            # held passes the same place twice).
+            close = d <= d[i] + 0.05
+            turn = np.maximum(np.abs(path[close, 3] - p[3]), np.abs(path[close, 4] - p[4]))
+            worst_deg = max(worst_deg, float(turn.min()))
         summary["points"] = len(pts)
         summary["point_miss_mm"] = worst_mm
         summary["point_miss_deg"] = worst_deg
 
 
 def points_of(ngc):
-    """The programmed points of a taxopt program: every G0/G1 block with all of X Y Z and the
-    two rotary words (the retracts, table turns and XY approaches give fewer)."""
+    """The programmed points of a taxopt program, mm and deg: every G0/G1 block with all of X
+    Y Z and the two rotary words (the retracts, table turns and positioning blocks give
+    fewer)."""
     pts = []
+    scale = 1.0  # mm per program unit: G20 programs are in inches, the controller's axes in mm
     with open(ngc) as f:
         for line in f:
             code = line.split("(")[0].split(";")[0].upper().split()
+            if "G20" in code:
+                scale = 25.4
+            elif "G21" in code:
+                scale = 1.0
             words = {w[0]: w[1:] for w in code if w and w[0] in "XYZABC"}
             if "G53" in code or not any(w in ("G0", "G1") for w in code):
                 continue
             rot = [k for k in "ABC" if k in words]
             if all(k in words for k in "XYZ") and len(rot) == 2 and "C" in rot:
-                pts.append([float(words["X"]), float(words["Y"]), float(words["Z"]),
-                            float(words[rot[0]]), float(words["C"])])
+                pts.append([scale * float(words["X"]), scale * float(words["Y"]),
+                            scale * float(words["Z"]), float(words[rot[0]]), float(words["C"])])
     return pts
 
 
@@ -381,6 +412,8 @@ def main():
     ap.add_argument("--tool-length", type=float, default=50.0)
     ap.add_argument("--axis-accel-scale", type=float, default=1.0,
                     help="every [AXIS_*] MAX_ACCELERATION of the copy times this")
+    ap.add_argument("--work-offset", default="0,0,0",
+                    help="G54 in machine coordinates, mm: X,Y,Z")
     ap.add_argument("--samples")
     ap.add_argument("--points", action="store_true",
                     help="measure how far the axis path passes from the program's points")
@@ -389,6 +422,13 @@ def main():
     ap.add_argument("--timeout", type=float, default=900.0)
     ap.add_argument("--keep", action="store_true")
     args = ap.parse_args()
+    try:
+        args.offset = [float(v) for v in args.work_offset.split(",")]
+        if len(args.offset) != 3 or not all(math.isfinite(v) for v in args.offset):
+            raise ValueError
+    except ValueError:
+        print("linuxcnc_controller: --work-offset takes X,Y,Z in mm", file=sys.stderr)
+        return 2
     if not 0.0 < args.axis_accel_scale <= 1.0:
         print("linuxcnc_controller: --axis-accel-scale must be in (0, 1]", file=sys.stderr)
         return 2

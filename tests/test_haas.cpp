@@ -163,15 +163,16 @@ TEST_CASE(
   CHECK(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'B').size() >= 348);
   CHECK_THROWS_AS(read_gcode_moves(ours_text, "o.nc", GcodeDialect::Haas, {}, 'A'), InputError);
   std::vector<Position> ours = positions(ours_text, "G234");
-  // taxopt comes down from the retract to the clearance height, then XY to above the first
-  // point on its tool axis, then along the axis (as CAM links an approach); the post's first
-  // block goes there diagonally. The descent and the XY block are ours.
-  REQUIRE(ours.size() == post.size() + 2);
-  const double tilt_rad = std::abs(ours[2].b) * M_PI / 180.0;
-  CHECK(std::hypot(ours[1].x - ours[2].x, ours[1].y - ours[2].y) ==
-        Approx((ours[1].z - ours[2].z) * std::tan(tilt_rad)).margin(3e-4));
-  CHECK(ours[0].z >= ours[2].z);
-  ours.erase(ours.begin(), ours.begin() + 2);
+  // taxopt's first block after the retract is a complete positioning (X, Y and Z) at the
+  // clearance height above the first point on its tool axis, then along the axis (as CAM
+  // links an approach); the post's first block goes to the first point itself. The
+  // positioning block is ours.
+  REQUIRE(ours.size() == post.size() + 1);
+  const double tilt_rad = std::abs(ours[1].b) * M_PI / 180.0;
+  CHECK(std::hypot(ours[0].x - ours[1].x, ours[0].y - ours[1].y) ==
+        Approx((ours[0].z - ours[1].z) * std::tan(tilt_rad)).margin(3e-4));
+  CHECK(ours[0].z >= ours[1].z);
+  ours.erase(ours.begin(), ours.begin() + 1);
   REQUIRE(ours.size() == post.size());
   double worst_b = 0.0, worst_c = 0.0, worst_xyz = 0.0;
   int branch = 0, moving = 0;

@@ -272,3 +272,45 @@ TEST_CASE(
   CHECK(std::fmod(last.c_deg, 360.0) == 0.0);
   CHECK(std::abs(last.c_deg - moves[moves.size() - 2].c_deg) <= 180.0);
 }
+
+TEST_CASE(
+    "joints: the first positioning after the program's first retract names X, Y and Z, and on "
+    "LinuxCNC with TCP its feed holds every joint within its velocity limit whichever way it "
+    "goes from where the machine stood",
+    "[program][tcp][joints]") {
+  TempDir t;
+  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
+                     " --out-mesh " + t.path("g.stl"))
+              .code == 0);
+  // The preset: TCP switched on by M428, every axis and joint at 20 mm/s; the table tilted
+  // about 20 deg before the positioning.
+  const RunResult r =
+      run_taxopt("--in " + t.path("g.cls") + " --part " + t.path("g.stl") + " --machine " +
+                 std::string(TAXOPT_SOURCE_DIR) +
+                 "/data/machines/linuxcnc-xyzac-trt.toml --gauge-length 50 -q --report " +
+                 t.path("r.json") + " --gcode " + t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::vector<std::string> lines = program_lines(read_file(t.path("o.ngc")));
+  const auto on = std::find(lines.begin(), lines.end(), "M428");
+  REQUIRE(on != lines.end());
+  REQUIRE(on + 2 < lines.end());
+  CHECK(on[1].find("joint-safe rapid") != std::string::npos);
+  std::smatch m;
+  const std::string& block = on[2];
+  INFO(block);
+  REQUIRE(
+      std::regex_match(block, m, std::regex(R"(G1 X-?[0-9.]+ Y-?[0-9.]+ Z-?[0-9.]+ F([0-9.]+))")));
+  // A feed of at most the joints' 20 mm/s: a table-table machine turns the tip's velocity,
+  // no joint moves faster than the tip. At the rapid's rate the diagonal could drive joint Z
+  // at 20 (|sin A| + |cos A|) mm/s, 25.6.
+  const double f = std::stod(m[1]);
+  CHECK(f <= 1200.0);
+  CHECK(f > 1150.0);
+  const auto report = nlohmann::json::parse(read_file(t.path("r.json")));
+  for (const auto& finding : report["findings"]) {
+    if (finding["code"] != "tcp_joint_limit") continue;
+    CHECK_THAT(finding["message"].get<std::string>(),
+               !Catch::Contains("mm/s against") && !Catch::Contains("deg/s against"));
+  }
+}

@@ -45,12 +45,15 @@ std::vector<std::string> real_files() {
 /// check_program: a breach of each kind, by the same rules written again here).
 struct Breaches {
   int no_tool = 0, spindle_off = 0, index = 0, diagonal = 0, retracts = 0;
+  /// First moves after a retract that do not position X and Y (a lone Z from wherever the
+  /// table's turn left the tip).
+  int partial = 0;
   bool home_at_end = false;
 };
 Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) {
   Breaches b;
   const GcodeMove* prev = nullptr;
-  bool after_retract = false, xy_given = false;
+  bool after_retract = false, xy_given = false, first_linear = false;
   double x = 0.0, y = 0.0;
   for (const GcodeMove& m : moves) {
     if (!m.retract && m.tool <= 0) ++b.no_tool;
@@ -60,10 +63,20 @@ Breaches breaches_of(const std::vector<GcodeMove>& moves, double threshold_deg) 
             threshold_deg + 1e-9) {
       ++b.index;
     }
+    if (!m.retract && first_linear && (m.given & 7u)) {
+      first_linear = false;
+      if ((m.given & 3u) != 3u) ++b.partial;
+    }
     if (m.retract) {
       ++b.retracts;
       after_retract = true;
       xy_given = false;
+      first_linear = true;
+    } else if (after_retract && (m.given & 0x1fu) == 0x7u && m.positioning && !xy_given) {
+      // the complete positioning: X, Y and Z (not the angles) over the way down
+      xy_given = true;
+      x = m.xyz_mm.x();
+      y = m.xyz_mm.y();
     } else if (after_retract && (m.given & 4u) && !(m.given & 3u) && !xy_given &&
                !(prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg))) {
       // straight down to the clearance height
@@ -142,6 +155,7 @@ TEST_CASE(
       CHECK(b.spindle_off == 0);
       CHECK(b.index == 0);
       CHECK(b.diagonal == 0);
+      CHECK(b.partial == 0);
       CHECK(b.home_at_end);
       std::size_t operations = 0;
       for (std::size_t at = text.find("operation "); at != std::string::npos;
@@ -193,6 +207,7 @@ TEST_CASE(
   CHECK(b.retracts == 3);  // the start, the index, the end
   CHECK(b.index == 0);
   CHECK(b.diagonal == 0);
+  CHECK(b.partial == 0);
   CHECK(text.find("T2 M6") != std::string::npos);
   CHECK(text.find("S5000 M3") != std::string::npos);
   // The turn is made with the tool up: the turning block follows a retract and holds A and C
@@ -326,10 +341,10 @@ TEST_CASE("program: check_program finds each breach a machinist looks for in a p
             }
           }
         }) == V{FindingCode::IndexWithoutRetract});
-  // The XY approach moved off the point's X: the way down is diagonal.
+  // The positioning block moved off the point's X: the way down is diagonal.
   CHECK(findings_of([&](pipeline::Written& w) {
           for (GcodeMove& m : w.moves) {
-            if (m.given == 3u) {
+            if (m.given == 7u && m.positioning) {
               m.xyz_mm.x() += 1.0;
               break;
             }
@@ -456,7 +471,8 @@ TEST_CASE(
   const std::size_t at = r.err.find("takes the spindle to Z ");
   REQUIRE(at != std::string::npos);
   CHECK(std::stod(r.err.substr(at + 23)) > 120.0);
-  // The line named is the descent to the approach height, the first block with TCP on.
+  // The line named is the positioning at the approach height (X, Y and Z), the first block
+  // with TCP on.
   const std::size_t l = r.err.find("G-code line ");
   REQUIRE(l != std::string::npos);
   const int line = std::stoi(r.err.substr(l + 12));
@@ -473,8 +489,12 @@ TEST_CASE(
   CHECK(forced.err.find("G-code line " + std::to_string(line) + " ") != std::string::npos);
   const std::size_t n = static_cast<std::size_t>(line);
   REQUIRE(n <= lines.size());
-  CHECK(lines[n - 1].rfind("G0 Z", 0) == 0);
-  CHECK(lines[n - 2] == "M428");
+  // A rapid, or the joint-safe feed block in its place after its comment.
+  CHECK((lines[n - 1].rfind("G0 X", 0) == 0 || lines[n - 1].rfind("G1 X", 0) == 0));
+  CHECK(lines[n - 1].find(" Y") != std::string::npos);
+  CHECK(lines[n - 1].find(" Z") != std::string::npos);
+  CHECK((lines[n - 2] == "M428" ||
+         (lines[n - 2].find("joint-safe") != std::string::npos && lines[n - 3] == "M428")));
   // With the tip as the spindle (no tool length given) that block stays within the travel:
   // what the tool's length adds is what breaks it.
   const RunResult tip = run_taxopt(args);
@@ -539,7 +559,9 @@ TEST_CASE(
   const auto& share = report["gcode"]["tcp_axis_accel_scale"];
   REQUIRE(share.is_number());
   const double s = share.get<double>();
-  CHECK(s > 0.9);
+  // 0.855: the program's first positioning (X, Y and Z at once with A at -20.6 deg, from the
+  // start the model takes) drives joint Z at 351 mm/s^2; the blocks of the cut at most 302.
+  CHECK(s > 0.8);
   CHECK(s < 1.0);
   const std::string preset = read_file(d + "machines/linuxcnc-xyzac-trt.toml");
   const auto scaled = [&](double axis_share, double joint_mm_s2) {

@@ -298,8 +298,8 @@ class GcodeReader {
     const Vec3d machine_xyz = xyz_;  // the words given, in machine coordinates
     xyz_ = xyz_before;
     for (int q = 0; q < 3; ++q) known_[q] = known_[q] && !b.given[q];
-    // The way back in (a table turn, a descent, an XY move) is positioning until a block gives
-    // X, Y and Z together: the point the program comes down to.
+    // The way back in (a table turn, the positioning, a descent) is positioning until a block
+    // gives X, Y, Z and both rotary axes together: the point the program comes down to.
     approaching_ = true;
     GcodeMove m{true, xyz_, a_, c_, feed_, inverse_time_, line_no_};
     m.positioning = true;
@@ -312,7 +312,9 @@ class GcodeReader {
   void workpiece_move(const BlockWords& b, const Vec3d& start) {
     if (motion_ < 0) fail("axis words without G0 or G1");
     for (int q = 0; q < 5; ++q) known_[q] = known_[q] || b.given[q];
-    if (b.given[0] && b.given[1] && b.given[2]) approaching_ = false;
+    // The way back in ends at the block that names the whole pose: the point's (the
+    // positioning before it names X, Y and Z at the clearance height, not the angles).
+    if (b.given[0] && b.given[1] && b.given[2] && b.given[3] && b.given[4]) approaching_ = false;
     GcodeMove m{motion_ == 0, xyz_, a_, c_, feed_, inverse_time_, line_no_};
     m.positioning =
         approaching_ || !(known_[0] && known_[1] && known_[2] && known_[3] && known_[4]);

@@ -248,14 +248,19 @@ std::size_t ProgramWriter::index_move_if_turning(std::size_t i) {
 }
 
 void ProgramWriter::approach(const CLPointd& p, const Posed& pose, const Vec3d& xyz) {
-  if (descend_) {
-    rapid_block(rapid_linear(0x4, Vec3d(0.0, 0.0, clearance_z_mm_)), BlockKind::Approach);
-  }
   const Vec3d above_tip =
       approach_tip_mm(p.tip_mm, p.axis, clearance_z_mm_, g_.program.approach_clearance_mm);
   const Vec3d above = descend_ ? out_xyz(above_tip, pose) : xyz;
-  // Fanuc: its length and TCP come on with the block below.
-  rapid_block(rapid_linear(0x3, above), BlockKind::Approach, !dialect_.length_on_first_move());
+  if (descend_) {
+    // The first move after the retract and the turn is a complete positioning: X, Y and Z
+    // at the clearance height over the way down, in one block (as a production post writes
+    // its first block under TCPC), never a lone Z from wherever the turn left the tip.
+    rapid_block(rapid_linear(0x7, Vec3d(above.x(), above.y(), clearance_z_mm_)),
+                BlockKind::Approach);
+  } else {
+    // Fanuc: its length and TCP come on with the block below.
+    rapid_block(rapid_linear(0x3, above), BlockKind::Approach, !dialect_.length_on_first_move());
+  }
   if (descend_ && std::abs(above.z() - clearance_z_mm_) * scale_ > 0.5 * std::pow(10.0, -d_)) {
     // A tool within 30 deg of the horizontal: straight down to the safe distance on its
     // axis, then along it.

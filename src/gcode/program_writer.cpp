@@ -196,7 +196,8 @@ bool ProgramWriter::tcp_in_force() const {
 bool ProgramWriter::tcp_planned_now() const { return joint_safe_ && tcp_in_force(); }
 
 std::optional<std::string> ProgramWriter::joint_safe_f(const PlannedMove& m) const {
-  if (!tcp_planned_now() || !joints_) return std::nullopt;
+  if (!tcp_planned_now()) return std::nullopt;
+  if (!joints_) return joint_safe_f_any_direction(m);
   const JointPosition& q = *joints_;
   const std::optional<JointPosition> end = joints_after(q, m);
   if (!end) return std::nullopt;
@@ -210,6 +211,40 @@ std::optional<std::string> ProgramWriter::joint_safe_f(const PlannedMove& m) con
   const double rot_deg =
       std::hypot(rad_to_deg(to.tilt_rad - from.tilt_rad), rad_to_deg(to.c_rad - from.c_rad));
   return joint_safe_feed((to_tip - from_tip).norm(), rot_deg, *rate);
+}
+
+std::optional<std::string> ProgramWriter::joint_safe_f_any_direction(const PlannedMove& m) const {
+  if ((m.given & 0x18u) != 0 || (m.given & 0x7u) == 0 || !at_[3] || !at_[4] ||
+      g_.feed_mode == FeedMode::InverseTime) {
+    return std::nullopt;
+  }
+  // With A and C held the joints are the tip turned with the table, J(tip) = M tip + o. The
+  // rapid drives each named axis at up to its limit, so joint j at up to sum |M_ji| v_i; a
+  // feed at the path speed f drives it at |M_j . dir| f <= |M_j| f whichever the direction.
+  const Posed pose{deg_to_rad(*at_[3]), deg_to_rad(*at_[4])};
+  const Vec3d o = machine_.rotary.to_machine_mm(Vec3d::Zero(), pose);
+  Eigen::Matrix3d jac;
+  for (int i = 0; i < 3; ++i) jac.col(i) = machine_.rotary.to_machine_mm(Vec3d::Unit(i), pose) - o;
+  bool rapid_may_pass = false;
+  double path_mm_s = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    const double v = limits_[static_cast<std::size_t>(i)].max_velocity_per_s;
+    if ((m.given & (1u << i)) && v > 0.0) path_mm_s = std::min(path_mm_s, v);
+  }
+  for (int j = 0; j < 3; ++j) {
+    const double limit = limits_[static_cast<std::size_t>(j)].max_velocity_per_s;
+    if (!(limit > 0.0)) continue;
+    double rapid = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      if (!(m.given & (1u << i))) continue;
+      const double v = limits_[static_cast<std::size_t>(i)].max_velocity_per_s;
+      rapid += std::abs(jac(j, i)) * (v > 0.0 ? v : std::numeric_limits<double>::infinity());
+    }
+    rapid_may_pass = rapid_may_pass || rapid > limit * (1.0 + 1e-9);
+    path_mm_s = std::min(path_mm_s, limit / std::max(jac.row(j).norm(), 1e-12));
+  }
+  if (!rapid_may_pass || !std::isfinite(path_mm_s)) return std::nullopt;
+  return joint_safe_feed(1.0, 0.0, path_mm_s * (1.0 - 1e-3));  // 1 mm at path_mm_s
 }
 
 int ProgramWriter::rapid_block(PlannedMove m, BlockKind kind, bool takes_prefix) {
@@ -287,6 +322,11 @@ void ProgramWriter::program_start(const std::vector<std::string>& comments) {
   if (!path.empty()) line(path, BlockKind::Start);
   if (const std::string w = dialect_.work_offset(); !w.empty()) verbatim({w}, BlockKind::Start);
   verbatim(g_.program.header, BlockKind::Start);
+  // A controller may start in its TCP kinematics (LinuxCNC's bridge-mill sample: M428's are
+  // its start-up default), where the writer and the time model take the switch as off until
+  // its tcp_on: the first table turn then swung the joints round the tip (X 221, Y 229 mm/s
+  // against 200 on LinuxCNC's controller). The switch's off words say which holds.
+  verbatim(g_.program.tcp_off, BlockKind::Start);
 }
 
 void ProgramWriter::program_end() {

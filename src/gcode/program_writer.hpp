@@ -203,6 +203,12 @@ class ProgramWriter {
   /// on its line in the table's frame, the rotary axes in proportion (a turn alone keeps the
   /// tip put while the joints swing round it).
   std::optional<std::string> joint_safe_f(const PlannedMove& m) const;
+  /// joint_safe_f for a linear block from a start the program does not state (the first
+  /// positioning: X and Y stand wherever the machine stood) with the rotary axes stated and
+  /// held: its direction is not known, so the F holds every joint within its limit whichever
+  /// way the block goes; empty where the rapid does so (or under G93, whose F needs the
+  /// block's length).
+  std::optional<std::string> joint_safe_f_any_direction(const PlannedMove& m) const;
   /// A rapid block (an approach's, a table turn), or the joint-safe feed block in its place
   /// (joint_safe_f), with the comment that says what it is; its line.
   int rapid_block(PlannedMove m, BlockKind kind, bool takes_prefix = true);

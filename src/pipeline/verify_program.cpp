@@ -206,8 +206,10 @@ class ProgramChecks {
     }
   }
 
-  /// Down from the retract height: XY first, then straight down, or under TCP along the tool
-  /// axis (as CAM links an approach: the writer comes down so where the axis is not vertical).
+  /// Down from the retract height: XY first (alone, or with Z at the clearance height in the
+  /// positioning block that names X, Y and Z but not the angles), then straight down, or under
+  /// TCP along the tool axis (as CAM links an approach: the writer comes down so where the
+  /// axis is not vertical).
   void approach(const GcodeMove& m, const GcodeMove* prev) {
     if (m.retract) {
       after_retract_ = true;
@@ -217,9 +219,10 @@ class ProgramChecks {
     if (!after_retract_) return;
     const bool gives_xy = (m.given & 3u) != 0, gives_z = (m.given & 4u) != 0;
     const bool turns = prev && (m.tilt_deg != prev->tilt_deg || m.c_deg != prev->c_deg);
+    const bool positioning_xyz = (m.given & 0x1fu) == 0x7u && m.positioning && !xy_set_;
     if (gives_z && !gives_xy && !xy_set_ && !turns) {
       // Straight down (or up) to the clearance height, where it is: not the way in yet.
-    } else if (gives_xy && !gives_z) {
+    } else if ((gives_xy && !gives_z) || positioning_xyz) {
       xy_set_ = true;
       xy_[0] = m.xyz_mm.x();
       xy_[1] = m.xyz_mm.y();

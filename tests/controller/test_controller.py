@@ -44,9 +44,15 @@ leave its travel and taxopt refuses them: NX's variable-axis ball mill at its ap
 spindle at Z 132 mm against 120 with the 50 mm tool; written anyway, the controller stopped
 there), the other NX file and Amorim's at their points.
 
+With `--set index` (ctest label `long`) real files with index moves, each at the work offset
+that puts it within the sample's travel (the controller's G54 set to it before the run): NX's
+multi-operation file cut to six operations that turn between them, on the bridge mill and the
+A/C sample; Amorim's wall with holes (a 90 deg turn inside an operation) on the bridge mill;
+and the demo on the bridge mill (about 60 minutes).
+
 Each program prints a row of the table in docs/feed-schedule.md "On LinuxCNC's controller".
 
-    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|sine-more|real|demo]
+    test_controller.py TAXOPT_EXE SOURCE_DIR [--set sine|sine-more|real|demo|index]
 """
 import json
 import os
@@ -66,6 +72,44 @@ REAL = [
      ["--gauge-length", "50", "--spindle-rpm", "1000", "--tool-number", "1"] +
      [w for k in PEENING_SKIPS for w in ("--skip-record", k)]),
 ]
+
+
+def index_cases(src, work, demo):
+    """Real files with index moves on LinuxCNC's samples, each with the work offset that puts
+    it within the travel (as a shop sets G54), and the demo on the head-head bridge mill: NX's
+    multi-operation file cut to six operations that turn the table or head between them (B or
+    A -82.875 to 82.875 and C by 90 deg; the file is CC0-1.0, the slice made here from the
+    project's copy) on the bridge mill and on the A/C sample, and Amorim's wall with holes,
+    which turns its table by 90 deg inside an operation (about 30 minutes), on the bridge
+    mill."""
+    bridgemill = os.path.join(src, "data/machines/linuxcnc-5axis-bridgemill.toml")
+    preset = os.path.join(src, "data/machines/linuxcnc-xyzac-trt.toml")
+    real = os.path.join(src, "tests", "data", "real")
+    lines = open(os.path.join(real, "mech491-project2-multiop.cls")).read().split("\n")
+    ops, start = {}, None
+    for k, l in enumerate(lines):
+        if l.startswith("TOOL PATH/"):
+            start = k
+        elif l.startswith("END-OF-PATH") and start is not None:
+            ops[lines[start].split("/")[1].split(",")[0]] = lines[start:k + 1]
+    keep = ["POCKETING_SLOT1", "POCKETING_SLOT2"] + [
+        "VARIABLE_AXIS_GUIDING_CURVES_1" + "_COPY" * n for n in range(1, 5)]
+    sliced = os.path.join(work, "mech491-multiop-index-slice.cls")
+    with open(sliced, "w") as f:
+        f.write("\n".join(sum((ops[n] for n in keep), [])) + "\n")
+    nx = ["--in", sliced, "--gauge-length", "1.9685", "--spindle-rpm", "1000", "--tool-number",
+          "1", "--work-offset", "0,0,-100"]
+    return [
+        ("mech491-project2-multiop.cls, six operations, bridge mill, work offset Z -100",
+         nx + ["--machine", bridgemill], "bridgemill", 1.0),
+        ("mech491-project2-multiop.cls, six operations, A/C, work offset Z -100",
+         nx + ["--machine", preset], "xyzac", 1.0),
+        ("amorim-wall-holes.apt, bridge mill, work offset Z -150",
+         ["--in", os.path.join(real, "amorim-wall-holes.apt"), "--machine", bridgemill,
+          "--skip-record", "CUTCOM", "--gauge-length", "50", "--work-offset", "0,0,-150"],
+         "bridgemill", 1.0),
+        ("demo, bridge mill", demo + ["--machine", bridgemill], "bridgemill", 1.0),
+    ]
 
 
 def remedy_case(exe, src, work, label, common, preset):
@@ -109,6 +153,8 @@ def cases(exe, src, work, which):
     bridgemill = os.path.join(src, "data/machines/linuxcnc-5axis-bridgemill.toml")
     demo = ["--in", os.path.join(src, "data/demo/sine.cls"), "--part",
             os.path.join(src, "data/demo/sine.stl"), "--gauge-length", "50"]
+    if which == "index":
+        return index_cases(src, work, demo), []
     demos = [("demo, A/C", demo + ["--machine", preset], "xyzac", 1.0),
              ("demo, B/C", demo + ["--machine", bc], "xyzbc", 1.0)]
     remedy = remedy_case(exe, src, work, "demo", demo, preset)
@@ -160,7 +206,8 @@ def cases(exe, src, work, which):
 def main():
     exe, src = sys.argv[1], sys.argv[2]
     which = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--set" else "sine"
-    if which in ("real", "demo", "sine-more") and os.environ.get("TAXOPT_LONG") != "1":
+    if which in ("real", "demo", "sine-more", "index") and \
+            os.environ.get("TAXOPT_LONG") != "1":
         print("skipped: the real files and the demo on the controller take about 95 minutes, "
               "the sine in its other modes about 7; TAXOPT_LONG=1 runs them")
         return 77
@@ -174,9 +221,14 @@ def main():
         schedule = [] if "--no-schedule" in args else ["--feed-schedule"]
         args = [a for a in args if a != "--no-schedule"]
         # LinuxCNC's sample simulations start with G54 at zero: the work offset the travel
-        # check holds every block with.
+        # check holds every block with, unless the case sets one (then the controller's G54
+        # is set to it before the run).
+        offset = "0,0,0"
+        if "--work-offset" in args:
+            at = args.index("--work-offset")
+            offset, args = args[at + 1], args[:at] + args[at + 2:]
         r = subprocess.run([exe] + args + ["--method", "paper", "-q", "--gcode", ngc,
-                                           "--report", report, "--work-offset", "0,0,0"]
+                                           "--report", report, "--work-offset", offset]
                            + schedule,
                            capture_output=True, text=True)
         if r.returncode != 0:
@@ -185,7 +237,8 @@ def main():
         out = os.path.join(work, "%d-controller.json" % k)
         c = subprocess.run(["/usr/bin/python3", os.path.join(src, "scripts/linuxcnc_controller.py"),
                             "--ngc", ngc, "--kins", kins, "--points", "--json", out,
-                            "--timeout", "1800", "--axis-accel-scale", repr(share)],
+                            "--timeout", "2400", "--axis-accel-scale", repr(share),
+                            "--work-offset", offset],
                            capture_output=True, text=True)
         if not os.path.exists(out):
             failures.append("%s: the controller run gave no summary: %s" % (name, c.stderr[-2000:]))

@@ -285,27 +285,28 @@ TEST_CASE("gcode: every dialect starts and ends safe, in its own words", "[io][g
     REQUIRE(off != std::string::npos);
     REQUIRE(end_retract != std::string::npos);
     CHECK(off < end_retract);
-    // Read back: the retracts, table turns and XY approaches are positioning moves, no
-    // point's: per operation retract, turn, XY; at the end retract and the rotaries home.
+    // Read back: the retracts, table turns and the positioning blocks are positioning moves,
+    // no point's: per operation retract, turn, positioning; at the end retract and the
+    // rotaries home.
     const auto moves = read_gcode_moves(prog.text, "t", w.dialect);
     std::size_t positioning = 0;
     for (const GcodeMove& g : moves) positioning += g.positioning ? 1 : 0;
-    // Under TCP (not Fanuc, whose G43.4 comes with the block down) the tool first comes
-    // straight down to the clearance height.
-    const std::size_t descent = w.dialect == GcodeDialect::Fanuc ? 0 : 1;
-    CHECK(positioning == 2 * (3 + descent) + 2);
+    CHECK(positioning == 2 * 3 + 2);
     CHECK(moves.back().positioning);
     CHECK(moves.back().tilt_deg == 0.0);
     CHECK(moves.back().c_deg == 0.0);
-    // From the retract: XY first (no Z word), then down to the first point with the same X Y
-    // (tests/test_program.cpp: no diagonal rapid from the retract height).
+    // From the retract: a complete positioning (under TCP X, Y and Z at the clearance height;
+    // Fanuc, whose G43.4 comes with it, X and Y), then down to the first point with the same
+    // X Y (tests/test_program.cpp: no diagonal rapid from the retract height).
     for (std::size_t k = 0; k < 2; ++k) {
       const int point_line = prog.emitted[k][0];
       std::size_t at = 0;
       while (moves[at].line != point_line) ++at;
       REQUIRE(at > 0);
       const GcodeMove& xy = moves[at - 1];
-      CHECK(xy.given == 3u);  // X and Y only
+      CHECK(xy.given == (w.dialect == GcodeDialect::Fanuc ? 3u : 7u));
+      CHECK(xy.positioning);
+      if (xy.given == 7u) CHECK(xy.xyz_mm.z() >= moves[at].xyz_mm.z());
       CHECK(moves[at].xyz_mm.x() == xy.xyz_mm.x());
       CHECK(moves[at].xyz_mm.y() == xy.xyz_mm.y());
       CHECK(moves[at].tilt_deg == xy.tilt_deg);
@@ -346,10 +347,15 @@ TEST_CASE("gcode: the program template of the machine file", "[io][gcode]") {
     REQUIRE(end != std::string::npos);
     CHECK(line_of(lines, "M9", last) < end);
     CHECK(line_of(lines, "M428") < static_cast<std::size_t>(prog.emitted[0][0] - 1));
-    CHECK(line_of(lines, "M429") > static_cast<std::size_t>(prog.emitted[0].back() - 1));
-    CHECK(line_of(lines, "M140 MB MAX") > line_of(lines, "M429"));
+    // TCP off in the set-up (after the header: a controller may start in its TCP
+    // kinematics), and after the last point.
+    CHECK(line_of(lines, "M429") > line_of(lines, "M98 P9000"));
+    CHECK(line_of(lines, "M429") < line_of(lines, "M428"));
+    const std::size_t off = line_of(lines, "M429", last);
+    CHECK(off > last);
+    CHECK(line_of(lines, "M140 MB MAX") > off);
     // The template's blocks are stepped over by the reader, told by the writer.
-    CHECK(prog.verbatim_lines.size() == 1 + 2 + 1 + 2 + 1 + 1);
+    CHECK(prog.verbatim_lines.size() == 1 + 1 + 2 + 1 + 2 + 1 + 1);
     CHECK_THROWS_AS(read_gcode_moves(prog.text, "t", d), InputError);
     std::size_t points = 0;
     for (const GcodeMove& g : read_gcode_moves(prog.text, "t", d, prog.verbatim_lines)) {

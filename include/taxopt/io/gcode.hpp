@@ -270,9 +270,9 @@ struct GcodeMove {
   Vec3d arc_normal = Vec3d::UnitZ();
   /// A move in machine coordinates (the safe retract: G53, G28, SUPA, M91), one with an
   /// axis whose workpiece position is not known since (the table turned before the first
-  /// point), or one on the way back in after a retract before the block that gives X, Y and Z
-  /// together (the descent to the clearance height, the XY move): it belongs to no point, and
-  /// xyz_mm holds the last known values.
+  /// point), or one on the way back in after a retract before the block that gives X, Y, Z
+  /// and both rotary axes together (the table turn, the positioning at the clearance height,
+  /// the descent): it belongs to no point, and xyz_mm holds the last known values.
   bool positioning = false;
   /// The tool length offset is on (G43/G43.4 H, Sinumerik D1..., a TNC's tool call), and the
   /// controller's tool centre point control (LinuxCNC: its kinematics, always; Fanuc G43.4,

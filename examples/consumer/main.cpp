@@ -29,9 +29,13 @@ int main(int argc, char** argv) {
   }
   try {
     const taxopt::Toolpath toolpath = taxopt::read_cl_file(argv[1]);
-    std::optional<taxopt::Part> part;
-    if (argc == 4) part.emplace(taxopt::read_mesh_file(argv[2]));
     taxopt::JobOptions options;
+    // Ctrl-C from here on: building a big part's search structures takes seconds, and looks at
+    // the same stop as the job.
+    g_stop = &options.stop;
+    std::signal(SIGINT, on_interrupt);
+    std::optional<taxopt::Part> part;
+    if (argc == 4) part.emplace(taxopt::read_mesh_file(argv[2]), options.stop);
     options.method = taxopt::Method::Paper;
     options.part = part ? &*part : nullptr;
     options.feed_schedule = true;
@@ -43,8 +47,6 @@ int main(int argc, char** argv) {
       if (done == total && total > 0) std::fprintf(stderr, "%s: done\n", stage.c_str());
     };
     options.threads = 2;  // the job's own arena; the result is the same for any count
-    g_stop = &options.stop;
-    std::signal(SIGINT, on_interrupt);
     const taxopt::JobResult result = taxopt::run_job(toolpath, taxopt::default_machine(), options);
     for (const auto& w : result.warnings) std::cerr << "warning: " << w << "\n";
     if (!result.ok()) {

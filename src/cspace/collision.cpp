@@ -7,8 +7,31 @@
 #include <fcl/narrowphase/collision.h>
 
 #include <new>
+#include <utility>
+
+#include "taxopt/core/stop.hpp"
 
 namespace taxopt {
+namespace {
+
+/// FCL's split of a BVH node (its default: at the mean of the primitives' centres), looking
+/// at the stop first: the model of a million triangles is built in one call (endModel).
+class StoppableSplitter : public fcl::detail::BVSplitter<fcl::OBBd> {
+ public:
+  explicit StoppableSplitter(StopSource stop)
+      : fcl::detail::BVSplitter<fcl::OBBd>(fcl::detail::SPLIT_METHOD_MEAN),
+        stop_(std::move(stop)) {}
+  void computeRule(const fcl::OBBd& bv, unsigned int* primitive_indices,
+                   int num_primitives) override {
+    stop_.throw_if_stop_requested();
+    fcl::detail::BVSplitter<fcl::OBBd>::computeRule(bv, primitive_indices, num_primitives);
+  }
+
+ private:
+  StopSource stop_;
+};
+
+}  // namespace
 
 struct CollisionModel::Impl {
   // OBB: 2.2-2.4x faster than OBBRSS for collide-only queries (DESIGN.md section 7); never
@@ -16,7 +39,11 @@ struct CollisionModel::Impl {
   std::shared_ptr<fcl::BVHModel<fcl::OBBd>> bvh;
 };
 
-CollisionModel::CollisionModel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+CollisionModel::CollisionModel(const TriangleMesh& mesh) : CollisionModel(mesh, StopSource()) {}
+
+CollisionModel::CollisionModel(const TriangleMesh& mesh, const StopSource& stop)
+    : impl_(std::make_unique<Impl>()) {
+  stop.throw_if_stop_requested();
   std::vector<fcl::Vector3d> vertices(mesh.vertices.begin(), mesh.vertices.end());
   std::vector<fcl::Triangle> triangles;
   triangles.reserve(mesh.faces.size());
@@ -24,7 +51,9 @@ CollisionModel::CollisionModel(const TriangleMesh& mesh) : impl_(std::make_uniqu
     triangles.emplace_back(static_cast<std::size_t>(f[0]), static_cast<std::size_t>(f[1]),
                            static_cast<std::size_t>(f[2]));
   }
+  stop.throw_if_stop_requested();
   impl_->bvh = std::make_shared<fcl::BVHModel<fcl::OBBd>>();
+  impl_->bvh->bv_splitter = std::make_shared<StoppableSplitter>(stop);
   // FCL reports a failed allocation by a return code ("BVH Error! Out of memory") and leaves a
   // model that crashes the first query (tests/test_bad_input.cpp: a segfault under ulimit -v with a
   // 183 MB part): every step is checked, and a failure is the out-of-memory it is.

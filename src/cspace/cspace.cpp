@@ -232,7 +232,11 @@ std::pair<double, double> certain_range(const ToolBody& b, double d) {
 
 }  // namespace
 
-CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh) {
+CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh)
+    : CSpaceRasteriser(mesh, StopSource()) {}
+
+CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh, const StopSource& stop) {
+  stop.throw_if_stop_requested();
   std::vector<Vec3d> centroids;
   for (const auto& f : mesh.faces) {
     const std::array<Vec3d, 3> t = {mesh.vertices[static_cast<std::size_t>(f[0])],
@@ -244,12 +248,15 @@ CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh) {
         {m, std::max({(t[0] - m).norm(), (t[1] - m).norm(), (t[2] - m).norm()})});
     centroids.push_back(m);
   }
-  if (!tri_.empty()) build(0, static_cast<int>(tri_.size()), centroids);
+  stop.throw_if_stop_requested();
+  if (!tri_.empty()) build(0, static_cast<int>(tri_.size()), centroids, stop);
 }
 
 /// Top-down: split the faces at the median centroid along the longest extent, four faces or
 /// fewer to a leaf. Faces are reordered so that a leaf's are contiguous.
-int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids) {
+int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids,
+                            const StopSource& stop) {
+  if (count >= 1024) stop.throw_if_stop_requested();  // a node's work: about 0.1 us a face
   const int id = static_cast<int>(nodes_.size());
   nodes_.push_back({});
   Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -295,8 +302,8 @@ int CSpaceRasteriser::build(int first, int count, std::vector<Vec3d>& centroids)
   std::copy(t.begin(), t.end(), tri_.begin() + first);
   std::copy(fs.begin(), fs.end(), face_sphere_.begin() + first);
   std::copy(c.begin(), c.end(), centroids.begin() + first);
-  const int left = build(first, count / 2, centroids);
-  const int right = build(first + count / 2, count - count / 2, centroids);
+  const int left = build(first, count / 2, centroids, stop);
+  const int right = build(first + count / 2, count - count / 2, centroids, stop);
   nodes_[static_cast<std::size_t>(id)].left = left;
   nodes_[static_cast<std::size_t>(id)].right = right;
   return id;

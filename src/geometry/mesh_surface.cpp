@@ -34,20 +34,45 @@ struct HalfEdge {
   int a, b, face;
 };
 
-/// Every face's edges, sorted so that the faces sharing an edge stand next to each other.
-std::vector<HalfEdge> sorted_half_edges(const TriangleMesh& m) {
-  std::vector<HalfEdge> edges;
-  edges.reserve(3 * m.faces.size());
+/// Every this many items a loop looks at the stop, where one is given (a few ms of work).
+constexpr std::size_t kStopStride = std::size_t{1} << 16;
+
+void look(const StopSource* stop, std::size_t i) {
+  if (stop && i % kStopStride == 0) stop->throw_if_stop_requested();
+}
+
+/// Every face's edges, sorted by (low vertex, high vertex, face) so that the faces sharing an
+/// edge stand next to each other: placed by low vertex (a counting sort, linear), then each
+/// vertex's few sorted.
+std::vector<HalfEdge> sorted_half_edges(const TriangleMesh& m, const StopSource* stop) {
+  std::vector<std::size_t> start(m.vertices.size() + 1, 0);
+  const auto edge = [&](std::size_t f, int k) {
+    const int a = m.faces[f][static_cast<std::size_t>(k)];
+    const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
+    return HalfEdge{std::min(a, b), std::max(a, b), static_cast<int>(f)};
+  };
   for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    look(stop, f);
+    for (int k = 0; k < 3; ++k) ++start[static_cast<std::size_t>(edge(f, k).a) + 1];
+  }
+  for (std::size_t v = 0; v + 1 < start.size(); ++v) start[v + 1] += start[v];
+  std::vector<HalfEdge> edges(3 * m.faces.size());
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    look(stop, f);
     for (int k = 0; k < 3; ++k) {
-      const int a = m.faces[f][static_cast<std::size_t>(k)];
-      const int b = m.faces[f][static_cast<std::size_t>((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
+      const HalfEdge e = edge(f, k);
+      edges[fill[static_cast<std::size_t>(e.a)]++] = e;
     }
   }
-  std::sort(edges.begin(), edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.face < y.face);
-  });
+  for (std::size_t v = 0; v + 1 < start.size(); ++v) {
+    look(stop, v);
+    std::sort(edges.begin() + static_cast<std::ptrdiff_t>(start[v]),
+              edges.begin() + static_cast<std::ptrdiff_t>(start[v + 1]),
+              [](const HalfEdge& x, const HalfEdge& y) {
+                return x.b != y.b ? x.b < y.b : x.face < y.face;
+              });
+  }
   return edges;
 }
 
@@ -62,7 +87,7 @@ struct VertexFaces {
   std::vector<std::pair<int, double>> around;
 };
 
-VertexFaces faces_around_vertices(const TriangleMesh& m) {
+VertexFaces faces_around_vertices(const TriangleMesh& m, const StopSource* stop) {
   const std::size_t nf = m.faces.size(), nv = m.vertices.size();
   VertexFaces vf;
   vf.start.assign(nv + 1, 0);
@@ -73,6 +98,7 @@ VertexFaces faces_around_vertices(const TriangleMesh& m) {
   vf.around.resize(vf.start[nv]);
   std::vector<std::size_t> fill(vf.start.begin(), vf.start.end() - 1);
   for (std::size_t f = 0; f < nf; ++f) {
+    look(stop, f);
     for (int k = 0; k < 3; ++k) {
       const auto& F = m.faces[f];
       const Vec3d& p = m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])];
@@ -104,13 +130,15 @@ std::vector<double> face_sizes(const TriangleMesh& m) {
 }
 
 /// SurfaceModel::corner_normal, from the faces' normals `fn`.
-std::vector<Eigen::Vector3f> corner_normals(const TriangleMesh& m, const std::vector<Vec3d>& fn) {
+std::vector<Eigen::Vector3f> corner_normals(const TriangleMesh& m, const std::vector<Vec3d>& fn,
+                                            const StopSource* stop) {
   const std::size_t nf = m.faces.size();
-  const VertexFaces vf = faces_around_vertices(m);
+  const VertexFaces vf = faces_around_vertices(m, stop);
   const std::vector<double> size = face_sizes(m);
   const double crease_cos = std::cos(kCreaseRad);
   std::vector<Eigen::Vector3f> out(3 * nf, Eigen::Vector3f::Zero());
   for (std::size_t f = 0; f < nf; ++f) {
+    look(stop, f);
     if (fn[f].isZero()) continue;
     for (int k = 0; k < 3; ++k) {
       const auto v = static_cast<std::size_t>(m.faces[f][static_cast<std::size_t>(k)]);
@@ -145,11 +173,14 @@ std::vector<Eigen::Vector3f> corner_normals(const TriangleMesh& m, const std::ve
 
 /// SurfaceModel::feature_edges and feature_vertex: the edges no tessellated curve runs over
 /// (not shared by exactly two faces, or turning by kCreaseRad or more between them).
-void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn, SurfaceModel& s) {
+void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn, SurfaceModel& s,
+                   const StopSource* stop) {
   const double crease_cos = std::cos(kCreaseRad);
-  const std::vector<HalfEdge> edges = sorted_half_edges(m);
+  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
   s.feature_vertex.assign(m.vertices.size(), false);
+  std::size_t runs = 0;
   for (std::size_t i = 0; i < edges.size();) {
+    look(stop, runs++);
     std::size_t j = i;
     while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
     bool feature = j - i != 2;
@@ -169,17 +200,20 @@ void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn, SurfaceM
 
 }  // namespace
 
-SurfaceModel surface_model_of(const TriangleMesh& m) {
+SurfaceModel surface_model_of(const TriangleMesh& m, const StopSource* stop) {
   std::vector<Vec3d> fn(m.faces.size());
-  for (std::size_t f = 0; f < m.faces.size(); ++f) fn[f] = face_normal(m, m.faces[f]);
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    look(stop, f);
+    fn[f] = face_normal(m, m.faces[f]);
+  }
   SurfaceModel s;
-  s.corner_normal = corner_normals(m, fn);
-  feature_edges(m, fn, s);
+  s.corner_normal = corner_normals(m, fn, stop);
+  feature_edges(m, fn, s, stop);
   return s;
 }
 
-double chordal_error_of(const TriangleMesh& m) {
-  const std::vector<HalfEdge> edges = sorted_half_edges(m);
+double chordal_error_of(const TriangleMesh& m, const StopSource* stop) {
+  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
   // Every edge two facets share, with its turn below 30 deg (sharper is a designed edge).
   struct Turn {
     int a, b, f1, f2;
@@ -188,6 +222,7 @@ double chordal_error_of(const TriangleMesh& m) {
   std::vector<Turn> turns;
   const double sharp = kCreaseRad;
   for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+    look(stop, i);
     const HalfEdge& e = edges[i];
     const HalfEdge& g = edges[i + 1];
     if (e.a != g.a || e.b != g.b) continue;
@@ -211,7 +246,9 @@ double chordal_error_of(const TriangleMesh& m) {
     }
   }
   double largest = 0.0;
-  for (const Turn& t : turns) {
+  for (std::size_t k = 0; k < turns.size(); ++k) {
+    look(stop, k);
+    const Turn& t = turns[k];
     const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(t.f1)];
     const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(t.f2)];
     const auto far_vertex_turn = [&](const std::array<int, 3>& f) {

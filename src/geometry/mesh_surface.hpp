@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "taxopt/core/stop.hpp"
 #include "taxopt/geometry/part.hpp"
 
 namespace taxopt::detail {
@@ -35,10 +36,11 @@ struct SurfaceModel {
   std::vector<bool> feature_vertex;
 };
 
-/// Builds the SurfaceModel of a mesh.
-SurfaceModel surface_model_of(const TriangleMesh& m);
+/// Builds the SurfaceModel of a mesh; with `stop`, looking at it every few milliseconds
+/// (StopSource::throw_if_stop_requested).
+SurfaceModel surface_model_of(const TriangleMesh& m, const StopSource* stop = nullptr);
 
-/// The chordal error estimate of Part::chordal_error_mm.
-double chordal_error_of(const TriangleMesh& m);
+/// The chordal error estimate of Part::chordal_error_mm; `stop` as surface_model_of's.
+double chordal_error_of(const TriangleMesh& m, const StopSource* stop = nullptr);
 
 }  // namespace taxopt::detail

@@ -616,8 +616,11 @@ void recover_contacts(Run& run, std::vector<OperationContext>& ops, JobResult& r
   };
   // FCL's model takes ~2 s at 800k triangles on one thread: built beside the contacts.
   detail::parallel_invoke(recover_all, [&] {
-    detail::parallel_invoke([&] { run.collision.emplace(run.options.part->mesh()); },
-                            [&] { run.checker.emplace(run.options.part->mesh()); });
+    // Each looks at the stop as it builds (FCL's and the rasteriser's trees are one call each,
+    // up to 2 s at 800k triangles): a stop ends the job within milliseconds, not after them.
+    detail::parallel_invoke(
+        [&] { run.collision.emplace(run.options.part->mesh(), run.options.stop); },
+        [&] { run.checker.emplace(run.options.part->mesh(), run.options.stop); });
   });
   for (OperationContext& o : ops) {
     if (!o.contact.recovered) continue;

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "taxopt/core/export.hpp"
+#include "taxopt/core/stop.hpp"
 #include "taxopt/cspace/tool_model.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 
@@ -31,6 +32,9 @@ class TAXOPT_API PartCheck {
 class TAXOPT_API CollisionModel : public PartCheck {
  public:
   explicit CollisionModel(const TriangleMesh& mesh);
+  /// As CollisionModel(mesh), looking at `stop` as FCL builds its tree (at every node): a stop
+  /// requested from another thread ends the build with Cancelled (or the stop's reason).
+  CollisionModel(const TriangleMesh& mesh, const StopSource& stop);
   ~CollisionModel();
   CollisionModel(CollisionModel&&) noexcept;
   CollisionModel& operator=(CollisionModel&&) noexcept;

@@ -73,6 +73,9 @@ class TAXOPT_API CSpaceGrid {
 class TAXOPT_API CSpaceRasteriser : public PartCheck {
  public:
   explicit CSpaceRasteriser(const TriangleMesh& mesh);
+  /// As CSpaceRasteriser(mesh), looking at `stop` as it builds its tree: a stop requested from
+  /// another thread ends the build with Cancelled (or the stop's reason).
+  CSpaceRasteriser(const TriangleMesh& mesh, const StopSource& stop);
 
   CSpaceGrid free_axes(const ToolModel& tool, const ContactPoint& contact, const Vec3d& ball_centre,
                        const Vec3d& input_axis, const CSpaceOptions& options = {}) const;
@@ -96,7 +99,7 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
     /// Children (inner node, else -1) and the range [first, first + count) of its faces.
     int left = -1, right = -1, first = 0, count = 0;
   };
-  int build(int first, int count, std::vector<Vec3d>& centroids);
+  int build(int first, int count, std::vector<Vec3d>& centroids, const StopSource& stop);
   /// One free_axes call's walk of the tree (cspace.cpp).
   class Walk;
   std::vector<std::array<Vec3d, 3>> tri_;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "taxopt/core/export.hpp"
+#include "taxopt/core/stop.hpp"
 #include "taxopt/geometry/surface.hpp"
 #include "taxopt/geometry/triangle_mesh.hpp"
 
@@ -24,8 +25,13 @@ struct LocalFit {
 
 class TAXOPT_API Part {
  public:
-  /// Builds the search structures. @throws std::invalid_argument for an empty mesh.
+  /// Builds the search structures. @throws InputError for an empty mesh, a vertex not finite
+  /// or beyond 1e6 mm, a face naming a vertex the mesh lacks.
   explicit Part(TriangleMesh mesh);
+  /// As Part(mesh), looking at `stop` as it goes (a few milliseconds of work apart): a stop
+  /// requested from another thread ends the build with Cancelled (or the stop's reason) and
+  /// no Part (bench/bench_stop measures how soon).
+  Part(TriangleMesh mesh, const StopSource& stop);
   ~Part();
   Part(Part&&) noexcept;
   Part& operator=(Part&&) noexcept;

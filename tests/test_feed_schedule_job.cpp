@@ -430,9 +430,14 @@ TEST_CASE(
       INFO(r.err);
       REQUIRE(r.code == 0);
       if (std::string(mode) != "machine") continue;
-      // Machine mode: the words are the joints, read by rs274 block by block.
+      // Machine mode: the words are the joints, read by rs274 block by block, with the
+      // sample's configuration (the program switches its TCP kinematics off in its set-up:
+      // M429, a remap of that configuration's).
       std::vector<CanonMove> points, all;
-      const RunResult rs = run_rs274(t.path("o.ngc"), points, {}, &all);
+      Rs274Options opt;
+      opt.ini = std::string(TAXOPT_SOURCE_DIR) + "/tests/data/linuxcnc/xyzac-trt/xyzac-trt.ini";
+      opt.stub_switchkins = true;
+      const RunResult rs = run_rs274(t.path("o.ngc"), points, opt, &all);
       REQUIRE(rs.code == 0);
       const Measured got =
           measure(all, true, none, none, lim, std::vector<Vec3d>(all.size(), Vec3d::Zero()), 250.0);

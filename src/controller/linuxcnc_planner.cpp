@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <limits>
 
@@ -166,6 +167,55 @@ double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
   }
   const double scale = std::floor(lo * 1000.0) / 1000.0;
   return past(worst(over, scale)) ? 0.0 : scale;
+}
+
+namespace {
+
+/// A move turns A or C from `from`.
+bool turns(const GcodeMove& from, const GcodeMove& to) {
+  return std::abs(to.tilt_deg - from.tilt_deg) > 1e-9 || std::abs(to.c_deg - from.c_deg) > 1e-9;
+}
+
+/// A line that is more than blanks and comments: a word the controller acts on.
+bool has_word(const std::string& line) {
+  int depth = 0;
+  for (const char ch : line) {
+    if (ch == ';') return false;
+    if (ch == '(') ++depth;
+    if (depth == 0 && !std::isspace(static_cast<unsigned char>(ch))) return true;
+    if (ch == ')' && depth > 0) --depth;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<bool> half_accel_rapids(const std::vector<GcodeMove>& moves, const std::string& text) {
+  std::vector<std::size_t> starts{0};  // where each line of `text` begins
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    if (text[k] == '\n') starts.push_back(k + 1);
+  }
+  const auto line_of = [&](int n) {
+    const auto at = static_cast<std::size_t>(n - 1);
+    if (n < 1 || at >= starts.size()) return std::string();
+    const std::size_t end = at + 1 < starts.size() ? starts[at + 1] : text.size();
+    return text.substr(starts[at], end - starts[at]);
+  };
+  std::vector<bool> half(moves.size(), false);
+  for (std::size_t k = 0; k < moves.size(); ++k) {
+    if (!moves[k].rapid) continue;
+    if (k + 1 == moves.size()) {
+      half[k] = true;
+      continue;
+    }
+    const GcodeMove& next = moves[k + 1];
+    bool stops = false;
+    for (int n = moves[k].line + 1; n < next.line && !stops; ++n) stops = has_word(line_of(n));
+    const GcodeMove* prev = k > 0 ? &moves[k - 1] : nullptr;
+    const bool turning = (prev && turns(*prev, moves[k])) || turns(moves[k], next);
+    half[k] = stops || (next.rapid && turning);
+  }
+  return half;
 }
 
 }  // namespace taxopt::controller

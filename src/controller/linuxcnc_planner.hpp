@@ -4,6 +4,7 @@
 /// line in the program's axes (tip X Y Z, A, C) at the path velocity and acceleration within
 /// every axis's limit, the joints following through the kinematics.
 
+#include <string>
 #include <vector>
 
 #include "taxopt/io/gcode.hpp"
@@ -47,5 +48,16 @@ std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector
 /// does.
 double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
                             const std::vector<TcpBlock>& blocks);
+
+/// Which of `moves` (read back from `text`, LinuxCNC's program) its planner (tp.c, 2.9) runs at
+/// half its acceleration: the rapids that keep the parabolic end they are queued with (G64).
+/// A rapid followed by a rapid blends with it parabolically where either turns a rotary axis
+/// (no blend arc is tried where rotary axes move), and keeps that end where no move follows
+/// before the queue stops (a tool change, M428's synch, G43, the end): such a rapid runs at half
+/// its acceleration from start to end. One followed by a feed block stops (full acceleration).
+/// Measured on the bridge mill's controller: its first head turn 2.104 s (1.804 at the full
+/// acceleration, 2.104 at half), a retract's three rapids that turn B 0.291, 0.448, 0.444 s
+/// (0.223, 0.339, 0.324 at the full).
+std::vector<bool> half_accel_rapids(const std::vector<GcodeMove>& moves, const std::string& text);
 
 }  // namespace taxopt::controller

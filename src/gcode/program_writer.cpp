@@ -322,6 +322,11 @@ void ProgramWriter::program_start(const std::vector<std::string>& comments) {
   if (!path.empty()) line(path, BlockKind::Start);
   if (const std::string w = dialect_.work_offset(); !w.empty()) verbatim({w}, BlockKind::Start);
   verbatim(g_.program.header, BlockKind::Start);
+  // A controller may start in its TCP kinematics (LinuxCNC's bridge-mill sample: M428's are
+  // its start-up default), where the writer and the time model take the switch as off until
+  // its tcp_on: the first table turn then swung the joints round the tip (X 221, Y 229 mm/s
+  // against 200 on LinuxCNC's controller). The switch's off words say which holds.
+  verbatim(g_.program.tcp_off, BlockKind::Start);
 }
 
 void ProgramWriter::program_end() {

@@ -153,6 +153,7 @@ class ProgramClock {
     w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
     w_.joints_after.assign(w_.moves.size(), std::nullopt);
     w_.tip_linear.assign(w_.moves.size(), 0);
+    if (lcnc_) half_accel_ = controller::half_accel_rapids(w_.moves, g.text);
   }
 
   /// Walks every block read back; then the program's time into `g`.
@@ -174,6 +175,10 @@ class ProgramClock {
 
   void block(std::size_t index) {
     const GcodeMove& m = w_.moves[index];
+    rapid_limits_ = limits_;
+    if (index < half_accel_.size() && half_accel_[index]) {
+      for (JointLimit& l : rapid_limits_) l.max_accel_per_s2 *= 0.5;
+    }
     JointPosition to = q_;
     const Gives gives = {(m.given & 1u) != 0, (m.given & 2u) != 0, (m.given & 4u) != 0,
                          (m.given & 8u) != 0, (m.given & 16u) != 0};
@@ -224,7 +229,7 @@ class ProgramClock {
       set_[0] = set_[1] = set_[2] = false;
     }
     tip_set_.fill(false);
-    if (known_ && m.rapid) rapid_s_ += rapid_time_s(q_, to, limits_);
+    if (known_ && m.rapid) rapid_s_ += rapid_time_s(q_, to, rapid_limits_);
     if (!known_) from_line_ = m.line;
     known_ = true;
   }
@@ -272,7 +277,7 @@ class ProgramClock {
                         : d.distance > 0.0 ? m.feed / 60.0 / d.distance
                                            : 0.0;
     if (m.rapid || safe_rapid) {
-      JointLimits capped = limits_;
+      JointLimits capped = safe_rapid ? limits_ : rapid_limits_;
       // A rapid written at a joint-safe feed: every axis at that rate along the move.
       for (std::size_t k = 0; k < kJointCount && safe_rapid && rate > 0.0; ++k) {
         const double v = rate * std::abs(b[k] - a[k]);
@@ -307,7 +312,7 @@ class ProgramClock {
       if (gives[k]) set_[k] = true;
     }
     tip_set_.fill(false);
-    if (m.rapid) rapid_s_ += rapid_time_s(q_, to, limits_);
+    if (m.rapid) rapid_s_ += rapid_time_s(q_, to, rapid_limits_);
   }
 
   /// A block that turns A or C (LinuxCNC's tcRotaryMotionCheck).
@@ -345,6 +350,9 @@ class ProgramClock {
   /// The work offset and the tool's gauge length are given: a retract's end is known.
   const bool placed_;
   const bool lcnc_;
+  // LinuxCNC runs these rapids at half their acceleration (half_accel_rapids); the block's.
+  std::vector<bool> half_accel_;
+  JointLimits rapid_limits_{};
   // LinuxCNC with TCP on: a feed block waits for the next block to know whether it ends at
   // rest; after_feed_: the previous block was a tcp feed block (its chain goes on).
   std::optional<TcpBlock> pending_;

@@ -3,6 +3,8 @@
 // tests/controller (label controller).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <map>
+#include <string>
 
 #include "controller/linuxcnc_planner.hpp"
 #include "support.hpp"
@@ -101,4 +103,41 @@ TEST_CASE(
   // Within the joints' limits at the full share: 1.
   m.joint_max_accel_per_s2[0] = m.joint_max_accel_per_s2[1] = 2.0 * swing;
   CHECK(controller::tcp_axis_accel_scale(m, limits, {b}) == 1.0);
+}
+
+TEST_CASE(
+    "linuxcnc planner: a rapid runs at half its acceleration where it keeps its parabolic end "
+    "(a turn, or no move before the queue stops)",
+    "[controller][model]") {
+  // Lines: 3 a turn with M428's synch after it, 6 a rapid on to a feed block, 8 and 9 rapids
+  // where 9 turns B, 10 a rapid of X alone on to 11 (X alone, a comment between), the last
+  // rapid before the end.
+  const std::string text =
+      "G21 G90 G17\n"
+      "G53 G0 Z100\n"
+      "G0 B-20 C90\n"
+      "M428\n"
+      "G0 X0 Y0 Z30 B-20 C90\n"
+      "G0 X0 Y0 Z20 B-20 C90\n"
+      "G1 X0 Y10 Z20 B-20 C90 F500\n"
+      "G0 X0 Y10 Z30 B-20 C90\n"
+      "G0 X0 Y20 Z30 B-25 C90\n"
+      "G0 X5 Y20 Z30 B-25 C90\n"
+      "(a comment) ; and another\n"
+      "G0 X9 Y20 Z30 B-25 C90\n"
+      "M2\n";
+  const std::vector<GcodeMove> moves = read_gcode_moves(text, "t", GcodeDialect::LinuxCNC, {}, 'B');
+  const std::vector<bool> half = controller::half_accel_rapids(moves, text);
+  REQUIRE(half.size() == moves.size());
+  std::map<int, bool> by_line;
+  for (std::size_t k = 0; k < moves.size(); ++k) by_line[moves[k].line] = half[k];
+  CHECK(by_line.at(2));    // G53 retract, then a move-less line: the queue stops
+  CHECK(by_line.at(3));    // the turn, then M428
+  CHECK(!by_line.at(5));   // on to a rapid, neither turns: a blend arc or tangent
+  CHECK(!by_line.at(6));   // on to a feed block: stops at the full acceleration
+  CHECK(!by_line.at(7));   // a feed block
+  CHECK(by_line.at(8));    // on to a rapid that turns
+  CHECK(by_line.at(9));    // turns itself
+  CHECK(!by_line.at(10));  // X alone on to X alone, the comment not a stop
+  CHECK(by_line.at(12));   // the last move before the end
 }

@@ -270,6 +270,16 @@ Machine run_machine(const Machine& machine, const JobOptions& options) {
   // The tool's gauge length the writer puts below a retract (ProgramWriter::joints_).
   if (options.tool.gauge_length_mm) m.holder_gauge_length_mm = options.tool.gauge_length_mm;
   if (options.work_offset_mm) m.work_offset_mm = options.work_offset_mm;
+  if (m.pivot_frame == PivotFrame::Machine && m.work_offset_mm) {
+    // The rotary axes in the workpiece's frame: a table's axes stay where the machine has
+    // them while the program's zero sits at the work offset. Along its own axis a point on C
+    // or on the tilt axis may move freely: only the across components matter.
+    const Vec3d& o = *m.work_offset_mm;
+    m.rotary.c_axis_point_mm -= Vec3d(o.x(), o.y(), 0.0);
+    m.rotary.tilt_axis_point_mm -=
+        m.rotary.tilt_about == TiltAxis::Y ? Vec3d(o.x(), 0.0, o.z()) : Vec3d(0.0, o.y(), o.z());
+    m.pivot_frame = PivotFrame::Workpiece;
+  }
   if (m.rotary.layout != RotaryLayout::TableTable) {
     m.rotary.head_length_mm =
         m.head_pivot_length_mm.value_or(0.0) +

@@ -314,3 +314,51 @@ TEST_CASE(
                !Catch::Contains("mm/s against") && !Catch::Contains("deg/s against"));
   }
 }
+
+TEST_CASE(
+    "joint space: a pivot given in machine coordinates lies at the pivot less the work offset "
+    "in the workpiece, as the controller's G54 turns with the table",
+    "[program][joints][setup]") {
+  TempDir t;
+  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
+                     " --out-mesh " + t.path("g.stl"))
+              .code == 0);
+  // LinuxCNC's xyzac-trt sample in machine mode (the written words are the joints), its pivot
+  // (A axis at Y 20, Z 10) in machine coordinates, the program's zero at X 5 Y -30 Z -40.
+  const std::string sample =
+      read_file(std::string(TAXOPT_SOURCE_DIR) + "/data/machines/linuxcnc-xyzac-trt.toml");
+  REQUIRE(sample.find("frame = \"machine\"") != std::string::npos);
+  const auto variant = [&](const std::string& name, const std::string& frame, double a_y,
+                           double a_z, double c_x, double c_y) {
+    std::string text =
+        std::regex_replace(sample, std::regex("mode = \"tcp\""), "mode = \"machine\"");
+    text = std::regex_replace(text, std::regex("frame = \"machine\""), "frame = \"" + frame + "\"");
+    text = std::regex_replace(text, std::regex("a_axis_y = [-0-9.]+"),
+                              "a_axis_y = " + std::to_string(a_y));
+    text = std::regex_replace(text, std::regex("a_axis_z = [-0-9.]+"),
+                              "a_axis_z = " + std::to_string(a_z));
+    text = std::regex_replace(text, std::regex("c_axis_x = [-0-9.]+"),
+                              "c_axis_x = " + std::to_string(c_x));
+    text = std::regex_replace(text, std::regex("c_axis_y = [-0-9.]+"),
+                              "c_axis_y = " + std::to_string(c_y));
+    write_file(t.path(name + ".toml"), text);
+    const RunResult r = run_taxopt(
+        "--in " + t.path("g.cls") + " --machine " + t.path(name + ".toml") +
+        " --gauge-length 50 --work-offset 5,-30,-40 -q --force --gcode " + t.path(name + ".ngc"));
+    INFO(r.err);
+    REQUIRE(r.code <= 1);
+    // The points' blocks: the header names the machine file, which differs.
+    std::string out;
+    for (const std::string& l : program_lines(read_file(t.path(name + ".ngc")))) {
+      if (l.rfind("G1 ", 0) == 0) out += l + "\n";
+    }
+    REQUIRE(!out.empty());
+    return out;
+  };
+  // In machine coordinates at (Y 20, Z 10) and (0, 0): in the workpiece's at the same less
+  // the offset, (Y 50, Z 50) and (-5, 30).
+  const std::string machine_frame = variant("m", "machine", 20.0, 10.0, 0.0, 0.0);
+  CHECK(machine_frame == variant("w", "workpiece", 50.0, 50.0, -5.0, 30.0));
+  // Taken as the workpiece's, the same numbers give other joints.
+  CHECK(machine_frame != variant("u", "workpiece", 20.0, 10.0, 0.0, 0.0));
+}

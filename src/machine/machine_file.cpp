@@ -172,10 +172,15 @@ class MachineParser {
            "sample)");
     };
     if (head && !given) needs_length(0);
+    if (given) {
+      choose(*given, "pivot", "frame",
+             {{"workpiece", PivotFrame::Workpiece}, {"machine", PivotFrame::Machine}},
+             m.pivot_frame);
+    }
     if (const toml::table* pivot = given; pivot && head) {
       // A head: its pivot length (tilt axis to the spindle's gauge line), and for a head-table
       // machine where C turns the table.
-      check_keys(*pivot, "pivot", {"head_pivot_length", "c_axis_x", "c_axis_y"});
+      check_keys(*pivot, "pivot", {"head_pivot_length", "c_axis_x", "c_axis_y", "frame"});
       if (!pivot->get("head_pivot_length")) needs_length(line_of(*pivot));
       const double pivot_mm = length_or(*pivot, "pivot", "head_pivot_length", 0.0);
       m.head_pivot_length_mm = pivot_mm;
@@ -188,11 +193,11 @@ class MachineParser {
                                        length_or(*pivot, "pivot", "c_axis_y", 0.0), 0.0);
     } else if (pivot) {
       if (m.rotary.tilt_about == TiltAxis::Y) {
-        check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y"});
+        check_keys(*pivot, "pivot", {"b_axis_x", "b_axis_z", "c_axis_x", "c_axis_y", "frame"});
         m.rotary.tilt_axis_point_mm = Vec3d(length_or(*pivot, "pivot", "b_axis_x", 0.0), 0.0,
                                             length_or(*pivot, "pivot", "b_axis_z", 0.0));
       } else {
-        check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y"});
+        check_keys(*pivot, "pivot", {"a_axis_y", "a_axis_z", "c_axis_x", "c_axis_y", "frame"});
         m.rotary.tilt_axis_point_mm = Vec3d(0.0, length_or(*pivot, "pivot", "a_axis_y", 0.0),
                                             length_or(*pivot, "pivot", "a_axis_z", 0.0));
       }

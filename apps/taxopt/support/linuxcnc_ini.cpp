@@ -479,11 +479,14 @@ class Importer {
     const double x_off = module_.bc ? pin_or_zero("x-offset") : 0.0;
     const double y_off = module_.bc ? 0.0 : pin_or_zero("y-offset");
     const double z_off = pin_or_zero("z-offset");
+    // The rot-point pins are machine coordinates: with a work offset the job moves them.
+    t << "\n[pivot]\n# In machine coordinates (the kinematics' rot-point pins).\nframe = "
+         "\"machine\"";
     if (module_.bc) {
-      t << "\n[pivot]\nb_axis_x = " << number_text(x_rot + x_off)
+      t << "\nb_axis_x = " << number_text(x_rot + x_off)
         << "\nb_axis_z = " << number_text(z_rot + z_off);
     } else {
-      t << "\n[pivot]\na_axis_y = " << number_text(y_rot + y_off)
+      t << "\na_axis_y = " << number_text(y_rot + y_off)
         << "\na_axis_z = " << number_text(z_rot + z_off);
     }
     t << "\nc_axis_x = " << number_text(x_rot) << "\nc_axis_y = " << number_text(y_rot) << "\n";

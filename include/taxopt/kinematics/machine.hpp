@@ -141,6 +141,15 @@ inline constexpr const char* kKinematicsNames =
 TAXOPT_API bool kinematics_layout(const std::string& name, TiltAxis& tilt, RotaryLayout& layout);
 
 /// A machine: name, kinematics and how to write its G-code.
+/// Where a machine file's [pivot] places the rotary axes (Machine::pivot_frame).
+enum class PivotFrame {
+  /// In the workpiece's coordinates: relative to the program's zero (CLI.md's [pivot]).
+  Workpiece,
+  /// In machine coordinates, as a controller's kinematics hold them (LinuxCNC's rot-point
+  /// pins): with a work offset the axes lie at the pivot less the offset in the workpiece.
+  Machine
+};
+
 struct Machine {
   std::string name = "generic-ac-trt";
   std::string kinematics = "ac-table-table";
@@ -178,6 +187,11 @@ struct Machine {
   /// X Y Z), mm. The travel checks hold every block to the machine's travel with it; empty: not
   /// known, and the program's span alone is held to the travel's.
   std::optional<Vec3d> work_offset_mm;
+  /// [pivot] frame: the frame rotary.c_axis_point_mm and tilt_axis_point_mm are given in.
+  /// Machine: run_job moves them into the workpiece's by the work offset (the joints are then
+  /// the controller's, which rotates the work offset with the table: LinuxCNC's G54 in its
+  /// TCP kinematics, measured on its controller); without a work offset the two coincide.
+  PivotFrame pivot_frame = PivotFrame::Workpiece;
   GcodeSettings gcode;
   /// A head machine's pivot ([pivot] head_pivot_length): from the tilt axis to the spindle's
   /// gauge line, mm (0 where the tilt axis crosses it, as LinuxCNC's max5); a head machine

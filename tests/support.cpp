@@ -142,6 +142,12 @@ RunResult run(const std::string& command) {
 
 RunResult run_taxopt(const std::string& args) { return run(std::string(TAXOPT_EXE) + " " + args); }
 
+int generate_small_sine(const TempDir& t) {
+  return run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") + " --out-mesh " +
+                    t.path("g.stl"))
+      .code;
+}
+
 bool have_rs274() { return run("command -v rs274").code == 0; }
 
 RunResult run_rs274(const std::string& ngc_path, std::vector<CanonMove>& moves,

@@ -68,6 +68,9 @@ struct RunResult {
 RunResult run(const std::string& command);
 /// Runs the taxopt CLI with the given arguments (already quoted as needed).
 RunResult run_taxopt(const std::string& args);
+/// The generator's small sine (5 passes of 20 mm, 3 mm wide) as g.cls and g.stl in `t`: the
+/// part the joint and program tests post; its exit code (0 when written).
+int generate_small_sine(const TempDir& t);
 /// Occurrences of `what` in `text` (overlapping ones too).
 std::size_t count_of(const std::string& text, const std::string& what);
 /// True when LinuxCNC's rs274 is installed.

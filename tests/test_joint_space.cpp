@@ -57,9 +57,7 @@ TEST_CASE(
     "joints' rate where a rapid would drive a joint past its velocity limit",
     "[program][tcp][joints]") {
   TempDir t;
-  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
-                     " --out-mesh " + t.path("g.stl"))
-              .code == 0);
+  REQUIRE(generate_small_sine(t) == 0);
   const std::string args =
       " --method none -q --report " + t.path("r.json") + " --gcode " + t.path("o.ngc");
   // In place (the part on C): the turn home is the rapid it always was.
@@ -279,9 +277,7 @@ TEST_CASE(
     "goes from where the machine stood",
     "[program][tcp][joints]") {
   TempDir t;
-  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
-                     " --out-mesh " + t.path("g.stl"))
-              .code == 0);
+  REQUIRE(generate_small_sine(t) == 0);
   // The preset: TCP switched on by M428, every axis and joint at 20 mm/s; the table tilted
   // about 20 deg before the positioning.
   const RunResult r =
@@ -320,9 +316,7 @@ TEST_CASE(
     "in the workpiece, as the controller's G54 turns with the table",
     "[program][joints][setup]") {
   TempDir t;
-  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
-                     " --out-mesh " + t.path("g.stl"))
-              .code == 0);
+  REQUIRE(generate_small_sine(t) == 0);
   // LinuxCNC's xyzac-trt sample in machine mode (the written words are the joints), its pivot
   // (A axis at Y 20, Z 10) in machine coordinates, the program's zero at X 5 Y -30 Z -40.
   const std::string sample =

@@ -507,9 +507,7 @@ TEST_CASE(
     "[program][tcp][slow]") {
   TempDir t;
   const std::string d = std::string(TAXOPT_SOURCE_DIR) + "/data/";
-  REQUIRE(run_taxopt("generate --width 3 --length 20 --out-cls " + t.path("g.cls") +
-                     " --out-mesh " + t.path("g.stl"))
-              .code == 0);
+  REQUIRE(generate_small_sine(t) == 0);
   const std::string common = "--in " + t.path("g.cls") + " --part " + t.path("g.stl") +
                              " --gauge-length 50 --method paper --feed-schedule -q --report " +
                              t.path("r.json") + " --gcode " + t.path("o.ngc") + " --machine ";

@@ -62,6 +62,19 @@ TEST_CASE(
     REQUIRE_FALSE(seen.empty());
     CHECK(seen.back() == stage);
   }
+  // Inside the verification's sweep of the moves (its third quarter of items): the stop was
+  // looked at in a destructor there, and its Cancelled ended the process.
+  for (const double share : {0.55, 0.65}) {
+    INFO(share);
+    JobOptions o = demo.options();
+    const StopSource stop = o.stop;
+    o.progress = [&](const std::string& s, std::size_t done, std::size_t total) {
+      if (s == "verification" && static_cast<double>(done) >= share * static_cast<double>(total)) {
+        stop.request_stop();
+      }
+    };
+    CHECK_THROWS_AS(run_job(demo.tp, default_machine(), o), Cancelled);
+  }
   // A callback that throws: its exception, the process alive, nothing after it run.
   {
     JobOptions o = demo.options();

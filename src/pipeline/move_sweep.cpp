@@ -120,12 +120,15 @@ std::vector<std::size_t> colliding_moves(
     const std::vector<char>* only, const CSpaceRasteriser* bounds) {
   return detail::parallel_select(1, xyz_w.size(), [&](std::size_t i) {
     if (only && !(*only)[i]) return false;
-    struct Advance {  // on every return of this move's check
+    // The stop looked at before the move's check; counted on every return of it (a
+    // destructor must not throw: the stop's Cancelled thrown there ended the process).
+    if (progress) progress->check();
+    struct Count {
       detail::StageProgress* p;
-      ~Advance() {
-        if (p) p->advance();
+      ~Count() {
+        if (p) p->count();
       }
-    } advance{progress};
+    } count{progress};
     const bool in_air = contacts[i - 1].state != ContactState::Touching ||
                         contacts[i].state != ContactState::Touching;
     std::vector<WayPoint> chain = {{xyz_w[i - 1], tilt_deg[i - 1], c_deg[i - 1]}};

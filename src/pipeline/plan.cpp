@@ -117,7 +117,8 @@ class OperationPlanner {
             o.strict_tool ? &*o.strict_tool : nullptr,
             &input_clear_,
             &o.least_tilt_rad,
-            run.clearance_bounds()} {}
+            run.clearance_bounds(),
+            &run.options.stop} {}
 
   void run() {
     const auto t0 = Clock::now();
@@ -171,8 +172,10 @@ class OperationPlanner {
     std::vector<Vec3d> axes;
     for (const CLPointd& p : op.points) axes.push_back(p.axis);
     std::vector<char> clear(op.points.size(), 1);
+    static const detail::StageProgress::Callback kNoReport;  // the stop looked at, no progress
+    detail::StageProgress watch(kNoReport, std::string(), op.points.size(), run.options.stop);
     for (std::size_t i :
-         colliding_points(*run.planner_check(), *o.strict_tool, op, axes, o.contacts)) {
+         colliding_points(*run.planner_check(), *o.strict_tool, op, axes, o.contacts, &watch)) {
       clear[i] = 0;
     }
     return clear;

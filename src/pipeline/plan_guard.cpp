@@ -42,13 +42,18 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
     a.push_back(rad_to_deg(poses[i].tilt_rad));
     c.push_back(rad_to_deg(poses[i].c_rad));
   }
+  // No progress to report (the sweeps run inside a stage's item), but the job's stop looked
+  // at with every point and move.
+  static const detail::StageProgress::Callback kNoReport;
+  const StopSource none;
+  detail::StageProgress watch(kNoReport, std::string(), 3 * n, in.stop ? *in.stop : none);
   std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
   for (std::size_t i :
-       colliding_moves(model, tool, machine, xyz, a, c, contacts.empty() ? air : contacts, nullptr,
+       colliding_moves(model, tool, machine, xyz, a, c, contacts.empty() ? air : contacts, &watch,
                        nullptr, &check, in.bounds)) {
     hit[i] = 1;
   }
-  for (std::size_t i : colliding_points(model, tool, op, axes, contacts, nullptr, &check)) {
+  for (std::size_t i : colliding_points(model, tool, op, axes, contacts, &watch, &check)) {
     hit[i] = 1;
   }
   // Where the input's flutes clear the part, an axis other than the input's must clear it too.
@@ -61,7 +66,7 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
   }
   if (any_strict) {
     for (std::size_t i :
-         colliding_points(model, *in.strict_tool, op, axes, contacts, nullptr, &strict)) {
+         colliding_points(model, *in.strict_tool, op, axes, contacts, &watch, &strict)) {
       hit[i] = 1;
     }
   }

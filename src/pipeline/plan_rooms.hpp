@@ -39,11 +39,15 @@ struct OperationPlanInputs {
   /// The part's tree for the sweeps of moves to clear runs of samples at once (colliding_moves),
   /// or none.
   const CSpaceRasteriser* bounds = nullptr;
+  /// The job's stop, looked at in the sweeps of every point and move (points_and_moves_hit),
+  /// or none.
+  const StopSource* stop = nullptr;
   /// The same, judged by another model (the verification's FCL model) with `other_bounds`.
   OperationPlanInputs judged_by(const PartCheck* other,
                                 const CSpaceRasteriser* other_bounds) const {
     return {op,     contacts,     ball_radius_mm, other,       tool,           machine,
-            timing, pose_options, strict_tool,    input_clear, least_tilt_rad, other_bounds};
+            timing, pose_options, strict_tool,    input_clear, least_tilt_rad, other_bounds,
+            stop};
   }
   /// Whether `axis` keeps point i's least tilt from the surface normal.
   bool keeps_tilt(std::size_t i, const Vec3d& axis) const {

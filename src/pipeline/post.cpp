@@ -96,12 +96,14 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
     const PosePlan plan =
         plan_poses(machine.rotary, axes, rapid_into, start, options.pose_options,
                    o.optimised ? o.optimised->preferred : std::vector<std::optional<Posed>>{});
+    options.stop.throw_if_stop_requested();  // looked at between the steps
     // The input axes as the machine would have run them, for the "before" metrics.
     if (o.optimised) {
       const PosePlan before =
           plan_poses(machine.rotary, in_axes, rapid_into, input_start, options.pose_options);
       if (before.ok()) input_start = before.poses.back();
       o.input_poses = before.ok() ? before.poses : std::vector<Posed>{};
+      options.stop.throw_if_stop_requested();
     } else {
       o.input_poses = plan.ok() ? plan.poses : std::vector<Posed>{};
       if (plan.ok()) input_start = plan.poses.back();
@@ -119,6 +121,7 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       spread_turns_in_air(op, o.contacts, o.ball_radius_mm, run.planner_check(),
                           o.tool ? *o.tool : ToolModel{}, machine,
                           deg_to_rad(options.paper.max_deviation_deg), po);
+      options.stop.throw_if_stop_requested();
     }
     if (o.optimised && machine.gcode.feed_reference == FeedReference::CutterPath) {
       keep_input_block_times(machine, o, po);

@@ -492,8 +492,11 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                                                      : po.programmed_time_s;
     }
   }
+  const StopSource& stop = run.options.stop;  // looked at between the steps
   res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+  stop.throw_if_stop_requested();
   read_back(machine, posted, res.gcode, w);
+  stop.throw_if_stop_requested();
 
   // Feed schedules at the machine's limits: the written path (from the words read back) and
   // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
@@ -512,6 +515,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
     w.schedule_after.push_back(schedule_operation(
         po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
         machine.rotary, &via, tcp ? &po.poses : nullptr));
+    stop.throw_if_stop_requested();
     std::vector<CLPointd> in_points = po.points;
     std::vector<Vec3d> in_tips;
     for (std::size_t i = 0; i < in_points.size(); ++i) {
@@ -528,6 +532,7 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
             : schedule_operation(in_points, joints_of(machine.rotary, in_tips, input_poses),
                                  w.time_into_before.back(), limits, machine.rotary, nullptr,
                                  tcp ? &input_poses : nullptr));
+    stop.throw_if_stop_requested();
   }
   if (run.options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k) {
@@ -542,10 +547,13 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
       posted[k].linearised_time_s = w.schedule_after[k].block_time_s;
     }
     res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
+    stop.throw_if_stop_requested();
     read_back(machine, posted, res.gcode, w);
   }
+  stop.throw_if_stop_requested();
   std::vector<TcpBlock> tcp_blocks;
   program_time(run, w, limits, res.gcode_units, res.gcode, tcp_blocks);
+  stop.throw_if_stop_requested();
   tcp_joint_findings(machine, limits, run.options.feed_schedule, tcp_blocks, res);
   w.write_s = seconds_since(t0);
   return w;

@@ -41,6 +41,8 @@ class StageProgress {
     report(done_ += n);
     check();
   }
+  /// `n` more items done, without looking at the stop (for a destructor: it must not throw).
+  void count(std::size_t n = 1) noexcept { report(done_ += n); }
   /// Throws the callback's exception, or Cancelled, when the job is to stop.
   void check() const { stop_.throw_if_stop_requested(); }
 

@@ -527,3 +527,58 @@ TEST_CASE(
   // rounding's own uncertainty instead.
   CHECK(changes < n / 20);
 }
+
+TEST_CASE(
+    "feed schedule: the block before a new, faster FEDRAT takes the F the schedule asked, so "
+    "the ramp after it keeps every joint's acceleration, as rs274 reads the program",
+    "[feed][rs274][integration]") {
+  REQUIRE(have_rs274());
+  // A straight diagonal of 0.43 mm blocks at F1006.8235, then FEDRAT/1342.566806 (SOLIDWORKS
+  // CAM's glue file on LinuxCNC's max5, X acceleration 100 mm/s^2): the schedule ramps the
+  // feed up over the blocks after the new FEDRAT. The F in force was held over the block
+  // before it, slower than asked within the words' rounding, and the step up from it put X
+  // at 100.08 of its 100 mm/s^2 (exit 1, "at the scheduled feed").
+  std::ostringstream cl;
+  cl.precision(10);
+  cl << "UNITS/MM\nLOADTL/1\nCUTTER/6,3\nSPINDL/10000,RPM,CLW\nFEDRAT/1006.8235,MMPM\n"
+     << "RAPID\nGOTO/-10,30,5,0,0,1\nGOTO/-10,30,0,0,0,1\n";
+  double x = -10.0, y = 30.0;
+  for (int i = 1; i <= 120; ++i) {
+    if (i == 61) cl << "FEDRAT/1342.566806,MMPM\n";
+    x += 0.3637 + 0.00013 * std::sin(1.7 * i);  // rounding that differs block to block
+    y -= 0.2307 + 0.00011 * std::cos(2.3 * i);
+    cl << "GOTO/" << x << "," << y << ",0,0,0,1\n";
+  }
+  cl << "FINI\n";
+  TempDir t;
+  write_file(t.path("ramp.cls"), cl.str());
+  const RunResult r =
+      run_taxopt("--in " + t.path("ramp.cls") + " --machine " + std::string(TAXOPT_SOURCE_DIR) +
+                 "/data/machines/linuxcnc-max5.toml --feed-schedule --method none -q --gcode " +
+                 t.path("o.ngc"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  std::vector<CanonMove> points, all;
+  const RunResult rs = run_rs274(t.path("o.ngc"), points, {}, &all);
+  INFO(rs.err);
+  REQUIRE(rs.code == 0);
+  // The tool stands vertical at B0 C0: the joints move as the tip. Each axis's acceleration
+  // between consecutive feed blocks, from their lengths and the F rs274 read.
+  std::vector<const CanonMove*> feeds;
+  for (const CanonMove& m : all) {
+    if (m.feed && !m.arc) feeds.push_back(&m);
+  }
+  REQUIRE(feeds.size() > 100);
+  double worst = 0.0;
+  for (std::size_t k = 2; k < feeds.size(); ++k) {
+    const CanonMove &a = *feeds[k - 2], &b = *feeds[k - 1], &c = *feeds[k];
+    const Vec3d d1(b.x - a.x, b.y - a.y, b.z - a.z), d2(c.x - b.x, c.y - b.y, c.z - b.z);
+    if (d1.norm() < 1e-9 || d2.norm() < 1e-9) continue;
+    const double t1 = 60.0 * d1.norm() / b.feed_rate, t2 = 60.0 * d2.norm() / c.feed_rate;
+    const Vec3d accel = (d2 / t2 - d1 / t1) / (0.5 * (t1 + t2));
+    worst = std::max(worst, accel.cwiseAbs().maxCoeff());
+  }
+  // The machine's 100 mm/s^2, within rs274's four decimals of F; and the ramp binds it.
+  CHECK(worst <= 100.0 * (1.0 + 1e-5));
+  CHECK(worst > 99.0);
+}

@@ -396,15 +396,29 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
   } else if (g_.mode == GcodeMode::Machine) {
     f = linearised_feed(i, xyz, fb);
   } else if (g_.feed_mode == FeedMode::InverseTime || scheduled) {
-    // Hold F only where no limit slowed the block (the schedule keeps its programmed time).
+    // Hold F only where no limit slowed the block (the schedule keeps its programmed time)
+    // and the next block does not speed up: a held F is slower than asked, so the step up to
+    // a faster next block grows past what the schedule allowed (X at 100.116 of its
+    // 100 mm/s^2 on LinuxCNC's max5, SOLIDWORKS CAM's glue file, where a new FEDRAT ramps up).
     const bool at_programmed = time_min <= programmed_min * (1.0 + 1e-12);
-    f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled, at_programmed);
+    f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled,
+                   at_programmed && next_not_faster(i));
   } else {
     f = tcp_feed(i, programmed_min);
   }
   PlannedMove block = move_to(PlannedMove::Type::Linear, xyz, op.poses[i]);
   set_feed(block, f);
   finish_point(i, xyz, words, block, restore_inverse_time);
+}
+
+bool ProgramWriter::next_not_faster(std::size_t i) const {
+  const PostedOperation& op = *op_;
+  const std::size_t n = i + 1;
+  if (n >= op.points.size() || op.points[n].motion == Motion::Rapid) return true;
+  if (op.points[n].feed_mm_per_min != op.points[i].feed_mm_per_min) return false;
+  const double given_s = n < op.programmed_time_s.size() ? op.programmed_time_s[n] : 0.0;
+  const double programmed_s = given_s > 0.0 ? given_s : own_times_[n];
+  return !(n < op.block_time_s.size() && op.block_time_s[n] > programmed_s * (1.0 + 1e-12));
 }
 
 std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const {

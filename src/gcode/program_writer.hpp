@@ -227,6 +227,9 @@ class ProgramWriter {
   /// Its distance over the block time is the programmed feed unless the programmed time is
   /// another path's (FeedReference::CutterPath).
   std::string tcp_feed(std::size_t i, double programmed_min) const;
+  /// Whether the block after point `i` runs no faster than it: none, a rapid, or a block at
+  /// the same programmed feed that no limit slowed (ramps come after such blocks only).
+  bool next_not_faster(std::size_t i) const;
   /// F of a joint-space block (machine mode, inverse time, a schedule) from `from` to `to`
   /// that takes `minutes`.
   std::string joint_feed(const Vec3d& from, const Posed& from_pose, const Vec3d& to,

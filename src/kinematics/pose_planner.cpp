@@ -21,11 +21,12 @@ struct Candidate {
 /// Candidate poses of a non-pole axis within the machine's ranges. With a continuous C the
 /// winding is left to the unwrapping after the programme (nearest turn is always optimal);
 /// with a bounded C every turn within the range is a candidate.
-std::vector<Candidate> candidates(const MachineKinematicsd& m, const Vec3d& axis) {
+/// `wind_free`: a bounded C's turns are left to the unwrapping too (PosePlanner::run).
+std::vector<Candidate> candidates(const MachineKinematicsd& m, const Vec3d& axis, bool wind_free) {
   std::vector<Candidate> out;
   for (const Posed& p : m.inverse(axis)) {
     if (!m.tilt.contains(p.tilt_rad)) continue;
-    if (m.c.continuous) {
+    if (m.c.continuous || wind_free) {
       out.push_back({p});
       continue;
     }
@@ -64,6 +65,36 @@ class PosePlanner {
         cand_(axes.size()) {}
 
   PosePlan run() {
+    if (!m_.c.continuous) {
+      // Every turn of a bounded C within its range is a candidate, and the programme's work
+      // grows with the square of their number: on LinuxCNC's samples (C +-36000 deg, 200
+      // turns a side) 143,840 points took minutes a plan. Planned first with the turns left
+      // to the unwrapping, as a continuous C is: every path's cost there is no more than its
+      // cost on the bounded C, so where that plan stays within the range it is the bounded
+      // plan's optimum too; else the programme over every turn.
+      wind_free_ = true;
+      PosePlan free = attempt();
+      if (!free.ok() || within_c_range(free)) return free;
+      wind_free_ = false;
+      cand_.assign(axes_.size(), {});
+      keys_.clear();
+      plan_ = PosePlan{};
+    }
+    return attempt();
+  }
+
+ private:
+  /// Whether every pose's C lies within the bounded C's range.
+  bool within_c_range(const PosePlan& p) const {
+    return std::all_of(p.poses.begin(), p.poses.end(), [&](const Posed& q) {
+      return q.c_rad >= m_.c.min_rad - 1e-9 && q.c_rad <= m_.c.max_rad + 1e-9;
+    });
+  }
+  /// The turns of C are the unwrapping's, not the programme's (a continuous C, or a bounded
+  /// one planned free of its range).
+  bool unwrapped_c() const { return m_.c.continuous || wind_free_; }
+
+  PosePlan attempt() {
     const std::size_t n = axes_.size();
     plan_.poses.assign(n, Posed{});
     if (n == 0) return plan_;
@@ -75,7 +106,6 @@ class PosePlanner {
     return plan_;
   }
 
- private:
   const std::optional<Posed>& preferred_at(std::size_t i) const {
     static const std::optional<Posed> none;
     return preferred_.empty() ? none : preferred_[i];
@@ -108,7 +138,7 @@ class PosePlanner {
       }
       return true;
     }
-    cand[i] = candidates(m, axes[i]);
+    cand[i] = candidates(m, axes[i], wind_free_);
     if (const std::optional<Posed>& want = preferred_at(i)) {
       // The caller's pose and its mirror (the whole pass mirrored has the same rates: which
       // one is left to the travel to and from the neighbouring passes), where the machine has
@@ -149,7 +179,7 @@ class PosePlanner {
   }
 
   double dc(double c0, double c1) const {
-    return m_.c.continuous ? std::abs(wrap_pi(c1 - c0)) : std::abs(c1 - c0);
+    return unwrapped_c() ? std::abs(wrap_pi(c1 - c0)) : std::abs(c1 - c0);
   }
   /// The heaviest move between two key points.
   double weight(std::size_t from, std::size_t to) const {
@@ -173,7 +203,6 @@ class PosePlanner {
 
   /// The dynamic programme over the key points, then the continuous C's winding.
   void choose_keys() {
-    const MachineKinematicsd& m = m_;
     const std::vector<std::vector<Candidate>>& cand = cand_;
     const std::vector<std::size_t>& keys = keys_;
     const std::vector<bool>& rapid_into = rapid_into_;
@@ -231,7 +260,7 @@ class PosePlanner {
     // else from home, C = 0). A half turn either way is a tie: turned negative, as the
     // production NX post for the Haas UMC-750 turns it (tests/test_program.cpp: it turns -180 deg
     // where taxopt turned +180, and every C after differed by a whole turn).
-    if (m.c.continuous) {
+    if (unwrapped_c()) {
       double prev_c = start ? start->c_rad : 0.0;
       for (std::size_t k : keys) {
         double turn = wrap_pi(plan.poses[k].c_rad - prev_c);
@@ -280,6 +309,7 @@ class PosePlanner {
   std::vector<std::vector<Candidate>> cand_;
   std::vector<std::size_t> keys_;  // points off the pole (and preferred pole points), in order
   PosePlan plan_;
+  bool wind_free_ = false;  // a bounded C planned with its turns left to the unwrapping
 };
 
 }  // namespace

@@ -218,3 +218,63 @@ TEST_CASE("planner: random smooth paths never jump C by 90 deg, A/C and B/C", "[
     }
   }
 }
+
+TEST_CASE(
+    "planner: a bounded C of many turns plans as a continuous C where the path stays within "
+    "its range, and within a narrow range it turns back, A/C and B/C",
+    "[kinematics][bc]") {
+  // LinuxCNC's samples bound C at +-36000 deg: every turn a candidate made the programme's
+  // work grow with the square of 200 turns a side (minutes on 143,840 points). Where the
+  // plan with C free of its range stays within it, it is the bounded plan's optimum.
+  std::mt19937 rng(977);
+  std::normal_distribution<double> n(0.0, 1.0);
+  MachineKinematicsd wide = default_machine_kinematics();
+  wide.c.continuous = false;
+  wide.c.min_rad = deg_to_rad(-36000.0);
+  wide.c.max_rad = deg_to_rad(36000.0);
+  MachineKinematicsd narrow = wide;
+  narrow.c.min_rad = deg_to_rad(-100.0);
+  narrow.c.max_rad = deg_to_rad(100.0);
+  const std::vector<MachineKinematicsd> kins = both_kinematics(default_machine_kinematics());
+  const std::vector<MachineKinematicsd> wides = both_kinematics(wide);
+  const std::vector<MachineKinematicsd> narrows = both_kinematics(narrow);
+  int turned_back = 0;
+  for (std::size_t k = 0; k < kins.size(); ++k) {
+    INFO("tilt " << kins[k].tilt_letter());
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<Vec3d> axes;
+      std::vector<bool> rapid(1, true);
+      const double turns = 0.5 * n(rng);  // the azimuth winds up to a turn or two
+      for (int i = 0; i < 200; ++i) {
+        const double phi = 2.0 * Constants<double>::pi() * turns * i / 200.0 + 0.02 * n(rng);
+        const double tilt = 0.4 + 0.1 * std::sin(i / 17.0);
+        axes.emplace_back(std::sin(tilt) * std::cos(phi), std::sin(tilt) * std::sin(phi),
+                          std::cos(tilt));
+        if (i > 0) rapid.push_back(i % 50 == 0);  // passes: a branch may change between them
+      }
+      const std::optional<Posed> start =
+          trial % 2 ? std::optional<Posed>(Posed{deg_to_rad(10.0), deg_to_rad(400.0)})
+                    : std::nullopt;
+      const PosePlan free = plan_poses(kins[k], axes, rapid, start);
+      const PosePlan bounded = plan_poses(wides[k], axes, rapid, start);
+      REQUIRE(free.ok());
+      REQUIRE(bounded.ok());
+      require_axes(wides[k], bounded.poses, axes);
+      for (std::size_t i = 0; i < axes.size(); ++i) {
+        INFO("point " << i);
+        CHECK(bounded.poses[i].tilt_rad == Approx(free.poses[i].tilt_rad).margin(1e-12));
+        CHECK(bounded.poses[i].c_rad == Approx(free.poses[i].c_rad).margin(1e-12));
+      }
+      // Within +-100 deg: every pose in range, the axes kept.
+      const PosePlan tight = plan_poses(narrows[k], axes, rapid, std::nullopt);
+      if (!tight.ok()) continue;
+      require_axes(narrows[k], tight.poses, axes);
+      bool differs = false;
+      for (std::size_t i = 0; i < axes.size(); ++i) {
+        differs |= std::abs(tight.poses[i].c_rad - free.poses[i].c_rad) > 1e-9;
+      }
+      turned_back += differs;
+    }
+  }
+  CHECK(turned_back > 0);  // the narrow range is not the free plan everywhere
+}

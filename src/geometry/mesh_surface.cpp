@@ -34,13 +34,6 @@ struct HalfEdge {
   int a, b, face;
 };
 
-/// Every this many items a loop looks at the stop, where one is given (a few ms of work).
-constexpr std::size_t kStopStride = std::size_t{1} << 16;
-
-void look(const StopSource* stop, std::size_t i) {
-  if (stop && i % kStopStride == 0) stop->throw_if_stop_requested();
-}
-
 /// Every face's edges, sorted by (low vertex, high vertex, face) so that the faces sharing an
 /// edge stand next to each other: placed by low vertex (a counting sort, linear), then each
 /// vertex's few sorted.
@@ -52,21 +45,21 @@ std::vector<HalfEdge> sorted_half_edges(const TriangleMesh& m, const StopSource*
     return HalfEdge{std::min(a, b), std::max(a, b), static_cast<int>(f)};
   };
   for (std::size_t f = 0; f < m.faces.size(); ++f) {
-    look(stop, f);
+    look_at_stop(stop, f);
     for (int k = 0; k < 3; ++k) ++start[static_cast<std::size_t>(edge(f, k).a) + 1];
   }
   for (std::size_t v = 0; v + 1 < start.size(); ++v) start[v + 1] += start[v];
   std::vector<HalfEdge> edges(3 * m.faces.size());
   std::vector<std::size_t> fill(start.begin(), start.end() - 1);
   for (std::size_t f = 0; f < m.faces.size(); ++f) {
-    look(stop, f);
+    look_at_stop(stop, f);
     for (int k = 0; k < 3; ++k) {
       const HalfEdge e = edge(f, k);
       edges[fill[static_cast<std::size_t>(e.a)]++] = e;
     }
   }
   for (std::size_t v = 0; v + 1 < start.size(); ++v) {
-    look(stop, v);
+    look_at_stop(stop, v);
     std::sort(edges.begin() + static_cast<std::ptrdiff_t>(start[v]),
               edges.begin() + static_cast<std::ptrdiff_t>(start[v + 1]),
               [](const HalfEdge& x, const HalfEdge& y) {
@@ -98,7 +91,7 @@ VertexFaces faces_around_vertices(const TriangleMesh& m, const StopSource* stop)
   vf.around.resize(vf.start[nv]);
   std::vector<std::size_t> fill(vf.start.begin(), vf.start.end() - 1);
   for (std::size_t f = 0; f < nf; ++f) {
-    look(stop, f);
+    look_at_stop(stop, f);
     for (int k = 0; k < 3; ++k) {
       const auto& F = m.faces[f];
       const Vec3d& p = m.vertices[static_cast<std::size_t>(F[static_cast<std::size_t>(k)])];
@@ -138,7 +131,7 @@ std::vector<Eigen::Vector3f> corner_normals(const TriangleMesh& m, const std::ve
   const double crease_cos = std::cos(kCreaseRad);
   std::vector<Eigen::Vector3f> out(3 * nf, Eigen::Vector3f::Zero());
   for (std::size_t f = 0; f < nf; ++f) {
-    look(stop, f);
+    look_at_stop(stop, f);
     if (fn[f].isZero()) continue;
     for (int k = 0; k < 3; ++k) {
       const auto v = static_cast<std::size_t>(m.faces[f][static_cast<std::size_t>(k)]);
@@ -173,14 +166,13 @@ std::vector<Eigen::Vector3f> corner_normals(const TriangleMesh& m, const std::ve
 
 /// SurfaceModel::feature_edges and feature_vertex: the edges no tessellated curve runs over
 /// (not shared by exactly two faces, or turning by kCreaseRad or more between them).
-void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn, SurfaceModel& s,
-                   const StopSource* stop) {
+void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn,
+                   const std::vector<HalfEdge>& edges, SurfaceModel& s, const StopSource* stop) {
   const double crease_cos = std::cos(kCreaseRad);
-  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
   s.feature_vertex.assign(m.vertices.size(), false);
   std::size_t runs = 0;
   for (std::size_t i = 0; i < edges.size();) {
-    look(stop, runs++);
+    look_at_stop(stop, runs++);
     std::size_t j = i;
     while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
     bool feature = j - i != 2;
@@ -198,22 +190,38 @@ void feature_edges(const TriangleMesh& m, const std::vector<Vec3d>& fn, SurfaceM
   }
 }
 
-}  // namespace
-
-SurfaceModel surface_model_of(const TriangleMesh& m, const StopSource* stop) {
+/// Every face's unit normal (face_normal).
+std::vector<Vec3d> face_normals(const TriangleMesh& m, const StopSource* stop) {
   std::vector<Vec3d> fn(m.faces.size());
   for (std::size_t f = 0; f < m.faces.size(); ++f) {
-    look(stop, f);
+    look_at_stop(stop, f);
     fn[f] = face_normal(m, m.faces[f]);
   }
+  return fn;
+}
+
+double chordal_error(const TriangleMesh& m, const std::vector<Vec3d>& fn,
+                     const std::vector<HalfEdge>& edges, const StopSource* stop);
+
+}  // namespace
+
+SurfaceModel surface_and_chordal_error(const TriangleMesh& m, double& chordal_error_mm,
+                                       const StopSource* stop) {
+  const std::vector<Vec3d> fn = face_normals(m, stop);
+  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
   SurfaceModel s;
   s.corner_normal = corner_normals(m, fn, stop);
-  feature_edges(m, fn, s, stop);
+  feature_edges(m, fn, edges, s, stop);
+  chordal_error_mm = chordal_error(m, fn, edges, stop);
   return s;
 }
 
-double chordal_error_of(const TriangleMesh& m, const StopSource* stop) {
-  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
+namespace {
+
+/// The chordal error estimate of Part::chordal_error_mm, from the faces' normals and the
+/// sorted half-edges.
+double chordal_error(const TriangleMesh& m, const std::vector<Vec3d>& fn,
+                     const std::vector<HalfEdge>& edges, const StopSource* stop) {
   // Every edge two facets share, with its turn below 30 deg (sharper is a designed edge).
   struct Turn {
     int a, b, f1, f2;
@@ -222,13 +230,13 @@ double chordal_error_of(const TriangleMesh& m, const StopSource* stop) {
   std::vector<Turn> turns;
   const double sharp = kCreaseRad;
   for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
-    look(stop, i);
+    look_at_stop(stop, i);
     const HalfEdge& e = edges[i];
     const HalfEdge& g = edges[i + 1];
     if (e.a != g.a || e.b != g.b) continue;
     if (i + 2 < edges.size() && edges[i + 2].a == e.a && edges[i + 2].b == e.b) continue;
-    const Vec3d n1 = face_normal(m, m.faces[static_cast<std::size_t>(e.face)]);
-    const Vec3d n2 = face_normal(m, m.faces[static_cast<std::size_t>(g.face)]);
+    const Vec3d& n1 = fn[static_cast<std::size_t>(e.face)];
+    const Vec3d& n2 = fn[static_cast<std::size_t>(g.face)];
     if (n1.isZero() || n2.isZero()) continue;
     // Consistently oriented neighbours share the edge in opposite directions: the angle
     // between their normals is the turn; else one is flipped.
@@ -247,7 +255,7 @@ double chordal_error_of(const TriangleMesh& m, const StopSource* stop) {
   }
   double largest = 0.0;
   for (std::size_t k = 0; k < turns.size(); ++k) {
-    look(stop, k);
+    look_at_stop(stop, k);
     const Turn& t = turns[k];
     const std::array<int, 3>& f1 = m.faces[static_cast<std::size_t>(t.f1)];
     const std::array<int, 3>& f2 = m.faces[static_cast<std::size_t>(t.f2)];
@@ -269,5 +277,7 @@ double chordal_error_of(const TriangleMesh& m, const StopSource* stop) {
   }
   return largest;
 }
+
+}  // namespace
 
 }  // namespace taxopt::detail

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,14 @@ namespace taxopt::detail {
 /// A turn between two facets from this angle on is a designed edge, not a tessellated curve
 /// (the chordal error's and the smooth normals' one threshold).
 constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
+
+/// Every this many items a long loop of a part's build looks at the stop (a few ms of work).
+constexpr std::size_t kStopStride = std::size_t{1} << 16;
+
+/// Looks at the stop, where one is given, at every kStopStride-th item `i` of a loop.
+inline void look_at_stop(const StopSource* stop, std::size_t i) {
+  if (stop && i % kStopStride == 0) stop->throw_if_stop_requested();
+}
 
 /// Unit normal of face f (by its vertex order), zero for a degenerate face.
 Vec3d face_normal(const TriangleMesh& m, const std::array<int, 3>& f);
@@ -36,11 +45,10 @@ struct SurfaceModel {
   std::vector<bool> feature_vertex;
 };
 
-/// Builds the SurfaceModel of a mesh; with `stop`, looking at it every few milliseconds
-/// (StopSource::throw_if_stop_requested).
-SurfaceModel surface_model_of(const TriangleMesh& m, const StopSource* stop = nullptr);
-
-/// The chordal error estimate of Part::chordal_error_mm; `stop` as surface_model_of's.
-double chordal_error_of(const TriangleMesh& m, const StopSource* stop = nullptr);
+/// Builds the SurfaceModel of a mesh and the chordal error estimate of
+/// Part::chordal_error_mm (into `chordal_error_mm`), the faces' edges sorted once; with
+/// `stop`, looking at it every few milliseconds (StopSource::throw_if_stop_requested).
+SurfaceModel surface_and_chordal_error(const TriangleMesh& m, double& chordal_error_mm,
+                                       const StopSource* stop = nullptr);
 
 }  // namespace taxopt::detail

@@ -23,9 +23,8 @@
 namespace taxopt {
 namespace {
 
-using detail::chordal_error_of;
 using detail::face_normal;
-using detail::surface_model_of;
+using detail::surface_and_chordal_error;
 using detail::SurfaceModel;
 using detail::width_across;
 
@@ -50,9 +49,6 @@ struct StoppableSplit {
     split(first, beyond, box);
   }
 };
-
-/// Every this many items a long loop of the build looks at the stop (a few ms of work).
-constexpr std::size_t kStopStride = std::size_t{1} << 16;
 
 K::Point_3 to_cgal(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
 Vec3d to_eigen(const K::Point_3& p) { return {p.x(), p.y(), p.z()}; }
@@ -118,7 +114,7 @@ void check_mesh(const TriangleMesh& mesh, const StopSource& stop) {
   // As the mesh readers check a file: a mesh built in code has not been read.
   if (mesh.faces.empty()) throw InputError("Part: the mesh has no faces");
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-    if (v % kStopStride == 0) stop.throw_if_stop_requested();
+    detail::look_at_stop(&stop, v);
     // Beyond any machine (1 km, as the CL reader's reach) a coordinate is a broken mesh, and
     // FCL's fitting of its bounding volumes does not converge.
     if (!mesh.vertices[v].allFinite() ||
@@ -129,7 +125,7 @@ void check_mesh(const TriangleMesh& mesh, const StopSource& stop) {
   }
   const auto count = static_cast<long long>(mesh.vertices.size());
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (f % kStopStride == 0) stop.throw_if_stop_requested();
+    detail::look_at_stop(&stop, f);
     for (int index : mesh.faces[f]) {
       if (index < 0 || index >= count) {
         throw InputError("Part: face " + std::to_string(f) + " names vertex " +
@@ -148,7 +144,7 @@ Part::Part(TriangleMesh mesh, const StopSource& stop) : impl_(std::make_unique<I
   impl_->triangles.reserve(m.faces.size());
   double edges = 0.0;
   for (std::size_t k = 0; k < m.faces.size(); ++k) {
-    if (k % kStopStride == 0) stop.throw_if_stop_requested();
+    detail::look_at_stop(&stop, k);
     const auto& f = m.faces[k];
     const Vec3d& a = m.vertices[static_cast<std::size_t>(f[0])];
     const Vec3d& b = m.vertices[static_cast<std::size_t>(f[1])];
@@ -157,8 +153,7 @@ Part::Part(TriangleMesh mesh, const StopSource& stop) : impl_(std::make_unique<I
     edges += (b - a).norm() + (c - b).norm() + (a - c).norm();
   }
   impl_->mean_edge = edges / (3.0 * static_cast<double>(m.faces.size()));
-  impl_->chordal_error = chordal_error_of(m, &stop);
-  impl_->surface = surface_model_of(m, &stop);
+  impl_->surface = surface_and_chordal_error(m, impl_->chordal_error, &stop);
   impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
   impl_->tree.custom_build(impl_->tree.traits().compute_bbox_object(),
                            StoppableSplit{impl_->tree.traits().split_primitives_object(), &stop});
@@ -167,7 +162,7 @@ Part::Part(TriangleMesh mesh, const StopSource& stop) : impl_(std::make_unique<I
   stop.throw_if_stop_requested();
   impl_->tree.accelerate_distance_queries();
   for (std::size_t v = 0; v < m.vertices.size(); ++v) {
-    if (v % kStopStride == 0) stop.throw_if_stop_requested();
+    detail::look_at_stop(&stop, v);
     impl_->kd.insert(to_cgal(m.vertices[v]));
   }
   stop.throw_if_stop_requested();

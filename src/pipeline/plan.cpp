@@ -172,8 +172,7 @@ class OperationPlanner {
     std::vector<Vec3d> axes;
     for (const CLPointd& p : op.points) axes.push_back(p.axis);
     std::vector<char> clear(op.points.size(), 1);
-    static const detail::StageProgress::Callback kNoReport;  // the stop looked at, no progress
-    detail::StageProgress watch(kNoReport, std::string(), op.points.size(), run.options.stop);
+    detail::StageProgress watch(op.points.size(), run.options.stop);  // the stop looked at
     for (std::size_t i :
          colliding_points(*run.planner_check(), *o.strict_tool, op, axes, o.contacts, &watch)) {
       clear[i] = 0;

@@ -44,9 +44,8 @@ std::vector<char> points_and_moves_hit(const OperationPlanInputs& in,
   }
   // No progress to report (the sweeps run inside a stage's item), but the job's stop looked
   // at with every point and move.
-  static const detail::StageProgress::Callback kNoReport;
   const StopSource none;
-  detail::StageProgress watch(kNoReport, std::string(), 3 * n, in.stop ? *in.stop : none);
+  detail::StageProgress watch(3 * n, in.stop ? *in.stop : none);
   std::vector<ContactPoint> air(n);  // no contacts known: treat every move as in the air
   for (std::size_t i :
        colliding_moves(model, tool, machine, xyz, a, c, contacts.empty() ? air : contacts, &watch,

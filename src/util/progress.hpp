@@ -28,6 +28,10 @@ class StageProgress {
     report(0);
     check();
   }
+  /// A watch: the stop looked at with every item, no progress reported (sweeps that run
+  /// inside another stage's item).
+  StageProgress(std::size_t total, const StopSource& stop)
+      : StageProgress(no_report(), std::string(), total, stop) {}
   StageProgress(const StageProgress&) = delete;
   StageProgress& operator=(const StageProgress&) = delete;
   /// Reports the end (done = total) if the stage has not, unless it is being left by an
@@ -61,6 +65,11 @@ class StageProgress {
     } catch (...) {
       stop_.request_stop(std::current_exception());
     }
+  }
+
+  static const Callback& no_report() {
+    static const Callback none;
+    return none;
   }
 
   const Callback& callback_;

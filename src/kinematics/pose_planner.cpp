@@ -259,12 +259,16 @@ class PosePlanner {
     // Continuous C: take the turn nearest to the previous key point (the first from `start`,
     // else from home, C = 0). A half turn either way is a tie: turned negative, as the
     // production NX post for the Haas UMC-750 turns it (tests/test_program.cpp: it turns -180 deg
-    // where taxopt turned +180, and every C after differed by a whole turn).
+    // where taxopt turned +180, and every C after differed by a whole turn). A bounded C
+    // planned free of its range turns such a tie towards C = 0, as the programme over its
+    // turns keeps the candidate nearest C = 0: else every pass over the pole turned it half a
+    // turn further the same way (the 143,840-point sine left C +-36000 deg on LinuxCNC's sample).
     if (unwrapped_c()) {
+      const double pi = Constants<double>::pi();
       double prev_c = start ? start->c_rad : 0.0;
       for (std::size_t k : keys) {
         double turn = wrap_pi(plan.poses[k].c_rad - prev_c);
-        if (std::abs(turn - Constants<double>::pi()) < kTie) turn = -Constants<double>::pi();
+        if (std::abs(turn - pi) < kTie) turn = m_.c.continuous || prev_c >= 0.0 ? -pi : pi;
         plan.poses[k].c_rad = prev_c + turn;
         prev_c = plan.poses[k].c_rad;
       }

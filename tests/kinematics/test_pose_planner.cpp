@@ -278,3 +278,35 @@ TEST_CASE(
   }
   CHECK(turned_back > 0);  // the narrow range is not the free plan everywhere
 }
+
+TEST_CASE(
+    "planner: on a bounded C of many turns a half turn over the pole turns back towards C = 0, "
+    "not on round the same way pass after pass",
+    "[kinematics]") {
+  // A tilt range almost one-sided (LinuxCNC's xyzac-trt: A in [-100, 50] deg): a pass
+  // through the pole keeps A's side and turns C half a turn. Unwrapped with every such tie
+  // turned negative, 40 passes left C 14,400 deg from home (the 143,840-point sine: -36181 deg, out
+  // of the sample's +-36000, so the plan fell back to the programme over every turn).
+  MachineKinematicsd m = default_machine_kinematics();
+  m.tilt.min_rad = deg_to_rad(-100.0);
+  m.tilt.max_rad = deg_to_rad(5.0);
+  m.c.continuous = false;
+  m.c.min_rad = deg_to_rad(-36000.0);
+  m.c.max_rad = deg_to_rad(36000.0);
+  std::vector<Vec3d> axes;
+  std::vector<bool> rapid;
+  for (int pass = 0; pass < 40; ++pass) {
+    for (int i = 0; i <= 20; ++i) {
+      const double t = deg_to_rad(-30.0 + 3.0 * i);  // through the pole, along Y
+      axes.emplace_back(0.0, std::sin(t), std::cos(t));
+      rapid.push_back(i == 0);
+    }
+  }
+  const PosePlan plan = plan_poses(m, axes, rapid);
+  REQUIRE(plan.ok());
+  require_axes(m, plan.poses, axes);
+  double widest = 0.0;
+  for (const Posed& p : plan.poses) widest = std::max(widest, std::abs(rad_to_deg(p.c_rad)));
+  CHECK(widest <= 180.0 + 1e-6);
+  CHECK(max_c_step_deg(plan.poses) <= 180.0 + 1e-6);
+}

@@ -377,8 +377,7 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
   if (!(p.feed_mm_per_min > 0.0)) {
     throw std::invalid_argument("write_gcode: feed move without a feed");
   }
-  const double given_s = i < op.programmed_time_s.size() ? op.programmed_time_s[i] : 0.0;
-  const double programmed_min = (given_s > 0.0 ? given_s : own_times_[i]) / 60.0;
+  const double programmed_min = programmed_minutes(i);
   // A scheduled block (never faster than programmed) writes its F with 8 significant
   // digits, so that rounding cannot carry it over the limits it was scheduled for; where
   // the controller takes fewer decimals, F is rounded down (slower, never faster).
@@ -400,9 +399,8 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
     // and the next block does not speed up: a held F is slower than asked, so the step up to
     // a faster next block grows past what the schedule allowed (X at 100.116 of its
     // 100 mm/s^2 on LinuxCNC's max5, SOLIDWORKS CAM's glue file, where a new FEDRAT ramps up).
-    const bool at_programmed = time_min <= programmed_min * (1.0 + 1e-12);
     f = joint_feed(prev_xyz_, prev_pose_, xyz, op.poses[i], time_min, scheduled,
-                   at_programmed && next_not_faster(i));
+                   keeps_programmed_time(i) && next_not_faster(i));
   } else {
     f = tcp_feed(i, programmed_min);
   }
@@ -411,14 +409,23 @@ void ProgramWriter::feed(std::size_t i, const Vec3d& xyz, const std::string& wor
   finish_point(i, xyz, words, block, restore_inverse_time);
 }
 
+double ProgramWriter::programmed_minutes(std::size_t i) const {
+  const PostedOperation& op = *op_;
+  const double given_s = i < op.programmed_time_s.size() ? op.programmed_time_s[i] : 0.0;
+  return (given_s > 0.0 ? given_s : own_times_[i]) / 60.0;
+}
+
+bool ProgramWriter::keeps_programmed_time(std::size_t i) const {
+  const PostedOperation& op = *op_;
+  return !(i < op.block_time_s.size() &&
+           op.block_time_s[i] / 60.0 > programmed_minutes(i) * (1.0 + 1e-12));
+}
+
 bool ProgramWriter::next_not_faster(std::size_t i) const {
   const PostedOperation& op = *op_;
   const std::size_t n = i + 1;
   if (n >= op.points.size() || op.points[n].motion == Motion::Rapid) return true;
-  if (op.points[n].feed_mm_per_min != op.points[i].feed_mm_per_min) return false;
-  const double given_s = n < op.programmed_time_s.size() ? op.programmed_time_s[n] : 0.0;
-  const double programmed_s = given_s > 0.0 ? given_s : own_times_[n];
-  return !(n < op.block_time_s.size() && op.block_time_s[n] > programmed_s * (1.0 + 1e-12));
+  return op.points[n].feed_mm_per_min == op.points[i].feed_mm_per_min && keeps_programmed_time(n);
 }
 
 std::string ProgramWriter::tcp_feed(std::size_t i, double programmed_min) const {

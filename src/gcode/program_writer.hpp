@@ -227,6 +227,10 @@ class ProgramWriter {
   /// Its distance over the block time is the programmed feed unless the programmed time is
   /// another path's (FeedReference::CutterPath).
   std::string tcp_feed(std::size_t i, double programmed_min) const;
+  /// Point i's block time at its programmed feed (the posted operation's, else its own), min.
+  double programmed_minutes(std::size_t i) const;
+  /// Whether point i's block keeps its programmed time: no schedule, or one no limit slowed.
+  bool keeps_programmed_time(std::size_t i) const;
   /// Whether the block after point `i` runs no faster than it: none, a rapid, or a block at
   /// the same programmed feed that no limit slowed (ramps come after such blocks only).
   bool next_not_faster(std::size_t i) const;

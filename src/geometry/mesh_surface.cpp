@@ -200,24 +200,6 @@ std::vector<Vec3d> face_normals(const TriangleMesh& m, const StopSource* stop) {
   return fn;
 }
 
-double chordal_error(const TriangleMesh& m, const std::vector<Vec3d>& fn,
-                     const std::vector<HalfEdge>& edges, const StopSource* stop);
-
-}  // namespace
-
-SurfaceModel surface_and_chordal_error(const TriangleMesh& m, double& chordal_error_mm,
-                                       const StopSource* stop) {
-  const std::vector<Vec3d> fn = face_normals(m, stop);
-  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
-  SurfaceModel s;
-  s.corner_normal = corner_normals(m, fn, stop);
-  feature_edges(m, fn, edges, s, stop);
-  chordal_error_mm = chordal_error(m, fn, edges, stop);
-  return s;
-}
-
-namespace {
-
 /// The chordal error estimate of Part::chordal_error_mm, from the faces' normals and the
 /// sorted half-edges.
 double chordal_error(const TriangleMesh& m, const std::vector<Vec3d>& fn,
@@ -279,5 +261,16 @@ double chordal_error(const TriangleMesh& m, const std::vector<Vec3d>& fn,
 }
 
 }  // namespace
+
+SurfaceModel surface_and_chordal_error(const TriangleMesh& m, double& chordal_error_mm,
+                                       const StopSource* stop) {
+  const std::vector<Vec3d> fn = face_normals(m, stop);
+  const std::vector<HalfEdge> edges = sorted_half_edges(m, stop);
+  SurfaceModel s;
+  s.corner_normal = corner_normals(m, fn, stop);
+  feature_edges(m, fn, edges, s, stop);
+  chordal_error_mm = chordal_error(m, fn, edges, stop);
+  return s;
+}
 
 }  // namespace taxopt::detail

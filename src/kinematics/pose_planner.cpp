@@ -61,8 +61,7 @@ class PosePlanner {
         rapid_into_(rapid_into),
         start_(start),
         options_(options),
-        preferred_(preferred),
-        cand_(axes.size()) {}
+        preferred_(preferred) {}
 
   PosePlan run() {
     if (!m_.c.continuous) {
@@ -76,9 +75,6 @@ class PosePlanner {
       PosePlan free = attempt();
       if (!free.ok() || within_c_range(free)) return free;
       wind_free_ = false;
-      cand_.assign(axes_.size(), {});
-      keys_.clear();
-      plan_ = PosePlan{};
     }
     return attempt();
   }
@@ -94,8 +90,12 @@ class PosePlanner {
   /// one planned free of its range).
   bool unwrapped_c() const { return m_.c.continuous || wind_free_; }
 
+  /// One plan from scratch (the candidates, the programme, the pole runs).
   PosePlan attempt() {
     const std::size_t n = axes_.size();
+    cand_.assign(n, {});
+    keys_.clear();
+    plan_ = PosePlan{};
     plan_.poses.assign(n, Posed{});
     if (n == 0) return plan_;
     for (std::size_t i = 0; i < n; ++i) {

@@ -15,40 +15,17 @@ import subprocess
 import sys
 import tempfile
 
-# The options the tests give each real file (tests/support.cpp real_flags).
-PEENING_SKIPS = ["SATUTEST", "RECIPE", "AIR", "GLASS", "FEEDOVER", "SAVERE", "STANDOFF",
-                 "SUBPROG", "SURFACE", "INITIAL", "REWIND"]
-
-
-def real_flags(name):
-    flags = []
-    if name in ("amorim-interface-glue.apt", "amorim-wall-holes.apt"):
-        flags += ["--skip-record", "CUTCOM"]
-    if name.startswith("peening-"):
-        for word in PEENING_SKIPS:
-            flags += ["--skip-record", word]
-        flags += ["--tool-number", "1", "--spindle-rpm", "1000"]
-    if name.startswith("mech491-"):
-        flags += ["--spindle-rpm", "1000", "--tool-number", "1"]
-    return flags
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from real_files import real_flags, real_path  # noqa: E402
 
 
 def inputs(source, work):
-    """The demo with its part, and every real file (the peening file's SPINDLE records made
-    comments, as tests/support.cpp real_text does)."""
+    """The demo with its part, and every real file with the suite's options (real_files.py)."""
     out = {"demo": ["--in", f"{source}/data/demo/sine.cls", "--part", f"{source}/data/demo/sine.stl"]}
     real = f"{source}/tests/data/real"
     for name in sorted(os.listdir(real)):
-        if not name.endswith((".apt", ".cls", ".ncl", ".aptsource")):
-            continue
-        path = f"{real}/{name}"
-        if name.startswith("peening-"):
-            with open(path, errors="replace") as f:
-                lines = f.read().splitlines(True)
-            path = f"{work}/{name}"
-            with open(path, "w") as f:
-                f.write("".join("$$ " + l if l.startswith("SPINDLE/") else l for l in lines))
-        out[name] = ["--in", path] + real_flags(name)
+        if name.endswith((".apt", ".cls", ".ncl", ".aptsource")):
+            out[name] = ["--in", real_path(real, name, work)] + real_flags(name)
     return out
 
 

@@ -61,17 +61,13 @@ import subprocess
 import sys
 import tempfile
 
-# The real files' options as the suite runs them (tests/support.cpp, real_flags): the NX files
-# name no spindle speed or tool, CATIA's peening file has its own records to skip and SPINDLE
-# records made comments; tool lengths of 50 mm in the file's unit.
-PEENING_SKIPS = ["SATUTEST", "RECIPE", "AIR", "GLASS", "FEEDOVER", "SAVERE",
-                 "STANDOFF", "SUBPROG", "SURFACE", "INITIAL", "REWIND"]
-REAL = [
-    ("creopost-profilfraesen.ncl", ["--gauge-length", "50"]),
-    ("peening-catia-multax.aptsource",
-     ["--gauge-length", "50", "--spindle-rpm", "1000", "--tool-number", "1"] +
-     [w for k in PEENING_SKIPS for w in ("--skip-record", k)]),
-]
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from real_files import real_flags, real_path  # noqa: E402
+
+# The real files that fit the samples, with the suite's options (tests/real_files.py) and tool
+# lengths of 50 mm in the file's unit.
+REAL = [(name, ["--gauge-length", "50"] + real_flags(name))
+        for name in ("creopost-profilfraesen.ncl", "peening-catia-multax.aptsource")]
 
 
 def index_cases(src, work, demo):
@@ -168,13 +164,7 @@ def cases(exe, src, work, which):
         real = os.path.join(src, "tests", "data", "real")  # the project's copies
         out = []
         for name, extra in REAL:
-            path = os.path.join(real, name)
-            if name.startswith("peening-"):
-                text = open(path).read().split("\n")
-                path = os.path.join(work, name)
-                with open(path, "w") as f:
-                    f.write("\n".join("$$ " + l if l.startswith("SPINDLE/") else l
-                                       for l in text))
+            path = real_path(real, name, work)
             out.append((name, ["--in", path, "--machine", preset] + extra, "xyzac", 1.0))
             out.append((name + ", B/C", ["--in", path, "--machine", bc] + extra, "xyzbc", 1.0))
         return out + demos, failures

@@ -112,10 +112,10 @@ struct JobOptions {
   bool feed_schedule = false;
   /// Receives progress and informational lines (the library never prints).
   std::function<void(const std::string&)> log;
-  /// Receives the progress of the long stages ("contact recovery", "optimisation",
-  /// "verification"): items done of total, from 0 and once per whole percent up to done ==
-  /// total. Called from any of the job's threads, never concurrently. An exception it throws
-  /// stops the job (as `stop` does) and is what run_job throws.
+  /// Receives the progress of the long stages ("contact recovery", "optimisation", "posting",
+  /// "writing", "verification", in that order): items done of total, from 0 and once per whole
+  /// percent up to done == total. Called from any of the job's threads, never concurrently. An
+  /// exception it throws stops the job (as `stop` does) and is what run_job throws.
   std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
   /// Stops the job from another thread: run_job throws Cancelled, nothing is returned.
   StopSource stop;

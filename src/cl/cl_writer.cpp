@@ -1,7 +1,10 @@
+#include "cl/cl_writer.hpp"
+
 #include <cstdio>
 #include <stdexcept>
 
 #include "taxopt/io/cl_file.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt {
 namespace {
@@ -28,6 +31,11 @@ std::string goto_line(const char* word, const CLPointd& p, double mm_per_file_un
 }  // namespace
 
 std::string format_cl(const Toolpath& original, const std::vector<Operationd>& operations) {
+  return cl::format_cl(original, operations, nullptr);
+}
+
+std::string cl::format_cl(const Toolpath& original, const std::vector<Operationd>& operations,
+                          const StopSource* stop) {
   if (operations.size() != original.operations.size()) {
     throw std::invalid_argument("format_cl: operations do not match the toolpath's");
   }
@@ -53,6 +61,7 @@ std::string format_cl(const Toolpath& original, const std::vector<Operationd>& o
   // and CNTRL) go with it.
   std::vector<char> changed(original.records.size(), 0);
   for (std::size_t k = 0; k < original.records.size(); ++k) {
+    detail::look_at_stop(stop, k, detail::kPointStride);
     const auto& r = original.records[k];
     if (r.point_count == 0 || r.op < 0) continue;
     const auto& before = original.operations[static_cast<std::size_t>(r.op)].points;
@@ -63,6 +72,7 @@ std::string format_cl(const Toolpath& original, const std::vector<Operationd>& o
     }
   }
   for (std::size_t k = 0; k < original.records.size(); ++k) {
+    detail::look_at_stop(stop, k, detail::kPointStride);
     const auto& r = original.records[k];
     if (r.owner >= 0 && changed[static_cast<std::size_t>(r.owner)]) continue;
     if (!changed[k]) {

@@ -8,8 +8,12 @@
 
 #include "util/parallel.hpp"
 #include "util/parallel_select.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt::controller {
+
+/// Blocks followed between two looks at the job's stop (each some hundred servo periods).
+constexpr std::size_t kBlocksBetweenLooks = 64;
 
 /// The joints (the tip's machine position, A, C) on `b` with every axis's acceleration limit
 /// scaled by `accel_scale` (1: the machine's), sampled each 1 ms servo period and differenced
@@ -101,14 +105,17 @@ void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_sca
 /// GcodeProgram::tcp_joint_peaks of `blocks` with the axes' accelerations scaled by
 /// `accel_scale`.
 std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector<TcpBlock>& blocks,
-                                       double accel_scale) {
+                                       double accel_scale, const StopSource* stop) {
   using Peaks = std::vector<JointPeak>;
   // Blocks in parallel (a program of 143,840 points is 40 million servo periods); a later
   // chunk's peak replaces an earlier one's only when larger, as a later block's does.
   return detail::parallel_reduce(
       0, blocks.size(), Peaks{},
       [&](std::size_t lo, std::size_t hi, Peaks acc) {
-        for (std::size_t i = lo; i < hi; ++i) tcp_block_peaks(machine, blocks[i], accel_scale, acc);
+        for (std::size_t i = lo; i < hi; ++i) {
+          detail::look_at_stop(stop, i, kBlocksBetweenLooks);
+          tcp_block_peaks(machine, blocks[i], accel_scale, acc);
+        }
         return acc;
       },
       [](Peaks left, const Peaks& right) {
@@ -133,7 +140,7 @@ std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector
 /// share does (the ramps' slope with it; a short block's top speed too), so a bisection finds
 /// it; only the blocks past a limit at the full share are followed.
 double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
-                            const std::vector<TcpBlock>& blocks) {
+                            const std::vector<TcpBlock>& blocks, const StopSource* stop) {
   const auto worst_of = [&](const std::vector<JointPeak>& peaks) {
     double r = 0.0;
     for (std::size_t j = 0; j < peaks.size(); ++j) {
@@ -143,7 +150,7 @@ double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
     return r;
   };
   const auto worst = [&](const std::vector<TcpBlock>& of, double scale) {
-    return worst_of(tcp_joint_peaks(machine, of, scale));
+    return worst_of(tcp_joint_peaks(machine, of, scale, stop));
   };
   // A joint at its limit to the last bits (a rotary axis, which is its own joint, ramping at
   // its limit) is within it.
@@ -152,6 +159,7 @@ double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
   // Each block alone, the blocks in parallel (one block's peaks need no reduction of their own).
   const std::vector<std::size_t> past_alone =
       detail::parallel_select(0, blocks.size(), [&](std::size_t i) {
+        detail::look_at_stop(stop, i, kBlocksBetweenLooks);
         std::vector<JointPeak> peaks;
         tcp_block_peaks(machine, blocks[i], 1.0, peaks);
         return past(worst_of(peaks));

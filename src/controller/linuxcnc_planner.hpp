@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "taxopt/core/stop.hpp"
 #include "taxopt/io/gcode.hpp"
 #include "taxopt/kinematics/machine.hpp"
 
@@ -39,15 +40,15 @@ void tcp_block_peaks(const Machine& machine, const TcpBlock& b, double accel_sca
                      std::vector<JointPeak>& peaks);
 
 /// GcodeProgram::tcp_joint_peaks of `blocks` with the axes' accelerations scaled by
-/// `accel_scale`.
+/// `accel_scale`; `stop`, where given, looked at every few blocks.
 std::vector<JointPeak> tcp_joint_peaks(const Machine& machine, const std::vector<TcpBlock>& blocks,
-                                       double accel_scale);
+                                       double accel_scale, const StopSource* stop = nullptr);
 
 /// The largest share of the axes' acceleration limits (0.001 steps, rounded down) at which
 /// `blocks` keep every joint within its own (joint_accel_limit); 0 where none down to 0.05
 /// does.
 double tcp_axis_accel_scale(const Machine& machine, const JointLimits& limits,
-                            const std::vector<TcpBlock>& blocks);
+                            const std::vector<TcpBlock>& blocks, const StopSource* stop = nullptr);
 
 /// Which of `moves` (read back from `text`, LinuxCNC's program) its planner (tp.c, 2.9) runs at
 /// half its acceleration: the rapids that keep the parabolic end they are queued with (G64).

@@ -4,8 +4,10 @@
 
 #include "controller/feed_word.hpp"
 #include "dialects/dialect_rules.hpp"
+#include "gcode/program_writer.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/io/gcode.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt {
 
@@ -46,10 +48,12 @@ class GcodeReader {
         tcp_(knows_.tcp_from_start) {}
 
   std::vector<GcodeMove> read(const std::string& text, const std::vector<int>& verbatim_lines,
-                              const std::vector<std::pair<int, int>>& tool_calls) {
+                              const std::vector<std::pair<int, int>>& tool_calls,
+                              const StopSource* stop) {
     std::size_t next_verbatim = 0;
     std::size_t pos = 0;
     while (pos <= text.size()) {
+      detail::look_at_stop(stop, static_cast<std::size_t>(line_no_), detail::kPointStride);
       std::size_t end = text.find('\n', pos);
       if (end == std::string::npos) end = text.size();
       std::string ln = text.substr(pos, end - pos);
@@ -380,7 +384,15 @@ std::vector<GcodeMove> read_gcode_moves(const std::string& text, const std::stri
                                         GcodeDialect dialect,
                                         const std::vector<int>& verbatim_lines, char tilt_letter,
                                         const std::vector<std::pair<int, int>>& tool_calls) {
-  return GcodeReader(source, dialect, tilt_letter).read(text, verbatim_lines, tool_calls);
+  return gcode::read_moves(text, source, dialect, verbatim_lines, tilt_letter, tool_calls, nullptr);
+}
+
+std::vector<GcodeMove> gcode::read_moves(const std::string& text, const std::string& source,
+                                         GcodeDialect dialect,
+                                         const std::vector<int>& verbatim_lines, char tilt_letter,
+                                         const std::vector<std::pair<int, int>>& tool_calls,
+                                         const StopSource* stop) {
+  return GcodeReader(source, dialect, tilt_letter).read(text, verbatim_lines, tool_calls, stop);
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "taxopt/core/error.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt {
 
@@ -365,6 +366,7 @@ void ProgramWriter::operation(std::size_t k) {
   index_target_ = 0;
   own_times_ = programmed_block_times_s(op.points, op.poses);
   for (std::size_t i = 0; i < op.points.size(); ++i) {
+    detail::look_at_stop(stop_, i, detail::kPointStride);
     point_ = i;
     events_before(i);
     if (arc_at(i)) {
@@ -516,10 +518,9 @@ void ProgramWriter::length_and_tcp_off() {
   verbatim(tcp_ ? g_.program.tcp_off : std::vector<std::string>{}, BlockKind::LengthTcp);
 }
 
-}  // namespace gcode
-
-GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
-                         LengthUnit units, const std::vector<std::string>& comments) {
+GcodeProgram write_program(const std::vector<PostedOperation>& operations, const Machine& machine,
+                           LengthUnit units, const std::vector<std::string>& comments,
+                           const StopSource* stop) {
   const GcodeSettings& g = machine.gcode;
   if (!has_inverse_time(g.dialect) && g.feed_mode == FeedMode::InverseTime) {
     throw std::invalid_argument("write_gcode: the heidenhain dialect has no inverse time (G93)");
@@ -529,7 +530,14 @@ GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const M
                                 " decimals are more than " + to_string(g.dialect) + " takes (" +
                                 std::to_string(max_decimals(g.dialect)) + ")");
   }
-  return gcode::ProgramWriter(operations, machine, units).write(comments);
+  return ProgramWriter(operations, machine, units).write(comments, stop);
+}
+
+}  // namespace gcode
+
+GcodeProgram write_gcode(const std::vector<PostedOperation>& operations, const Machine& machine,
+                         LengthUnit units, const std::vector<std::string>& comments) {
+  return gcode::write_program(operations, machine, units, comments, nullptr);
 }
 
 }  // namespace taxopt

@@ -9,9 +9,21 @@
 #include <vector>
 
 #include "gcode/dialect.hpp"
+#include "taxopt/core/stop.hpp"
 #include "taxopt/io/gcode.hpp"
 
 namespace taxopt::gcode {
+
+/// write_gcode looking at `stop` as it goes (a few milliseconds of work apart), and
+/// read_gcode_moves the same: a job's stop is honoured inside them.
+GcodeProgram write_program(const std::vector<PostedOperation>& operations, const Machine& machine,
+                           LengthUnit units, const std::vector<std::string>& comments,
+                           const StopSource* stop);
+std::vector<GcodeMove> read_moves(const std::string& text, const std::string& source,
+                                  GcodeDialect dialect, const std::vector<int>& verbatim_lines,
+                                  char tilt_letter,
+                                  const std::vector<std::pair<int, int>>& tool_calls,
+                                  const StopSource* stop);
 
 /// Writes one program. The stages: the program's start, per operation its start (retract,
 /// tool, spindle, coolant, table turn, length and TCP on), its points (events, arcs, index
@@ -39,7 +51,9 @@ class ProgramWriter {
         retract_z_(dialect_.number(g_.program.retract_z_mm * scale_, d_)),
         // The tilt axis's word: A or B (ac_machine.hpp).
         tilt_word_(std::string(" ") + machine.rotary.tilt_letter()) {}
-  GcodeProgram write(const std::vector<std::string>& comments) {
+  /// The program; `stop`, where given, is looked at every few hundred points.
+  GcodeProgram write(const std::vector<std::string>& comments, const StopSource* stop = nullptr) {
+    stop_ = stop;
     program_start(comments);
     for (std::size_t k = 0; k < ops_.size(); ++k) operation(k);
     program_end();
@@ -253,6 +267,7 @@ class ProgramWriter {
   const bool tcp_, joint_safe_, retracts_;
   const JointLimits limits_;
   const std::string retract_z_, tilt_word_;
+  const StopSource* stop_ = nullptr;
   // --- the program so far ------------------------------------------------------------------
   GcodeProgram prog_;
   /// Where the program stands in its own frame as written (X Y Z mm, the tilt axis and C deg,

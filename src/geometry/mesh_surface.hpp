@@ -11,20 +11,13 @@
 
 #include "taxopt/core/stop.hpp"
 #include "taxopt/geometry/part.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt::detail {
 
 /// A turn between two facets from this angle on is a designed edge, not a tessellated curve
 /// (the chordal error's and the smooth normals' one threshold).
 constexpr double kCreaseRad = 30.0 * 3.14159265358979323846 / 180.0;
-
-/// Every this many items a long loop of a part's build looks at the stop (a few ms of work).
-constexpr std::size_t kStopStride = std::size_t{1} << 16;
-
-/// Looks at the stop, where one is given, at every kStopStride-th item `i` of a loop.
-inline void look_at_stop(const StopSource* stop, std::size_t i) {
-  if (stop && i % kStopStride == 0) stop->throw_if_stop_requested();
-}
 
 /// Unit normal of face f (by its vertex order), zero for a degenerate face.
 Vec3d face_normal(const TriangleMesh& m, const std::array<int, 3>& f);

@@ -6,6 +6,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kinematics/pose_planning.hpp"
+#include "util/progress.hpp"
+
 namespace taxopt {
 namespace {
 
@@ -55,13 +58,15 @@ class PosePlanner {
  public:
   PosePlanner(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
               const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
-              const PosePlanOptions& options, const std::vector<std::optional<Posed>>& preferred)
+              const PosePlanOptions& options, const std::vector<std::optional<Posed>>& preferred,
+              const StopSource* stop)
       : m_(m),
         axes_(axes),
         rapid_into_(rapid_into),
         start_(start),
         options_(options),
-        preferred_(preferred) {}
+        preferred_(preferred),
+        stop_(stop) {}
 
   PosePlan run() {
     if (!m_.c.continuous) {
@@ -99,6 +104,7 @@ class PosePlanner {
     plan_.poses.assign(n, Posed{});
     if (n == 0) return plan_;
     for (std::size_t i = 0; i < n; ++i) {
+      detail::look_at_stop(stop_, i, detail::kPointStride);
       if (!candidates_at(i)) return plan_;
     }
     if (!keys_.empty()) choose_keys();
@@ -223,6 +229,8 @@ class PosePlanner {
       }
     }
     for (std::size_t k = 1; k < keys.size(); ++k) {
+      // Every turn of a bounded C is a candidate here: some 10^5 steps a key point.
+      detail::look_at_stop(stop_, k, 64);
       const auto& prev = cand[keys[k - 1]];
       const auto& cur = cand[keys[k]];
       const double w = weight(keys[k - 1], keys[k]);
@@ -310,6 +318,7 @@ class PosePlanner {
   const std::optional<Posed>& start_;
   const PosePlanOptions& options_;
   const std::vector<std::optional<Posed>>& preferred_;
+  const StopSource* stop_;
   std::vector<std::vector<Candidate>> cand_;
   std::vector<std::size_t> keys_;  // points off the pole (and preferred pole points), in order
   PosePlan plan_;
@@ -322,13 +331,21 @@ PosePlan plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
                     const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
                     const PosePlanOptions& options,
                     const std::vector<std::optional<Posed>>& preferred) {
+  return detail::plan_poses(m, axes, rapid_into, start, options, preferred, nullptr);
+}
+
+PosePlan detail::plan_poses(const MachineKinematicsd& m, const std::vector<Vec3d>& axes,
+                            const std::vector<bool>& rapid_into, const std::optional<Posed>& start,
+                            const PosePlanOptions& options,
+                            const std::vector<std::optional<Posed>>& preferred,
+                            const StopSource* stop) {
   if (rapid_into.size() != axes.size()) {
     throw std::invalid_argument("plan_poses: rapid_into and axes differ in size");
   }
   if (!preferred.empty() && preferred.size() != axes.size()) {
     throw std::invalid_argument("plan_poses: preferred and axes differ in size");
   }
-  return PosePlanner(m, axes, rapid_into, start, options, preferred).run();
+  return PosePlanner(m, axes, rapid_into, start, options, preferred, stop).run();
 }
 
 }  // namespace taxopt

@@ -7,6 +7,7 @@
 #include "pipeline/stages.hpp"
 #include "taxopt/kinematics/feed_schedule.hpp"
 #include "util/parallel_select.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt::pipeline {
 namespace {
@@ -306,7 +307,7 @@ class OperationScheduler {
   OperationScheduler(const std::vector<CLPointd>& points, const std::vector<JointPosition>& joints,
                      const std::vector<double>& programmed_s, const JointLimits& limits,
                      const MachineKinematicsd& ac, const std::vector<Linearised>* via,
-                     const std::vector<Posed>* tcp_poses)
+                     const std::vector<Posed>* tcp_poses, const StopSource* stop)
       : points_(points),
         joints_(joints),
         programmed_s_(programmed_s),
@@ -314,6 +315,7 @@ class OperationScheduler {
         ac_(ac),
         via_(via),
         tcp_poses_(tcp_poses),
+        stop_(stop),
         n_(points.size()),
         bound_(n_, FeedBound::Programmed),
         bound_joint_(n_, Joint::X),
@@ -324,7 +326,10 @@ class OperationScheduler {
   }
 
   OperationSchedule run() {
-    for (const IndexRange& c : feed_chains(points_)) schedule_chain(c);
+    for (const IndexRange& c : feed_chains(points_)) {
+      if (stop_) stop_->throw_if_stop_requested();
+      schedule_chain(c);
+    }
     summarise();
     return std::move(out_);
   }
@@ -340,6 +345,7 @@ class OperationScheduler {
     FeedChain chain;
     chain.joints = {joints_[c.begin - 1]};
     for (std::size_t i = c.begin; i < c.end; ++i) {
+      detail::look_at_stop(stop_, i, detail::kPointStride);
       if (const Linearised* l = blocks_of(i)) {
         for (std::size_t j = 0; j < l->share.size(); ++j) {
           chain.joints.push_back(j < l->joints.size() ? l->joints[j] : joints_[i]);
@@ -410,6 +416,7 @@ class OperationScheduler {
     std::array<double, kJointCount> by_velocity{}, by_accel{};
     bool any_feed = false;
     for (std::size_t i = 1; i < n_; ++i) {
+      detail::look_at_stop(stop_, i, detail::kPointStride);
       if (points_[i].motion == Motion::Rapid) {
         rapid(i);
         continue;
@@ -451,6 +458,7 @@ class OperationScheduler {
   const MachineKinematicsd& ac_;
   const std::vector<Linearised>* via_;
   const std::vector<Posed>* tcp_poses_;
+  const StopSource* stop_;
   const std::size_t n_;
   OperationSchedule out_;
   std::vector<FeedBound> bound_;
@@ -465,8 +473,8 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<double>& programmed_s,
                                      const JointLimits& limits, const MachineKinematicsd& ac,
                                      const std::vector<Linearised>* via,
-                                     const std::vector<Posed>* tcp_poses) {
-  return OperationScheduler(points, joints, programmed_s, limits, ac, via, tcp_poses).run();
+                                     const std::vector<Posed>* tcp_poses, const StopSource* stop) {
+  return OperationScheduler(points, joints, programmed_s, limits, ac, via, tcp_poses, stop).run();
 }
 
 /// Indices of the points of `op` whose tool collides, for axes `axes` (tips from the fixed

@@ -30,7 +30,8 @@ double least_angle_in_move_rad(const Vec3d& axis0, const Vec3d& axis1, const Vec
 
 }  // namespace
 
-void cutting_conditions(const OperationContext& o, const PostedOperation& po, OperationResult& r) {
+void cutting_conditions(const OperationContext& o, const PostedOperation& po, OperationResult& r,
+                        const StopSource& stop) {
   const Operationd& op = *o.op;
   if (!(o.ball_radius_mm > 0.0) || o.contacts.size() != op.points.size()) return;
   OperationResult::Cutting c;
@@ -45,6 +46,7 @@ void cutting_conditions(const OperationContext& o, const PostedOperation& po, Op
     return op.points[i].motion == Motion::Feed && o.contacts[i].state == ContactState::Touching;
   };
   for (std::size_t i = 0; i < op.points.size(); ++i) {
+    detail::look_at_stop(&stop, i, detail::kPointStride);
     const ContactPoint& contact = o.contacts[i];
     if (!touching_feed(i)) continue;
     const double before_rad = angle_between(op.points[i].axis, contact.surface_normal);

@@ -186,7 +186,8 @@ class AirTurnSpreader {
  public:
   AirTurnSpreader(const Operationd& op, const std::vector<ContactPoint>& contacts,
                   double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
-                  const Machine& machine, double max_deviation_rad, PostedOperation& po)
+                  const Machine& machine, double max_deviation_rad, PostedOperation& po,
+                  const StopSource* stop)
       : op_(op),
         contacts_(contacts),
         ball_radius_mm_(ball_radius_mm),
@@ -195,6 +196,7 @@ class AirTurnSpreader {
         machine_(machine),
         max_deviation_rad_(max_deviation_rad),
         po_(po),
+        stop_(stop),
         n_(op.points.size()),
         limits_(effective_limits(machine)) {}
 
@@ -208,6 +210,7 @@ class AirTurnSpreader {
     std::vector<Posed> trial = po_.poses;
     std::vector<std::pair<std::size_t, std::size_t>> changed;  // chains [a, b) taken
     for (std::size_t a = 1; a < n_;) {
+      detail::look_at_stop(stop_, a, detail::kPointStride);
       if (in_pass[a]) {
         ++a;
         continue;
@@ -340,12 +343,14 @@ class AirTurnSpreader {
     std::vector<ContactPoint> air(n_);  // no contacts known: every point in the air
     const std::vector<ContactPoint>& state = contacts_.empty() ? air : contacts_;
     std::vector<char> hit(n_, 0);
-    for (std::size_t i :
-         colliding_points(*model_, tool_, op_, axes, state, nullptr, &check_point)) {
+    // A watch on the stop, where one is given (the checks report no progress of their own).
+    const StopSource no_stop;
+    detail::StageProgress watch(2 * n_, stop_ ? *stop_ : no_stop);
+    for (std::size_t i : colliding_points(*model_, tool_, op_, axes, state, &watch, &check_point)) {
       hit[i] = 1;
     }
     for (std::size_t i : colliding_moves(*model_, tool_, machine_, xyz, tilt_deg, c_deg, state,
-                                         nullptr, nullptr, &check_move)) {
+                                         &watch, nullptr, &check_move)) {
       hit[i] = 1;
     }
     for (const auto& [first, b] : changed) {
@@ -366,6 +371,7 @@ class AirTurnSpreader {
   const Machine& machine_;
   const double max_deviation_rad_;
   PostedOperation& po_;
+  const StopSource* stop_;
   const std::size_t n_;
   const JointLimits limits_;
 };
@@ -374,8 +380,10 @@ class AirTurnSpreader {
 
 void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
                          double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
-                         const Machine& machine, double max_deviation_rad, PostedOperation& po) {
-  AirTurnSpreader(op, contacts, ball_radius_mm, model, tool, machine, max_deviation_rad, po).run();
+                         const Machine& machine, double max_deviation_rad, PostedOperation& po,
+                         const StopSource* stop) {
+  AirTurnSpreader(op, contacts, ball_radius_mm, model, tool, machine, max_deviation_rad, po, stop)
+      .run();
 }
 
 }  // namespace taxopt::pipeline

@@ -1,5 +1,6 @@
 // The post stage: the machine's poses of the planned axes, and of the input axes for the
 // "before" (stages.hpp).
+#include "kinematics/pose_planning.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/kinematics/pose_planner.hpp"
@@ -81,8 +82,13 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
   std::vector<PostedOperation> posted;
   std::optional<Posed> start, input_start;
   bool failed = false;
+  // Per point: its pose, its pose before the method, the turns in the air.
+  std::size_t items = 0;
+  for (const OperationContext& o : ops) items += 3 * o.op->points.size();
+  detail::StageProgress posting(options.progress, "posting", items, options.stop);
   for (OperationContext& o : ops) {
     const Operationd& op = *o.op;
+    const std::size_t n = op.points.size();
     const std::size_t k = o.index;
     const auto t0 = Clock::now();
     PostedOperation po = operation_to_post(run, o);
@@ -93,21 +99,21 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
       axes.push_back(po.points[i].axis);
       in_axes.push_back(op.points[i].axis);
     }
-    const PosePlan plan =
-        plan_poses(machine.rotary, axes, rapid_into, start, options.pose_options,
-                   o.optimised ? o.optimised->preferred : std::vector<std::optional<Posed>>{});
-    options.stop.throw_if_stop_requested();  // looked at between the steps
+    const PosePlan plan = detail::plan_poses(
+        machine.rotary, axes, rapid_into, start, options.pose_options,
+        o.optimised ? o.optimised->preferred : std::vector<std::optional<Posed>>{}, &options.stop);
+    posting.advance(n);
     // The input axes as the machine would have run them, for the "before" metrics.
     if (o.optimised) {
-      const PosePlan before =
-          plan_poses(machine.rotary, in_axes, rapid_into, input_start, options.pose_options);
+      const PosePlan before = detail::plan_poses(machine.rotary, in_axes, rapid_into, input_start,
+                                                 options.pose_options, {}, &options.stop);
       if (before.ok()) input_start = before.poses.back();
       o.input_poses = before.ok() ? before.poses : std::vector<Posed>{};
-      options.stop.throw_if_stop_requested();
     } else {
       o.input_poses = plan.ok() ? plan.poses : std::vector<Posed>{};
       if (plan.ok()) input_start = plan.poses.back();
     }
+    posting.advance(n);
     if (!plan.ok()) {
       failed = true;
       add_finding(res, FindingCode::UnreachablePose, k, op.points[plan.failed_index].line,
@@ -120,9 +126,9 @@ std::optional<std::vector<PostedOperation>> post_operations(const Run& run,
     if (o.optimised) {
       spread_turns_in_air(op, o.contacts, o.ball_radius_mm, run.planner_check(),
                           o.tool ? *o.tool : ToolModel{}, machine,
-                          deg_to_rad(options.paper.max_deviation_deg), po);
-      options.stop.throw_if_stop_requested();
+                          deg_to_rad(options.paper.max_deviation_deg), po, &options.stop);
     }
+    posting.advance(n);
     if (o.optimised && machine.gcode.feed_reference == FeedReference::CutterPath) {
       keep_input_block_times(machine, o, po);
     }

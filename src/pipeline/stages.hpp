@@ -294,7 +294,8 @@ std::string msys_remedy(const Run& run, const CLPointd& p);
 constexpr double kTiltAllowanceDeg = 0.01;
 
 /// The cutting conditions at an operation's contacts (cutting.cpp).
-void cutting_conditions(const OperationContext& o, const PostedOperation& po, OperationResult& r);
+void cutting_conditions(const OperationContext& o, const PostedOperation& po, OperationResult& r,
+                        const StopSource& stop);
 
 /// A rotary axis moving slower than this is still, as the promise "no axis faster than the
 /// input's" reads: where the input holds an axis still, a method may move it this little (a
@@ -385,7 +386,8 @@ OperationSchedule schedule_operation(const std::vector<CLPointd>& points,
                                      const std::vector<double>& programmed_s,
                                      const JointLimits& limits, const MachineKinematicsd& ac,
                                      const std::vector<Linearised>* via = nullptr,
-                                     const std::vector<Posed>* tcp_poses = nullptr);
+                                     const std::vector<Posed>* tcp_poses = nullptr,
+                                     const StopSource* stop = nullptr);
 /// The points with every feed move's feed set (`fallback_feed` where the file gives none).
 std::vector<CLPointd> posted_feeds(const Operationd& op, double fallback_feed);
 /// Per point, whether the move into it is a rapid (the first point counts as one).
@@ -417,12 +419,16 @@ std::vector<JointPosition> written_joints(const Machine& machine,
 /// The findings of LinuxCNC's TCP planner on the written program's `blocks`
 /// (GcodeProgram::tcp_joint_peaks, in `res.gcode`): a joint velocity past a limit held (the
 /// machine file's, or with `scheduled` the effective ones) from a stated start a problem, the
-/// rest a warning with its remedy (tcp_findings.cpp).
+/// rest a warning with its remedy (tcp_findings.cpp). `stop` is looked at as the blocks are
+/// followed.
 void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool scheduled,
-                        const std::vector<controller::TcpBlock>& blocks, JobResult& res);
-/// The turn between two passes spread over the rapids of the chain in the air (plan.cpp).
+                        const std::vector<controller::TcpBlock>& blocks, JobResult& res,
+                        const StopSource* stop = nullptr);
+/// The turn between two passes spread over the rapids of the chain in the air
+/// (plan_global.cpp); `stop`, where given, looked at as the chains and their checks go.
 void spread_turns_in_air(const Operationd& op, const std::vector<ContactPoint>& contacts,
                          double ball_radius_mm, const PartCheck* model, const ToolModel& tool,
-                         const Machine& machine, double max_deviation_rad, PostedOperation& po);
+                         const Machine& machine, double max_deviation_rad, PostedOperation& po,
+                         const StopSource* stop = nullptr);
 
 }  // namespace taxopt::pipeline

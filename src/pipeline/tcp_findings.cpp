@@ -23,12 +23,12 @@ bool velocity_held(const Machine& machine, bool scheduled, std::size_t j) {
 /// Whether a block whose start the program states drives a joint past a velocity limit held
 /// (tcp_joint_findings).
 bool known_start_over(const Machine& machine, const JointLimits& limits, bool scheduled,
-                      const std::vector<TcpBlock>& blocks) {
+                      const std::vector<TcpBlock>& blocks, const StopSource* stop) {
   std::vector<TcpBlock> known;
   for (const TcpBlock& b : blocks) {
     if (b.start_known) known.push_back(b);
   }
-  const std::vector<JointPeak> peaks = controller::tcp_joint_peaks(machine, known, 1.0);
+  const std::vector<JointPeak> peaks = controller::tcp_joint_peaks(machine, known, 1.0, stop);
   for (std::size_t j = 0; j < peaks.size() && j < kJointCount; ++j) {
     const double v_max = limits[j].max_velocity_per_s;
     if (velocity_held(machine, scheduled, j) && v_max > 0.0 &&
@@ -50,7 +50,8 @@ bool known_start_over(const Machine& machine, const JointLimits& limits, bool sc
 /// motion controller); the warning gives the share of those limits that keeps the joints
 /// within theirs (GcodeProgram::tcp_axis_accel_scale).
 void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool scheduled,
-                        const std::vector<TcpBlock>& blocks, JobResult& res) {
+                        const std::vector<TcpBlock>& blocks, JobResult& res,
+                        const StopSource* stop) {
   const std::vector<JointPeak>& peaks = res.gcode.tcp_joint_peaks;
   res.gcode.tcp_axis_accel_scale.reset();
   std::ostringstream velocity, accel;
@@ -82,7 +83,7 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool 
     }
   }
   const std::string velocity_remedy = "[AXIS_*] MAX_VELOCITY below the [JOINT_*] ones";
-  if (velocity_over && !known_start_over(machine, limits, scheduled, blocks)) {
+  if (velocity_over && !known_start_over(machine, limits, scheduled, blocks, stop)) {
     // Only blocks from where the program has not yet stated the joints pass: those peaks
     // are the model's guess of where the machine stands (blocks_not_checked), a warning.
     velocity_over = 0;
@@ -101,7 +102,7 @@ void tcp_joint_findings(const Machine& machine, const JointLimits& limits, bool 
   std::ostringstream remedy;
   remedy << std::fixed;
   if (accel_over) {
-    const double scale = controller::tcp_axis_accel_scale(machine, limits, blocks);
+    const double scale = controller::tcp_axis_accel_scale(machine, limits, blocks, stop);
     res.gcode.tcp_axis_accel_scale = scale;
     if (scale > 0.0) {
       remedy << "every [AXIS_*] MAX_ACCELERATION at " << std::setprecision(3) << scale

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "cl/cl_writer.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/verify_checks.hpp"
 #include "taxopt/core/error.hpp"
@@ -360,6 +361,7 @@ void contact_rows(const Run& run, const OperationContext& o, detail::StageProgre
   const JobOptions& options = run.options;
   if (!o.contacts.empty()) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {
+      if (i % detail::kPointStride == 0) checking.check();
       const ContactPoint& c = o.contacts[i];
       if (c.state != ContactState::Touching) continue;
       PointRow& row = r.rows[i];
@@ -552,7 +554,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     for (PointRow& row : r.rows) row.mark(PointMark::NotChecked);
   }
   contact_rows(run, o, checking, r);
-  cutting_conditions(o, po, r);
+  cutting_conditions(o, po, r, run.options.stop);
   rates(o, w, ax, r);
   r.worst_axis = worst_axis_share(r.before, r.after, machine);
   if (o.optimised) axis_rise_finding(run, o, r, res);
@@ -564,6 +566,7 @@ OperationResult verify_operation(const Run& run, const OperationContext& o,
     r.rows[i].feed_before_mm_min = w.schedule_before[k].feed_mm_min[i];
   }
   r.feed_words = written_feed_words(op, po, w.point_moves[k], res.gcode_units, machine);
+  checking.check();
   check_dynamic_limits(run, k, po, w.point_moves[k], w.moves, r, res);
   // The checks' own time: this operation's verification without its C-space raster.
   r.time_verify_s = std::max(0.0, seconds_since(t_verify) - r.time_cspace_s);
@@ -599,7 +602,7 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
   check_every_block(run, ops, posted, written, res);
   // The program as a whole after its points: a point's own finding names its CL line first.
   check_program(run, posted, written, res);
-  res.out_cls = format_cl(run.tp, out_ops);
+  res.out_cls = cl::format_cl(run.tp, out_ops, &options.stop);
 }
 
 }  // namespace taxopt::pipeline

@@ -65,8 +65,10 @@ std::optional<std::pair<double, std::size_t>> clearance_bound(const CollisionMod
     return detail::parallel_reduce(
         0, at.size(), Least{hi, n},
         [&](std::size_t lo, std::size_t end, Least acc) {
-          for (std::size_t j = lo; j != end; ++j)
+          for (std::size_t j = lo; j != end; ++j) {
+            if (progress) progress->check();  // a bisection is some 10 queries
             acc = std::min(acc, Least{bisect(at[j], hi), at[j]});
+          }
           return acc;
         },
         [](const Least& a, const Least& b) { return std::min(a, b); });

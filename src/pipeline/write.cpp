@@ -13,9 +13,11 @@
 #include "controller/feed_word.hpp"
 #include "controller/linuxcnc_planner.hpp"
 #include "dialects/dialect_rules.hpp"
+#include "gcode/program_writer.hpp"
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/kinematics/machine.hpp"
+#include "util/progress.hpp"
 
 namespace taxopt::pipeline {
 namespace {
@@ -27,10 +29,10 @@ using controller::TcpBlock;
 /// (with the block's words), so that every check sees the path the controller runs; the blocks
 /// that split an arc at 180 deg belong to no point and are stepped over.
 void read_back(const Machine& machine, const std::vector<PostedOperation>& posted,
-               const GcodeProgram& program, Written& w) {
-  w.moves =
-      read_gcode_moves(program.text, "written G-code", machine.gcode.dialect,
-                       program.verbatim_lines, machine.rotary.tilt_letter(), program.tool_calls);
+               const GcodeProgram& program, Written& w, const StopSource* stop) {
+  w.moves = gcode::read_moves(program.text, "written G-code", machine.gcode.dialect,
+                              program.verbatim_lines, machine.rotary.tilt_letter(),
+                              program.tool_calls, stop);
   w.on_arcs.clear();
   w.way_points.assign(posted.size(), {});
   w.point_moves.assign(posted.size(), {});
@@ -77,10 +79,12 @@ void read_back(const Machine& machine, const std::vector<PostedOperation>& poste
 /// two points' moves, their joints and their shares of the move's time as written.
 std::vector<Linearised> linearised_blocks(const Machine& machine, const PostedOperation& po,
                                           const std::vector<const GcodeMove*>& at,
-                                          const std::vector<GcodeMove>& moves, LengthUnit units) {
+                                          const std::vector<GcodeMove>& moves, LengthUnit units,
+                                          const StopSource* stop) {
   std::vector<Linearised> via(po.points.size());
   const auto index_of = [&](const GcodeMove* m) { return move_index(moves, m); };
   for (std::size_t i = 1; i < po.points.size(); ++i) {
+    detail::look_at_stop(stop, i, detail::kPointStride);
     if (po.points[i].motion != Motion::Feed || at[i] == at[i - 1]) continue;
     const std::ptrdiff_t from = index_of(at[i - 1]), to = index_of(at[i]);
     if (from < 0 || to <= from + 1) continue;
@@ -148,7 +152,8 @@ class ProgramClock {
         tcp_blocks_(tcp_blocks),
         length_mm_(run.options.tool.gauge_length_mm.value_or(0.0)),
         placed_(run.machine.work_offset_mm && run.options.tool.gauge_length_mm),
-        lcnc_(gcode::rules_of(run.machine.gcode.dialect).tcp_planned_in_program_axes()) {
+        lcnc_(gcode::rules_of(run.machine.gcode.dialect).tcp_planned_in_program_axes()),
+        stop_(run.options.stop) {
     tcp_blocks_.clear();
     w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
     w_.joints_after.assign(w_.moves.size(), std::nullopt);
@@ -158,11 +163,14 @@ class ProgramClock {
 
   /// Walks every block read back; then the program's time into `g`.
   void run(GcodeProgram& g) {
-    for (std::size_t index = 0; index < w_.moves.size(); ++index) block(index);
+    for (std::size_t index = 0; index < w_.moves.size(); ++index) {
+      detail::look_at_stop(&stop_, index, detail::kPointStride);
+      block(index);
+    }
     flush_feed(true, nullptr);
     double feed_s = 0.0;
     for (const OperationSchedule& s : w_.schedule_after) feed_s += s.summary.feed_time_s;
-    g.tcp_joint_peaks = controller::tcp_joint_peaks(machine_, tcp_blocks_, 1.0);
+    g.tcp_joint_peaks = controller::tcp_joint_peaks(machine_, tcp_blocks_, 1.0, &stop_);
     g.time_s = feed_s + rapid_s_;
     g.time_from_line = from_line_;
     g.time_tool_length_mm = length_mm_;
@@ -350,6 +358,7 @@ class ProgramClock {
   /// The work offset and the tool's gauge length are given: a retract's end is known.
   const bool placed_;
   const bool lcnc_;
+  const StopSource& stop_;
   // LinuxCNC runs these rapids at half their acceleration (half_accel_rapids); the block's.
   std::vector<bool> half_accel_;
   JointLimits rapid_limits_{};
@@ -474,6 +483,53 @@ void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted,
   }
 }
 
+namespace {
+
+/// The feed schedules of every operation at `limits`, as written (the blocks read back) and
+/// as the input axes would run (Written::schedule_after and schedule_before, with the
+/// programmed times they start from).
+void schedule_operations(const Run& run, const std::vector<OperationContext>& ops,
+                         const std::vector<PostedOperation>& posted, const JointLimits& limits,
+                         LengthUnit units, Written& w, detail::StageProgress& writing) {
+  const Machine& machine = run.machine;
+  const StopSource& stop = run.options.stop;
+  // Tcp mode: the joints follow the kinematics inside a block (schedule_operation).
+  const bool tcp = machine.gcode.mode == GcodeMode::Tcp;
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    const Operationd& op = *ops[k].op;
+    const std::vector<Posed>& input_poses = ops[k].input_poses;
+    const std::vector<Linearised> via =
+        linearised_blocks(machine, po, w.point_moves[k], w.moves, units, &stop);
+    w.time_into_after.push_back(po.programmed_time_s.empty()
+                                    ? programmed_block_times_s(po.points, po.poses)
+                                    : po.programmed_time_s);
+    w.schedule_after.push_back(schedule_operation(
+        po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
+        machine.rotary, &via, tcp ? &po.poses : nullptr, &stop));
+    writing.advance(po.points.size());
+    std::vector<CLPointd> in_points = po.points;
+    std::vector<Vec3d> in_tips;
+    for (std::size_t i = 0; i < in_points.size(); ++i) {
+      in_points[i].tip_mm = op.points[i].tip_mm;
+      in_points[i].axis = op.points[i].axis;
+      in_tips.push_back(in_points[i].tip_mm);
+    }
+    w.time_into_before.push_back(input_poses.empty()
+                                     ? w.time_into_after.back()
+                                     : programmed_block_times_s(in_points, input_poses));
+    w.schedule_before.push_back(
+        input_poses.empty()
+            ? w.schedule_after.back()
+            : schedule_operation(in_points, joints_of(machine.rotary, in_tips, input_poses),
+                                 w.time_into_before.back(), limits, machine.rotary, nullptr,
+                                 tcp ? &input_poses : nullptr, &stop));
+    writing.advance(po.points.size());
+  }
+}
+
+}  // namespace
+
 Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                       std::vector<PostedOperation>& posted, JobResult& res) {
   const Machine& machine = run.machine;
@@ -492,48 +548,22 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
                                                      : po.programmed_time_s;
     }
   }
-  const StopSource& stop = run.options.stop;  // looked at between the steps
-  res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-  stop.throw_if_stop_requested();
-  read_back(machine, posted, res.gcode, w);
-  stop.throw_if_stop_requested();
+  const StopSource& stop = run.options.stop;
+  // Per point: the program written and read back, the schedules after and before, (with a
+  // feed schedule: the program written and read back again,) its time.
+  std::size_t points = 0;
+  for (const PostedOperation& po : posted) points += po.points.size();
+  const std::size_t steps = run.options.feed_schedule ? 7 : 5;
+  detail::StageProgress writing(run.options.progress, "writing", steps * points, stop);
+  res.gcode = gcode::write_program(posted, machine, res.gcode_units, comments, &stop);
+  writing.advance(points);
+  read_back(machine, posted, res.gcode, w, &stop);
+  writing.advance(points);
 
   // Feed schedules at the machine's limits: the written path (from the words read back) and
   // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
   const JointLimits limits = effective_limits(machine);
-  // Tcp mode: the joints follow the kinematics inside a block (schedule_operation).
-  const bool tcp = machine.gcode.mode == GcodeMode::Tcp;
-  for (std::size_t k = 0; k < posted.size(); ++k) {
-    const PostedOperation& po = posted[k];
-    const Operationd& op = *ops[k].op;
-    const std::vector<Posed>& input_poses = ops[k].input_poses;
-    const std::vector<Linearised> via =
-        linearised_blocks(machine, po, w.point_moves[k], w.moves, res.gcode_units);
-    w.time_into_after.push_back(po.programmed_time_s.empty()
-                                    ? programmed_block_times_s(po.points, po.poses)
-                                    : po.programmed_time_s);
-    w.schedule_after.push_back(schedule_operation(
-        po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
-        machine.rotary, &via, tcp ? &po.poses : nullptr));
-    stop.throw_if_stop_requested();
-    std::vector<CLPointd> in_points = po.points;
-    std::vector<Vec3d> in_tips;
-    for (std::size_t i = 0; i < in_points.size(); ++i) {
-      in_points[i].tip_mm = op.points[i].tip_mm;
-      in_points[i].axis = op.points[i].axis;
-      in_tips.push_back(in_points[i].tip_mm);
-    }
-    w.time_into_before.push_back(input_poses.empty()
-                                     ? w.time_into_after.back()
-                                     : programmed_block_times_s(in_points, input_poses));
-    w.schedule_before.push_back(
-        input_poses.empty()
-            ? w.schedule_after.back()
-            : schedule_operation(in_points, joints_of(machine.rotary, in_tips, input_poses),
-                                 w.time_into_before.back(), limits, machine.rotary, nullptr,
-                                 tcp ? &input_poses : nullptr));
-    stop.throw_if_stop_requested();
-  }
+  schedule_operations(run, ops, posted, limits, res.gcode_units, w, writing);
   if (run.options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k) {
       w.time_into_after[k] = w.schedule_after[k].time_s;
@@ -546,22 +576,22 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
       posted[k].block_time_s = w.schedule_after[k].time_s;
       posted[k].linearised_time_s = w.schedule_after[k].block_time_s;
     }
-    res.gcode = write_gcode(posted, machine, res.gcode_units, comments);
-    stop.throw_if_stop_requested();
-    read_back(machine, posted, res.gcode, w);
+    res.gcode = gcode::write_program(posted, machine, res.gcode_units, comments, &stop);
+    writing.advance(points);
+    read_back(machine, posted, res.gcode, w, &stop);
+    writing.advance(points);
   }
-  stop.throw_if_stop_requested();
   std::vector<TcpBlock> tcp_blocks;
   program_time(run, w, limits, res.gcode_units, res.gcode, tcp_blocks);
-  stop.throw_if_stop_requested();
-  tcp_joint_findings(machine, limits, run.options.feed_schedule, tcp_blocks, res);
+  writing.advance(points);
+  tcp_joint_findings(machine, limits, run.options.feed_schedule, tcp_blocks, res, &stop);
   w.write_s = seconds_since(t0);
   return w;
 }
 
 void read_program_again(const Run& run, const std::vector<PostedOperation>& posted, Written& w,
                         JobResult& res) {
-  read_back(run.machine, posted, res.gcode, w);
+  read_back(run.machine, posted, res.gcode, w, &run.options.stop);
   std::vector<TcpBlock> tcp_blocks;
   program_time(run, w, effective_limits(run.machine), res.gcode_units, res.gcode, tcp_blocks);
 }

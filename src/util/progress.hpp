@@ -13,6 +13,19 @@
 
 namespace taxopt::detail {
 
+/// Every this many items a long loop of a part's build looks at the stop (a few ms of work).
+constexpr std::size_t kStopStride = std::size_t{1} << 16;
+
+/// Every this many points, blocks or lines a loop over a program looks at the stop (each a few
+/// microseconds of work).
+constexpr std::size_t kPointStride = 1024;
+
+/// Looks at the stop, where one is given, at every `stride`-th item `i` of a loop: a stride
+/// of a few milliseconds' work at most (JobOptions::stop is honoured within 100 ms).
+inline void look_at_stop(const StopSource* stop, std::size_t i, std::size_t stride = kStopStride) {
+  if (stop && i % stride == 0) stop->throw_if_stop_requested();
+}
+
 /// Counts the work items of a stage and reports each whole percent once, and the end. The
 /// callback is the caller's code: what it throws stops the job (StopSource::request_stop with
 /// that exception) instead of passing through the job's threads and destructors; advance()

@@ -2,10 +2,14 @@
 // writing and reading back the program, scheduling the feeds, writing the new CL file. Each
 // looks at the job's stop as it goes; a stop requested ends it with Cancelled, and without one
 // it gives what the public function gives (the same bytes).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "cl/cl_writer.hpp"
 #include "gcode/program_writer.hpp"
@@ -131,4 +135,28 @@ TEST_CASE(
   }
   CHECK(cancelled + built == 9);
   CHECK(cancelled > 0);
+}
+
+TEST_CASE(
+    "stop inside: a Part's build reports its progress from 0 to the end in steps a bar can "
+    "show, and a progress callback that throws ends the build with its exception",
+    "[library][cancel]") {
+  const TriangleMesh mesh = read_mesh_file(std::string(TAXOPT_SOURCE_DIR) + "/data/demo/sine.stl");
+  std::vector<std::size_t> done_seen;
+  std::size_t total_seen = 0;
+  const Part part(mesh, StopSource(),
+                  [&](const std::string& stage, std::size_t done, std::size_t total) {
+                    CHECK(stage == "building the part");
+                    done_seen.push_back(done);
+                    total_seen = total;
+                  });
+  REQUIRE(done_seen.size() >= 7);  // 0, then each of its six steps
+  CHECK(done_seen.front() == 0);
+  CHECK(std::is_sorted(done_seen.begin(), done_seen.end()));
+  CHECK(done_seen.back() == total_seen);
+  CHECK(total_seen > 0);
+  const auto halfway = [](const std::string&, std::size_t done, std::size_t total) {
+    if (2 * done >= total && done < total) throw std::runtime_error("closed by the user");
+  };
+  CHECK_THROWS_WITH(Part(mesh, StopSource(), halfway), "closed by the user");
 }

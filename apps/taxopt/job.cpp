@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <iostream>
 #include <map>
@@ -193,9 +194,11 @@ std::future<TriangleMesh> mesh_file_of(const Args& a) {
       how, [path = a.part] { return path.empty() ? TriangleMesh{} : read_mesh_file(path); });
 }
 
-/// The part mesh in the CL file's units and coordinates, with its frame note.
-std::optional<Part> part_of(const Args& a, const Toolpath& toolpath,
-                            std::future<TriangleMesh>& mesh_file) {
+/// The part mesh in the CL file's units and coordinates, with its frame note; its build's
+/// progress to `progress`.
+std::optional<Part> part_of(
+    const Args& a, const Toolpath& toolpath, std::future<TriangleMesh>& mesh_file,
+    const std::function<void(const std::string&, std::size_t, std::size_t)>& progress) {
   std::optional<Part> part;
   if (!a.part.empty()) {
     std::string frame_note;
@@ -206,7 +209,8 @@ std::optional<Part> part_of(const Args& a, const Toolpath& toolpath,
                                                          : MeshFrame::Auto;
     part.emplace(part_mesh_for(toolpath, mesh_file.get(),
                                parse_unit(a.part_units, "--part-units").value_or(toolpath.units),
-                               frame, &frame_note, radius_mm));
+                               frame, &frame_note, radius_mm),
+                 StopSource(), progress);
     if (!frame_note.empty() && !a.quiet) std::cerr << "taxopt: note: " << frame_note << "\n";
   }
   return part;
@@ -393,16 +397,16 @@ int run_main_job(Args& a, const Invocation& how) {
              std::to_string(kMostPlottedOperations) +
              " (about 5 SVG files each): split the file, or leave out --plots");
     }
-    const std::optional<Part> part = part_of(a, toolpath, mesh_file);
-    // The tool's dimensions, known now in the CL file's units: run_job checks them first.
-    options.tool = tool_dimensions_of(a, toolpath);
-    if (part) options.part = &*part;
     ProgressPrinter printer(!a.quiet && isatty(STDERR_FILENO), !a.quiet && a.verbose > 0);
     if (!a.quiet) {
       options.progress = [&printer](const std::string& stage, std::size_t done, std::size_t total) {
         printer(stage, done, total);
       };
     }
+    const std::optional<Part> part = part_of(a, toolpath, mesh_file, options.progress);
+    // The tool's dimensions, known now in the CL file's units: run_job checks them first.
+    options.tool = tool_dimensions_of(a, toolpath);
+    if (part) options.part = &*part;
     if (!a.quiet && a.verbose > 0) {
       options.log = [](const std::string& line) {
         std::fprintf(stderr, "taxopt: %s\n", line.c_str());

@@ -3,7 +3,10 @@
 /// points, k-d tree over the vertices for local fitting), built once and then queried from
 /// any number of threads.
 
+#include <cstddef>
+#include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "taxopt/core/export.hpp"
@@ -32,6 +35,14 @@ class TAXOPT_API Part {
   /// requested from another thread ends the build with Cancelled (or the stop's reason) and
   /// no Part (bench/bench_stop measures how soon).
   Part(TriangleMesh mesh, const StopSource& stop);
+  /// As Part(mesh, stop), reporting the build's progress to `progress` as JobOptions::progress
+  /// reports a job's: stage "building the part", items done of total, from 0 and once per
+  /// whole percent up to done == total, on the calling thread. An exception it throws ends the
+  /// build as a stop does (it is requested on `stop` with that exception) and is what the
+  /// constructor throws.
+  Part(TriangleMesh mesh, const StopSource& stop,
+       const std::function<void(const std::string& stage, std::size_t done, std::size_t total)>&
+           progress);
   ~Part();
   Part(Part&&) noexcept;
   Part& operator=(Part&&) noexcept;

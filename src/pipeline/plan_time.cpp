@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "kinematics/pose_planning.hpp"
 #include "pipeline/plan_rooms.hpp"
 #include "pipeline/stages.hpp"
 #include "plan/air_turn.hpp"
@@ -27,8 +28,8 @@ double operation_cycle_s(const OperationPlanInputs& in, double max_deviation_rad
   const Operationd& op = in.op;
   const Machine& machine = in.machine;
   const double ball_radius_mm = in.ball_radius_mm;
-  const PosePlan plan =
-      plan_poses(machine.rotary, axes, rapid_into_of(op), {}, in.pose_options, preferred);
+  const PosePlan plan = detail::plan_poses(machine.rotary, axes, rapid_into_of(op), {},
+                                           in.pose_options, preferred, in.stop);
   if (!plan.ok()) return std::numeric_limits<double>::infinity();
   PostedOperation po;
   po.points = posted_feeds(op, fallback_feed);
@@ -38,7 +39,7 @@ double operation_cycle_s(const OperationPlanInputs& in, double max_deviation_rad
     po.points[i].tip_mm = tip_for_axis(op.points[i], ball_radius_mm, axes[i]);
   }
   spread_turns_in_air(op, in.contacts, ball_radius_mm, in.model, in.tool ? *in.tool : ToolModel{},
-                      machine, max_deviation_rad, po);
+                      machine, max_deviation_rad, po, in.stop);
   std::vector<Vec3d> tips;
   for (const CLPointd& p : po.points) tips.push_back(p.tip_mm);
   std::vector<double> programmed = programmed_block_times_s(po.points, po.poses);
@@ -48,7 +49,7 @@ double operation_cycle_s(const OperationPlanInputs& in, double max_deviation_rad
   }
   return schedule_operation(po.points, joints_of(machine.rotary, tips, po.poses), programmed,
                             effective_limits(machine), machine.rotary, nullptr,
-                            machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr)
+                            machine.gcode.mode == GcodeMode::Tcp ? &po.poses : nullptr, in.stop)
       .summary.cycle_time_s;
 }
 

@@ -361,7 +361,7 @@ void contact_rows(const Run& run, const OperationContext& o, detail::StageProgre
   const JobOptions& options = run.options;
   if (!o.contacts.empty()) {
     for (std::size_t i = 0; i < op.points.size(); ++i) {
-      if (i % detail::kPointStride == 0) checking.check();
+      detail::look_at_stop(&options.stop, i, detail::kPointStride);
       const ContactPoint& c = o.contacts[i];
       if (c.state != ContactState::Touching) continue;
       PointRow& row = r.rows[i];

@@ -11,6 +11,7 @@
 #include "pipeline/stages.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/geometry/part.hpp"
+#include "util/release_memory.hpp"
 
 namespace taxopt {
 
@@ -354,13 +355,17 @@ JobResult run_once(const Toolpath& tp, const Machine& machine, const JobOptions&
   std::vector<pipeline::OperationContext> ops = pipeline::operation_contexts(run);
   pipeline::recover_contacts(run, ops, res);
   stop.throw_if_stop_requested();
+  detail::release_free_memory();
   pipeline::plan_operations(run, ops, res);
   stop.throw_if_stop_requested();
+  detail::release_free_memory();
   std::optional<std::vector<PostedOperation>> posted = pipeline::post_operations(run, ops, res);
   stop.throw_if_stop_requested();
   if (!posted) return res;
+  detail::release_free_memory();
   const pipeline::Written written = pipeline::write_program(run, ops, *posted, res);
   stop.throw_if_stop_requested();
+  detail::release_free_memory();
   pipeline::verify_operations(run, ops, *posted, written, res);
   pipeline::mark_unverified(run, *posted, res);
   stop.throw_if_stop_requested();

@@ -1,5 +1,6 @@
 #include "cl/cl_writer.hpp"
 
+#include <charconv>
 #include <cstdio>
 #include <stdexcept>
 
@@ -13,19 +14,40 @@ bool same_point(const CLPointd& a, const CLPointd& b) {
   return (a.tip_mm - b.tip_mm).norm() <= 1e-9 && (a.axis - b.axis).norm() <= 1e-12;
 }
 
-/// A GOTO in the file's units and in the frame its record was given in (MSYS).
-std::string goto_line(const char* word, const CLPointd& p, double mm_per_file_unit,
-                      const ClFrame* frame = nullptr) {
+/// Appends `v` as printf's "%.*f" writes it: std::to_chars with a precision is specified so
+/// (C++17 [charconv]), at a fraction of the cost; printf where it would not fit.
+void append_fixed(std::string& out, double v, int decimals) {
+  char buf[400];  // the longest double in %f, 309 digits, and the decimals
+  const std::to_chars_result r =
+      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  if (r.ec == std::errc()) {
+    out.append(buf, r.ptr);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    out += buf;
+  }
+}
+
+/// A GOTO in the file's units and in the frame its record was given in (MSYS), appended to
+/// `out`: WORD/x,y,z,i,j,k with 6 decimals for the tip, 9 for the axis.
+void append_goto(std::string& out, const char* word, const CLPointd& p, double mm_per_file_unit,
+                 const ClFrame* frame = nullptr) {
   Vec3d tip = p.tip_mm, axis = p.axis;
   if (frame) {
     tip = frame->rotation * tip + frame->origin_mm;
     axis = frame->rotation * axis;
   }
   const Vec3d t = tip / mm_per_file_unit;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f", word, t.x(), t.y(), t.z(),
-                axis.x(), axis.y(), axis.z());
-  return buf;
+  out += word;
+  out += '/';
+  for (int c = 0; c < 3; ++c) {
+    if (c > 0) out += ',';
+    append_fixed(out, t[c], 6);
+  }
+  for (int c = 0; c < 3; ++c) {
+    out += ',';
+    append_fixed(out, axis[c], 9);
+  }
 }
 
 }  // namespace
@@ -47,14 +69,15 @@ std::string cl::format_cl(const Toolpath& original, const std::vector<Operationd
   }
   const double scale = mm_per_unit(original.units);
   std::string out = original.byte_order_mark ? "\xEF\xBB\xBF" : "";
+  // A record's text with its line ends as the file's (a record may span lines).
   const auto emit = [&](const std::string& text) {
-    for (char c : text) {
-      if (c == '\n') {
-        out += original.line_end;
-      } else {
-        out += c;
-      }
+    std::size_t from = 0;
+    for (std::size_t nl = text.find('\n'); nl != std::string::npos; nl = text.find('\n', from)) {
+      out.append(text, from, nl - from);
+      out += original.line_end;
+      from = nl + 1;
     }
+    out.append(text, from, std::string::npos);
     out += original.line_end;
   };
   // A record whose points changed is written as GOTOs; the records it owns (a NURBS's KNOT
@@ -83,10 +106,11 @@ std::string cl::format_cl(const Toolpath& original, const std::vector<Operationd
     const ClFrame* frame =
         r.frame >= 0 ? &original.frames[static_cast<std::size_t>(r.frame)] : nullptr;
     for (int j = 0; j < r.point_count; ++j) {
-      emit(goto_line(word,
-                     operations[static_cast<std::size_t>(r.op)]
-                         .points[static_cast<std::size_t>(r.first_point + j)],
-                     scale, frame));
+      append_goto(out, word,
+                  operations[static_cast<std::size_t>(r.op)]
+                      .points[static_cast<std::size_t>(r.first_point + j)],
+                  scale, frame);
+      out += original.line_end;
     }
   }
   if (!original.final_line_end && !out.empty()) {
@@ -119,7 +143,8 @@ std::string format_new_cl(const std::vector<Operationd>& operations) {
         out += buf;
         feed = p.feed_mm_per_min;
       }
-      out += goto_line("GOTO", p, 1.0) + "\n";
+      append_goto(out, "GOTO", p, 1.0);
+      out += "\n";
     }
     out += "END-OF-PATH\n";
   }

@@ -46,8 +46,16 @@ inline std::string fmt(double v, int decimals) {
 /// The value a reader gets back from fmt(v, decimals) (from_chars: strtod's value, correctly
 /// rounded, in the C locale).
 inline double round_to(double v, int decimals) {
-  const std::string s = fmt(v, decimals);
+  // fmt's text read back, without a string: a text of zeros reads as 0 whatever its sign
+  // (fmt writes no sign there), every other text as fmt writes it.
+  char buf[400];
+  const std::to_chars_result w =
+      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
   double out = 0.0;
+  if (w.ec == std::errc() && std::from_chars(buf, w.ptr, out).ec == std::errc()) {
+    return out == 0.0 ? 0.0 : out;
+  }
+  const std::string s = fmt(v, decimals);
   const auto r = std::from_chars(s.data(), s.data() + s.size(), out);
   if (r.ec != std::errc()) return std::strtod(s.c_str(), nullptr);
   return out;

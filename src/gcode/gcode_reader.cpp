@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -52,6 +53,8 @@ class GcodeReader {
                               const StopSource* stop) {
     std::size_t next_verbatim = 0;
     std::size_t pos = 0;
+    // At most a move a line: reserved, not grown by doubling.
+    moves_.reserve(static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
     while (pos <= text.size()) {
       detail::look_at_stop(stop, static_cast<std::size_t>(line_no_), detail::kPointStride);
       std::size_t end = text.find('\n', pos);

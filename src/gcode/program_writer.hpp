@@ -54,6 +54,15 @@ class ProgramWriter {
   /// The program; `stop`, where given, is looked at every few hundred points.
   GcodeProgram write(const std::vector<std::string>& comments, const StopSource* stop = nullptr) {
     stop_ = stop;
+    // About a block a feed point, a few around each rapid (retract, turn, approach) and 60
+    // characters a block: reserved, not grown by doubling (a program of 143,840 points held
+    // 1.5 times its blocks while they grew).
+    std::size_t blocks = 256;
+    for (const PostedOperation& op : ops_) {
+      for (const CLPointd& p : op.points) blocks += p.motion == Motion::Rapid ? 8 : 1;
+    }
+    prog_.blocks.reserve(blocks);
+    prog_.text.reserve(60 * blocks);
     program_start(comments);
     for (std::size_t k = 0; k < ops_.size(); ++k) operation(k);
     program_end();

@@ -25,6 +25,7 @@
 #include "geometry/mesh_surface.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/core/stop.hpp"
+#include "util/parallel.hpp"
 
 namespace taxopt {
 namespace {
@@ -190,46 +191,54 @@ Part::Part(TriangleMesh mesh, const StopSource& stop) : Part(std::move(mesh), st
 Part::Part(TriangleMesh mesh, const StopSource& stop,
            const std::function<void(const std::string&, std::size_t, std::size_t)>& progress)
     : impl_(std::make_unique<Impl>()) {
-  // Six steps of about equal time, each counted as the faces: the mesh checked, the
-  // triangles, the surface model and chordal error, the AABB tree, its search tree, the
-  // vertices' k-d tree.
+  // Six steps, each counted as the faces: the mesh checked; the triangles, the surface model
+  // and chordal error, the AABB tree, the vertices' k-d tree (two at a time); the AABB tree's
+  // search tree.
   const std::size_t faces = mesh.faces.size();
   detail::StageProgress building(progress, "building the part", 6 * faces, stop);
   check_mesh(mesh, stop);
   building.advance(faces);
   impl_->mesh = std::move(mesh);
   const auto& m = impl_->mesh;
-  impl_->triangles.reserve(m.faces.size());
-  double edges = 0.0;
-  for (std::size_t k = 0; k < m.faces.size(); ++k) {
-    detail::look_at_stop(&stop, k);
-    const auto& f = m.faces[k];
-    const Vec3d& a = m.vertices[static_cast<std::size_t>(f[0])];
-    const Vec3d& b = m.vertices[static_cast<std::size_t>(f[1])];
-    const Vec3d& c = m.vertices[static_cast<std::size_t>(f[2])];
-    impl_->triangles.emplace_back(to_cgal(a), to_cgal(b), to_cgal(c));
-    edges += (b - a).norm() + (c - b).norm() + (a - c).norm();
-  }
-  impl_->mean_edge = edges / (3.0 * static_cast<double>(m.faces.size()));
-  building.advance(faces);
-  impl_->surface = surface_and_chordal_error(m, impl_->chordal_error, &stop);
-  building.advance(faces);
-  impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
-  impl_->tree.custom_build(impl_->tree.traits().compute_bbox_object(),
-                           StoppableSplit{impl_->tree.traits().split_primitives_object(), &stop});
-  building.advance(faces);
-  // The two k-d trees are CGAL's single calls (0.13 and 0.03 s at 490k faces): the first is
-  // built apart and left to finish on its own when a stop comes; a stop is seen before the
-  // second.
+  // Side by side (each looks at the stop): the triangles and their AABB tree; the surface
+  // model with its chordal error, and the vertices' k-d tree. The tree's search tree after
+  // both (build_or_leave).
+  detail::parallel_invoke(
+      [&] {
+        impl_->triangles.reserve(m.faces.size());
+        double edges = 0.0;
+        for (std::size_t k = 0; k < m.faces.size(); ++k) {
+          detail::look_at_stop(&stop, k);
+          const auto& f = m.faces[k];
+          const Vec3d& a = m.vertices[static_cast<std::size_t>(f[0])];
+          const Vec3d& b = m.vertices[static_cast<std::size_t>(f[1])];
+          const Vec3d& c = m.vertices[static_cast<std::size_t>(f[2])];
+          impl_->triangles.emplace_back(to_cgal(a), to_cgal(b), to_cgal(c));
+          edges += (b - a).norm() + (c - b).norm() + (a - c).norm();
+        }
+        impl_->mean_edge = edges / (3.0 * static_cast<double>(m.faces.size()));
+        building.advance(faces);
+        impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
+        impl_->tree.custom_build(
+            impl_->tree.traits().compute_bbox_object(),
+            StoppableSplit{impl_->tree.traits().split_primitives_object(), &stop});
+        building.advance(faces);
+      },
+      [&] {
+        impl_->surface = surface_and_chordal_error(m, impl_->chordal_error, &stop);
+        building.advance(faces);
+        for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+          detail::look_at_stop(&stop, v);
+          impl_->kd.insert(to_cgal(m.vertices[v]));
+        }
+        stop.throw_if_stop_requested();
+        impl_->kd.build();
+        building.advance(faces);
+      });
+  // The k-d trees are CGAL's single calls (0.13 and 0.03 s at 490k faces): the search tree is
+  // built apart and left to finish on its own when a stop comes.
   stop.throw_if_stop_requested();
   build_or_leave(impl_, stop, [](Impl& impl) { impl.tree.accelerate_distance_queries(); });
-  building.advance(faces);
-  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
-    detail::look_at_stop(&stop, v);
-    impl_->kd.insert(to_cgal(m.vertices[v]));
-  }
-  stop.throw_if_stop_requested();
-  impl_->kd.build();
   building.advance(faces);
 }
 

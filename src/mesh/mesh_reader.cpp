@@ -1,7 +1,6 @@
 // Part meshes through CGAL's polygon-soup readers (compiled here so that users of the public
 // headers never include CGAL).
 #include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
@@ -326,6 +325,50 @@ void check_soup(const std::string& path, const std::vector<K::Point_3>& points,
   }
 }
 
+/// CGAL's merge_duplicate_points_in_polygon_soup, by hashing instead of its std::map: the
+/// points equal in x, y and z (0 and -0 alike) become the first of them, numbered in the order
+/// they first appear, and the polygons name those (the same points and polygons, at 490k faces
+/// 0.1 s instead of 0.6). The points are finite (check_soup).
+void merge_duplicate_points(std::vector<K::Point_3>& points,
+                            std::vector<std::vector<std::size_t>>& polygons) {
+  const std::size_t n = points.size();
+  std::size_t size = 16;
+  while (size < 2 * n) size *= 2;
+  constexpr std::size_t kEmpty = static_cast<std::size_t>(-1);
+  std::vector<std::size_t> table(size, kEmpty);  // a slot: the unique point's number
+  const auto key = [](double v) {
+    std::uint64_t bits = 0;
+    v = v == 0.0 ? 0.0 : v;  // -0 hashes as 0
+    std::memcpy(&bits, &v, sizeof bits);
+    return bits;
+  };
+  std::vector<K::Point_3> unique;
+  unique.reserve(n);
+  std::vector<std::size_t> id(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const K::Point_3& p = points[i];
+    std::uint64_t h = key(p.x()) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ key(p.y())) * 0xC2B2AE3D27D4EB4Full;
+    h = (h ^ key(p.z())) * 0x165667B19E3779F9ull;
+    std::size_t slot = static_cast<std::size_t>(h ^ (h >> 29)) & (size - 1);
+    for (;; slot = (slot + 1) & (size - 1)) {
+      if (table[slot] == kEmpty) {
+        table[slot] = unique.size();
+        unique.push_back(p);
+        break;
+      }
+      const K::Point_3& q = unique[table[slot]];
+      if (q.x() == p.x() && q.y() == p.y() && q.z() == p.z()) break;
+    }
+    id[i] = table[slot];
+  }
+  if (unique.size() == n) return;
+  for (std::vector<std::size_t>& polygon : polygons) {
+    for (std::size_t& v : polygon) v = id[v];
+  }
+  points = std::move(unique);
+}
+
 /// The merged soup as triangles (polygons fanned), slivers of no area dropped and counted.
 TriangleMesh triangles_of(const std::vector<K::Point_3>& points,
                           const std::vector<std::vector<std::size_t>>& polygons) {
@@ -399,7 +442,7 @@ TriangleMesh read_mesh_file(const std::string& path) {
   }
   check_soup(path, points, polygons);
   // An STL is a soup: one copy of a vertex per triangle. Merge exact duplicates.
-  CGAL::Polygon_mesh_processing::merge_duplicate_points_in_polygon_soup(points, polygons);
+  merge_duplicate_points(points, polygons);
   TriangleMesh mesh = triangles_of(points, polygons);
   if (mesh.faces.empty()) {
     throw InputError(path, 0,

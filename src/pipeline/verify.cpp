@@ -598,11 +598,16 @@ void verify_operations(const Run& run, const std::vector<OperationContext>& ops,
       out_ops[k].points[i].tip_mm = posted[k].points[i].tip_mm;
     }
   }
-  // Every block the program holds, whoever wrote it, swept against the part.
-  check_every_block(run, ops, posted, written, res);
-  // The program as a whole after its points: a point's own finding names its CL line first.
-  check_program(run, posted, written, res);
-  res.out_cls = cl::format_cl(run.tp, out_ops, &options.stop);
+  // Every block the program holds swept against the part, then the program as a whole (a
+  // point's own finding names its CL line first); beside them the new CL file.
+  std::string out_cls;
+  detail::parallel_invoke(
+      [&] {
+        check_every_block(run, ops, posted, written, res);
+        check_program(run, posted, written, res);
+      },
+      [&] { out_cls = cl::format_cl(run.tp, out_ops, &options.stop); });
+  res.out_cls = std::move(out_cls);
 }
 
 }  // namespace taxopt::pipeline

@@ -17,6 +17,7 @@
 #include "pipeline/stages.hpp"
 #include "taxopt/core/version.hpp"
 #include "taxopt/kinematics/machine.hpp"
+#include "util/parallel.hpp"
 #include "util/progress.hpp"
 
 namespace taxopt::pipeline {
@@ -155,6 +156,7 @@ class ProgramClock {
         lcnc_(gcode::rules_of(run.machine.gcode.dialect).tcp_planned_in_program_axes()),
         stop_(run.options.stop) {
     tcp_blocks_.clear();
+    if (lcnc_) tcp_blocks_.reserve(w_.moves.size());  // a block a move, not grown by doubling
     w_.spindle_mm.assign(w_.moves.size(), std::nullopt);
     w_.joints_after.assign(w_.moves.size(), std::nullopt);
     w_.tip_linear.assign(w_.moves.size(), 0);
@@ -409,96 +411,17 @@ std::vector<std::string> program_comments(const Run& run, const JobResult& res) 
 
 namespace {
 
-std::vector<std::string> unverified_comments(const Run& run, const JobResult& res) {
-  std::vector<std::string> comments = program_comments(run, res);
-  comments.push_back("NOT VERIFIED: the verification failed (" +
-                     std::to_string(res.problems.size()) +
-                     " problems); a program written anyway is not to be run as it is");
-  for (std::size_t i = 0; i < res.problems.size() && i < 10; ++i) {
-    comments.push_back("FAILED: " + res.problems[i].substr(0, 200));
-  }
-  return comments;
-}
-
-int line_count(const std::string& text) {
-  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-}
-
-/// "G-code line N" in a message, N moved by `shift`.
-std::string shifted_gcode_lines(const std::string& message, int shift) {
-  static const std::string kWords = "G-code line ";
-  std::string out;
-  std::size_t from = 0;
-  for (std::size_t at = message.find(kWords); at != std::string::npos;
-       at = message.find(kWords, from)) {
-    std::size_t end = at + kWords.size();
-    while (end < message.size() && std::isdigit(static_cast<unsigned char>(message[end]))) ++end;
-    out += message.substr(from, at + kWords.size() - from);
-    const std::string digits = message.substr(at + kWords.size(), end - at - kWords.size());
-    out += digits.empty() ? digits : std::to_string(std::stoi(digits) + shift);
-    from = end;
-  }
-  return out + message.substr(from);
-}
-
-}  // namespace
-
-void mark_unverified(const Run& run, const std::vector<PostedOperation>& posted, JobResult& res) {
-  if (res.problems.empty() || res.gcode.text.empty()) return;
-  // The same program with the failed checks named in its first lines (comments only: every
-  // block and its line's place after them is as verified, shifted). Every line the program's
-  // record and the findings name moves down with it: the writer's own (blocks, points,
-  // template lines, joint-safe rapids) are the marked program's; the G-code lines the
-  // verification and the time model found are shifted, in the findings' messages too, before
-  // those are written into the program. (Before, only the text and the blocks were replaced:
-  // read back with its verbatim lines, the marked program's feed blocks were stepped over,
-  // and a finding's G-code line named another block.)
-  // Each comment is one line (comment_text folds line ends): the marks add one line per
-  // comment beyond the program's own.
-  const int shift =
-      static_cast<int>(unverified_comments(run, res).size() - program_comments(run, res).size());
-  for (Finding& f : res.findings) {
-    if (f.gcode_line) *f.gcode_line += shift;
-    f.message = shifted_gcode_lines(f.message, shift);
-  }
-  for (std::vector<std::string>* list : {&res.problems, &res.safety_warnings, &res.warnings}) {
-    for (std::string& m : *list) m = shifted_gcode_lines(m, shift);
-  }
-  GcodeProgram marked =
-      write_gcode(posted, run.machine, res.gcode_units, unverified_comments(run, res));
-  if (line_count(marked.text) - line_count(res.gcode.text) != shift) {
-    throw std::logic_error("mark_unverified: the marks are not one line each");
-  }
-  GcodeProgram& g = res.gcode;
-  g.text = std::move(marked.text);
-  g.blocks = std::move(marked.blocks);
-  g.emitted = std::move(marked.emitted);
-  g.joint_safe_rapids = std::move(marked.joint_safe_rapids);
-  g.verbatim_lines = std::move(marked.verbatim_lines);
-  g.tool_calls = std::move(marked.tool_calls);
-  if (g.time_from_line > 0) g.time_from_line += shift;
-  for (JointPeak& p : g.tcp_joint_peaks) {
-    if (p.velocity_line > 0) p.velocity_line += shift;
-    if (p.accel_line > 0) p.accel_line += shift;
-  }
-}
-
-namespace {
-
-/// The feed schedules of every operation at `limits`, as written (the blocks read back) and
-/// as the input axes would run (Written::schedule_after and schedule_before, with the
-/// programmed times they start from).
-void schedule_operations(const Run& run, const std::vector<OperationContext>& ops,
-                         const std::vector<PostedOperation>& posted, const JointLimits& limits,
-                         LengthUnit units, Written& w, detail::StageProgress& writing) {
+/// The feed schedules of every operation at `limits` as written (the blocks read back):
+/// Written::schedule_after, with the programmed times they start from.
+void schedule_after(const Run& run, const std::vector<PostedOperation>& posted,
+                    const JointLimits& limits, LengthUnit units, Written& w,
+                    detail::StageProgress& writing) {
   const Machine& machine = run.machine;
   const StopSource& stop = run.options.stop;
   // Tcp mode: the joints follow the kinematics inside a block (schedule_operation).
   const bool tcp = machine.gcode.mode == GcodeMode::Tcp;
   for (std::size_t k = 0; k < posted.size(); ++k) {
     const PostedOperation& po = posted[k];
-    const Operationd& op = *ops[k].op;
-    const std::vector<Posed>& input_poses = ops[k].input_poses;
     const std::vector<Linearised> via =
         linearised_blocks(machine, po, w.point_moves[k], w.moves, units, &stop);
     w.time_into_after.push_back(po.programmed_time_s.empty()
@@ -508,23 +431,47 @@ void schedule_operations(const Run& run, const std::vector<OperationContext>& op
         po.points, written_joints(machine, w.point_moves[k]), w.time_into_after.back(), limits,
         machine.rotary, &via, tcp ? &po.poses : nullptr, &stop));
     writing.advance(po.points.size());
-    std::vector<CLPointd> in_points = po.points;
-    std::vector<Vec3d> in_tips;
-    for (std::size_t i = 0; i < in_points.size(); ++i) {
-      in_points[i].tip_mm = op.points[i].tip_mm;
-      in_points[i].axis = op.points[i].axis;
-      in_tips.push_back(in_points[i].tip_mm);
+  }
+}
+
+/// The feed schedules the input axes would run at `limits` (Written::schedule_before, with
+/// the programmed times they start from), for the operations with input poses; those
+/// without take the written path's (fill_schedule_before). They depend on the input alone:
+/// made beside the program's writing.
+void schedule_before(const Run& run, const std::vector<OperationContext>& ops,
+                     const std::vector<PostedOperation>& posted, const JointLimits& limits,
+                     Written& w, detail::StageProgress& writing) {
+  const Machine& machine = run.machine;
+  const bool tcp = machine.gcode.mode == GcodeMode::Tcp;
+  w.time_into_before.resize(posted.size());
+  w.schedule_before.resize(posted.size());
+  for (std::size_t k = 0; k < posted.size(); ++k) {
+    const PostedOperation& po = posted[k];
+    const Operationd& op = *ops[k].op;
+    const std::vector<Posed>& input_poses = ops[k].input_poses;
+    if (!input_poses.empty()) {
+      std::vector<CLPointd> in_points = po.points;
+      std::vector<Vec3d> in_tips;
+      for (std::size_t i = 0; i < in_points.size(); ++i) {
+        in_points[i].tip_mm = op.points[i].tip_mm;
+        in_points[i].axis = op.points[i].axis;
+        in_tips.push_back(in_points[i].tip_mm);
+      }
+      w.time_into_before[k] = programmed_block_times_s(in_points, input_poses);
+      w.schedule_before[k] = schedule_operation(
+          in_points, joints_of(machine.rotary, in_tips, input_poses), w.time_into_before[k], limits,
+          machine.rotary, nullptr, tcp ? &input_poses : nullptr, &run.options.stop);
     }
-    w.time_into_before.push_back(input_poses.empty()
-                                     ? w.time_into_after.back()
-                                     : programmed_block_times_s(in_points, input_poses));
-    w.schedule_before.push_back(
-        input_poses.empty()
-            ? w.schedule_after.back()
-            : schedule_operation(in_points, joints_of(machine.rotary, in_tips, input_poses),
-                                 w.time_into_before.back(), limits, machine.rotary, nullptr,
-                                 tcp ? &input_poses : nullptr, &stop));
     writing.advance(po.points.size());
+  }
+}
+
+/// The operations without input poses run the written path before as after.
+void fill_schedule_before(const std::vector<OperationContext>& ops, Written& w) {
+  for (std::size_t k = 0; k < w.schedule_before.size(); ++k) {
+    if (!ops[k].input_poses.empty()) continue;
+    w.time_into_before[k] = w.time_into_after[k];
+    w.schedule_before[k] = w.schedule_after[k];
   }
 }
 
@@ -555,15 +502,20 @@ Written write_program(const Run& run, const std::vector<OperationContext>& ops,
   for (const PostedOperation& po : posted) points += po.points.size();
   const std::size_t steps = run.options.feed_schedule ? 7 : 5;
   detail::StageProgress writing(run.options.progress, "writing", steps * points, stop);
-  res.gcode = gcode::write_program(posted, machine, res.gcode_units, comments, &stop);
-  writing.advance(points);
-  read_back(machine, posted, res.gcode, w, &stop);
-  writing.advance(points);
-
-  // Feed schedules at the machine's limits: the written path (from the words read back) and
-  // the input axes; with --feed-schedule the program is written again at the scheduled feeds.
+  // Feed schedules at the machine's limits: the written path (from the words read back) and,
+  // beside the writing (it depends on the input alone), the input axes; with --feed-schedule
+  // the program is written again at the scheduled feeds.
   const JointLimits limits = effective_limits(machine);
-  schedule_operations(run, ops, posted, limits, res.gcode_units, w, writing);
+  detail::parallel_invoke(
+      [&] {
+        res.gcode = gcode::write_program(posted, machine, res.gcode_units, comments, &stop);
+        writing.advance(points);
+        read_back(machine, posted, res.gcode, w, &stop);
+        writing.advance(points);
+        schedule_after(run, posted, limits, res.gcode_units, w, writing);
+      },
+      [&] { schedule_before(run, ops, posted, limits, w, writing); });
+  fill_schedule_before(ops, w);
   if (run.options.feed_schedule) {
     for (std::size_t k = 0; k < posted.size(); ++k) {
       w.time_into_after[k] = w.schedule_after[k].time_s;

@@ -1,4 +1,6 @@
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "support.hpp"
@@ -75,6 +77,47 @@ TEST_CASE("mesh: every format reads to the same indexed mesh", "[io][mesh]") {
     CHECK(r.faces.size() == 4);
     CHECK(r.vertices.size() == 4);  // STL's 12 corner copies merged into 4 vertices
   }
+}
+
+TEST_CASE("mesh: an STL's corner copies merge exactly -- first seen first -- 0 and -0 alike",
+          "[io][mesh]") {
+  // Four triangles whose corners repeat: a copy equal in x, y and z (-0 equal to 0) is the
+  // vertex first seen; a corner one unit of the last place away is a vertex of its own.
+  const double apart = std::nextafter(1.0, 2.0);
+  std::string ascii = "solid t\n";
+  const double tri[4][3][3] = {{{5, 0, 0}, {0, 1, 0}, {1, 0, 0}},
+                               {{-0.0, 1, -0.0}, {1, 0, 0}, {0, 0, 1}},
+                               {{0, 0, 1}, {5, -0.0, 0}, {apart, 0, 0}},
+                               {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  char number[64];
+  for (const auto& f : tri) {
+    ascii += " facet normal 0 0 0\n  outer loop\n";
+    for (const auto& v : f) {
+      ascii += "   vertex";
+      for (double c : v) {
+        std::snprintf(number, sizeof number, " %.17g", c);
+        ascii += number;
+      }
+      ascii += "\n";
+    }
+    ascii += "  endloop\n endfacet\n";
+  }
+  ascii += "endsolid t\n";
+  TempDir t;
+  write_file(t.path("m.stl"), ascii);
+  const TriangleMesh r = read_mesh_file(t.path("m.stl"));
+  // First seen: (5,0,0) (0,1,0) (1,0,0) (0,0,1) (1+ulp,0,0).
+  REQUIRE(r.vertices.size() == 5);
+  CHECK(r.vertices[0] == Vec3d(5, 0, 0));
+  CHECK(r.vertices[1] == Vec3d(0, 1, 0));
+  CHECK(r.vertices[2] == Vec3d(1, 0, 0));
+  CHECK(r.vertices[3] == Vec3d(0, 0, 1));
+  CHECK(r.vertices[4] == Vec3d(apart, 0, 0));
+  REQUIRE(r.faces.size() == 4);
+  CHECK(r.faces[0] == std::array<int, 3>{0, 1, 2});
+  CHECK(r.faces[1] == std::array<int, 3>{1, 2, 3});
+  CHECK(r.faces[2] == std::array<int, 3>{3, 0, 4});
+  CHECK(r.faces[3] == std::array<int, 3>{2, 1, 3});
 }
 
 TEST_CASE("mesh: the demo part reads with shared vertices", "[io][mesh]") {

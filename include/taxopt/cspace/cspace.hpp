@@ -99,7 +99,13 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
     /// Children (inner node, else -1) and the range [first, first + count) of its faces.
     int left = -1, right = -1, first = 0, count = 0;
   };
-  int build(int first, int count, std::vector<Vec3d>& centroids, const StopSource& stop);
+  /// The tree's build: each face's centroid (in the mesh's order), the face at each place of
+  /// the tree's order, and room for one node's order.
+  struct Build {
+    const std::vector<Vec3d>& centroids;
+    std::vector<int> perm, scratch;
+  };
+  int build(int first, int count, Build& b, const StopSource& stop);
   /// One free_axes call's walk of the tree (cspace.cpp).
   class Walk;
   std::vector<std::array<Vec3d, 3>> tri_;

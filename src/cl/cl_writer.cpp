@@ -1,11 +1,11 @@
 #include "cl/cl_writer.hpp"
 
-#include <charconv>
 #include <cstdio>
 #include <stdexcept>
 
 #include "taxopt/io/cl_file.hpp"
 #include "util/progress.hpp"
+#include "util/text.hpp"
 
 namespace taxopt {
 namespace {
@@ -14,18 +14,10 @@ bool same_point(const CLPointd& a, const CLPointd& b) {
   return (a.tip_mm - b.tip_mm).norm() <= 1e-9 && (a.axis - b.axis).norm() <= 1e-12;
 }
 
-/// Appends `v` as printf's "%.*f" writes it: std::to_chars with a precision is specified so
-/// (C++17 [charconv]), at a fraction of the cost; printf where it would not fit.
-void append_fixed(std::string& out, double v, int decimals) {
-  char buf[400];  // the longest double in %f, 309 digits, and the decimals
-  const std::to_chars_result r =
-      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
-  if (r.ec == std::errc()) {
-    out.append(buf, r.ptr);
-  } else {
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    out += buf;
-  }
+/// Appends `v` as printf's "%.*f" writes it.
+void append_number(std::string& out, double v, int decimals) {
+  const detail::FixedText f = detail::fixed_text(v, decimals);
+  out.append(f.text, f.size);
 }
 
 /// A GOTO in the file's units and in the frame its record was given in (MSYS), appended to
@@ -42,11 +34,11 @@ void append_goto(std::string& out, const char* word, const CLPointd& p, double m
   out += '/';
   for (int c = 0; c < 3; ++c) {
     if (c > 0) out += ',';
-    append_fixed(out, t[c], 6);
+    append_number(out, t[c], 6);
   }
   for (int c = 0; c < 3; ++c) {
     out += ',';
-    append_fixed(out, axis[c], 9);
+    append_number(out, axis[c], 9);
   }
 }
 

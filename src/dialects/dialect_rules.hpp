@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "taxopt/kinematics/machine.hpp"
+#include "util/text.hpp"
 
 namespace taxopt::gcode {
 
@@ -28,37 +29,23 @@ inline std::string fmt_signless_zero(const char* text) {
   return s;
 }
 
-/// `v` with `decimals` decimals, as every dialect writes a number.
-/// std::to_chars with a precision writes what printf's "%.*f" writes (C++17 [charconv]), at a
-/// fraction of its cost (a program of 143,840 points formats over a million numbers).
+/// `v` with `decimals` decimals, as every dialect writes a number: printf's "%.*f"
+/// (detail::fixed_text, a program of 143,840 points formats over a million numbers) without a
+/// negative zero's sign.
 inline std::string fmt(double v, int decimals) {
-  char buf[400];  // the longest double in %f, 309 digits, and the decimals a dialect writes
-  const std::to_chars_result r =
-      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
-  if (r.ec != std::errc()) {
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    return fmt_signless_zero(buf);
-  }
-  *r.ptr = '\0';
-  return fmt_signless_zero(buf);
+  return fmt_signless_zero(detail::fixed_text(v, decimals).text);
 }
 
 /// The value a reader gets back from fmt(v, decimals) (from_chars: strtod's value, correctly
-/// rounded, in the C locale).
+/// rounded, in the C locale). Read from the text before fmt drops a zero's sign: a text of
+/// zeros reads as 0 whatever its sign, every other text as fmt writes it.
 inline double round_to(double v, int decimals) {
-  // fmt's text read back, without a string: a text of zeros reads as 0 whatever its sign
-  // (fmt writes no sign there), every other text as fmt writes it.
-  char buf[400];
-  const std::to_chars_result w =
-      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  const detail::FixedText f = detail::fixed_text(v, decimals);
   double out = 0.0;
-  if (w.ec == std::errc() && std::from_chars(buf, w.ptr, out).ec == std::errc()) {
-    return out == 0.0 ? 0.0 : out;
+  if (std::from_chars(f.text, f.text + f.size, out).ec != std::errc()) {
+    out = std::strtod(f.text, nullptr);
   }
-  const std::string s = fmt(v, decimals);
-  const auto r = std::from_chars(s.data(), s.data() + s.size(), out);
-  if (r.ec != std::errc()) return std::strtod(s.c_str(), nullptr);
-  return out;
+  return out == 0.0 ? 0.0 : out;
 }
 
 /// Comment text for a controller: no parentheses (they close a LinuxCNC or Fanuc comment),

@@ -327,8 +327,8 @@ void check_soup(const std::string& path, const std::vector<K::Point_3>& points,
 
 /// CGAL's merge_duplicate_points_in_polygon_soup, by hashing instead of its std::map: the
 /// points equal in x, y and z (0 and -0 alike) become the first of them, numbered in the order
-/// they first appear, and the polygons name those (the same points and polygons, at 490k faces
-/// 0.1 s instead of 0.6). The points are finite (check_soup).
+/// they first appear, and the polygons name those (the same points and polygons; the read of
+/// 490k faces 1.0 s -> 0.55 s). The points are finite (check_soup).
 void merge_duplicate_points(std::vector<K::Point_3>& points,
                             std::vector<std::vector<std::size_t>>& polygons) {
   const std::size_t n = points.size();

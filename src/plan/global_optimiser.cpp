@@ -20,25 +20,9 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
 
-using detail::kTie;
-
-/// An objective value: the peak a^2 and the sum of a^2 (deg^2/s^4). Which one orders values
-/// depends on the objective; the other breaks ties.
-struct Value {
-  double peak_sq = 0.0, sum_sq = 0.0;
-};
-
-bool less(const Value& x, const Value& y, GlobalObjective objective) {
-  if (objective == GlobalObjective::Peak) {
-    if (x.peak_sq < y.peak_sq * (1.0 - kTie)) return true;
-    if (x.peak_sq > y.peak_sq * (1.0 + kTie)) return false;
-  }
-  return x.sum_sq < y.sum_sq * (1.0 - kTie) - 1e-300;
-}
-
-double scalar(const Value& v, GlobalObjective objective) {
-  return objective == GlobalObjective::Peak ? std::sqrt(v.peak_sq) : v.sum_sq;
-}
+using Value = detail::RotaryValue;
+using detail::less;
+using detail::scalar;
 
 /// Accelerations (deg/s^2) of A and C at every point of poses with continuous C (eq. 16-18,
 /// metrics.hpp; 0 at the ends).
@@ -166,81 +150,6 @@ double rotary_objective(const std::vector<Posed>& poses, const std::vector<doubl
     throw std::invalid_argument("rotary_objective: the time objective needs the joints");
   }
   return scalar(value_of(poses, segment_time_s, jerk_weight_s2), objective);
-}
-
-std::vector<std::size_t> best_candidate_sequence(const std::vector<std::vector<Posed>>& candidates,
-                                                 const std::vector<double>& segment_time_s,
-                                                 GlobalObjective objective, double* value,
-                                                 bool wrap_c) {
-  const std::size_t n = candidates.size();
-  if (n == 0) return {};
-  if (segment_time_s.size() + 1 != n) {
-    throw std::invalid_argument("best_candidate_sequence: n points need n - 1 segment times");
-  }
-  for (const auto& c : candidates) {
-    if (c.empty() || c.size() > 255) {
-      throw std::invalid_argument("best_candidate_sequence: 1 to 255 candidates per point");
-    }
-  }
-  if (n <= 2) {
-    if (value) *value = 0.0;
-    return std::vector<std::size_t>(n, 0);
-  }
-  const auto& t = segment_time_s;
-  // Rates (rad/s) of A and C of every pair of candidates of segment i; C steps wrapped.
-  const auto rates = [&](std::size_t i, std::vector<double>& wa, std::vector<double>& wc) {
-    const auto& p = candidates[i];
-    const auto& q = candidates[i + 1];
-    wa.resize(p.size() * q.size());
-    wc.resize(p.size() * q.size());
-    for (std::size_t r = 0; r < p.size(); ++r) {
-      for (std::size_t s = 0; s < q.size(); ++s) {
-        wa[r * q.size() + s] = (q[s].tilt_rad - p[r].tilt_rad) / t[i];
-        const double step = q[s].c_rad - p[r].c_rad;
-        wc[r * q.size() + s] = (wrap_c ? wrap_pi(step) : step) / t[i];
-      }
-    }
-  };
-  // State of point i: (candidate r at i - 1, candidate s at i), index r * K_i + s.
-  std::vector<Value> cost(candidates[0].size() * candidates[1].size());
-  std::vector<std::vector<std::uint8_t>> back(n);
-  std::vector<double> wa0, wc0, wa1, wc1;
-  rates(0, wa0, wc0);
-  for (std::size_t i = 1; i + 1 < n; ++i) {
-    rates(i, wa1, wc1);
-    const std::size_t kp = candidates[i - 1].size(), k = candidates[i].size(),
-                      kn = candidates[i + 1].size();
-    const double c = kRadToDeg * 2.0 / (t[i - 1] + t[i]);
-    std::vector<Value> next(k * kn);
-    back[i + 1].assign(k * kn, 0);
-    for (std::size_t s = 0; s < k; ++s) {
-      for (std::size_t u = 0; u < kn; ++u) {
-        const double a1 = wa1[s * kn + u], c1 = wc1[s * kn + u];
-        Value best{std::numeric_limits<double>::infinity(),
-                   std::numeric_limits<double>::infinity()};
-        std::uint8_t arg = 0;
-        for (std::size_t r = 0; r < kp; ++r) {
-          const double da = c * (a1 - wa0[r * k + s]), dc = c * (c1 - wc0[r * k + s]);
-          const double sq = da * da + dc * dc;
-          const Value& before = cost[r * k + s];
-          const Value v{std::max(before.peak_sq, sq), before.sum_sq + sq};
-          if (less(v, best, objective)) best = v, arg = static_cast<std::uint8_t>(r);
-        }
-        next[s * kn + u] = best;
-        back[i + 1][s * kn + u] = arg;
-      }
-    }
-    cost.swap(next);
-    wa0.swap(wa1);
-    wc0.swap(wc1);
-  }
-  // Best final state, then back through the pointers.
-  std::size_t best = 0;
-  for (std::size_t st = 1; st < cost.size(); ++st) {
-    if (less(cost[st], cost[best], objective)) best = st;
-  }
-  if (value) *value = scalar(cost[best], objective);
-  return detail::backtrack(candidates, back, best);
 }
 
 namespace {

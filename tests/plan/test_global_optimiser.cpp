@@ -129,6 +129,96 @@ TEST_CASE("global: the programme finds the best sequence of candidates, as enume
   CHECK(compared == 160);
 }
 
+namespace {
+
+/// The sum-of-squares programme as the file comment states it, one state and one predecessor
+/// at a time: the first predecessor of the least value (ties within 1e-12 keep the earlier).
+std::vector<std::size_t> reference_sum_squares(const std::vector<std::vector<Posed>>& cand,
+                                               const std::vector<double>& t, double& value) {
+  const std::size_t n = cand.size();
+  const double deg = 180.0 / Constants<double>::pi();
+  const auto rate = [&](std::size_t i, std::size_t r, std::size_t s) {
+    return std::array<double, 2>{(cand[i + 1][s].tilt_rad - cand[i][r].tilt_rad) / t[i],
+                                 wrap_pi(cand[i + 1][s].c_rad - cand[i][r].c_rad) / t[i]};
+  };
+  std::vector<std::vector<double>> cost(n);
+  std::vector<std::vector<std::size_t>> back(n);
+  cost[1].assign(cand[0].size() * cand[1].size(), 0.0);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const std::size_t kp = cand[i - 1].size(), k = cand[i].size(), kn = cand[i + 1].size();
+    const double c = deg * 2.0 / (t[i - 1] + t[i]);
+    cost[i + 1].assign(k * kn, 0.0);
+    back[i + 1].assign(k * kn, 0);
+    for (std::size_t s = 0; s < k; ++s) {
+      for (std::size_t u = 0; u < kn; ++u) {
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t r = 0; r < kp; ++r) {
+          const auto before = rate(i - 1, r, s), after = rate(i, s, u);
+          const double da = c * (after[0] - before[0]), dc = c * (after[1] - before[1]);
+          const double v = cost[i][r * k + s] + (da * da + dc * dc);
+          if (v < best * (1.0 - 1e-12) - 1e-300) best = v, back[i + 1][s * kn + u] = r;
+        }
+        cost[i + 1][s * kn + u] = best;
+      }
+    }
+  }
+  std::size_t state = 0;
+  for (std::size_t st = 1; st < cost[n - 1].size(); ++st) {
+    if (cost[n - 1][st] < cost[n - 1][state] * (1.0 - 1e-12) - 1e-300) state = st;
+  }
+  value = cost[n - 1][state];
+  std::vector<std::size_t> seq(n);
+  seq[n - 1] = state % cand[n - 1].size();
+  seq[n - 2] = state / cand[n - 1].size();
+  for (std::size_t i = n - 1; i >= 2; --i) {
+    seq[i - 2] = back[i][seq[i - 1] * cand[i].size() + seq[i]];
+  }
+  return seq;
+}
+
+}  // namespace
+
+TEST_CASE("global: the sum-of-squares programme keeps the rule's choice on ties and near-ties",
+          "[plan][global]") {
+  // Many candidates (the programme's vectorised step), some repeated exactly or within a few
+  // ulps (ties its shortcut must hand to the rule's scan), some far apart (no tie).
+  std::mt19937 rng(65);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int repeats = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const std::size_t n = 4 + static_cast<std::size_t>(u(rng) * 30.0);
+    std::vector<std::vector<Posed>> cand(n);
+    std::vector<double> t;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = 1 + static_cast<std::size_t>(u(rng) * 24.0);
+      for (std::size_t j = 0; j < k; ++j) {
+        const double pick = u(rng);
+        if (j > 0 && pick < 0.3) {
+          Posed again = cand[i][static_cast<std::size_t>(u(rng) * static_cast<double>(j))];
+          if (pick < 0.1) again.tilt_rad = std::nextafter(again.tilt_rad, 10.0);
+          cand[i].push_back(again);
+          ++repeats;
+        } else {
+          cand[i].push_back(
+              Posed{deg_to_rad(-40.0 + 80.0 * u(rng)), deg_to_rad(-180.0 + 360.0 * u(rng))});
+        }
+      }
+      if (i > 0) t.push_back(trial % 3 == 0 ? 0.1 : 0.01 + u(rng));
+    }
+    if (trial % 5 == 0) {
+      // Every point the same candidates: the zero-acceleration plans tie exactly.
+      for (std::size_t i = 1; i < n; ++i) cand[i] = cand[0];
+    }
+    INFO("trial " << trial);
+    double value = -1.0, want_value = -2.0;
+    const std::vector<std::size_t> seq =
+        best_candidate_sequence(cand, t, GlobalObjective::SumSquares, &value, true);
+    CHECK(seq == reference_sum_squares(cand, t, want_value));
+    CHECK(value == want_value);
+  }
+  CHECK(repeats > 100);
+}
+
 TEST_CASE("global: the objective is eq. 16-18's acceleration, squared and summed or peaked",
           "[plan][global]") {
   // A at 0, 1, 3 deg and C fixed, segments of 0.5 s: omega 2 and 4 deg/s, a = 2 / 0.5 = 4.

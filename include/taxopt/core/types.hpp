@@ -47,7 +47,10 @@ constexpr S rad_to_deg(S angle_rad) {
 /// Wraps an angle to (-pi, pi].
 template <class S>
 S wrap_pi(S angle_rad) {
-  S a = std::fmod(angle_rad + Constants<S>::pi(), Constants<S>::two_pi());
+  // fmod(x, 2 pi) is x itself for |x| < 2 pi (exactly): the usual case, without the call.
+  const S x = angle_rad + Constants<S>::pi();
+  using std::abs;
+  S a = abs(x) < Constants<S>::two_pi() ? x : S(std::fmod(x, Constants<S>::two_pi()));
   if (a <= S(0)) a += Constants<S>::two_pi();
   return a - Constants<S>::pi();
 }

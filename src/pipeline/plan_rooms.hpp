@@ -79,9 +79,20 @@ struct Acceptance {
   }
   /// Acceptable and within the cone around point i's input axis.
   bool in_cone(std::size_t i, const Vec3d& axis) const {
-    return angle_between(axis, in.op.points[i].axis) <= max_deviation_rad + 1e-12 &&
-           (*this)(i, axis);
+    return within_cone(axis, in.op.points[i].axis) && (*this)(i, axis);
   }
+  /// angle_between(axis, input) <= max_deviation_rad + 1e-12, the angle's atan2 taken only
+  /// where the cosine leaves it in doubt (unit vectors: their cosine is the dot to 1e-9).
+  bool within_cone(const Vec3d& axis, const Vec3d& input) const {
+    const double dot = axis.dot(input);
+    if (std::abs(axis.squaredNorm() - 1.0) < 1e-9 && std::abs(input.squaredNorm() - 1.0) < 1e-9) {
+      if (dot >= cos_cone + 3e-9) return true;
+      if (dot <= cos_cone - 3e-9) return false;
+    }
+    return angle_between(axis, input) <= max_deviation_rad + 1e-12;
+  }
+  /// The cosine of the cone's half-angle (with its 1e-12 rad of slack).
+  double cos_cone = std::cos(max_deviation_rad + 1e-12);
 };
 
 /// What a method plans for one pass: the axes of `span` (the pass, or its cut) and, where the

@@ -174,6 +174,36 @@ double pass_time_s(const std::vector<JointPosition>& joints,
 
 namespace {
 
+/// A sparse LDL^T that keeps its analysis (the fill-reducing ordering and the elimination tree)
+/// while the matrices it factors keep one pattern, as the refinement's do: the same factors
+/// as a new SimplicialLDLT each time, without the ordering's cost.
+class SparseLdlt {
+ public:
+  bool factor(const Eigen::SparseMatrix<double>& a) {
+    if (!same_pattern(a)) {
+      ldlt_.analyzePattern(a);
+      rows_ = a.rows();
+      outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
+      inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+    }
+    ldlt_.factorize(a);
+    return ldlt_.info() == Eigen::Success;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const { return ldlt_.solve(b); }
+
+ private:
+  bool same_pattern(const Eigen::SparseMatrix<double>& a) const {
+    return a.isCompressed() && a.rows() == rows_ &&
+           static_cast<std::size_t>(a.nonZeros()) == inner_.size() &&
+           std::equal(outer_.begin(), outer_.end(), a.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), a.innerIndexPtr());
+  }
+
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  long rows_ = -1;
+  std::vector<int> outer_, inner_;
+};
+
 /// One pass's plan (plan_pass_global): the programme over coarse candidates, the pyramid of
 /// finer caps, the continuous refinement, and for the time objective the fastest start and
 /// rounds at the scheduled times.
@@ -407,6 +437,29 @@ class GlobalPassPlanner {
     return acceptable_(i, machine_.forward(p));
   }
 
+  /// The damped Gauss-Newton step of both coordinates from `plan_.poses`: (H + lambda diag) d =
+  /// -H x, with a floor on the damping of 1e-9 of H's mean diagonal. False where it fails.
+  bool damped_step(const Eigen::SparseMatrix<double>& h, double lambda, SparseLdlt& ldlt,
+                   Eigen::VectorXd& da, Eigen::VectorXd& dc) const {
+    const long n = static_cast<long>(n_);
+    Eigen::VectorXd xa(n), xc(n);
+    for (long i = 0; i < n; ++i) {
+      xa[i] = plan_.poses[static_cast<std::size_t>(i)].tilt_rad;
+      xc[i] = plan_.poses[static_cast<std::size_t>(i)].c_rad;
+    }
+    Eigen::SparseMatrix<double> lhs = h;
+    double mean_diag = 0.0;
+    for (long i = 0; i < h.rows(); ++i) mean_diag += h.coeff(i, i);
+    mean_diag /= static_cast<double>(h.rows());
+    for (long i = 0; i < h.rows(); ++i) {
+      lhs.coeffRef(i, i) += lambda * (h.coeff(i, i) + 1e-9 * mean_diag + 1e-300);
+    }
+    if (!ldlt.factor(lhs)) return false;
+    da = ldlt.solve(-(h * xa));
+    dc = ldlt.solve(-(h * xc));
+    return da.allFinite() && dc.allFinite();
+  }
+
   /// (2) Continuous refinement from `plan_.poses`, minimising `obj` at segment times `tt`; a
   /// step is taken only where `admissible` (if given) accepts it. Returns the steps taken.
   int refine(const std::vector<double>& tt, GlobalObjective obj, int budget,
@@ -419,6 +472,8 @@ class GlobalPassPlanner {
     std::vector<double> row_weight(n, 1.0);
     double lambda = 1e-3;
     int rejected = 0, taken = 0;
+    Eigen::SparseMatrix<double> h;
+    SparseLdlt ldlt;
     while (taken < budget && rejected < 12) {
       if (obj == GlobalObjective::Peak) {
         std::vector<double> aa, ac;
@@ -429,24 +484,13 @@ class GlobalPassPlanner {
           row_weight[i] = std::max(std::pow(r, 6.0), 1e-6);
         }
       }
-      const Eigen::SparseMatrix<double> m = second_difference(tt, row_weight, wj);
-      Eigen::SparseMatrix<double> h = (m.transpose() * m).pruned();
-      Eigen::VectorXd xa(static_cast<long>(n)), xc(static_cast<long>(n));
-      for (std::size_t i = 0; i < n; ++i) {
-        xa[static_cast<long>(i)] = plan.poses[i].tilt_rad;
-        xc[static_cast<long>(i)] = plan.poses[i].c_rad;
+      // The normal matrix changes only with the weights (the peak objective's).
+      if (h.rows() == 0 || obj == GlobalObjective::Peak) {
+        const Eigen::SparseMatrix<double> m = second_difference(tt, row_weight, wj);
+        h = (m.transpose() * m).pruned();
       }
-      Eigen::SparseMatrix<double> lhs = h;
-      double mean_diag = 0.0;
-      for (long i = 0; i < h.rows(); ++i) mean_diag += h.coeff(i, i);
-      mean_diag /= static_cast<double>(h.rows());
-      for (long i = 0; i < h.rows(); ++i) {
-        lhs.coeffRef(i, i) += lambda * (h.coeff(i, i) + 1e-9 * mean_diag + 1e-300);
-      }
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(lhs);
-      if (ldlt.info() != Eigen::Success) break;
-      const Eigen::VectorXd da = ldlt.solve(-(h * xa)), dc = ldlt.solve(-(h * xc));
-      if (!da.allFinite() || !dc.allFinite()) break;
+      Eigen::VectorXd da, dc;
+      if (!damped_step(h, lambda, ldlt, da, dc)) break;
       std::vector<Posed> trial = plan.poses;
       for (std::size_t i = 0; i < n; ++i) {
         const double sa = problem_.hold_tilt ? 0.0 : da[static_cast<long>(i)];

@@ -29,6 +29,19 @@ std::vector<Vec3d> cap_grid(const Vec3d& centre, double radius_rad, double step_
 
 namespace {
 
+/// The pattern search's eight directions: cos and sin of 2 pi d / 8, worked out once.
+struct EightDirections {
+  double cos[8], sin[8];
+  EightDirections() {
+    for (int d = 0; d < 8; ++d) {
+      const double phi = Constants<double>::two_pi() * d / 8;
+      cos[d] = std::cos(phi);
+      sin[d] = std::sin(phi);
+    }
+  }
+};
+const EightDirections kEight;
+
 /// The state of one pass while it is being planned.
 class PassPlanner {
  public:
@@ -249,8 +262,7 @@ class PassPlanner {
         const Vec3d e1 = tangent_towards(b, input_turn(i)), e2 = b.cross(e1);
         bool improved = false;
         for (int d = 0; d < 8; ++d) {
-          const double phi = Constants<double>::two_pi() * d / 8;
-          const Vec3d v = sphere_exp(b, Vec3d(step * (std::cos(phi) * e1 + std::sin(phi) * e2)));
+          const Vec3d v = sphere_exp(b, Vec3d(step * (kEight.cos[d] * e1 + kEight.sin[d] * e2)));
           const double cost = bending_at(v) + pull_term(i, v);
           if (cost < best_cost - 1e-15 && acceptable(i, v)) {
             best = v;

@@ -423,6 +423,9 @@ CSpaceGrid CSpaceRasteriser::free_axes(const ToolModel& tool, const ContactPoint
   return grid;
 }
 
+/// The slabs' slack for rounding (coordinates of a few metres: 1e-12 of them).
+constexpr double kSlabMarginMm = 1e-6;
+
 bool CSpaceRasteriser::collides(const ToolModel& tool, const Vec3d& centre, const Vec3d& axis,
                                 bool with_ball) const {
   if (nodes_.empty()) return false;
@@ -447,14 +450,31 @@ bool CSpaceRasteriser::collides(const ToolModel& tool, const Vec3d& centre, cons
     }
     return false;
   };
+  // Whether some body, or the ball, reaches a node's slab: each body's extent along the slab's
+  // normal n is n.c + [min, max](start n.a, end n.a) -/+ radius sqrt(1 - (n.a)^2).
+  const auto reaches = [&](const Slab& slab) {
+    const double nc = slab.normal.dot(centre), na = slab.normal.dot(axis);
+    const double across = std::sqrt(std::max(0.0, 1.0 - na * na));
+    const double lo = slab.lo - kSlabMarginMm, hi = slab.hi + kSlabMarginMm;
+    if (with_ball && nc + ball_r >= lo && nc - ball_r <= hi) return true;
+    for (const ToolBody& b : tool.bodies) {
+      const double z0 = b.start_mm * na, z1 = b.end_mm * na;
+      if (nc + std::max(z0, z1) + b.radius_mm * across >= lo &&
+          nc + std::min(z0, z1) - b.radius_mm * across <= hi) {
+        return true;
+      }
+    }
+    return false;
+  };
   // Depth-first; the tree is balanced (median splits), so its depth is about log2(faces / 4)
   // and a stack of 2 per level holds the walk.
   std::array<int, 256> stack{};
   std::size_t top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
-    if (!near(node.sphere)) continue;
+    const auto id = static_cast<std::size_t>(stack[--top]);
+    const Node& node = nodes_[id];
+    if (!near(node.sphere) || !reaches(slab_[id])) continue;
     if (node.left >= 0) {
       stack[top++] = node.right;
       stack[top++] = node.left;

@@ -1,6 +1,7 @@
 // The rasteriser's tree of bounding spheres over the part's faces (cspace.hpp): its build.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -44,6 +45,7 @@ CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh, const StopSource& s
   Build b{centroids, std::vector<int>(n), std::vector<int>(n)};
   for (std::size_t k = 0; k < n; ++k) b.perm[k] = static_cast<int>(k);
   nodes_.reserve(tree_nodes(n));
+  slab_.reserve(tree_nodes(n));
   build(0, static_cast<int>(n), b, stop);
   // The faces into the tree's order in place, cycle by cycle (no second copy of them).
   std::vector<bool> placed(n, false);
@@ -63,6 +65,30 @@ CSpaceRasteriser::CSpaceRasteriser(const TriangleMesh& mesh, const StopSource& s
     tri_[at] = first_tri;
     face_sphere_[at] = first_sphere;
   }
+}
+
+/// The slab of the faces at places [first, first + count): the normal their area-weighted
+/// mean (each face's turned to agree with the sum so far: a mesh's winding may be mixed), the
+/// least and greatest height of their corners along it.
+CSpaceRasteriser::Slab CSpaceRasteriser::slab_of(int first, int count, const Build& b) const {
+  Vec3d sum = Vec3d::Zero();
+  for (int k = first; k < first + count; ++k) {
+    const auto& t = tri_[static_cast<std::size_t>(b.perm[static_cast<std::size_t>(k)])];
+    const Vec3d n = (t[1] - t[0]).cross(t[2] - t[0]);
+    sum += n.dot(sum) < 0.0 ? Vec3d(-n) : n;
+  }
+  Slab slab;
+  if (sum.norm() > 0.0 && std::isfinite(sum.norm())) slab.normal = sum.normalized();
+  slab.lo = std::numeric_limits<double>::infinity();
+  slab.hi = -slab.lo;
+  for (int k = first; k < first + count; ++k) {
+    for (const Vec3d& p : tri_[static_cast<std::size_t>(b.perm[static_cast<std::size_t>(k)])]) {
+      const double h = slab.normal.dot(p);
+      slab.lo = std::min(slab.lo, h);
+      slab.hi = std::max(slab.hi, h);
+    }
+  }
+  return slab;
 }
 
 /// Top-down: split the faces at the median centroid along the longest extent, four faces or
@@ -87,6 +113,8 @@ int CSpaceRasteriser::build(int first, int count, Build& b, const StopSource& st
     for (const Vec3d& p : tri_[face_at(k)]) s.radius = std::max(s.radius, (p - s.centre).norm());
   }
   nodes_[static_cast<std::size_t>(id)].sphere = s;
+  slab_.resize(nodes_.size());
+  slab_[static_cast<std::size_t>(id)] = slab_of(first, count, b);
   nodes_[static_cast<std::size_t>(id)].first = first;
   nodes_[static_cast<std::size_t>(id)].count = count;
   if (count <= 4) return id;

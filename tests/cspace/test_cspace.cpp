@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "cspace/triangle_tests.hpp"
 #include "support.hpp"
 #include "taxopt/core/error.hpp"
 #include "taxopt/cspace/cspace.hpp"
@@ -244,4 +245,55 @@ TEST_CASE("cspace: the tree's one-pose check agrees with FCL on unseen parts",
   CHECK(hits < queries - queries / 10);
   CHECK(tree_free_fcl_hit == 0);
   CHECK(tree_hit_fcl_free <= queries / 1000);
+}
+
+TEST_CASE("cspace: the tree's one-pose check is every face's own test with the tree only skipping",
+          "[cspace]") {
+  // collides walks the tree and drops a node by its sphere or its slab (the planes its faces
+  // lie between); neither may drop a face the exact tests would find: the verdict is the
+  // verdict of every face tested in turn, for the bodies, the ball, and bodies grown past the
+  // ball centre as the move sweeps grow them.
+  std::mt19937 rng(6502);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::size_t queries = 0, hits = 0;
+  for (const Heightfield& hf : random_heightfields(rng)) {
+    INFO(hf.name);
+    const TriangleMesh mesh = height_mesh(hf, 40);
+    const CSpaceRasteriser tree(mesh);
+    for (int q = 0; q < 400; ++q) {
+      ToolModel tool;
+      tool.ball_radius_mm = 1.0 + 3.0 * u01(rng);
+      const double grow = q % 3 == 0 ? 2.0 * u01(rng) : 0.0;
+      tool.bodies.push_back({tool.ball_radius_mm + grow, -grow, 10.0 + grow});
+      tool.bodies.push_back(
+          {tool.ball_radius_mm + 1.0 + grow, 10.0 - grow, 10.0 + 30.0 * u01(rng)});
+      const double x = 5.0 + 40.0 * u01(rng), y = 5.0 + 40.0 * u01(rng);
+      const Vec3d centre(x, y, hf.z(x, y) + 6.0 * u01(rng) - 0.5);
+      const double tilt = deg_to_rad(100.0) * u01(rng), yaw = deg_to_rad(360.0) * u01(rng);
+      const Vec3d axis(std::sin(tilt) * std::cos(yaw), std::sin(tilt) * std::sin(yaw),
+                       std::cos(tilt));
+      const bool with_ball = q % 2 == 0;
+      bool every_face = false;
+      for (const auto& f : mesh.faces) {
+        const Vec3d& a = mesh.vertices[static_cast<std::size_t>(f[0])];
+        const Vec3d& b = mesh.vertices[static_cast<std::size_t>(f[1])];
+        const Vec3d& c = mesh.vertices[static_cast<std::size_t>(f[2])];
+        if (with_ball && detail::squared_distance_to_triangle(centre, a, b, c) <=
+                             tool.ball_radius_mm * tool.ball_radius_mm) {
+          every_face = true;
+        }
+        for (const ToolBody& body : tool.bodies) {
+          every_face = every_face || triangle_meets_cylinder(a, b, c, centre, axis, body.radius_mm,
+                                                             body.start_mm, body.end_mm);
+        }
+        if (every_face) break;
+      }
+      INFO("query " << q);
+      REQUIRE(tree.collides(tool, centre, axis, with_ball) == every_face);
+      ++queries;
+      hits += every_face ? 1 : 0;
+    }
+  }
+  CHECK(hits > queries / 5);
+  CHECK(hits < queries - queries / 5);
 }

@@ -99,6 +99,13 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
     /// Children (inner node, else -1) and the range [first, first + count) of its faces.
     int left = -1, right = -1, first = 0, count = 0;
   };
+  /// A node's faces between two planes: lo <= normal . p <= hi for every corner p (normal:
+  /// their area-weighted mean, turned to agree). collides drops a node whose sphere meets a
+  /// body but whose slab no body reaches: the faces under a tool standing over them.
+  struct Slab {
+    Vec3d normal = Vec3d::UnitZ();
+    double lo = 0.0, hi = 0.0;
+  };
   /// The tree's build: each face's centroid (in the mesh's order), the face at each place of
   /// the tree's order, and room for one node's order.
   struct Build {
@@ -106,11 +113,14 @@ class TAXOPT_API CSpaceRasteriser : public PartCheck {
     std::vector<int> perm, scratch;
   };
   int build(int first, int count, Build& b, const StopSource& stop);
+  Slab slab_of(int first, int count, const Build& b) const;
   /// One free_axes call's walk of the tree (cspace.cpp).
   class Walk;
   std::vector<std::array<Vec3d, 3>> tri_;
   std::vector<Sphere> face_sphere_;
   std::vector<Node> nodes_;
+  /// Per node (collides only; the occlusion map's walk needs the spheres alone).
+  std::vector<Slab> slab_;
 };
 
 /// One-off convenience: builds a CSpaceRasteriser for `part` and asks it once. Build the

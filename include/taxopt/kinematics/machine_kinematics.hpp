@@ -118,6 +118,12 @@ struct MachineKinematics {
   /// True when some pose of unit `axis` has A within its range and a turn of C within its
   /// range (on the pole any C will do).
   bool reachable(const Vec3<S>& axis) const {
+    if (c.continuous) {
+      // Any C will do: the tilts of inverse(axis) alone, without its C.
+      const S k = std::max(S(-1), std::min(S(1), axis.z()));
+      const S tilt_rad = S(tilt.sense) * std::atan2(std::hypot(axis.x(), axis.y()), k);
+      return tilt.contains(tilt_rad) || tilt.contains(-tilt_rad);
+    }
     for (const Pose<S>& p : inverse(axis)) {
       if (!tilt.contains(p.tilt_rad)) continue;
       if (c.continuous || (at_pole(axis) && c.min_rad <= c.max_rad)) return true;

@@ -15,6 +15,9 @@ namespace taxopt::detail {
 /// Relative tolerance under which two objective values are equal (ties keep the earlier).
 inline constexpr double kTie = 1e-12;
 
+/// Degrees per radian (the programmes' accelerations are in deg/s^2).
+inline constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
+
 /// An objective value: the peak a^2 and the sum of a^2 (deg^2/s^4). Which one orders values
 /// depends on the objective; the other breaks ties.
 struct RotaryValue {

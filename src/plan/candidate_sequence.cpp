@@ -13,9 +13,7 @@
 namespace taxopt {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
-
-using detail::kTie;
+using detail::kRadToDeg;
 using detail::less;
 using detail::scalar;
 using Value = detail::RotaryValue;
@@ -31,6 +29,13 @@ struct PairRates {
   const std::vector<double>& c;
 };
 
+/// The squared acceleration (deg/s^2)^2 between two segments' rates (rad/s) of A and C: each
+/// change of rate times c, the centred second difference's 2 / (t_before + t_after) in deg.
+double squared_step(double c, double da_rad_s, double dc_rad_s) {
+  const double da = c * da_rad_s, dc = c * dc_rad_s;
+  return da * da + dc * dc;
+}
+
 /// One step of the programme for any objective: the states (s, u) of point i + 1 from those
 /// (r, s) of point i, `cost` replaced, `back` filled. The rule every step keeps: the first r
 /// of the least value (`less`, ties within kTie keep the earlier).
@@ -44,8 +49,7 @@ void general_step(const Sizes3& k, double c, const PairRates& in, const PairRate
       Value best{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
       std::uint8_t arg = 0;
       for (std::size_t r = 0; r < k.before; ++r) {
-        const double da = c * (a1 - in.a[r * k.here + s]), dc = c * (c1 - in.c[r * k.here + s]);
-        const double sq = da * da + dc * dc;
+        const double sq = squared_step(c, a1 - in.a[r * k.here + s], c1 - in.c[r * k.here + s]);
         const Value& before = cost[r * k.here + s];
         const Value v{std::max(before.peak_sq, sq), before.sum_sq + sq};
         if (less(v, best, objective)) best = v, arg = static_cast<std::uint8_t>(r);
@@ -90,7 +94,7 @@ class SumSquaresStep {
       for (std::size_t u = 0; u < k.next; ++u) {
         // general_step's scan ends on a value within [m, (m + 1e-300) / (1 - kTie)] of the
         // least m: one value alone within a wider bound is the scan's.
-        const double bound = least_[u] * (1.0 + 4.0 * kTie) + 1e-290;
+        const double bound = least_[u] * (1.0 + 4.0 * detail::kTie) + 1e-290;
         const std::size_t r = second_[u] > bound ? static_cast<std::size_t>(arg_[u])
                                                  : scan(k, c, in, cost, s, a1[u], c1[u]);
         next_[s * k.next + u].sum_sq =
@@ -103,10 +107,9 @@ class SumSquaresStep {
   }
 
  private:
-  /// general_step's value: before + ((c da)^2 + (c dc)^2).
+  /// general_step's value of a predecessor: its sum plus the squared step.
   static double value(double c, double before, double da_rad_s, double dc_rad_s) {
-    const double da = c * da_rad_s, dc = c * dc_rad_s;
-    return before + (da * da + dc * dc);
+    return before + squared_step(c, da_rad_s, dc_rad_s);
   }
 
   /// general_step's scan for one state (s, u).
@@ -117,7 +120,7 @@ class SumSquaresStep {
     for (std::size_t r = 0; r < k.before; ++r) {
       const double v = value(c, cost[r * k.here + s].sum_sq, a1 - in.a[r * k.here + s],
                              c1 - in.c[r * k.here + s]);
-      if (v < best * (1.0 - kTie) - 1e-300) best = v, at = r;
+      if (less(Value{0.0, v}, Value{0.0, best}, GlobalObjective::SumSquares)) best = v, at = r;
     }
     return at;
   }

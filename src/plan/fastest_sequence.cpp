@@ -13,7 +13,7 @@
 namespace taxopt {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
+using detail::kRadToDeg;
 
 /// The time objective's surrogate: the share of a segment's stretch charged to each of its
 /// ends (docs/global-method.md measures the choice).

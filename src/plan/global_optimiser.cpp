@@ -18,8 +18,7 @@
 namespace taxopt {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / Constants<double>::pi();
-
+using detail::kRadToDeg;
 using Value = detail::RotaryValue;
 using detail::less;
 using detail::scalar;

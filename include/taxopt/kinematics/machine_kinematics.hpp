@@ -99,14 +99,19 @@ struct MachineKinematics {
     return std::hypot(axis.x(), axis.y()) < pole_tolerance && axis.z() > S(0);
   }
 
+  /// The angle of unit `axis` from the pole (Z), in [0, pi]: the magnitude of both inverse
+  /// solutions' tilt. atan2 of (sin, cos) keeps accuracy near the pole where acos(z) loses it.
+  static S tilt_from_pole(const Vec3<S>& axis) {
+    const S k = std::max(S(-1), std::min(S(1), axis.z()));
+    return std::atan2(std::hypot(axis.x(), axis.y()), k);
+  }
+
   /// Both inverse solutions of a unit axis, machine values, C in (-pi, pi]:
   /// [0] the branch a >= 0 (a = acos k, A/C: c = atan2(i, -j); B/C: c = atan2(j, i)),
   /// [1] the branch a <= 0 (a = -acos k, A/C: c = atan2(-i, j); B/C: c = atan2(-j, -i)) --
   /// for A/C the corrected eq. 15. At the pole both have A = 0 and C = 0 (any C is valid there).
   std::array<Pose<S>, 2> inverse(const Vec3<S>& axis) const {
-    const S k = std::max(S(-1), std::min(S(1), axis.z()));
-    // atan2 of (sin, cos) keeps accuracy near the pole where acos(k) loses it.
-    const S ag = std::atan2(std::hypot(axis.x(), axis.y()), k);
+    const S ag = tilt_from_pole(axis);
     const bool y = tilt_about == TiltAxis::Y;
     S c_pos = y ? std::atan2(axis.y(), axis.x()) : std::atan2(axis.x(), -axis.y());
     S c_neg = y ? std::atan2(-axis.y(), -axis.x()) : std::atan2(-axis.x(), axis.y());
@@ -120,8 +125,7 @@ struct MachineKinematics {
   bool reachable(const Vec3<S>& axis) const {
     if (c.continuous) {
       // Any C will do: the tilts of inverse(axis) alone, without its C.
-      const S k = std::max(S(-1), std::min(S(1), axis.z()));
-      const S tilt_rad = S(tilt.sense) * std::atan2(std::hypot(axis.x(), axis.y()), k);
+      const S tilt_rad = S(tilt.sense) * tilt_from_pole(axis);
       return tilt.contains(tilt_rad) || tilt.contains(-tilt_rad);
     }
     for (const Pose<S>& p : inverse(axis)) {
